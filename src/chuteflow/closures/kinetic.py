@@ -1,0 +1,58 @@
+"""Constitutive relations of Lun et al. (1984): Table 1 and label eq:pmuetc.
+
+Dimensionless (σ, ρ_p σ³, √(σ/g)) transport functions of packing fraction ν and
+granular temperature T:
+
+    p = f1 T,   μ = f2 √T,   ζ = f3 √T,   κ = f4 √T,   Γ = (1 − e_p²) f5 T^{3/2}.
+
+The heat-flux term κ_h ∇ν is neglected, as in the paper (footnote to eq:pmuetc).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+from .radial import LunSavage, RadialDistribution
+
+
+def lun_functions(nu, e, nu_max, g0):
+    """Return f1 … f7 of Table 1 as sympy expressions (η = (1 + e_p)/2)."""
+    eta = (1 + e) / 2
+    sqpi = sp.sqrt(sp.pi)
+    f1 = nu * (1 + 4 * eta * nu * g0)
+    f2 = (5 * sqpi / (96 * eta * (2 - eta)) * (1 + sp.Rational(8, 5) * eta * nu * g0)
+          * (1 / g0 + sp.Rational(8, 5) * eta * (3 * eta - 2) * nu)
+          + 8 / (5 * sqpi) * eta * nu**2 * g0)
+    f3 = 8 / (3 * sqpi) * eta * nu**2 * g0
+    f4 = (25 * sqpi / (16 * eta * (41 - 33 * eta)) * (1 + sp.Rational(12, 5) * eta * nu * g0)
+          * (1 / g0 + sp.Rational(12, 5) * eta**2 * (4 * eta - 3) * nu)
+          + 4 / sqpi * eta * nu**2 * g0)
+    f5 = 12 / sqpi * nu**2 * g0
+    f6 = sp.sqrt(3) * sp.pi * nu * g0 / (2 * nu_max * f4)
+    f7 = sp.pi * nu * g0 / (2 * sp.sqrt(3) * nu_max * f2)
+    return {"f1": f1, "f2": f2, "f3": f3, "f4": f4, "f5": f5, "f6": f6, "f7": f7}
+
+
+@dataclass(frozen=True)
+class LunClosure:
+    """Lun et al. (1984) kinetic-theory closure with a pluggable g0(ν)."""
+
+    radial: RadialDistribution = LunSavage()
+    name: str = "lun"
+
+    def functions(self, nu, e, nu_max):
+        """f1 … f7 (Table 1) as sympy expressions in ν."""
+        return lun_functions(nu, e, nu_max, self.radial.expr(nu, nu_max))
+
+    def transport(self, nu, T, e, nu_max):
+        """Transport functions p, μ, ζ, κ, Γ of eq:pmuetc as sympy expressions."""
+        f = self.functions(nu, e, nu_max)
+        sqT = sp.sqrt(T)
+        return {
+            "p": f["f1"] * T,
+            "mu": f["f2"] * sqT,
+            "zeta": f["f3"] * sqT,
+            "kappa": f["f4"] * sqT,
+            "Gamma": (1 - e**2) * f["f5"] * T * sqT,
+        }

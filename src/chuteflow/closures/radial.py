@@ -1,0 +1,47 @@
+"""Radial distribution functions g0(ν) at contact.
+
+A radial distribution function is a small class that returns a sympy expression in
+ν and the maximum packing ``nu_max``; everything numeric (values, derivatives) is
+derived from that one expression.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import sympy as sp
+
+
+@dataclass(frozen=True)
+class RadialDistribution:
+    """Base class: ``expr(nu, nu_max)`` gives g0 as a sympy expression."""
+
+    name: str = "base"
+
+    def expr(self, nu: sp.Expr, nu_max: sp.Expr) -> sp.Expr:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class LunSavage(RadialDistribution):
+    """Lun & Savage (1986): g0(ν) = (1 − ν/ν_m)^(−2.5 ν_m) (paper §2.1)."""
+
+    name: str = "lun_savage"
+
+    def expr(self, nu, nu_max):
+        return (1 - nu / nu_max) ** (-sp.Rational(5, 2) * nu_max)
+
+
+@dataclass(frozen=True)
+class CarnahanStarling(RadialDistribution):
+    """Carnahan–Starling: g0(ν) = (2 − ν) / (2 (1 − ν)³); ``nu_max`` unused.
+
+    Offered as an alternative closure (beyond the paper); it does not diverge at ν_m.
+    """
+
+    name: str = "carnahan_starling"
+
+    def expr(self, nu, nu_max):
+        return (2 - nu) / (2 * (1 - nu) ** 3)
+
+
+RADIAL_FUNCTIONS = {cls.name: cls for cls in (LunSavage(), CarnahanStarling())}
