@@ -1,0 +1,165 @@
+"""The steady-flow result object and its derived quantities (paper §3.2)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..closures import ChuteModel
+from ..spectral import ChebyshevGrid, tail
+
+
+@dataclass(frozen=True)
+class SteadyFlow:
+    """A steady flow uniform along the slope, ν0(y), u0(y), T0(y) on Chebyshev nodes.
+
+    Attributes
+    ----------
+    theta, nu0 : float
+        Inclination (degrees) and floor packing fraction ν0(0) that label the flow.
+    model : ChuteModel
+        Closure parameters (restitution, nu_max, roughness, wall_loss).
+    y, nu, u, T : ndarray
+        Chebyshev–Lobatto nodes on [0, y_max] (ascending) and the profiles there.
+    y_max : float
+        Top of the domain, where ν0(y_max) = ``nu_top``.
+    u_floor, T_floor : float
+        Slip velocity u0(0) and floor temperature T0(0).
+    h : float
+        Thickness: height where ν0 falls to 1 % of its maximum.
+    nu_mean : float
+        Mean density ν̄ = (1/h) ∫ ν0 dy.
+    rho_bar : float
+        One-dimensional density ρ̄0 = ∫ ν0 dy (label rho0q0).
+    Q : float
+        Flux Q0 = ∫ ν0 u0 dy (label rho0q0).
+    T_mean : float
+        Density-weighted temperature T̄0 = ∫ ν0 T0 dy / ρ̄0 (§5.1.2).
+    monotonic : bool
+        Whether ν0 decreases monotonically from the floor.
+    y_peak, nu_peak : float
+        Height and value of the density maximum (0 and ν0(0) when monotonic).
+    residual : float
+        Max-norm of the scaled discrete residual at the solution.
+    convergence : float
+        Largest relative change of (u_floor, T_floor, h, nu_mean, rho_bar, Q, y_max) between
+        this resolution and a coarser one: an estimate of the discretisation error.
+    spectral_tail : float
+        Largest of the ten highest Chebyshev coefficients of ln ν0, u0, T0 (relative).
+    """
+
+    theta: float
+    nu0: float
+    model: ChuteModel
+    nu_top: float
+    n: int
+    y: np.ndarray = field(repr=False)
+    log_nu: np.ndarray = field(repr=False)
+    u: np.ndarray = field(repr=False)
+    T: np.ndarray = field(repr=False)
+    y_max: float = 0.0
+    u_floor: float = 0.0
+    T_floor: float = 0.0
+    h: float = 0.0
+    nu_mean: float = 0.0
+    rho_bar: float = 0.0
+    Q: float = 0.0
+    T_mean: float = 0.0
+    monotonic: bool = True
+    y_peak: float = 0.0
+    nu_peak: float = 0.0
+    residual: float = 0.0
+    iterations: int = 0
+    convergence: float = float("nan")
+    spectral_tail: float = float("nan")
+
+    @property
+    def nu(self) -> np.ndarray:
+        return np.exp(self.log_nu)
+
+    @property
+    def grid(self) -> ChebyshevGrid:
+        return ChebyshevGrid(self.n, 0.0, self.y_max)
+
+    def profiles(self, y) -> dict[str, np.ndarray]:
+        """ν0, u0, T0 interpolated spectrally at heights ``y`` (0 ≤ y ≤ y_max)."""
+        g = self.grid
+        y = np.asarray(y, dtype=float)
+        return {"nu": np.exp(g.interpolate(self.log_nu, y)), "u": g.interpolate(self.u, y),
+                "T": g.interpolate(self.T, y)}
+
+    def derivatives(self) -> dict[str, np.ndarray]:
+        """First and second y-derivatives of ν0, u0, T0 at the nodes."""
+        g = self.grid
+        nu = self.nu
+        s1, s2 = g.D @ self.log_nu, g.D2 @ self.log_nu
+        return {"nu_y": nu * s1, "nu_yy": nu * (s2 + s1**2), "u_y": g.D @ self.u,
+                "u_yy": g.D2 @ self.u, "T_y": g.D @ self.T, "T_yy": g.D2 @ self.T}
+
+    def summary(self) -> dict:
+        """Scalar quantities as a JSON-ready dict (keys used by the CLI)."""
+        d = {"theta": self.theta, "nu0": self.nu0}
+        d.update({k: getattr(self.model, k) for k in ("roughness", "wall_loss", "restitution",
+                                                      "nu_max")})
+        for k in ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "T_mean", "monotonic",
+                  "y_peak", "nu_peak", "y_max", "nu_top", "n", "residual", "iterations",
+                  "convergence", "spectral_tail"):
+            v = getattr(self, k)
+            d[k] = bool(v) if isinstance(v, (bool, np.bool_)) else (
+                int(v) if isinstance(v, (int, np.integer)) else float(v))
+        return d
+
+    def to_xarray(self):
+        """Profiles as an :class:`xarray.Dataset` on the nodes, scalars as attributes."""
+        import xarray as xr
+        ds = xr.Dataset(
+            {"nu": ("y", self.nu, {"long_name": "packing fraction ν0", "units": "1"}),
+             "u": ("y", self.u, {"long_name": "velocity u0", "units": "sqrt(g sigma)"}),
+             "T": ("y", self.T, {"long_name": "granular temperature T0", "units": "g sigma"})},
+            coords={"y": ("y", self.y, {"long_name": "height above the floor",
+                                        "units": "sigma"})})
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v)
+                         for k, v in self.summary().items()})
+        return ds
+
+
+def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteModel):
+    """h, ν̄, ρ̄0, Q0, T̄0, monotonicity and the density peak of a solved profile.
+
+    The integrals include the dilute tail above y_max in closed form: integrating the
+    y-momentum balance p' = −ν cos θ gives ∫_{y_max}^∞ ν dy = p(y_max)/cos θ, with u0 and T0
+    constant there to the same order.
+    """
+    c = math.cos(math.radians(theta))
+    nu = np.exp(log_nu)
+    p_top = float(model.evaluate(nu[-1], T[-1])["p"][(0, 0)])
+    tail_rho = p_top / c
+    rho_bar = grid.integrate(nu) + tail_rho
+    Q = grid.integrate(nu * u) + u[-1] * tail_rho
+    T_mean = (grid.integrate(nu * T) + T[-1] * tail_rho) / rho_bar
+    # density maximum: sign of d ln ν/dy on a fine sampling, refined by root finding
+    ds = grid.D @ log_nu
+    yf = np.linspace(0.0, grid.b, 20 * grid.n + 1)
+    dsf = grid.interpolate(ds, yf)
+    if dsf[0] <= 0 and (dsf[1:] <= 0).all():
+        monotonic, y_peak = True, 0.0
+    else:
+        monotonic = False
+        idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
+        i = idx[0] if len(idx) else 0
+        y_peak = brentq(lambda y: grid.interpolate(ds, y), yf[i], yf[i + 1], xtol=1e-13) \
+            if len(idx) else 0.0
+    s_peak = float(grid.interpolate(log_nu, y_peak))
+    target = s_peak + math.log(0.01)
+    sf = grid.interpolate(log_nu, yf)
+    above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
+    j = above[0]
+    h = brentq(lambda y: grid.interpolate(log_nu, y) - target, yf[j - 1], yf[j], xtol=1e-14)
+    return {"h": h, "nu_mean": rho_bar / h, "rho_bar": rho_bar, "Q": Q, "T_mean": T_mean,
+            "monotonic": monotonic, "y_peak": y_peak, "nu_peak": math.exp(s_peak)}
+
+
+def spectral_tail(log_nu, u, T) -> float:
+    return max(tail(log_nu), tail(u), tail(T))
