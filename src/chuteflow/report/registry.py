@@ -1,0 +1,192 @@
+"""Registry of reproduction stages and the context a stage receives.
+
+A stage is a function ``stage(ctx) -> None`` registered with :func:`register_stage`;
+stages run in increasing ``order`` (ties by name). A stage module lives in
+:mod:`chuteflow.report.stages` and is listed in that package's ``STAGE_MODULES``::
+
+    from chuteflow.report import Checkpoint, StageContext, register_stage
+
+    @register_stage("steady", order=10, title="Steady flows (§3)")
+    def steady(ctx: StageContext) -> None:
+        ctx.progress("shooting for θ = 16°")
+        ...
+        ctx.report.add_figure(ctx.path("profiles.png"), "Steady profiles", source="figure 2")
+        ctx.report.check("steady.h16", source="§3.2", statement="...", computed="...",
+                         passed=True)
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from importlib import import_module
+from pathlib import Path
+from typing import Any, Protocol
+
+from ..errors import ParameterError
+from .report import Report
+
+__all__ = ["Stage", "StageContext", "ProgressCallback", "register_stage", "registered_stages",
+           "get_stage", "select_stages", "load_stages", "isolated_registry"]
+
+
+class ProgressCallback(Protocol):
+    """What ``ctx.progress`` accepts: a message and/or rich-style progress counts."""
+
+    def __call__(self, message: str | None = None, *, advance: float | None = None,
+                 total: float | None = None, completed: float | None = None) -> None: ...
+
+
+def _no_progress(message: str | None = None, **_: Any) -> None:
+    """Default progress callback: does nothing."""
+
+
+@dataclass
+class StageContext:
+    """What a stage function receives.
+
+    Attributes
+    ----------
+    out : Path
+        Output folder of the whole run (``report.md`` goes here). Created.
+    quick : bool
+        Quick mode (coarse grids, few parameter points; minutes) or full (the paper's
+        resolution; hours).
+    report : Report
+        The report; ``check``/``add_checkpoint``/``add_figure``/``add_note`` go to this
+        stage's section.
+    progress : callable
+        ``progress(message=None, *, advance=None, total=None, completed=None)``; in
+        :func:`~chuteflow.report.reproduce.run_reproduce` a
+        :class:`~chuteflow.report.reproduce.StageProgress`, which also has
+        ``.track(iterable, description=None, total=None)``.
+    stage : str
+        Name of the running stage.
+    shared : dict
+        One dict shared by all stages of a run, for results a later stage reuses
+        (e.g. steady solutions). Key by stage name to avoid clashes.
+    """
+
+    out: Path
+    quick: bool
+    report: Report
+    progress: ProgressCallback | Callable[..., None] = _no_progress
+    stage: str = ""
+    shared: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.out = Path(self.out)
+
+    @property
+    def stage_dir(self) -> Path:
+        """``out / stage`` (created): where this stage's files go."""
+        d = self.out / (self.stage or "general")
+        d.mkdir(parents=True, exist_ok=True)
+        return d
+
+    def path(self, name: str) -> Path:
+        """Path of a file ``name`` in :attr:`stage_dir` (parent folders created)."""
+        p = self.stage_dir / name
+        p.parent.mkdir(parents=True, exist_ok=True)
+        return p
+
+
+StageFunc = Callable[[StageContext], None]
+
+
+@dataclass(frozen=True)
+class Stage:
+    """A registered stage: ``func(ctx)`` run at position ``order``."""
+
+    name: str
+    order: float
+    func: StageFunc
+    title: str
+
+    def __call__(self, ctx: StageContext) -> None:
+        self.func(ctx)
+
+
+_REGISTRY: dict[str, Stage] = {}
+_NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
+
+
+def register_stage(name: str, order: float, *, title: str | None = None
+                   ) -> Callable[[StageFunc], StageFunc]:
+    """Decorator registering ``func(ctx) -> None`` as stage ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Stage name used on the command line (``chuteflow reproduce --stage NAME``) and
+        as its output sub-folder: letters, digits, ``-`` and ``_``.
+    order : float
+        Stages run in increasing order; a stage that needs another's results in
+        ``ctx.shared`` must come after it.
+    title : str, optional
+        Section heading in the report (default: first line of the docstring, else name).
+
+    Returns the function unchanged. Registering another function under a taken name
+    raises ``ValueError``.
+    """
+    if not isinstance(name, str) or not _NAME.match(name):
+        raise ValueError(f"stage name {name!r}: use letters, digits, '-' and '_' "
+                         "(starting with a letter)")
+
+    def decorator(func: StageFunc) -> StageFunc:
+        doc_lines = (func.__doc__ or "").strip().splitlines()
+        heading = title or (doc_lines[0].rstrip(".") if doc_lines else name)
+        old = _REGISTRY.get(name)
+        if old is not None and (old.func.__module__, old.func.__qualname__) != \
+                (func.__module__, func.__qualname__):
+            raise ValueError(f"stage {name!r} is already registered by "
+                             f"{old.func.__module__}.{old.func.__qualname__}")
+        _REGISTRY[name] = Stage(name, float(order), func, heading)
+        return func
+
+    return decorator
+
+
+def load_stages() -> None:
+    """Import :mod:`chuteflow.report.stages`, which registers every stage module."""
+    import_module("chuteflow.report.stages")
+
+
+def registered_stages() -> list[Stage]:
+    """All registered stages in run order (by ``order``, then name)."""
+    return sorted(_REGISTRY.values(), key=lambda s: (s.order, s.name))
+
+
+def get_stage(name: str) -> Stage:
+    """The stage called ``name``; :class:`~chuteflow.errors.ParameterError` if none."""
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        avail = ", ".join(s.name for s in registered_stages()) or "none registered"
+        raise ParameterError(f"stage: unknown stage {name!r} (available: {avail})") from None
+
+
+def select_stages(names: Sequence[str] | None) -> list[Stage]:
+    """Stages to run: all for ``None``; else the named ones, deduplicated, in run order."""
+    if names is None:
+        return registered_stages()
+    chosen = {get_stage(n).name for n in names}
+    return [s for s in registered_stages() if s.name in chosen]
+
+
+@contextmanager
+def isolated_registry() -> Iterator[dict[str, Stage]]:
+    """Run with an empty registry (for tests); the real one is restored on exit.
+
+    The real stage modules are imported first, so that their registration does not
+    land in the temporary registry.
+    """
+    load_stages()
+    saved = dict(_REGISTRY)
+    _REGISTRY.clear()
+    try:
+        yield _REGISTRY
+    finally:
+        _REGISTRY.clear()
+        _REGISTRY.update(saved)

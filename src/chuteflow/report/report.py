@@ -1,0 +1,309 @@
+"""Checkpoints, figures and the :class:`Report` that collects them by stage.
+
+A *checkpoint* pairs one statement of the paper (with its section or equation label)
+with what chuteflow computed for it and whether the two agree. A *stage* is one part of
+the reproduction (steady flows, dispersion relations, stability diagrams, …); the report
+keeps one :class:`Section` per stage and writes ``report.md``, a self-contained
+``report.html`` and ``checkpoints.json``.
+"""
+from __future__ import annotations
+
+import json
+import math
+import platform
+import sys
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import asdict, dataclass, field
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+__all__ = ["Checkpoint", "Figure", "Section", "Report", "DEFAULT_TITLE", "GENERAL"]
+
+DEFAULT_TITLE = ("chuteflow: reproduction of Mitarai & Nakanishi, linear stability of "
+                 "rapid granular flow down a slope")
+#: Section that receives checkpoints and figures added outside any stage.
+GENERAL = "general"
+
+STATUS_PASS, STATUS_FAIL, STATUS_NOT_CHECKED = "pass", "fail", "not checked"
+
+
+@dataclass(frozen=True)
+class Checkpoint:
+    """One statement of the paper checked against chuteflow.
+
+    Parameters
+    ----------
+    id : str
+        Short identifier, unique within a report (e.g. ``"steady.h_theta16"``).
+    source : str
+        Where the paper says it: section and/or label (e.g. ``"§3.2, fig:steady"``).
+    statement : str
+        The paper's words (or a faithful paraphrase), e.g. ``"h ≈ 23 at θ = 16°"``.
+    computed : str
+        What chuteflow obtained, with the tolerance used, as text.
+    passed : bool or None
+        ``True``/``False`` for agreement/disagreement; ``None`` if not checked
+        (e.g. a qualitative statement only shown in a figure).
+    detail : str
+        Anything else worth keeping (method, resolution, traceback of a failure).
+    """
+
+    id: str
+    source: str
+    statement: str
+    computed: str
+    passed: bool | None = None
+    detail: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.id, str) or not self.id.strip():
+            raise ValueError(f"checkpoint id must be a non-empty string, got {self.id!r}")
+        if self.passed is not None:  # accept numpy.bool_ and the like
+            object.__setattr__(self, "passed", bool(self.passed))
+        for name in ("source", "statement", "computed", "detail"):
+            object.__setattr__(self, name, str(getattr(self, name)))
+
+    @property
+    def status(self) -> str:
+        """``"pass"``, ``"fail"`` or ``"not checked"``."""
+        if self.passed is None:
+            return STATUS_NOT_CHECKED
+        return STATUS_PASS if self.passed else STATUS_FAIL
+
+    @classmethod
+    def compare(cls, id: str, *, source: str, statement: str, value: float,
+                expected: float, rtol: float = 0.0, atol: float = 0.0, name: str = "value",
+                fmt: str = ".4g", detail: str = "") -> Checkpoint:
+        """Checkpoint for ``|value − expected| ≤ atol + rtol·|expected|``.
+
+        ``computed`` reads e.g. ``"h = 23.41 (paper 23; |Δ| = 0.41 ≤ 1.15)"``.
+        A non-finite ``value`` fails.
+        """
+        tol = atol + rtol * abs(expected)
+        diff = abs(value - expected)
+        passed = bool(math.isfinite(value) and diff <= tol)
+        computed = (f"{name} = {value:{fmt}} (paper {expected:{fmt}}; "
+                    f"|Δ| = {diff:.2g} {'≤' if passed else '>'} {tol:.2g})")
+        return cls(id, source, statement, computed, passed, detail)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {**asdict(self), "status": self.status}
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A figure file (PNG preferred) with its caption.
+
+    ``source`` names the paper figure it reproduces (e.g. ``"figure 3, fig:disp"``).
+    """
+
+    path: Path
+    caption: str
+    id: str | None = None
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "path", Path(self.path))
+
+
+@dataclass
+class Section:
+    """Everything one stage contributed to the report."""
+
+    name: str
+    title: str
+    checkpoints: list[Checkpoint] = field(default_factory=list)
+    figures: list[Figure] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    #: ``"pending"``, ``"running"``, ``"ok"`` or ``"failed"`` (set by the runner).
+    status: str = "pending"
+    wall_time: float | None = None
+
+
+class Report:
+    """Figures and checkpoints of a reproduction run, grouped by stage.
+
+    Parameters
+    ----------
+    title : str
+        Report title.
+    parameters : mapping, optional
+        Run parameters shown in the header (mode, model defaults, …). Stages may add
+        to :attr:`parameters` as they run.
+
+    Notes
+    -----
+    Stages add content through :meth:`check` / :meth:`add_checkpoint`,
+    :meth:`add_figure` and :meth:`add_note`; these go to the current stage's section
+    (set by the runner with :meth:`stage`) unless ``stage=`` is given. :meth:`write`
+    renders ``report.md``, ``report.html`` (self-contained: figures embedded) and
+    ``checkpoints.json``.
+    """
+
+    def __init__(self, title: str = DEFAULT_TITLE, *,
+                 parameters: Mapping[str, Any] | None = None) -> None:
+        from chuteflow import __version__
+
+        self.title = title
+        self.version: str = __version__
+        self.created: datetime = datetime.now(timezone.utc).replace(microsecond=0)
+        self.parameters: dict[str, Any] = dict(parameters or {})
+        self.wall_time: float | None = None
+        self.sections: dict[str, Section] = {}
+        self.paths: dict[str, Path] = {}
+        self._current: str | None = None
+        self._ids: set[str] = set()
+
+    @property
+    def environment(self) -> dict[str, str]:
+        """Python, platform and versions of the numerical libraries loaded so far."""
+        return _environment()
+
+    # -- structure -------------------------------------------------------------------
+    def section(self, name: str, title: str | None = None) -> Section:
+        """The section for stage ``name``, created on first use."""
+        if name not in self.sections:
+            self.sections[name] = Section(name, title or name)
+        elif title:
+            self.sections[name].title = title
+        return self.sections[name]
+
+    @contextmanager
+    def stage(self, name: str, title: str | None = None) -> Iterator[Section]:
+        """Make ``name`` the current section inside the ``with`` block."""
+        previous, self._current = self._current, name
+        try:
+            yield self.section(name, title)
+        finally:
+            self._current = previous
+
+    def _target(self, stage: str | None) -> Section:
+        return self.section(stage or self._current or GENERAL)
+
+    # -- content ---------------------------------------------------------------------
+    def add_checkpoint(self, checkpoint: Checkpoint, *, stage: str | None = None) -> Checkpoint:
+        """Add a checkpoint; its id must be new to this report."""
+        if not isinstance(checkpoint, Checkpoint):
+            raise TypeError(f"expected a Checkpoint, got {type(checkpoint).__name__}")
+        if checkpoint.id in self._ids:
+            raise ValueError(f"duplicate checkpoint id {checkpoint.id!r}")
+        self._ids.add(checkpoint.id)
+        self._target(stage).checkpoints.append(checkpoint)
+        return checkpoint
+
+    def check(self, id: str, *, source: str, statement: str, computed: str,
+              passed: bool | None, detail: str = "", stage: str | None = None) -> Checkpoint:
+        """Build a :class:`Checkpoint` from the fields and add it."""
+        return self.add_checkpoint(Checkpoint(id, source, statement, computed, passed, detail),
+                                   stage=stage)
+
+    def add_figure(self, path: str | Path, caption: str, *, id: str | None = None,
+                   source: str = "", stage: str | None = None) -> Figure:
+        """Add a figure file (written by the stage, usually under ``ctx.out``)."""
+        fig = Figure(Path(path), caption, id, source)
+        self._target(stage).figures.append(fig)
+        return fig
+
+    def add_note(self, text: str, *, stage: str | None = None) -> None:
+        """Add a paragraph of plain text to a section."""
+        self._target(stage).notes.append(str(text))
+
+    # -- queries ---------------------------------------------------------------------
+    def iter_checkpoints(self) -> Iterator[tuple[str, Checkpoint]]:
+        """``(stage name, checkpoint)`` in stage order, then insertion order."""
+        for name, sec in self.sections.items():
+            for cp in sec.checkpoints:
+                yield name, cp
+
+    @property
+    def checkpoints(self) -> list[Checkpoint]:
+        return [cp for _, cp in self.iter_checkpoints()]
+
+    @property
+    def failed(self) -> list[Checkpoint]:
+        return [cp for cp in self.checkpoints if cp.passed is False]
+
+    @property
+    def ok(self) -> bool:
+        """True when no checkpoint failed (unchecked ones do not count)."""
+        return not self.failed
+
+    def counts(self) -> dict[str, int]:
+        """Number of checkpoints per status: ``pass``, ``fail``, ``not checked``."""
+        out = {STATUS_PASS: 0, STATUS_FAIL: 0, STATUS_NOT_CHECKED: 0}
+        for cp in self.checkpoints:
+            out[cp.status] += 1
+        return out
+
+    # -- output ----------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "title": self.title,
+            "chuteflow_version": self.version,
+            "date": self.created.isoformat(),
+            "wall_time_s": self.wall_time,
+            "parameters": {k: _plain(v) for k, v in self.parameters.items()},
+            "environment": self.environment,
+            "counts": self.counts(),
+            "stages": [
+                {"name": s.name, "title": s.title, "status": s.status, "wall_time_s": s.wall_time,
+                 "checkpoints": [cp.to_dict() for cp in s.checkpoints],
+                 "figures": [{"path": str(f.path), "caption": f.caption, "id": f.id,
+                              "source": f.source} for f in s.figures],
+                 "notes": list(s.notes)}
+                for s in self.sections.values()
+            ],
+        }
+
+    def to_markdown(self, base: str | Path = ".") -> str:
+        """Markdown text; figure links are relative to ``base`` (the output folder)."""
+        from .render import render_markdown
+
+        return render_markdown(self, Path(base))
+
+    def to_html(self) -> str:
+        """Self-contained HTML (figures embedded as data URIs)."""
+        from .render import render_html
+
+        return render_html(self)
+
+    def write(self, out: str | Path, *, wall_time: float | None = None) -> dict[str, Path]:
+        """Write ``report.md``, ``report.html`` and ``checkpoints.json`` into ``out``.
+
+        Returns the paths by kind (``"md"``, ``"html"``, ``"json"``), also kept in
+        :attr:`paths`.
+        """
+        out = Path(out)
+        out.mkdir(parents=True, exist_ok=True)
+        if wall_time is not None:
+            self.wall_time = float(wall_time)
+        paths = {"md": out / "report.md", "html": out / "report.html",
+                 "json": out / "checkpoints.json"}
+        paths["md"].write_text(self.to_markdown(out), encoding="utf-8")
+        paths["html"].write_text(self.to_html(), encoding="utf-8")
+        paths["json"].write_text(json.dumps(self.to_dict(), indent=2, ensure_ascii=False) + "\n",
+                                 encoding="utf-8")
+        self.paths = paths
+        return paths
+
+
+def _plain(value: Any) -> Any:
+    """JSON-friendly version of a parameter value."""
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    if isinstance(value, Mapping):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    return str(value)
+
+
+def _environment() -> dict[str, str]:
+    env = {"python": sys.version.split()[0], "platform": platform.platform()}
+    for mod in ("numpy", "scipy", "sympy", "matplotlib"):
+        m = sys.modules.get(mod)
+        if m is not None:
+            env[mod] = getattr(m, "__version__", "?")
+    return env

@@ -1,0 +1,159 @@
+"""Command line: help, one-line user errors (exit 2), ``reproduce`` and the report."""
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from chuteflow import __version__
+from chuteflow.cli import app, main
+from chuteflow.cli._app import ChuteflowGroup
+from chuteflow.report import Checkpoint, isolated_registry, register_stage, run_reproduce
+
+runner = CliRunner()
+
+
+def _one_line_error(result) -> str:
+    err = result.stderr.strip()
+    assert "Traceback" not in result.output
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("error: "), err
+    return err
+
+
+def test_help():
+    result = runner.invoke(app, ["--help"])
+    assert result.exit_code == 0, result.output
+    assert "reproduce" in result.output
+    result = runner.invoke(app, ["reproduce", "--help"])
+    assert result.exit_code == 0, result.output
+    assert "--quick" in result.output and "--stage" in result.output
+
+
+def test_version():
+    result = runner.invoke(app, ["--version"])
+    assert result.exit_code == 0
+    assert __version__ in result.output
+
+
+def test_unknown_stage_is_a_one_line_error():
+    with isolated_registry():
+        result = runner.invoke(app, ["reproduce", "--stage", "no-such-stage"])
+    assert result.exit_code == 2
+    assert "no-such-stage" in _one_line_error(result)
+
+
+def test_parameter_error_is_a_one_line_error():
+    """A ParameterError from the model layer, raised inside any command."""
+    from chuteflow.closures import ChuteModel
+
+    demo = typer.Typer(cls=ChuteflowGroup)
+
+    @demo.command()
+    def build(restitution: float = 0.7) -> None:
+        ChuteModel(restitution=restitution)
+
+    @demo.command()
+    def other() -> None:  # a second command keeps `demo` a group
+        pass
+
+    result = runner.invoke(demo, ["build", "--restitution", "1.5"])
+    assert result.exit_code == 2
+    err = _one_line_error(result)
+    assert "restitution" in err and "(0, 1]" in err
+    assert runner.invoke(demo, ["build", "--restitution", "0.9"]).exit_code == 0
+
+
+def test_main_returns_2_on_user_error(capsys):
+    with isolated_registry():
+        code = main(["reproduce", "--stage", "no-such-stage"])
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("error: ") and len(err.splitlines()) == 1
+
+
+def test_reproduce_with_no_stages_writes_report(tmp_path):
+    out = tmp_path / "out"
+    with isolated_registry():
+        result = runner.invoke(app, ["reproduce", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    md = (out / "report.md").read_text(encoding="utf-8")
+    html = (out / "report.html").read_text(encoding="utf-8")
+    assert __version__ in md and "mode | quick" in md
+    assert html.startswith("<!DOCTYPE html>") and __version__ in html
+    data = json.loads((out / "checkpoints.json").read_text(encoding="utf-8"))
+    assert data["counts"] == {"pass": 0, "fail": 0, "not checked": 0}
+
+
+def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
+    import matplotlib.pyplot as plt
+
+    with isolated_registry():
+        @register_stage("broken", order=1)
+        def broken(ctx):
+            """A stage that crashes."""
+            ctx.progress("about to fail")
+            raise RuntimeError("boom")
+
+        @register_stage("works", order=2, title="Working stage")
+        def works(ctx):
+            for _ in ctx.progress.track(range(3), "looping"):
+                pass
+            fig, ax = plt.subplots()
+            ax.plot([0, 1], [0, 1])
+            fig.savefig(ctx.path("line.png"))
+            plt.close(fig)
+            ctx.report.add_figure(ctx.path("line.png"), "A line", id="fig1", source="figure 1")
+            ctx.report.add_note("Note with <html> & | pipes.")
+            ctx.report.check("works.ok", source="§3", statement="1 = 1", computed="1",
+                             passed=True)
+            ctx.report.add_checkpoint(Checkpoint.compare(
+                "works.h", source="§3.2", statement="h ≈ 23", value=23.4, expected=23.0,
+                rtol=0.05, name="h"))
+            ctx.report.check("works.qual", source="fig:x", statement="qualitative",
+                             computed="see figure", passed=None)
+
+        result = runner.invoke(app, ["reproduce", "--out", str(tmp_path), "--full"])
+        assert result.exit_code == 1, result.output
+        assert "Traceback" not in result.stderr
+
+        # Selecting one stage runs only that one.
+        sub = tmp_path / "sub"
+        report = run_reproduce(sub, stages=["works"])
+        assert report.ok and [s for s in report.sections] == ["works"]
+
+    md = (tmp_path / "report.md").read_text(encoding="utf-8")
+    html = (tmp_path / "report.html").read_text(encoding="utf-8")
+    assert "broken.completed" in md and "RuntimeError: boom" in md
+    assert "## Working stage" in md and "![A line](works/line.png)" in md
+    assert "mode | full" in md
+    assert "data:image/png;base64," in html  # self-contained
+    assert 'class="fail"' in html and 'class="pass"' in html and 'class="not-checked"' in html
+    assert "&lt;html&gt;" in html
+    data = json.loads((tmp_path / "checkpoints.json").read_text(encoding="utf-8"))
+    assert data["counts"] == {"pass": 2, "fail": 1, "not checked": 1}
+    assert [s["status"] for s in data["stages"]] == ["failed", "ok"]
+
+
+def test_duplicate_stage_name_rejected():
+    with isolated_registry():
+        @register_stage("dup", order=1)
+        def first(ctx):
+            pass
+
+        with pytest.raises(ValueError, match="already registered"):
+            @register_stage("dup", order=2)
+            def second(ctx):
+                pass
+
+
+def test_python_dash_m(tmp_path):
+    """``python -m chuteflow`` works (subprocess: the real entry point)."""
+    result = subprocess.run([sys.executable, "-m", "chuteflow", "--help"],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert "reproduce" in result.stdout

@@ -1,0 +1,48 @@
+"""Package namespace and thread limiting."""
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import chuteflow
+
+
+def test_version_is_a_string():
+    assert isinstance(chuteflow.__version__, str) and chuteflow.__version__
+
+
+def test_import_is_light():
+    code = ("import sys, chuteflow; heavy = [m for m in ('numpy', 'sympy', 'scipy', "
+            "'matplotlib', 'rich', 'typer') if m in sys.modules]; print(','.join(heavy))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, timeout=120).stdout.strip()
+    assert out == "", f"import chuteflow loaded {out}"
+
+
+def test_lazy_names():
+    from chuteflow.closures import ChuteModel
+    from chuteflow.errors import ParameterError
+
+    assert chuteflow.ChuteModel is ChuteModel
+    assert chuteflow.ParameterError is ParameterError
+    assert "solve_steady" in dir(chuteflow)
+    try:
+        chuteflow.no_such_name  # noqa: B018
+    except AttributeError as exc:
+        assert "no_such_name" in str(exc)
+    else:  # pragma: no cover
+        raise AssertionError("expected AttributeError")
+
+
+def test_limit_blas_threads(monkeypatch):
+    from threadpoolctl import threadpool_info
+
+    from chuteflow._threads import limit_blas_threads
+
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        monkeypatch.delenv(var, raising=False)
+    with limit_blas_threads():
+        assert all(p["num_threads"] == 1 for p in threadpool_info()
+                   if p["user_api"] == "blas")
+        assert os.environ["OPENBLAS_NUM_THREADS"] == "1"
