@@ -255,11 +255,22 @@ def test_non_numeric_parameter_raises():
         ChuteModel(restitution="abc")
 
 
-@pytest.mark.xfail(strict=True, reason="closures accept roughness=inf although the stated "
-                   "range is (0, inf); reported, to be fixed in chuteflow.closures.model._check")
 def test_infinite_roughness_raises():
     with pytest.raises(ParameterError, match="roughness"):
         ChuteModel(roughness=float("inf"))
+
+
+@pytest.mark.parametrize("value", ["0.7", True, None])
+def test_parameter_types_are_checked(value):
+    with pytest.raises(ParameterError, match="restitution"):
+        ChuteModel(restitution=value)
+
+
+def test_parameters_stored_as_float_and_partials_float():
+    m = ChuteModel(restitution=1, roughness=np.float32(0.05))
+    assert type(m.restitution) is float and type(m.roughness) is float
+    ev = m.evaluate([0.1, 0.2], 1.0)
+    assert all(a.dtype == float for f in ev.values() for a in f.values())
 
 
 @pytest.mark.parametrize("kwargs", [

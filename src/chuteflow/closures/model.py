@@ -73,18 +73,18 @@ class ChuteModel:
     roughness: float = 0.05
     wall_loss: float = 0.39
     radial: RadialDistribution = field(default=LunSavage())
-    closure_name: str = "lun"
-    wall_name: str = "johnson_jackson"
 
     def __post_init__(self):
         _check("restitution", self.restitution, 0.0, 1.0, lo_open=True,
                why="e_p is a restitution coefficient (η = (1+e_p)/2 must stay in (1/2, 1])")
-        _check("nu_max", self.nu_max, 0.0, 0.74048, lo_open=True,
+        _check("nu_max", self.nu_max, 0.0, math.pi / math.sqrt(18.0), lo_open=True,
                why="ν_m is a packing fraction below the close-packing limit π/√18")
         _check("roughness", self.roughness, 0.0, math.inf, lo_open=True,
                why="φ is the fraction of slip momentum lost per floor collision")
         _check("wall_loss", self.wall_loss, 0.0, 1.0,
                why="Φ is the fraction of fluctuation energy lost per floor collision")
+        for name in ("restitution", "nu_max", "roughness", "wall_loss"):
+            object.__setattr__(self, name, float(getattr(self, name)))
         if isinstance(self.radial, str):
             if self.radial not in RADIAL_FUNCTIONS:
                 raise ParameterError(f"radial: unknown g0 '{self.radial}'; choose one of "
@@ -112,7 +112,9 @@ class ChuteModel:
         out, it = {}, iter(flat)
         shape = np.broadcast(nu, T).shape
         for name in FUNCTIONS:
-            out[name] = {o: np.broadcast_to(next(it), shape) for o in ORDERS}
+            # identically-zero partials come back as Python ints: make every entry a float array
+            out[name] = {o: np.broadcast_to(np.asarray(next(it), dtype=float), shape)
+                         for o in ORDERS}
         return out
 
     def f(self, nu) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -136,12 +138,10 @@ class ChuteModel:
 
 
 def _check(name, value, lo, hi, *, lo_open=False, why=""):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{name}: expected a number, got {value!r}") from None
-    bad = (not math.isfinite(v) and hi != math.inf) or math.isnan(v) or v > hi \
-        or (v <= lo if lo_open else v < lo)
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ParameterError(f"{name}: expected a number, got {value!r}")
+    v = float(value)
+    bad = not math.isfinite(v) or v > hi or (v <= lo if lo_open else v < lo)
     if bad:
         lb = "(" if lo_open else "["
         rb = ")" if hi == math.inf else "]"
