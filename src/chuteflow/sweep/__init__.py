@@ -1,0 +1,22 @@
+"""Parameter sweeps over (θ, ν0(0)) and stability diagrams in the (h, ν̄) plane (§4.2).
+
+- :class:`SweepConfig`: the grid, closures, resolution and point functions (hashed).
+- :func:`run_sweep` / :class:`Sweep`: run on local processes or Dask, persist each finished
+  task, resume after an interruption, return an :class:`xarray.Dataset`.
+- :class:`PointFunction`, :class:`Variable`, :func:`register_point_function`: per-point
+  computations (steady quantities, kinematic-wave speeds, long-wave coefficients, k_c, growth).
+- :func:`classify`: unstable points, regimes A, B, C, and the finite-k cross-check.
+"""
+from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid
+from .engine import Sweep, SweepStats, assemble, load_sweep, run_sweep, write_dataset
+from .points import (Point, PointFunction, Variable, point_function, register_point_function,
+                     registered_point_functions)
+from .runner import STATUS, TaskResult, run_task
+from .store import ConfigMismatchError, PartStore
+from .classify import classify
+
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "default_ranges", "parse_grid", "Sweep",
+           "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
+           "PointFunction", "Variable", "point_function", "register_point_function",
+           "registered_point_functions", "STATUS", "TaskResult", "run_task",
+           "ConfigMismatchError", "PartStore", "classify"]

@@ -1,0 +1,246 @@
+"""What a sweep computes: the (θ, ν0(0)) grid, closures, resolution, point functions, tasks.
+
+:class:`SweepConfig` is frozen and hashable; :meth:`SweepConfig.digest` (SHA-256 of its
+canonical JSON, with the chuteflow version and every point function's version) names the
+results, so saved partial results are reused only by the very same configuration.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "default_ranges", "parse_grid"]
+
+#: (θ range in degrees, ν0(0) range) covering the paper's stability diagrams, where steady
+#: flows exist (found by scanning with chuteflow.steady; beyond them no steady flow exists
+#: or the steady solver does not converge). Figures phase005 and phase010.
+DEFAULT_RANGES: dict[float, tuple[tuple[float, float], tuple[float, float]]] = {
+    0.05: ((12.0, 18.0), (0.01, 0.25)),
+    0.10: ((16.5, 22.5), (0.01, 0.30)),
+}
+
+
+def default_ranges(roughness: float) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Default (θ range, ν0 range) for a roughness: the paper's two cases, else a wide guess.
+
+    For other roughness values the θ window is centred by linear interpolation between the
+    paper's two cases (the window moves up by ~4.5° when φ doubles); check the ``status``
+    map of the result and adjust ``theta_range``.
+    """
+    r = float(roughness)
+    for key, val in DEFAULT_RANGES.items():
+        if math.isclose(r, key, rel_tol=1e-9):
+            return val
+    (a0, a1), _ = DEFAULT_RANGES[0.05]
+    (b0, b1), _ = DEFAULT_RANGES[0.10]
+    s = (r - 0.05) / 0.05
+    lo = max(1.0, a0 + s * (b0 - a0))
+    hi = max(lo + 2.0, a1 + s * (b1 - a1))
+    return (round(lo, 2), round(hi, 2)), (0.01, 0.30)
+
+
+def parse_grid(text: str) -> tuple[int, int]:
+    """``"60x60"`` → (n_theta, n_nu0)."""
+    try:
+        a, b = str(text).lower().replace("×", "x").split("x")
+        nt, nn = int(a), int(b)
+    except ValueError:
+        raise ParameterError(f"grid = {text!r}: write it as N_THETAxN_NU0, e.g. 60x60") from None
+    if nt < 1 or nn < 1:
+        raise ParameterError(f"grid = {text!r}: both sizes must be at least 1")
+    return nt, nn
+
+
+@dataclass(frozen=True)
+class Task:
+    """A unit of work: one θ row, points ``j0 ≤ j < j1`` along ν0 (continuation inside)."""
+
+    index: int
+    i: int
+    j0: int
+    j1: int
+
+    @property
+    def key(self) -> str:
+        return f"t{self.i:05d}_{self.j0:05d}-{self.j1:05d}"
+
+    @property
+    def size(self) -> int:
+        return self.j1 - self.j0
+
+
+@dataclass(frozen=True)
+class SweepConfig:
+    """A sweep over the (θ, ν0(0)) grid.
+
+    Parameters
+    ----------
+    theta : sequence of float
+        Inclinations θ in degrees (strictly increasing).
+    nu0 : sequence of float
+        Floor packing fractions ν0(0) (strictly increasing).
+    roughness, wall_loss, restitution, nu_max : float
+        Closure parameters φ, Φ, e_p, ν_m (:class:`~chuteflow.closures.ChuteModel`).
+    metrics : sequence
+        Point functions by name, ``{"name", "options"}`` dict or instance; default: the
+        steady quantities, kinematic-wave speeds and the stability metrics
+        (:func:`chuteflow.sweep.metrics.default_metrics`).
+    nu_top, steady_rtol, n_max, min_thickness :
+        Passed to :func:`~chuteflow.steady.solve_steady`. ``min_thickness`` defaults to 0:
+        the diagrams show h < 1 (hatched, paper fig. phase005: "not examined").
+    chunk : int
+        Points per task along ν0. Tasks are computed with continuation from the previous
+        point, so results depend on the chunking at round-off level: it is part of the hash
+        and independent of the number of workers.
+    retry_cold : bool
+        If a continued steady solve fails, retry once from the solver's cold start.
+    """
+
+    theta: tuple[float, ...]
+    nu0: tuple[float, ...]
+    roughness: float = 0.05
+    wall_loss: float = 0.39
+    restitution: float = 0.7
+    nu_max: float = 0.6
+    metrics: tuple = field(default=None)
+    nu_top: float = 1e-9
+    steady_rtol: float = 1e-8
+    n_max: int = 384
+    min_thickness: float = 0.0
+    chunk: int = 20
+    retry_cold: bool = True
+
+    def __post_init__(self):
+        for name in ("theta", "nu0"):
+            try:
+                arr = np.asarray(getattr(self, name), dtype=float).ravel()
+            except (TypeError, ValueError):
+                raise ParameterError(f"{name}: must be a sequence of numbers") from None
+            if arr.size == 0 or not np.isfinite(arr).all():
+                raise ParameterError(f"{name}: need at least one finite value")
+            if arr.size > 1 and not (np.diff(arr) > 0).all():
+                raise ParameterError(f"{name}: values must be strictly increasing")
+            object.__setattr__(self, name, tuple(float(x) for x in arr))
+        if not (0.0 < self.theta[0] and self.theta[-1] < 90.0):
+            raise ParameterError(f"theta: values must lie in (0, 90) degrees, got "
+                                 f"[{self.theta[0]:g}, {self.theta[-1]:g}]")
+        if not (0.0 < self.nu0[0] and self.nu0[-1] < self.nu_max):
+            raise ParameterError(f"nu0: values must lie in (0, nu_max = {self.nu_max:g}) "
+                                 f"(floor packing fraction), got [{self.nu0[0]:g}, "
+                                 f"{self.nu0[-1]:g}]")
+        if int(self.chunk) < 1:
+            raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
+        object.__setattr__(self, "chunk", int(self.chunk))
+        object.__setattr__(self, "n_max", int(self.n_max))
+        for name in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top",
+                     "steady_rtol", "min_thickness"):
+            object.__setattr__(self, name, float(getattr(self, name)))
+        self.model()  # validates the closure parameters
+        from .points import point_function
+        if self.metrics is None:
+            from .metrics import default_metrics
+            specs = default_metrics()
+        else:
+            specs = self.metrics
+        fns = [point_function(s) for s in specs]
+        names = [f.name for f in fns]
+        if len(set(names)) != len(names):
+            raise ParameterError(f"metrics: duplicate point functions in {names}")
+        seen = set()
+        for f in fns:
+            missing = [r for r in f.requires if r not in seen]
+            if missing:
+                raise ParameterError(f"metrics: {f.name!r} needs {missing} listed before it")
+            seen.add(f.name)
+        variables = [v.name for f in fns for v in f.variables]
+        dup = {v for v in variables if variables.count(v) > 1}
+        if dup:
+            raise ParameterError(f"metrics: variables {sorted(dup)} are produced twice")
+        object.__setattr__(self, "metrics", tuple(json.dumps(f.spec(), sort_keys=True)
+                                                  for f in fns))
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def grid(cls, roughness: float = 0.05, *, shape: tuple[int, int] = (60, 60),
+             theta_range: tuple[float, float] | None = None,
+             nu0_range: tuple[float, float] | None = None, **kw) -> SweepConfig:
+        """Uniform grid of ``shape = (n_theta, n_nu0)`` over the given (or default) ranges."""
+        dt, dn = default_ranges(roughness)
+        tr = tuple(theta_range) if theta_range is not None else dt
+        nr = tuple(nu0_range) if nu0_range is not None else dn
+        for name, r in (("theta_range", tr), ("nu0_range", nr)):
+            if len(r) != 2 or not (float(r[0]) <= float(r[1])):
+                raise ParameterError(f"{name} = {r!r}: need (low, high) with low <= high")
+        nt, nn = (int(x) for x in shape)
+        if nt < 1 or nn < 1:
+            raise ParameterError(f"shape = {shape!r}: both sizes must be at least 1")
+        if (nt > 1 and tr[0] == tr[1]) or (nn > 1 and nr[0] == nr[1]):
+            raise ParameterError("a range with low == high allows one grid point only")
+        th = np.linspace(float(tr[0]), float(tr[1]), nt)
+        nu = np.linspace(float(nr[0]), float(nr[1]), nn)
+        # round to 12 digits so that the same command line always gives the same hash
+        return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)),
+                   roughness=roughness, **kw)
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def shape(self) -> tuple[int, int]:
+        return len(self.theta), len(self.nu0)
+
+    @property
+    def size(self) -> int:
+        return len(self.theta) * len(self.nu0)
+
+    def model(self):
+        from ..closures import ChuteModel
+        return ChuteModel(restitution=self.restitution, nu_max=self.nu_max,
+                          roughness=self.roughness, wall_loss=self.wall_loss)
+
+    def point_functions(self) -> list:
+        from .points import point_function
+        return [point_function(json.loads(s)) for s in self.metrics]
+
+    def variables(self) -> list:
+        return [v for f in self.point_functions() for v in f.variables]
+
+    def tasks(self) -> list[Task]:
+        """Tasks in a fixed order: θ rows, each cut into chunks of ``chunk`` points."""
+        out = []
+        nn = len(self.nu0)
+        nchunks = math.ceil(nn / self.chunk)
+        # equal-sized chunks (sizes differ by at most one)
+        edges = [round(k * nn / nchunks) for k in range(nchunks + 1)]
+        for i in range(len(self.theta)):
+            for a, b in zip(edges[:-1], edges[1:]):
+                out.append(Task(len(out), i, a, b))
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """Canonical JSON-ready form (what is hashed, and stored in the Dataset attrs)."""
+        from .. import __version__
+        return {"theta": list(self.theta), "nu0": list(self.nu0),
+                "roughness": self.roughness, "wall_loss": self.wall_loss,
+                "restitution": self.restitution, "nu_max": self.nu_max,
+                "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
+                "steady_rtol": self.steady_rtol, "n_max": self.n_max,
+                "min_thickness": self.min_thickness, "chunk": self.chunk,
+                "retry_cold": self.retry_cold, "chuteflow_version": __version__}
+
+    def digest(self) -> str:
+        """SHA-256 (hex) of the canonical configuration."""
+        text = json.dumps(self.to_dict(), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+    @classmethod
+    def from_dict(cls, d: dict) -> SweepConfig:
+        d = dict(d)
+        d.pop("chuteflow_version", None)
+        return cls(**{**d, "theta": tuple(d["theta"]), "nu0": tuple(d["nu0"]),
+                      "metrics": tuple(d["metrics"])})
