@@ -1,0 +1,4 @@
+"""Long-wave (kinematic-wave) theory: α(k) = α1 k + α2 k² + O(k³) by perturbation theory."""
+from .theory import LongWave, longwave
+
+__all__ = ["LongWave", "longwave"]

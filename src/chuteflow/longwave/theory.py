@@ -1,0 +1,215 @@
+"""Long-wave expansion of the least-stable branch, α(k) = α1 k + α2 k² + O(k³) (§5.1.1, App. B).
+
+At k = 0 the mass-conservation mode has α = 0 and eigenvector V0 = ∂X0/∂β, the derivative of
+the steady flow along its family at fixed θ (Appendix B, eq:last), which the steady solver
+gives exactly (:func:`chuteflow.steady.steady_tangent`). Writing the discrete operator as
+A(k) = A0 + k P1 + k² P2 (P1 = i A1, P2 = −A2 of :meth:`StabilityOperator.series`) and
+expanding A V = α B V with V = V0 + k V1 + k² V2,
+
+    A0 V1 − α1 B V0 = −P1 V0,
+    A0 V2 − α2 B V0 = α1 B V1 − P1 V1 − P2 V0,
+
+each solved for (V_j, α_j) together as one *bordered* system [[A0, −B V0], [c, 0]] with the
+normalisation c·V_j = ∫ ν̂_j dy = 0. Bordering replaces the solvability condition with the
+adjoint vector, which is ill-conditioned here: a continuum of slowly settling density modes of
+the dilute top (ERRATA, numerical notes) sits within ~1e-8 of α = 0. Rows and columns are
+equilibrated before the LU for the same reason.
+
+Checks: α1 = −i dQ0/dρ̄0 (Appendix B, eq:vp0) and α2 = lim Re α/k² + i Im … of the eigenvalues
+at k ≲ 1e-6. Re α2 converges only algebraically in N (≈ N⁻⁴), hence the default N = 200 and the
+reported convergence. Re α2 > 0 means long-wave instability; never decide stability at finite k
+from α2 alone (the k² regime ends near k ~ 1e-5 … 1e-4 for P1).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..errors import ConvergenceError
+from ..stability.operator import StabilityOperator
+from ..steady import SteadyFlow, steady_tangent
+
+
+@dataclass(frozen=True)
+class LongWave:
+    """Long-wave coefficients of the least-stable branch of one steady flow.
+
+    Attributes
+    ----------
+    theta, nu0 : float
+        The steady flow (degrees, floor density).
+    alpha1, alpha2 : complex
+        α(k) = α1 k + α2 k² + O(k³) for perturbations ∝ exp(αt + ikx) (eq:lin).
+    dQ_drho : float
+        dQ0/dρ̄0 along the family at fixed θ (eq:dqdh); Appendix B: α1 = −i dQ0/dρ̄0.
+    n : int
+        Chebyshev intervals of the finer resolution.
+    convergence_alpha1, convergence_alpha2 : float
+        Relative change of α1 and α2 between n and 4n/5.
+    """
+
+    theta: float
+    nu0: float
+    alpha1: complex
+    alpha2: complex
+    dQ_drho: float
+    n: int
+    convergence_alpha1: float
+    convergence_alpha2: float
+    k_check: float = float("nan")
+    alpha_check: complex = complex("nan")
+
+    @property
+    def alpha2_from_eigenvalue(self) -> complex:
+        """(α(k) − α1 k)/k² from the eigenvalue at ``k_check``: the k² coefficient as the
+        eigenvalues see it, for comparison with the perturbative α2."""
+        return (self.alpha_check - self.alpha1 * self.k_check) / self.k_check**2
+
+    @property
+    def phase_velocity(self) -> float:
+        """Long-wave phase velocity Im α/k → Im α1 (negative: the wave runs down the slope)."""
+        return float(self.alpha1.imag)
+
+    @property
+    def unstable(self) -> bool:
+        """Long-wave unstable: Re α2 > 0."""
+        return self.alpha2.real > 0
+
+    def summary(self) -> dict:
+        return {"theta": self.theta, "nu0": self.nu0, "alpha1_re": self.alpha1.real,
+                "alpha1_im": self.alpha1.imag, "alpha2_re": self.alpha2.real,
+                "alpha2_im": self.alpha2.imag, "dQ_drho": self.dQ_drho, "n": self.n,
+                "convergence_alpha1": self.convergence_alpha1,
+                "convergence_alpha2": self.convergence_alpha2,
+                "k_check": self.k_check,
+                "alpha2_from_eigenvalue_re": self.alpha2_from_eigenvalue.real,
+                "alpha2_from_eigenvalue_im": self.alpha2_from_eigenvalue.imag,
+                "long_wave_unstable": bool(self.unstable)}
+
+
+def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
+    """V0 = ∂X0/∂β at fixed height y on the operator's grid (v̂ = ŵ = 0).
+
+    The tangent is taken at fixed ξ = y/y_max; at fixed y, ∂f/∂β|_y = ∂f/∂β|_ξ − (y/y_max)
+    (dy_max/dβ) f'(y).
+    """
+    flow = op.flow
+    g, L, dL = flow.grid, flow.y_max, tangent["y_max"]
+    shift = (g.y / L) * dL
+    fixed_y = {"nu": flow.nu * tangent["log_nu"] - shift * (g.D @ flow.nu),
+               "u": tangent["u"] - shift * (g.D @ flow.u),
+               "T": tangent["T"] - shift * (g.D @ flow.T)}
+    y = op.grid.y
+    parts = [g.interpolate(fixed_y[f], y) if f in fixed_y else np.zeros_like(y)
+             for f in op.fields]
+    return np.concatenate(parts)
+
+
+def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:
+    """(α1, α2) of one discretised operator by bordered perturbation theory."""
+    A0, A1, A2 = op.series()
+    P1, P2 = 1j * A1, -A2
+    B = np.asarray(op.B, dtype=float)
+    M = A0.shape[0]
+    V0 = null_vector(op, tangent)
+    c = np.zeros(M)
+    i = op.fields.index("nu") * (op.n + 1)
+    c[i:i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
+    V0 = V0 / (c @ V0)
+    bord = np.zeros((M + 1, M + 1))
+    bord[:M, :M] = A0
+    bord[:M, M] = -(B @ V0)
+    bord[M, :M] = c
+    rs = 1.0 / np.abs(bord).max(axis=1)
+    bord *= rs[:, None]
+    cs = 1.0 / np.abs(bord).max(axis=0)
+    bord *= cs[None, :]
+    lu = sla.lu_factor(bord, check_finite=False)
+
+    def solve(rhs):
+        r = np.concatenate([rhs, [0.0]]) * rs
+        x = sla.lu_solve(lu, r.real, check_finite=False) \
+            + 1j * sla.lu_solve(lu, r.imag, check_finite=False)
+        x *= cs
+        return x[:M], x[M]
+
+    V1, a1 = solve(-(P1 @ V0))
+    _, a2 = solve(a1 * (B @ V1) - P1 @ V1 - P2 @ V0)
+    return complex(a1), complex(a2)
+
+
+def eigenvalue_near(op: StabilityOperator, k: float, shift: complex, iters: int = 8) -> complex:
+    """Eigenvalue of A(k) V = α B V nearest ``shift`` by inverse iteration on the row- and
+    column-equilibrated pencil (one LU; Rayleigh quotient of the converged vector)."""
+    P = op.pencil(k)
+    A, B = P.A, np.asarray(P.B, dtype=complex)
+    r = 1.0 / np.maximum(np.abs(A).max(axis=1), np.abs(B).max(axis=1))
+    A, B = A * r[:, None], B * r[:, None]
+    c = 1.0 / np.maximum(np.abs(A).max(axis=0), np.abs(B).max(axis=0))
+    A, B = A * c, B * c
+    lu = sla.lu_factor(A - shift * B, check_finite=False)
+    x = np.ones(A.shape[0], dtype=complex)
+    for _ in range(iters):
+        y = sla.lu_solve(lu, B @ x, check_finite=False)
+        # eigenvalue of the shift-invert operator (A − σB)⁻¹B, accurate relative to |λ − σ|
+        mu = np.vdot(x, y) / np.vdot(x, x)
+        x = y / np.linalg.norm(y)
+    return complex(shift + 1.0 / mu)
+
+
+def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
+             n_max: int = 480, k_check: float = 1e-6) -> LongWave:
+    """Long-wave coefficients α1, α2 of the least-stable branch (perturbation theory at k = 0).
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        The base state.
+    n : int
+        Starting number of Chebyshev intervals per field. α1, α2 are computed at 4n/5 and n,
+        and n is raised by 25 % until α2 changes by less than ``rtol`` (α1 by less than
+        ``rtol``/100).
+    rtol : float
+        Accepted relative change of α2 between resolutions. Re α2 converges only
+        algebraically (≈ N⁻⁴) when the domain reaches far into the dilute layer
+        (``flow.nu_top`` = 1e-9 needs N ≈ 300–400 for 1 %); for a sign only, 0.2 suffices.
+    n_max : int
+        Largest resolution tried.
+
+    Raises
+    ------
+    ConvergenceError
+        If the target is not reached by ``n_max``.
+
+    Notes
+    -----
+    The eigenvalue at ``k_check`` (default 1e-6) is computed too, by inverse iteration from
+    α1 k + α2 k², and kept in the result (``alpha2_from_eigenvalue``). The two differ by a few
+    per cent for ν_top = 1e-9: at k → 0 the branch interacts with the near-neutral continuum of
+    the dilute top (gap ~1e-8), which the strict k² coefficient includes and eigenvalues at
+    k ≳ 1e-7 do not.
+    """
+    tangent = steady_tangent(flow)
+    n = int(n)
+    n2 = max(24, (4 * n) // 5)
+    b1, b2 = coefficients(StabilityOperator(flow, n2), tangent)
+    while True:
+        a1, a2 = coefficients(StabilityOperator(flow, n), tangent)
+        c1 = abs(a1 - b1) / max(abs(a1), 1e-300)
+        c2 = abs(a2 - b2) / max(abs(a2), 1e-300)
+        ok = math.isfinite(c1) and math.isfinite(c2) and c2 <= rtol and c1 <= rtol / 100
+        if ok or n >= n_max:
+            break
+        b1, b2, n2, n = a1, a2, n, min(n_max, int(round(1.25 * n)))
+    if not ok:
+        raise ConvergenceError(
+            f"long-wave coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did not "
+            f"converge: relative change of alpha1 {c1:.1e}, alpha2 {c2:.1e} between n = {n2} "
+            f"and n = {n} (rtol = {rtol:g}); raise n_max or rtol")
+    op = StabilityOperator(flow, n)
+    check = eigenvalue_near(op, k_check, a1 * k_check + a2 * k_check**2)
+    return LongWave(flow.theta, flow.nu0, a1, a2, float(tangent["dQ_drho"]), n, float(c1),
+                    float(c2), float(k_check), check)

@@ -1,0 +1,107 @@
+"""Long-wave theory (paper §5.1.1, Appendix B): α(k) = α1 k + α2 k² + O(k³)."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+
+from chuteflow.closures import ChuteModel
+from chuteflow.longwave import longwave
+from chuteflow.longwave.theory import coefficients, null_vector
+from chuteflow.stability.operator import StabilityOperator
+from chuteflow.steady import solve_steady, steady_tangent
+
+
+@pytest.fixture(scope="module")
+def p1():
+    return solve_steady(16, 0.05)
+
+
+def _qz_branch(op, k, alpha1):
+    """Eigenvalue of the row/column-equilibrated pencil closest to the kinematic wave."""
+    P = op.pencil(k)
+    A, B = P.A.copy(), np.asarray(P.B, dtype=complex)
+    r = 1.0 / np.maximum(abs(A).max(1), abs(B).max(1))
+    A, B = A * r[:, None], B * r[:, None]
+    c = 1.0 / np.maximum(abs(A).max(0), abs(B).max(0))
+    w = sla.eig(A * c, B * c, right=False)
+    w = w[np.isfinite(w)]
+    return w[np.argmin(abs(w / k - alpha1))]
+
+
+def test_alpha1_is_minus_i_dQ_drho(p1):
+    """Appendix B (eq:vp0): α1 = −i dQ0/dρ̄0, with dQ0/dρ̄0 from the exact family tangent.
+
+    The two agree to the discretisation error of the operator at N = 160 (≈ 1e-6 relative,
+    measured: 7e-7), and Re α1 vanishes to round-off.
+    """
+    a1, _ = coefficients(StabilityOperator(p1, 160), steady_tangent(p1))
+    dq = steady_tangent(p1)["dQ_drho"]
+    assert abs(a1.imag + dq) / dq < 5e-6
+    assert abs(a1.real) < 1e-9 * abs(a1)
+
+
+def test_null_vector_is_family_tangent(p1):
+    """eq:x02: A0 ∂X0/∂β = 0 (interior and floor rows; round-off relative to ‖A0‖ ‖V0‖)."""
+    op = StabilityOperator(p1, 120)
+    V0 = null_vector(op, steady_tangent(p1))
+    A0 = op.series()[0]
+    r = A0 @ V0
+    m = op.n + 1
+    interior = np.ones(r.size, bool)
+    interior[m - 1::m] = False  # top decay rows are not part of the steady problem
+    scale = np.abs(A0).max(axis=1) * np.abs(V0).max()
+    assert (np.abs(r[interior]) / scale[interior]).max() < 1e-9
+
+
+def test_alpha2_matches_small_k_eigenvalue():
+    """α2 equals (α(k) − α1 k)/k² of the eigenvalues at small k (ERRATA: k ≲ 1e-5).
+
+    With the domain top at ν0 = 1e-7 the near-neutral continuum of the dilute layer sits
+    ~1e-6 below α = 0, so k = 1e-7 lies inside the k² regime: agreement to 0.5 % (measured
+    0.1 %, the O(k) remainder). Dense QZ on the equilibrated pencil is the reference.
+    """
+    flow = solve_steady(16, 0.05, nu_top=1e-7)
+    op = StabilityOperator(flow, 200)
+    a1, a2 = coefficients(op, steady_tangent(flow))
+    k = 1e-7
+    alpha = _qz_branch(op, k, a1)
+    assert abs(alpha.real / k**2 - a2.real) / abs(a2.real) < 5e-3
+
+
+def test_alpha2_vs_eigenvalue_at_paper_top(p1):
+    """At the paper's top (ν0 = 1e-9) the continuum gap is ~1e-8 and eigenvalues at
+    k = 1e-6 see Re α/k² a few per cent away from the strict α2 (measured 4 %): the
+    result reports both; they agree to 8 % and in sign. The inverse-iteration eigenvalue
+    equals dense QZ to 1e-6 of |α| (measured 3e-7: both are limited by the conditioning of
+    this non-normal pencil), i.e. to 2e-4 of Re α."""
+    lw = longwave(p1, rtol=0.05)
+    e2 = lw.alpha2_from_eigenvalue
+    assert abs(e2.real - lw.alpha2.real) / abs(lw.alpha2.real) < 8e-2
+    op = StabilityOperator(p1, lw.n)
+    qz = _qz_branch(op, lw.k_check, lw.alpha1)
+    assert abs(qz - lw.alpha_check) < 1e-6 * abs(qz)
+    assert abs(qz.real - lw.alpha_check.real) < 2e-4 * abs(qz.real)
+
+
+@pytest.mark.parametrize("theta, nu0, roughness, unstable", [
+    (16, 0.05, 0.05, True),    # P1, regime B (§4.2.1)
+    (16, 0.10, 0.05, False),   # P3, stable
+    (14, 0.05, 0.05, True),    # P4, regime A
+    (17, 0.10, 0.05, True),    # P5, regime C
+    (20, 0.17, 0.10, True),    # Q3 (§4.2.2)
+])
+def test_long_wave_stability_of_paper_points(theta, nu0, roughness, unstable):
+    """Sign of Re α2 at the paper's points P1, P3–P5, Q3 (rtol 0.2: the sign only)."""
+    lw = longwave(solve_steady(theta, nu0, ChuteModel(roughness=roughness)), rtol=0.2)
+    assert lw.unstable is unstable
+    assert abs(lw.alpha1.imag + lw.dQ_drho) < 1e-5 * lw.dQ_drho
+
+
+@pytest.mark.slow
+def test_alpha2_converges_and_p2_is_stable(p1):
+    """Re α2 at 1 % (N up to 480) for P1; P2 (16°, 0.08) long-wave stable (§4.2.1)."""
+    lw = longwave(p1)
+    assert lw.convergence_alpha2 < 1e-2 and 1.1e4 < lw.alpha2.real < 1.3e4
+    p2 = longwave(solve_steady(16, 0.08), rtol=0.05)
+    assert not p2.unstable
