@@ -1,9 +1,164 @@
-"""Stability classification of a swept Dataset: unstable points and regimes A, B, C (§4.2)."""
+"""Stability classification of a swept Dataset: unstable points, regimes A, B, C (§4.2).
+
+- ``unstable``: Re α2 > 0, the long-wave criterion (§4.2: every unstable mode found by the paper
+  has α(0) = 0 and Re α ∝ k² at small k).
+- ``finite_k_unstable`` and ``finite_k_disagrees``: where the dispersion relation was sampled
+  (metric ``growth``), whether some k on its grid grows, and whether that contradicts the
+  long-wave criterion (a finite-k instability it misses, or a long-wave instability the k grid
+  does not see). Such points are reported, never hidden.
+- ``regime``: 1 = A, 2 = B, 3 = C, 0 = stable, −1 = unknown. §4.2: in B the lighter flow is
+  faster (dU/dρ̄0 < 0 with U = Q0/ρ̄0); in A and C the denser flow is faster (dU/dρ̄0 > 0). A lies
+  at small h and small ν̄, C at large h and large ν̄: the unstable points with dU/dρ̄0 > 0 are
+  split into connected regions of the (θ, ν0) grid, and a region is C when it lies above the
+  B regime in ν̄ and beyond the A/B separatrix in h (see :func:`regimes`).
+"""
 from __future__ import annotations
 
-__all__ = ["classify"]
+import numpy as np
+
+__all__ = ["classify", "regimes", "REGIMES", "regime_summary"]
+
+#: Regime codes of the ``regime`` variable.
+REGIMES = {"stable": 0, "A": 1, "B": 2, "C": 3}
+
+
+def _flag(arr_bool, valid):
+    out = np.full(arr_bool.shape, -1, dtype=np.int8)
+    out[valid] = arr_bool[valid].astype(np.int8)
+    return out
+
+
+def _flag_attrs(long_name, source=""):
+    a = {"units": "1", "long_name": long_name,
+         "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+         "flag_meanings": "missing false true"}
+    if source:
+        a["source"] = source
+    return a
 
 
 def classify(ds):
-    """Add the classification variables to ``ds`` when its metrics allow it."""
+    """Add ``unstable``, ``regime`` and the finite-k cross-check to ``ds`` (if computable).
+
+    Needs ``alpha2_re`` (metric ``longwave``); the regimes also need ``dU_drho`` (metric
+    ``kinematic``), the check needs ``growth_max`` (metric ``growth``). Marked points get the
+    same variables (``marker_…``).
+    """
+    if "alpha2_re" not in ds:
+        return ds
+    ds = ds.copy()
+    for prefix in ("", "marker_"):
+        if prefix and "marker" not in ds.dims:
+            continue
+        a2 = ds[prefix + "alpha2_re"].values
+        valid = np.isfinite(a2)
+        ds[prefix + "unstable"] = (ds[prefix + "alpha2_re"].dims, _flag(a2 > 0, valid),
+                                   _flag_attrs("long-wave unstable, Re α2 > 0", "§4.2"))
+        if "growth_max" in ds:
+            g = ds[prefix + "growth_max"].values
+            sampled = ds[prefix + "dispersion_sampled"].values == 1
+            ok = sampled & np.isfinite(g)
+            fk = _flag(g > 0, ok)
+            dis = np.full(a2.shape, -1, dtype=np.int8)
+            both = ok & valid
+            dis[both] = ((g[both] > 0) != (a2[both] > 0)).astype(np.int8)
+            dims = ds[prefix + "alpha2_re"].dims
+            ds[prefix + "finite_k_unstable"] = (dims, fk, _flag_attrs(
+                "some sampled k has Re α > 0 (dispersion relation of the α(0) = 0 branch)"))
+            ds[prefix + "finite_k_disagrees"] = (dims, dis, _flag_attrs(
+                "sampled dispersion relation and long-wave criterion disagree"))
+    if "dU_drho" in ds:
+        reg = regimes(ds["unstable"].values, ds["dU_drho"].values, ds["h"].values,
+                      ds["nu_mean"].values)
+        ds["regime"] = (("theta", "nu0"), reg, {
+            "long_name": "unstable regime (§4.2): A small h & small ν̄, denser faster; B lighter "
+                         "faster; C large h & large ν̄, denser faster",
+            "flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8),
+            "flag_meanings": "unknown stable A B C", "source": "§4.2, fig phase005"})
+        if "marker" in ds.dims:
+            ds["marker_regime"] = ("marker", _marker_regimes(ds, reg), dict(ds["regime"].attrs))
     return ds
+
+
+def regimes(unstable, dU, h, nu_mean):
+    """Regime codes (:data:`REGIMES`) on the (θ, ν0) grid.
+
+    B: unstable with dU/dρ̄0 < 0. The unstable points with dU/dρ̄0 ≥ 0 form connected regions
+    (4-neighbour connectivity of the grid); each region is A or C by where its median lies:
+    C when its median ν̄ exceeds the largest ν̄ of the B regime's lower half … see the code:
+    a region is C when its median ν̄ is above the median ν̄ of all B points and its median h
+    is not below the smallest h of the B regime; otherwise A.
+    """
+    from scipy import ndimage
+
+    unstable = np.asarray(unstable)
+    out = np.full(unstable.shape, -1, dtype=np.int8)
+    known = (unstable >= 0) & np.isfinite(dU)
+    out[known & (unstable == 0)] = REGIMES["stable"]
+    isB = known & (unstable == 1) & (dU < 0)
+    out[isB] = REGIMES["B"]
+    faster = known & (unstable == 1) & (dU >= 0)
+    labels, nlab = ndimage.label(faster)
+    if isB.any():
+        nu_B = float(np.median(nu_mean[isB]))
+        h_B = float(np.min(h[isB]))
+    else:
+        nu_B, h_B = -np.inf, np.inf
+    for lab in range(1, nlab + 1):
+        sel = labels == lab
+        mh, mn = float(np.median(h[sel])), float(np.median(nu_mean[sel]))
+        out[sel] = REGIMES["C"] if (mn > nu_B and mh >= h_B) else REGIMES["A"]
+    return out
+
+
+def _marker_regimes(ds, reg):
+    """Regime of each marked point from its own Re α2 and dU/dρ̄0; A or C (denser flow faster)
+    from the nearest grid point (in scaled (θ, ν0)) of regime A or C."""
+    out = np.full(ds.sizes["marker"], -1, dtype=np.int8)
+    th = ds["theta"].values
+    nu = ds["nu0"].values
+    T, N = np.meshgrid(th, nu, indexing="ij")
+    sth = max(np.ptp(th), 1e-12)
+    snu = max(np.ptp(nu), 1e-12)
+    for m in range(ds.sizes["marker"]):
+        u = int(ds["marker_unstable"].values[m])
+        if u < 0:
+            continue
+        if u == 0:
+            out[m] = REGIMES["stable"]
+            continue
+        dU = float(ds["marker_dU_drho"].values[m])
+        if not np.isfinite(dU):
+            continue
+        if dU < 0:
+            out[m] = REGIMES["B"]
+            continue
+        cand = (reg == REGIMES["A"]) | (reg == REGIMES["C"])
+        if not cand.any():
+            continue
+        d = ((T - ds["marker_theta"].values[m]) / sth) ** 2 + \
+            ((N - ds["marker_nu0"].values[m]) / snu) ** 2
+        d = np.where(cand, d, np.inf)
+        out[m] = reg.ravel()[int(np.argmin(d))]
+    return out
+
+
+def regime_summary(ds) -> dict:
+    """Per regime: number of grid points and median (h, ν̄), θ range; for reports."""
+    out = {}
+    if "regime" not in ds:
+        return out
+    reg = ds["regime"].values
+    T = np.broadcast_to(ds["theta"].values[:, None], reg.shape)
+    for name in ("A", "B", "C"):
+        sel = reg == REGIMES[name]
+        if not sel.any():
+            out[name] = {"points": 0}
+            continue
+        out[name] = {"points": int(sel.sum()),
+                     "h_median": float(np.median(ds["h"].values[sel])),
+                     "nu_mean_median": float(np.median(ds["nu_mean"].values[sel])),
+                     "theta_min": float(T[sel].min()), "theta_max": float(T[sel].max())}
+        if "monotonic" in ds:
+            out[name]["monotonic_fraction"] = float(np.mean(ds["monotonic"].values[sel] == 1))
+    return out

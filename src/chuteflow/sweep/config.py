@@ -16,7 +16,8 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "default_ranges", "parse_grid"]
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_ranges",
+           "default_markers", "parse_grid"]
 
 #: (θ range in degrees, ν0(0) range) covering the paper's stability diagrams, where steady
 #: flows exist (found by scanning with chuteflow.steady; beyond them no steady flow exists
@@ -25,6 +26,22 @@ DEFAULT_RANGES: dict[float, tuple[tuple[float, float], tuple[float, float]]] = {
     0.05: ((12.0, 18.0), (0.01, 0.25)),
     0.10: ((16.5, 22.5), (0.01, 0.30)),
 }
+
+
+#: Points marked in the paper's diagrams (name, θ in degrees, ν0(0)): figs phase005, phase010.
+DEFAULT_MARKERS: dict[float, tuple[tuple[str, float, float], ...]] = {
+    0.05: (("P1", 16.0, 0.05), ("P2", 16.0, 0.08), ("P3", 16.0, 0.10), ("P4", 14.0, 0.05),
+           ("P5", 17.0, 0.10)),
+    0.10: (("Q1", 20.0, 0.10), ("Q2", 20.0, 0.15), ("Q3", 20.0, 0.17)),
+}
+
+
+def default_markers(roughness: float) -> tuple[tuple[str, float, float], ...]:
+    """The paper's marked points for this roughness (none for other values)."""
+    for key, val in DEFAULT_MARKERS.items():
+        if math.isclose(float(roughness), key, rel_tol=1e-9):
+            return val
+    return ()
 
 
 def default_ranges(roughness: float) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -60,7 +77,10 @@ def parse_grid(text: str) -> tuple[int, int]:
 
 @dataclass(frozen=True)
 class Task:
-    """A unit of work: one θ row, points ``j0 ≤ j < j1`` along ν0 (continuation inside)."""
+    """A unit of work: one θ row, points ``j0 ≤ j < j1`` along ν0 (continuation inside).
+
+    ``i = -1`` is the task of the marked points (``markers[j0:j1]``, each from a cold start).
+    """
 
     index: int
     i: int
@@ -69,6 +89,8 @@ class Task:
 
     @property
     def key(self) -> str:
+        if self.i < 0:
+            return f"markers_{self.j0:05d}-{self.j1:05d}"
         return f"t{self.i:05d}_{self.j0:05d}-{self.j1:05d}"
 
     @property
@@ -101,6 +123,9 @@ class SweepConfig:
         and independent of the number of workers.
     retry_cold : bool
         If a continued steady solve fails, retry once from the solver's cold start.
+    markers : sequence of (name, theta, nu0)
+        Extra points computed with the same point functions and stored on a ``marker``
+        dimension (the paper's P1–P5, Q1–Q3; see :data:`DEFAULT_MARKERS`).
     """
 
     theta: tuple[float, ...]
@@ -116,6 +141,7 @@ class SweepConfig:
     min_thickness: float = 0.0
     chunk: int = 20
     retry_cold: bool = True
+    markers: tuple = ()
 
     def __post_init__(self):
         for name in ("theta", "nu0"):
@@ -138,6 +164,20 @@ class SweepConfig:
         if int(self.chunk) < 1:
             raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
         object.__setattr__(self, "chunk", int(self.chunk))
+        marks = []
+        for mk in self.markers:
+            try:
+                name, th, nu = mk
+                name, th, nu = str(name), float(th), float(nu)
+            except (TypeError, ValueError):
+                raise ParameterError(f"markers: {mk!r} is not (name, theta, nu0)") from None
+            if not (0 < th < 90 and 0 < nu < self.nu_max):
+                raise ParameterError(f"markers: {name} = ({th:g}°, {nu:g}) is outside theta in "
+                                     f"(0, 90) degrees, nu0 in (0, nu_max)")
+            marks.append((name, th, nu))
+        if len({m[0] for m in marks}) != len(marks):
+            raise ParameterError("markers: names must be unique")
+        object.__setattr__(self, "markers", tuple(marks))
         object.__setattr__(self, "n_max", int(self.n_max))
         for name in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top",
                      "steady_rtol", "min_thickness"):
@@ -185,6 +225,7 @@ class SweepConfig:
             raise ParameterError("a range with low == high allows one grid point only")
         th = np.linspace(float(tr[0]), float(tr[1]), nt)
         nu = np.linspace(float(nr[0]), float(nr[1]), nn)
+        kw.setdefault("markers", default_markers(roughness))
         # round to 12 digits so that the same command line always gives the same hash
         return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)),
                    roughness=roughness, **kw)
@@ -220,7 +261,14 @@ class SweepConfig:
         for i in range(len(self.theta)):
             for a, b in zip(edges[:-1], edges[1:]):
                 out.append(Task(len(out), i, a, b))
+        if self.markers:
+            out.append(Task(len(out), -1, 0, len(self.markers)))
         return out
+
+    @property
+    def npoints(self) -> int:
+        """Grid points plus marked points."""
+        return self.size + len(self.markers)
 
     def to_dict(self) -> dict[str, Any]:
         """Canonical JSON-ready form (what is hashed, and stored in the Dataset attrs)."""
@@ -231,7 +279,8 @@ class SweepConfig:
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
                 "steady_rtol": self.steady_rtol, "n_max": self.n_max,
                 "min_thickness": self.min_thickness, "chunk": self.chunk,
-                "retry_cold": self.retry_cold, "chuteflow_version": __version__}
+                "retry_cold": self.retry_cold, "markers": [list(m) for m in self.markers],
+                "chuteflow_version": __version__}
 
     def digest(self) -> str:
         """SHA-256 (hex) of the canonical configuration."""
@@ -243,4 +292,5 @@ class SweepConfig:
         d = dict(d)
         d.pop("chuteflow_version", None)
         return cls(**{**d, "theta": tuple(d["theta"]), "nu0": tuple(d["nu0"]),
-                      "metrics": tuple(d["metrics"])})
+                      "metrics": tuple(d["metrics"]),
+                      "markers": tuple(tuple(m) for m in d.get("markers", ()))})

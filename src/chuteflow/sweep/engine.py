@@ -26,7 +26,8 @@ from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
 from .store import ConfigMismatchError, PartStore, atomic_write
 
-__all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset"]
+__all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset",
+           "markers"]
 
 
 @dataclass
@@ -118,7 +119,7 @@ class Sweep:
         cfg = self.config
         t0 = time.perf_counter()
         tasks = cfg.tasks()
-        self.stats = st = SweepStats(tasks=len(tasks), points=cfg.size)
+        self.stats = st = SweepStats(tasks=len(tasks), points=cfg.npoints)
         if workers is not None and int(workers) < 1:
             raise ParameterError(f"workers = {workers!r}: need at least 1 worker process")
         if client is not None and scheduler is not None:
@@ -149,7 +150,7 @@ class Sweep:
             bar.advance(res.j1 - res.j0)
 
         npts_done = sum(t.size for t in tasks if t.key in done)
-        with _Progress(progress, total=cfg.size, completed=npts_done,
+        with _Progress(progress, total=cfg.npoints, completed=npts_done,
                        label=f"sweep φ={cfg.roughness:g}") as bar:
             if todo:
                 if client is not None or scheduler is not None:
@@ -306,13 +307,23 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
     data = {v.name: np.full((nt, nn), v.missing, dtype=v.dtype) for v in variables}
     status = np.full((nt, nn), -1, dtype=np.int8)
     message = np.full((nt, nn), "", dtype=object)
+    nm = len(config.markers)
+    mdata = {v.name: np.full(nm, v.missing, dtype=v.dtype) for v in variables}
+    mstatus = np.full(nm, -1, dtype=np.int8)
+    mmessage = np.full(nm, "", dtype=object)
     for p in parts:
+        if p.i < 0:
+            for v in variables:
+                mdata[v.name][p.j0:p.j1] = p.values[v.name]
+            mstatus[p.j0:p.j1] = p.status
+            mmessage[p.j0:p.j1] = [str(s) for s in p.message]
+            continue
         for v in variables:
             data[v.name][p.i, p.j0:p.j1] = p.values[v.name]
         status[p.i, p.j0:p.j1] = p.status
         message[p.i, p.j0:p.j1] = [str(s) for s in p.message]
-    if (status < 0).any():
-        raise RuntimeError("assemble: some grid points have no result")
+    if (status < 0).any() or (mstatus < 0).any():
+        raise RuntimeError("assemble: some points have no result")
     dims = ("theta", "nu0")
     ds = xr.Dataset(
         {v.name: (dims, data[v.name], v.attrs()) for v in variables},
@@ -325,6 +336,19 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
                                    "flag_values": np.array(list(STATUS.values()), np.int8),
                                    "flag_meanings": names})
     ds["message"] = (dims, message.astype(str), {"long_name": "why a point is not ok"})
+    if nm:
+        # marked points (paper's P1–P5, Q1–Q3): same variables on a 'marker' dimension
+        ds = ds.assign_coords(
+            marker=("marker", np.array([m[0] for m in config.markers], dtype=str),
+                    {"long_name": "marked point"}),
+            marker_theta=("marker", np.array([m[1] for m in config.markers]),
+                          {"units": "degree", "long_name": "inclination θ of the marked point"}),
+            marker_nu0=("marker", np.array([m[2] for m in config.markers]),
+                        {"units": "1", "long_name": "ν0(0) of the marked point"}))
+        for v in variables:
+            ds["marker_" + v.name] = ("marker", mdata[v.name], v.attrs())
+        ds["marker_status"] = ("marker", mstatus, dict(ds["status"].attrs))
+        ds["marker_message"] = ("marker", mmessage.astype(str), dict(ds["message"].attrs))
     d = config.to_dict()
     ds.attrs.update({
         "title": f"chuteflow stability sweep, roughness φ = {config.roughness:g}",
@@ -372,6 +396,14 @@ def load_sweep(path):
     if "config_digest" not in ds.attrs or "status" not in ds:
         raise ParameterError(f"file: {path} is not a chuteflow sweep (no config_digest/status)")
     return ds
+
+
+def markers(ds):
+    """The marked points of a sweep Dataset as their own Dataset (dimension ``marker``)."""
+    names = [v for v in ds.data_vars if v.startswith("marker_")]
+    out = ds[names].rename({v: v[len("marker_"):] for v in names})
+    return out.drop_vars([c for c in ds.coords if c not in ("marker", "marker_theta",
+                                                            "marker_nu0")], errors="ignore")
 
 
 def run_sweep(config: SweepConfig, out=None, *, workers: int | None = None, client=None,

@@ -107,7 +107,7 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     messages = [""] * m
     pt_seconds = np.zeros(m)
     model = config.model()
-    theta = config.theta[task.i]
+    marker = task.i < 0
     guess = None
     retries = 0
     kw = dict(nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max,
@@ -118,7 +118,12 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
         warnings.simplefilter("ignore", RuntimeWarning)
         for k, j in enumerate(range(task.j0, task.j1)):
             t0 = time.perf_counter()
-            nu0 = config.nu0[j]
+            if marker:
+                # marked points are unrelated: each from the cold start
+                _, theta, nu0 = config.markers[j]
+                guess = None
+            else:
+                theta, nu0 = config.theta[task.i], config.nu0[j]
             point = Point(task.i, j, theta, nu0)
             try:
                 try:

@@ -1,0 +1,286 @@
+"""Stability diagram in the (h, ν̄) plane from a sweep Dataset (paper figs phase005, phase010).
+
+Every grid point (θ, ν0(0)) with a steady flow is mapped to (h, ν̄). The grid's own connectivity
+gives a triangulation of the mapped plane (two triangles per grid cell whose corners all have a
+flow), so fields defined on the grid are contoured exactly where the flows are, with no
+Delaunay triangles bridging regions without flows:
+
+- unstable regions (Re α2 > 0) grey: the 0.5 level of the 0/1 field ``unstable``;
+- boundary of the non-monotonic region dashed (0.5 level of ``monotonic``);
+- contour lines of θ thin, labelled in degrees;
+- edge of the swept domain (where flows exist) thin solid;
+- h < 1 hatched (paper: "not examined": decay length below one diameter);
+- regimes A, B, C labelled, the paper's points P1–P5 / Q1–Q3 marked (filled: unstable);
+- points where the sampled dispersion relation disagrees with the long-wave criterion: red ×.
+
+A second panel (optional) shows the same classification on the (θ, ν0) grid, with the points
+where no steady flow was found or a solver did not converge.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["grid_triangulation", "plot_diagram", "save_diagram"]
+
+_REGIME_COLOURS = {0: "white", 1: "0.55", 2: "0.7", 3: "0.4"}
+
+
+def grid_triangulation(x, y, valid):
+    """Triangulation of points on a structured grid, from the grid's connectivity.
+
+    Parameters
+    ----------
+    x, y : ndarray (ni, nj)
+        Coordinates of the grid points in the target plane.
+    valid : ndarray of bool (ni, nj)
+        Points that exist (a steady flow was found).
+
+    Returns
+    -------
+    matplotlib.tri.Triangulation or None
+        Two triangles per cell with four valid corners, one per cell with three. Degenerate
+        (zero-area) triangles are dropped. None if there are no triangles.
+    """
+    import matplotlib.tri as mtri
+
+    ni, nj = valid.shape
+    idx = np.arange(ni * nj).reshape(ni, nj)
+    tris = []
+    for i in range(ni - 1):
+        for j in range(nj - 1):
+            c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]
+            ok = [bool(valid[p]) for p in c]
+            if all(ok):
+                tris.append([idx[c[0]], idx[c[1]], idx[c[2]]])
+                tris.append([idx[c[0]], idx[c[2]], idx[c[3]]])
+            elif sum(ok) == 3:
+                tris.append([idx[p] for p, o in zip(c, ok) if o])
+    if not tris:
+        return None
+    tris = np.array(tris)
+    xf, yf = np.nan_to_num(x.ravel()), np.nan_to_num(y.ravel())
+    area = 0.5 * ((xf[tris[:, 1]] - xf[tris[:, 0]]) * (yf[tris[:, 2]] - yf[tris[:, 0]]) -
+                  (xf[tris[:, 2]] - xf[tris[:, 0]]) * (yf[tris[:, 1]] - yf[tris[:, 0]]))
+    tris = tris[np.abs(area) > 1e-14 * (np.ptp(xf) * np.ptp(yf) + 1e-300)]
+    if len(tris) == 0:
+        return None
+    return mtri.Triangulation(xf, yf, tris)
+
+
+def _boundary_segments(tri):
+    """Edges used by exactly one triangle: the outline of the triangulated domain."""
+    edges = np.sort(np.concatenate([tri.triangles[:, [0, 1]], tri.triangles[:, [1, 2]],
+                                    tri.triangles[:, [2, 0]]]), axis=1)
+    uniq, counts = np.unique(edges, axis=0, return_counts=True)
+    b = uniq[counts == 1]
+    return np.stack([np.c_[tri.x[b[:, 0]], tri.y[b[:, 0]]],
+                     np.c_[tri.x[b[:, 1]], tri.y[b[:, 1]]]], axis=1)
+
+
+def _label_position(x, y, sel, xlim, ylim):
+    """A grid point of the region ``sel`` near its median, inside the axes."""
+    xs, ys = x[sel], y[sel]
+    inside = (xs > xlim[0]) & (xs < xlim[1]) & (ys > ylim[0]) & (ys < ylim[1])
+    if not inside.any():
+        return None
+    xs, ys = xs[inside], ys[inside]
+    sx, sy = xlim[1] - xlim[0], ylim[1] - ylim[0]
+    mx, my = np.median(xs), np.median(ys)
+    k = int(np.argmin(((xs - mx) / sx) ** 2 + ((ys - my) / sy) ** 2))
+    return xs[k], ys[k]
+
+
+def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = None,
+                 nu_max: float | None = None, theta_step: float | None = None,
+                 title: str | None = None):
+    """Draw the stability diagram of a sweep Dataset.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        From :func:`chuteflow.sweep.run_sweep` or :func:`chuteflow.sweep.load_sweep`.
+    ax : matplotlib Axes, optional
+        Draw the (h, ν̄) diagram here (no grid panel).
+    grid_panel : bool
+        Add a second panel with the classification on the (θ, ν0) grid.
+    h_max, nu_max : float, optional
+        Axis limits (default: the extent of the flows, h at most 60).
+    theta_step : float, optional
+        Spacing of the θ contour lines in degrees (default: about eight lines).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    if ax is None:
+        if grid_panel:
+            fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12.5, 5.2),
+                                          gridspec_kw={"width_ratios": [1.35, 1]})
+        else:
+            fig, ax = plt.subplots(figsize=(7.2, 5.4))
+            ax2 = None
+    else:
+        fig, ax2 = ax.figure, None
+    th = ds["theta"].values
+    T = np.broadcast_to(th[:, None], ds["h"].shape)
+    h = ds["h"].values
+    nb = ds["nu_mean"].values
+    ok = (ds["status"].values == 0) & np.isfinite(h) & np.isfinite(nb)
+    tri = grid_triangulation(h, nb, ok)
+    handles = []
+    if ok.any():
+        hx = float(np.nanmax(h[ok]))
+        xlim = (0.0, h_max if h_max is not None else min(60.0, 1.03 * hx))
+        ylim = (0.0, nu_max if nu_max is not None else 1.05 * float(np.nanmax(nb[ok])))
+    else:
+        xlim, ylim = (0.0, 1.0), (0.0, 1.0)
+    have_stab = "unstable" in ds
+    if tri is not None:
+        if have_stab:
+            u = ds["unstable"].values.astype(float)
+            u = np.where(u < 0, np.nan, u).ravel()
+            mask = np.isnan(u)[tri.triangles].any(axis=1)
+            tri.set_mask(mask)
+            ax.tricontourf(tri, np.nan_to_num(u), levels=[0.5, 1.5], colors=["0.72"])
+            handles.append(Patch(facecolor="0.72", label="unstable (Re α₂ > 0)"))
+            tri.set_mask(None)
+        if "monotonic" in ds:
+            mono = ds["monotonic"].values.astype(float).ravel()
+            if (mono[ok.ravel()] == 0).any() and (mono[ok.ravel()] == 1).any():
+                ax.tricontour(tri, mono, levels=[0.5], colors="k", linestyles="--",
+                              linewidths=1.3)
+                handles.append(Line2D([], [], color="k", ls="--",
+                                      label="monotonic / non-monotonic ν₀(y)"))
+        tf = T.ravel().astype(float)
+        step = theta_step or _nice_step(np.ptp(th) / 8 if len(th) > 1 else 1.0)
+        lev = np.arange(np.ceil(th.min() / step) * step, th.max() + 1e-9, step)
+        if len(lev):
+            cs = ax.tricontour(tri, tf, levels=lev, colors="0.35", linewidths=0.6)
+            ax.clabel(cs, fmt=lambda v: f"{v:g}°", fontsize=7, inline=True)
+            handles.append(Line2D([], [], color="0.35", lw=0.6, label="θ contours"))
+        seg = _boundary_segments(tri)
+        from matplotlib.collections import LineCollection
+        ax.add_collection(LineCollection(seg, colors="0.25", linewidths=0.8))
+        handles.append(Line2D([], [], color="0.25", lw=0.8, label="edge of swept flows"))
+    ax.axvspan(0.0, 1.0, facecolor="none", edgecolor="0.45", hatch="....", lw=0)
+    handles.append(Patch(facecolor="none", edgecolor="0.45", hatch="....",
+                         label="h < 1: not examined"))
+    if "regime" in ds:
+        reg = ds["regime"].values
+        for name, code in (("A", 1), ("B", 2), ("C", 3)):
+            pos = _label_position(h, nb, (reg == code) & ok, xlim, ylim)
+            if pos is not None:
+                ax.text(*pos, name, fontsize=17, fontweight="bold", ha="center", va="center",
+                        color="k", bbox=dict(boxstyle="circle,pad=0.15", fc="white",
+                                             ec="none", alpha=0.65))
+    if "finite_k_disagrees" in ds:
+        bad = (ds["finite_k_disagrees"].values == 1) & ok
+        if bad.any():
+            ax.plot(h[bad], nb[bad], "x", color="crimson", ms=7, mew=1.6)
+            handles.append(Line2D([], [], marker="x", color="crimson", ls="",
+                                  label="dispersion sample disagrees"))
+    if "marker" in ds.dims:
+        mh, mn = ds["marker_h"].values, ds["marker_nu_mean"].values
+        mu = ds["marker_unstable"].values if "marker_unstable" in ds else \
+            np.full(len(mh), -1)
+        for name, x, y, uu in zip(ds["marker"].values, mh, mn, mu):
+            if not (np.isfinite(x) and np.isfinite(y)):
+                continue
+            ax.plot(x, y, "o", ms=6, mec="k", mfc="k" if uu == 1 else "white", zorder=5)
+            ax.annotate(str(name), (x, y), xytext=(4, 4), textcoords="offset points",
+                        fontsize=9, zorder=6)
+        handles.append(Line2D([], [], marker="o", color="k", ls="", mfc="k",
+                              label="marked point, unstable"))
+        handles.append(Line2D([], [], marker="o", color="k", ls="", mfc="white",
+                              label="marked point, stable"))
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
+    ax.set_xlabel("thickness h (particle diameters)")
+    ax.set_ylabel("mean density ν̄")
+    phi = ds.attrs.get("roughness", float("nan"))
+    ax.set_title(title or f"Stability diagram, φ = {phi:g}" +
+                 ("" if have_stab else " (steady quantities only)"))
+    ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.85)
+    if ax2 is not None:
+        _grid_panel(ax2, ds)
+    fig.tight_layout()
+    return fig
+
+
+def _grid_panel(ax, ds):
+    """Classification and status on the (θ, ν0) grid."""
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
+
+    th, nu = ds["theta"].values, ds["nu0"].values
+    st = ds["status"].values
+    # codes: 0 no flow, 1 not converged/error, 2 stable, 3 A, 4 B, 5 C, 6 ok (unclassified)
+    code = np.full(st.shape, 6, dtype=int)
+    if "regime" in ds:
+        reg = ds["regime"].values
+        code = np.where(reg == 0, 2, np.where(reg == 1, 3, np.where(reg == 2, 4,
+                        np.where(reg == 3, 5, 6))))
+    code = np.where(st == 1, 0, np.where(st >= 2, 1, code))
+    colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd"]
+    names = ["no steady flow", "not converged / error", "stable", "A", "B", "C",
+             "steady only"]
+    ax.pcolormesh(_edges(nu), _edges(th), code, cmap=ListedColormap(colours), vmin=-0.5,
+                  vmax=6.5, shading="flat", edgecolors="0.85", linewidth=0.2)
+    if "monotonic" in ds and len(th) > 1 and len(nu) > 1:
+        mono = np.where(st == 0, ds["monotonic"].values.astype(float), np.nan)
+        if np.nanmin(mono) == 0 and np.nanmax(mono) == 1:
+            ax.contour(nu, th, mono, levels=[0.5], colors="k", linestyles="--", linewidths=1)
+    if "finite_k_disagrees" in ds:
+        bad = ds["finite_k_disagrees"].values == 1
+        if bad.any():
+            Ti, Nj = np.meshgrid(th, nu, indexing="ij")
+            ax.plot(Nj[bad], Ti[bad], "x", color="crimson", ms=6)
+    if "marker" in ds.dims:
+        for name, t, n in zip(ds["marker"].values, ds["marker_theta"].values,
+                              ds["marker_nu0"].values):
+            ax.plot(n, t, "ko", ms=4)
+            ax.annotate(str(name), (n, t), xytext=(3, 3), textcoords="offset points",
+                        fontsize=8)
+    present = sorted(set(np.unique(code)))
+    ax.legend(handles=[Patch(facecolor=colours[c], edgecolor="0.6", label=names[c])
+                       for c in present], fontsize=7, loc="lower right", framealpha=0.9)
+    ax.set_xlabel("floor density ν₀(0)")
+    ax.set_ylabel("inclination θ (degrees)")
+    ax.set_title("classification on the (θ, ν₀(0)) grid")
+
+
+def _edges(c):
+    c = np.asarray(c, dtype=float)
+    if len(c) == 1:
+        return np.array([c[0] - 0.5, c[0] + 0.5])
+    mid = 0.5 * (c[1:] + c[:-1])
+    return np.concatenate([[c[0] - (mid[0] - c[0])], mid, [c[-1] + (c[-1] - mid[-1])]])
+
+
+def _nice_step(x):
+    x = max(float(x), 1e-9)
+    e = 10 ** np.floor(np.log10(x))
+    for m in (1, 2, 2.5, 5, 10):
+        if m * e >= x:
+            return m * e
+    return 10 * e
+
+
+def save_diagram(ds, path, *, dpi: int = 150, **kw) -> Path:
+    """Draw with :func:`plot_diagram` and save to ``path`` (format from the suffix)."""
+    import matplotlib.pyplot as plt
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig = plot_diagram(ds, **kw)
+    try:
+        fig.savefig(path, dpi=dpi)
+    finally:
+        plt.close(fig)
+    return path
