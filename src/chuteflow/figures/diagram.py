@@ -233,8 +233,9 @@ def _grid_panel(ax, ds):
     ax.pcolormesh(_edges(nu), _edges(th), code, cmap=ListedColormap(colours), vmin=-0.5,
                   vmax=6.5, shading="flat", edgecolors="0.85", linewidth=0.2)
     if "monotonic" in ds and len(th) > 1 and len(nu) > 1:
-        mono = np.where(st == 0, ds["monotonic"].values.astype(float), np.nan)
-        if np.nanmin(mono) == 0 and np.nanmax(mono) == 1:
+        mono = np.where((st == 0) & (ds["monotonic"].values >= 0),
+                        ds["monotonic"].values.astype(float), np.nan)
+        if (mono == 0).any() and (mono == 1).any():
             ax.contour(nu, th, mono, levels=[0.5], colors="k", linestyles="--", linewidths=1)
     if "finite_k_disagrees" in ds:
         bad = ds["finite_k_disagrees"].values == 1

@@ -13,11 +13,11 @@ from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep,
 from .points import (Point, PointFunction, Variable, point_function, register_point_function,
                      registered_point_functions)
 from .runner import STATUS, TaskResult, run_task
-from .store import ConfigMismatchError, PartStore
+from .store import ConfigMismatchError, PartStore, parts_dir
 from .classify import classify
 
 __all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_markers", "markers", "default_ranges", "parse_grid", "Sweep",
            "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
            "PointFunction", "Variable", "point_function", "register_point_function",
            "registered_point_functions", "STATUS", "TaskResult", "run_task",
-           "ConfigMismatchError", "PartStore", "classify"]
+           "ConfigMismatchError", "PartStore", "parts_dir", "classify"]

@@ -149,13 +149,16 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
             guess = flow
             for f in fns:
                 try:
-                    out = f.compute(flow, point)
-                    for name, val in out.items():
-                        if name not in byname or owner[name] != f.name:
-                            raise ValueError(f"point function {f.name!r} returned undeclared "
-                                             f"variable {name!r}")
-                        values[name][k] = _coerce(byname[name], val)
-                        point.values[name] = values[name][k]
+                    out = dict(f.compute(flow, point))
+                    bad = [n for n in out if n not in byname or owner[n] != f.name]
+                    if bad:
+                        raise ValueError(f"point function {f.name!r} returned undeclared "
+                                         f"variable(s) {bad}")
+                    # all values of a metric or none: coerce first, then store
+                    coerced = {n: _coerce(byname[n], v) for n, v in out.items()}
+                    for name, val in coerced.items():
+                        values[name][k] = val
+                        point.values[name] = val
                 except ConvergenceError as exc:
                     status[k], messages[k] = STATUS["not_converged"], _clip(f"{f.name}: {exc}")
                     break
