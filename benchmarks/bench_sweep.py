@@ -1,0 +1,107 @@
+"""Benchmarks of the sweep engine (issue 4): diagram wall time, worker speed-up, cost per point
+against the paper's method (dense QZ per point and k), peak memory against grid size.
+
+``run(quick)`` returns rows with keys name, seconds, baseline_seconds, ratio, note (the
+interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_sweep.py [--quick]``.
+
+- ``sweep_phi005_<grid>``: the φ = 0.05 diagram (default metrics) with 2 worker processes;
+  baseline = the same sweep in one process; ratio = speed-up (2 is linear).
+- ``point_vs_dense_qz``: mean compute time per grid point with a steady flow (all metrics,
+  from the workers' own timers) against the paper's method at the same points: dense QZ
+  (``scipy.linalg.eig``, eigenvectors, N = 100, and again at N' = 110 for the drift test,
+  §4.1) for each k of the growth metric's grid; ratio = paper / chuteflow.
+- ``peak_memory_grid``: peak resident memory of the worker processes for a small and a 4×
+  larger grid of the same region; ratio = large / small (1 = independent of grid size).
+"""
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+if __package__ in (None, ""):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+import numpy as np  # noqa: E402
+
+
+def _sweep(cfg, workers, tmp=None):
+    from chuteflow.sweep import Sweep
+    sw = Sweep(cfg, None)
+    t0 = time.perf_counter()
+    ds = sw.run(workers=workers)
+    return ds, sw.stats, time.perf_counter() - t0
+
+
+def _dense_qz_seconds(flows, nks, n=100, n_check=110):
+    """Paper's method at one point: dense QZ with eigenvectors at N and N' for each k."""
+    import scipy.linalg as sla
+
+    from chuteflow.stability import operator
+    per_solve = []
+    for f in flows:
+        for nn in (n, n_check):
+            p = operator(f, 1e-3, n=nn)
+            t0 = time.perf_counter()
+            sla.eig(p.A, p.B, check_finite=False)
+            per_solve.append(time.perf_counter() - t0)
+    t = float(np.mean(per_solve))
+    return nks * t * 2, t
+
+
+def run(quick: bool = False) -> list[dict]:
+    from chuteflow._threads import limit_blas_threads
+    from chuteflow.steady import solve_steady
+    from chuteflow.sweep import SweepConfig
+
+    limit_blas_threads(1)
+    rows = []
+    # the diagram at full size with 2 workers, against the 60 s target
+    shape = (20, 20) if quick else (60, 60)
+    cfg = SweepConfig.grid(0.05, shape=shape, markers=())
+    ds2, st2, t2 = _sweep(cfg, 2)
+    ok = int((ds2["status"].values == 0).sum())
+    rows.append({"name": f"sweep_phi005_{shape[0]}x{shape[1]}", "seconds": t2,
+                 "baseline_seconds": 60.0, "ratio": 60.0 / t2,
+                 "note": f"2 workers; baseline = the 60 s target (ratio > 1 meets it); {ok} of "
+                         f"{cfg.size} points with a steady flow"})
+    # speed-up 1 → 2 workers on a smaller grid of the same ranges
+    sub = SweepConfig.grid(0.05, shape=(8, 8) if quick else (16, 16), markers=())
+    _, _, t1 = _sweep(sub, 1)
+    _, _, t2s = _sweep(sub, 2)
+    rows.append({"name": f"speedup_2_workers_{sub.shape[0]}x{sub.shape[1]}", "seconds": t2s,
+                 "baseline_seconds": t1, "ratio": t1 / t2s,
+                 "note": "2 worker processes vs one process (2 = linear)"})
+    # cost per point of the full diagram: the workers' own timers, per point with a flow
+    pts = np.array(st2.point_seconds)
+    per_point = float(st2.task_seconds) / max(ok, 1)
+    growth = [f for f in cfg.point_functions() if f.name == "growth"]
+    nks = int(growth[0].options["num"]) if growth else 24
+    sample = [(16.0, 0.05), (14.0, 0.05), (17.0, 0.10)]
+    model = cfg.model()
+    flows = [solve_steady(t, n, model) for t, n in sample]
+    paper, per_solve = _dense_qz_seconds(flows, nks)
+    rows.append({"name": "point_vs_dense_qz", "seconds": per_point, "baseline_seconds": paper,
+                 "ratio": paper / per_point,
+                 "note": f"chuteflow: all metrics incl. failed points, per point with a flow "
+                         f"(median point {np.median(pts):.3f} s); paper: {nks} k x 2 dense QZ "
+                         f"(N=100,110) at {per_solve:.3f} s each, on P1, P4, P5"})
+    # peak memory of the workers against the grid size (same region, 4x the points)
+    region = dict(theta_range=(15.0, 16.5), nu0_range=(0.04, 0.12), markers=())
+    small = SweepConfig.grid(0.05, shape=(4, 4), **region)
+    large = SweepConfig.grid(0.05, shape=(8, 8), **region)
+    _, sts, _ = _sweep(small, 2)
+    _, stl, _ = _sweep(large, 2)
+    rows.append({"name": "peak_memory_grid", "seconds": stl.max_rss_mib,
+                 "baseline_seconds": sts.max_rss_mib,
+                 "ratio": stl.max_rss_mib / sts.max_rss_mib,
+                 "note": "'seconds' columns hold MiB: worker peak RSS for 8x8 vs 4x4 grid"})
+    return rows
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    for r in run("--quick" in sys.argv):
+        print(f"{r['name']:28s} {r['seconds']:10.3f} {r['baseline_seconds']:10.3f} "
+              f"{r['ratio']:8.2f}  {r['note']}")
