@@ -4,9 +4,10 @@
   :func:`chuteflow.longwave.longwave`; Re α2 > 0 is long-wave instability (§4.2).
 - ``growth``: the dispersion relation of the α(0) = 0 branch sampled on a k grid
   (:func:`chuteflow.stability.dispersion`): maximum growth rate, its k, and the critical k_c
-  (first sign change of Re α, refined). Computed where Re α2 > 0 and on a sample of the other
-  points (every ``stride``-th point in θ and ν0, and every marked point), which is the check that
-  no finite-k instability is missed by the long-wave criterion.
+  (first sign change of Re α, refined). Computed where Re α2 > 0 (unless
+  ``unstable_points=False``) and on a sample of the other points (every ``stride``-th point in θ
+  and ν0, and every marked point), which is the check that no finite-k instability is missed by
+  the long-wave criterion.
 
 The stability layer is imported inside ``compute``, so registering these classes never depends
 on it.
@@ -75,7 +76,7 @@ class GrowthMetric(PointFunction):
     version = "1"
     requires = ("steady", "longwave")
     defaults = {"k_min": 1e-4, "k_max": 0.05, "num": 24, "stride": 4, "n": None,
-                "n_max": 320}
+                "n_max": 320, "unstable_points": True}
     variables = (
         Variable("growth_max", _RATE, "largest Re α of the α(0) = 0 branch on the k grid",
                  source="figs disp, disp-AC, disp01"),
@@ -111,7 +112,7 @@ class GrowthMetric(PointFunction):
 
         a2 = point.values.get("alpha2_re", np.nan)
         unstable = bool(np.isfinite(a2) and a2 > 0)
-        if not (unstable or self.sampled(point)):
+        if not ((unstable and self.options["unstable_points"]) or self.sampled(point)):
             return {"dispersion_sampled": False}
         o = self.options
         ks = self.k_grid()
