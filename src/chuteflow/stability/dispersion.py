@@ -1,0 +1,367 @@
+"""The least-stable branch α(k), tracked from k = 0 (paper §4.2, figures 7–9, 13).
+
+At k = 0 the mass-conservation mode has α = 0 exactly: its right null vector is the
+tangent ∂X0/∂β of the steady family and its left null vector the total-mass functional
+(Appendix B). First-order perturbation theory gives α ≈ α1 k,
+α1 = lᴴ(dA/dk) r / lᴴ B r, which seeds the continuation; every later step predicts α from
+the previous points (linear, then quadratic extrapolation) and takes the eigenvalue nearest
+the prediction by shift-invert Arnoldi. Steps whose answer lands far from the prediction are
+halved, so the branch is not lost to the near-neutral continuum α ≈ −ik u0(y) that crowds
+it at small k. Each point is then checked at N' = ⌈1.25 N⌉ (drift) and by the Chebyshev
+tail; N is raised along the branch when a point fails.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ConvergenceError, ParameterError
+from ..steady import SteadyFlow
+from .eigen import ShiftInvert
+from .modes import (DRIFT_TOL, N_DEFAULT, N_MAX, TAIL_TOL, Mode, _interp_vector, _make_mode,
+                    _tols, drift_of, nearest_eigenpair, stability_operator)
+from .operator import StabilityOperator, _check_k, _check_n
+
+
+@dataclass(frozen=True, eq=False)
+class NullVectors:
+    """The k = 0 eigenvalue α0 ≈ 0 of the mass mode with its right and left eigenvectors.
+
+    Attributes
+    ----------
+    alpha0 : complex
+        The computed eigenvalue (0 up to discretisation and round-off).
+    right, left : ndarray
+        A0 r = α0 B r and lᴴ A0 = α0 lᴴ B, normalised so that max |r| = 1 and lᴴ B r = 1.
+    """
+
+    alpha0: complex
+    right: np.ndarray = field(repr=False)
+    left: np.ndarray = field(repr=False)
+
+
+def null_vectors(op: StabilityOperator) -> NullVectors:
+    """Right and left eigenvectors of the k = 0 pencil for its eigenvalue nearest 0.
+
+    Shift-invert at σ = 0 (the continuum nearest it sits at |α| ~ 1e-8, four decades
+    further than the round-off of α0), right by Arnoldi, left by inverse iteration with the
+    conjugate-transposed factors of the same LU.
+    """
+    A0 = op.pieces[(0, 0)]
+    si = ShiftInvert(A0.astype(complex), op.B, 0.0)
+    alpha, V = si.nearest(1)
+    a0, r = alpha[0], V[:, 0]
+    r = r / r[np.argmax(np.abs(r))]
+    import scipy.linalg as sla
+    l = np.conj(op.B @ r)  # start: B-weighted, close to the mass functional
+    for _ in range(8):
+        # (A − σB)ᴴ x = Bᴴ l  ⇒  x ∝ left eigenvector for the eigenvalue nearest σ = 0
+        x = sla.lu_solve(si.lu, op.B.T @ l, trans=2, check_finite=False)
+        l = x / np.linalg.norm(x)
+    l = l / np.conj(np.vdot(l, op.B @ r))  # lᴴ B r = 1
+    return NullVectors(complex(a0), r, l)
+
+
+def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) -> complex:
+    """α1 = dα/ds at s = 0 along k = s·(k̂x, k̂z): lᴴ (dA/ds) r / lᴴ B r (Appendix B)."""
+    kx, kz = direction
+    z = np.zeros_like(op.pieces[(0, 0)])
+    dA = (1j * kx * op.pieces.get((1, 0), z) + 1j * kz * op.pieces.get((0, 1), z)
+          + math.hypot(kx, kz) * op.K)
+    return complex(np.vdot(nv.left, dA @ nv.right) / np.vdot(nv.left, op.B @ nv.right))
+
+
+class BranchTracker:
+    """Continuation of the α(0) = 0 branch along a ray k = s·(k̂x, k̂z), s ≥ 0.
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    n : int
+        Starting resolution N (raised when a point fails the drift or tail test).
+    direction : (float, float)
+        Unit direction (k̂x, k̂z) of the wavevector; (1, 0) for the paper's perturbations.
+    n_max : int
+        Largest resolution tried.
+    """
+
+    def __init__(self, flow: SteadyFlow, n: int = N_DEFAULT, *, direction=(1.0, 0.0),
+                 n_max: int = N_MAX, drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
+                 check: bool = True):
+        kx, kz = (float(direction[0]), float(direction[1]))
+        norm = math.hypot(kx, kz)
+        if norm == 0 or kx < 0:
+            raise ParameterError(f"direction = {direction!r}: need a nonzero wavevector "
+                                 "direction with k̂x ≥ 0")
+        self.direction = (kx / norm, kz / norm)
+        self.three_d = self.direction[1] != 0.0
+        self.flow, self.n, self.n_max = flow, _check_n(n), _check_n(n_max)
+        self.drift_tol, self.tail_tol = _tols(drift_tol, tail_tol)
+        self.check = check
+        self._start(self.n)
+
+    def _start(self, n):
+        op = stability_operator(self.flow, n, self.three_d)
+        nv = null_vectors(op)
+        self.nv = nv
+        self.alpha1 = first_order(op, nv, self.direction)
+        self.history = [(0.0, complex(nv.alpha0), nv.right)]  # (s, α, v at N)
+        self.n = n
+
+    def _pencil(self, s, n=None):
+        kx, kz = self.direction
+        return stability_operator(self.flow, n or self.n, self.three_d).pencil(s * kx, s * kz)
+
+    def _predict(self, s):
+        h = self.history
+        if len(h) == 1:
+            return h[0][1] + self.alpha1 * s
+        if len(h) == 2:
+            (s0, a0, _), (s1, a1, _) = h
+            # through the k = 0 point with slope α1, and the first point: quadratic
+            c2 = (a1 - a0 - self.alpha1 * (s1 - s0)) / (s1 - s0) ** 2
+            return a0 + self.alpha1 * (s - s0) + c2 * (s - s0) ** 2
+        (s0, a0, _), (s1, a1, _), (s2, a2, _) = h[-3:]
+        # quadratic through the last three points (Lagrange)
+        return (a0 * (s - s1) * (s - s2) / ((s0 - s1) * (s0 - s2))
+                + a1 * (s - s0) * (s - s2) / ((s1 - s0) * (s1 - s2))
+                + a2 * (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1)))
+
+    def _step(self, s):
+        """Solve at s (> last s) from the prediction; returns (alpha, v) or None if the
+        answer is too far from the prediction (likely another branch)."""
+        s_prev, a_prev, v_prev = self.history[-1]
+        pred = self._predict(s)
+        pencil = self._pencil(s)
+        alpha, v = nearest_eigenpair(pencil, pred, v0=v_prev)
+        miss = abs(alpha - pred)
+        scale = max(abs(pred - a_prev), 1e-14)
+        # the answer must lie closer to the prediction than the step is long, or the step
+        # was too long to trust (the nearest eigenvalue may belong to another branch)
+        if miss > 0.25 * scale:
+            return None
+        return alpha, v
+
+    def advance(self, s_target: float, max_halvings: int = 12) -> tuple[complex, np.ndarray]:
+        """Continue the branch up to s_target (≥ the last point); returns (alpha, v)."""
+        s_last = self.history[-1][0]
+        if s_target < s_last:
+            raise ParameterError("the branch is tracked in increasing k only")
+        if s_target == s_last:
+            return self.history[-1][1], self.history[-1][2]
+        goal = s_target
+        halvings = 0
+        while self.history[-1][0] < goal:
+            s_last = self.history[-1][0]
+            s = goal
+            if s_last == 0.0:
+                # first step: stay where α1 k is a good predictor (|α2| k² ≪ |α1| k)
+                s = min(goal, self._first_step())
+            elif s > 3.0 * s_last:
+                s = 3.0 * s_last
+            res = self._step(s)
+            while res is None:
+                halvings += 1
+                if halvings > max_halvings:
+                    raise ConvergenceError(
+                        f"lost the branch near k = {s:.4g} (theta = {self.flow.theta:g}, "
+                        f"nu0 = {self.flow.nu0:g}, N = {self.n}): the continuation step "
+                        "shrank below any useful size")
+                s = s_last + 0.5 * (s - s_last)
+                res = self._step(s)
+            self.history.append((s, complex(res[0]), res[1]))
+        return self.history[-1][1], self.history[-1][2]
+
+    def _first_step(self):
+        # |α1| sets the wave speed; the continuum lies ~|α1| k away. 1e-5 is inside the
+        # quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5).
+        return 1e-5
+
+    def mode(self, s: float) -> Mode:
+        """The tracked mode at s with drift and tail; raises N until physical."""
+        while True:
+            alpha, v = self.advance(s)
+            pencil = self._pencil(s)
+            kx, kz = self.direction
+            if self.check:
+                drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d)
+            else:
+                drift, n2 = math.nan, self.n
+            mode = _make_mode(pencil, alpha, v, drift if self.check else 0.0, n2,
+                              self.drift_tol, self.tail_tol)
+            if not self.check:
+                mode = _replace(mode, drift=math.nan)
+            if mode.physical or not self.check or self.n >= self.n_max:
+                return mode
+            self._raise_n()
+
+    def _raise_n(self):
+        """Move the branch to a finer grid: the k = 0 point and the last two points (all the
+        predictor needs) are re-solved there; earlier points are dropped."""
+        n_new = min(self.n_max, int(round(self.n * 1.25)))
+        old = self.history[1:][-2:]
+        n_old = self.n
+        nf = len(self._pencil(0.0).fields)
+        self._start(n_new)
+        for s, a, v in old:
+            pencil = self._pencil(s)
+            alpha, v2 = nearest_eigenpair(pencil, a, v0=_interp_vector(v, nf, n_old, n_new))
+            self.history.append((s, complex(alpha), v2))
+
+
+def _replace(mode: Mode, **kw) -> Mode:
+    from dataclasses import replace
+    return replace(mode, **kw)
+
+
+def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
+                drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL) -> Mode:
+    """The mode of the α(0) = 0 branch at (k, kz), tracked from k = 0 at resolution N."""
+    kk = math.hypot(k, kz)
+    tr = BranchTracker(flow, n, direction=(k, kz) if kk else (1.0, 0.0), n_max=n,
+                       drift_tol=drift_tol, tail_tol=tail_tol)
+    return tr.mode(kk)
+
+
+# -- dispersion relation -----------------------------------------------------------------
+def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
+               drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
+               strict: bool = True):
+    """Dispersion relation α(k) of the α(0) = 0 branch (figures 7–9, 13).
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    k : array_like
+        Wavenumbers ≥ 0 (any order; computed in increasing order by continuation).
+    n : int, optional
+        Starting resolution (default 80); raised along the branch where a point fails.
+    strict : bool
+        Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max``
+        (default); otherwise return it flagged ``physical = False``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``k``: ``alpha_re``, ``alpha_im``, ``drift`` (|α(N) − α(N')|), ``tail``, ``n``,
+        ``physical``; attributes: the flow's parameters, ``dQ_drho`` and ``alpha1``
+        (first-order long-wave coefficient, α ≈ α1 k).
+    """
+    import xarray as xr
+
+    ks = np.atleast_1d(np.asarray(k, dtype=float))
+    if ks.ndim != 1 or len(ks) == 0:
+        raise ParameterError("k: expected a non-empty 1-D array of wavenumbers")
+    for kk in ks:
+        _check_k(kk, "k")
+    order = np.argsort(ks, kind="stable")
+    tr = BranchTracker(flow, n or N_DEFAULT, n_max=n_max, drift_tol=drift_tol,
+                       tail_tol=tail_tol)
+    out = {name: np.empty(len(ks)) for name in ("alpha_re", "alpha_im", "drift", "tail")}
+    nres = np.empty(len(ks), dtype=int)
+    phys = np.empty(len(ks), dtype=bool)
+    for i in order:
+        if ks[i] == 0.0:
+            mode = _zero_mode(tr)
+        else:
+            mode = tr.mode(ks[i])
+        if strict and not mode.physical:
+            raise ConvergenceError(
+                f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
+                f"converged at N = {mode.n} (drift {mode.drift:.1e}, tail {mode.tail:.1e}; "
+                f"thresholds {drift_tol:g}, {tail_tol:g}); raise n_max or pass strict=False")
+        out["alpha_re"][i], out["alpha_im"][i] = mode.alpha.real, mode.alpha.imag
+        out["drift"][i], out["tail"][i] = mode.drift, mode.tail
+        nres[i], phys[i] = mode.n, mode.physical
+    attrs = {"long_name": "dispersion relation of the alpha(0) = 0 branch",
+             "source": "Mitarai & Nakanishi §4, eq:lin", "theta": flow.theta, "nu0": flow.nu0,
+             "nu_top": flow.nu_top, "y_max": flow.y_max, "alpha1_re": tr.alpha1.real,
+             "alpha1_im": tr.alpha1.imag, "drift_tol": drift_tol, "tail_tol": tail_tol}
+    attrs.update({name: getattr(flow.model, name)
+                  for name in ("roughness", "wall_loss", "restitution", "nu_max")})
+    u = "1/sqrt(sigma/g)"
+    ds = xr.Dataset(
+        {"alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),
+         "alpha_im": ("k", out["alpha_im"], {"long_name": "Im alpha", "units": u}),
+         "drift": ("k", out["drift"], {"long_name": "|alpha(N) - alpha(N')|", "units": u}),
+         "tail": ("k", out["tail"], {"long_name": "largest of the ten highest Chebyshev "
+                                                  "coefficients", "units": "1"}),
+         "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
+         "physical": ("k", phys, {"long_name": "passes drift and tail tests"})},
+        coords={"k": ("k", ks, {"long_name": "wavenumber", "units": "1/sigma"})},
+        attrs=attrs)
+    return ds
+
+
+def _zero_mode(tr: BranchTracker) -> Mode:
+    """The k = 0 point: the null vector, with its own drift and tail."""
+    a0 = tr.history[0][1]
+    v = tr.history[0][2]
+    pencil = tr._pencil(0.0)
+    drift, n2 = drift_of(tr.flow, a0, v, tr.n, 0.0, 0.0, tr.three_d)
+    return _make_mode(pencil, a0, v, drift, n2, tr.drift_tol, tr.tail_tol)
+
+
+# -- critical wavenumber -----------------------------------------------------------------
+def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
+               n_max: int = N_MAX, xtol: float = 1e-10):
+    """Critical wavenumber k_c where Re α of the α(0) = 0 branch changes sign (brentq).
+
+    The branch is tracked on a grid of ``num`` points up to ``k_max`` (denser at small k);
+    each sign change of Re α is refined by Brent's method on the tracked branch.
+
+    Returns
+    -------
+    float or None
+        The smallest crossing k_c (the upper edge of the long-wave unstable band 0 < k < k_c
+        when the flow is long-wave unstable); None when Re α does not change sign in
+        (0, k_max]. All crossings are in :func:`crossings`.
+    """
+    found = crossings(flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol)
+    return found[0] if found else None
+
+
+def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
+              n_max: int = N_MAX, xtol: float = 1e-10) -> tuple[float, ...]:
+    """All wavenumbers in (0, k_max] where Re α of the tracked branch changes sign."""
+    from scipy.optimize import brentq
+
+    k_max = _check_k(k_max, "k_max")
+    if k_max == 0 or num < 3:
+        raise ParameterError("k_max must be > 0 and num ≥ 3")
+    # geometric start resolves the narrow quadratic regime, then uniform
+    ks = np.unique(np.concatenate([np.geomspace(1e-5, k_max, num // 3),
+                                   np.linspace(0, k_max, num - num // 3 + 1)[1:]]))
+    tr = BranchTracker(flow, n or N_DEFAULT, n_max=n_max)
+    vals = []
+    for kk in ks:
+        vals.append(tr.mode(kk))
+    re = np.array([m.alpha.real for m in vals])
+    hist = {s: (a, v) for s, a, v in tr.history}
+    out = []
+    for i in range(len(ks) - 1):
+        if np.sign(re[i]) != np.sign(re[i + 1]) and re[i] != 0:
+            ka, kb = ks[i], ks[i + 1]
+            aa, ab = vals[i].alpha, vals[i + 1].alpha
+            va = hist[ka][1]
+            n_here = vals[i + 1].n
+
+            def f(kk):
+                pred = aa + (ab - aa) * (kk - ka) / (kb - ka)
+                pencil = stability_operator(flow, n_here).pencil(kk)
+                return nearest_eigenpair(pencil, pred, v0=_pad(va, pencil))[0].real
+
+            out.append(float(brentq(f, ka, kb, xtol=xtol * max(kb, 1e-300), rtol=1e-12)))
+    return tuple(out)
+
+
+def _pad(v, pencil):
+    m = pencil.n + 1
+    nf = len(pencil.fields)
+    if v.size == m * nf:
+        return v
+    return _interp_vector(v, nf, v.size // nf - 1, pencil.n)
