@@ -21,7 +21,13 @@ from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow
 from .eigen import ShiftInvert
 from .modes import (DRIFT_TOL, N_DEFAULT, N_MAX, TAIL_TOL, Mode, _interp_vector, _make_mode,
-                    _tols, drift_of, nearest_eigenpair, stability_operator)
+                    _tols, drift_of, nearest_eigenpair, stability_operator, tail)
+
+#: First continuation step from k = 0.
+FIRST_STEP = 1e-5
+#: Largest Chebyshev tail a tracked eigenvector may have (the physical test is stricter;
+#: the continuum's tails are ~1e-4).
+ACCEPT_TAIL = 1e-5
 from .operator import StabilityOperator, _check_k, _check_n
 
 
@@ -45,23 +51,28 @@ class NullVectors:
 def null_vectors(op: StabilityOperator) -> NullVectors:
     """Right and left eigenvectors of the k = 0 pencil for its eigenvalue nearest 0.
 
-    Shift-invert at σ = 0 (the continuum nearest it sits at |α| ~ 1e-8, four decades
-    further than the round-off of α0), right by Arnoldi, left by inverse iteration with the
-    conjugate-transposed factors of the same LU.
+    Shift-invert at σ = 0 on the equilibrated pencil (the continuum nearest α0 sits at
+    |α| ~ 1e-8, four decades further than the round-off of α0): right by Arnoldi, left by
+    inverse iteration with the conjugate-transposed factors of the same LU. Returned for
+    (A, B) itself, not the equilibrated pencil.
     """
-    A0 = op.pieces[(0, 0)]
-    si = ShiftInvert(A0.astype(complex), op.B, 0.0)
-    alpha, V = si.nearest(1)
-    a0, r = alpha[0], V[:, 0]
-    r = r / r[np.argmax(np.abs(r))]
     import scipy.linalg as sla
-    l = np.conj(op.B @ r)  # start: B-weighted, close to the mass functional
+
+    p = op.pencil(0.0)
+    A, B = p.equilibrated()
+    si = ShiftInvert(A, B, 0.0)
+    alpha, W = si.nearest(1)
+    a0, w = alpha[0], W[:, 0]
+    ell = np.conj(B @ w)
     for _ in range(8):
-        # (A − σB)ᴴ x = Bᴴ l  ⇒  x ∝ left eigenvector for the eigenvalue nearest σ = 0
-        x = sla.lu_solve(si.lu, op.B.T @ l, trans=2, check_finite=False)
-        l = x / np.linalg.norm(x)
-    l = l / np.conj(np.vdot(l, op.B @ r))  # lᴴ B r = 1
-    return NullVectors(complex(a0), r, l)
+        # (A − σB)ᴴ x = Bᴴ ℓ  ⇒  x ∝ left eigenvector for the eigenvalue nearest σ = 0
+        x = sla.lu_solve(si.lu, B.T @ ell, trans=2, check_finite=False)
+        ell = x / np.linalg.norm(x)
+    r = p.unscale(w)
+    r = r / r[np.argmax(np.abs(r))]
+    left = op.row_eq * ell  # ℓᴴ R A C = 0  ⇒  (R ℓ)ᴴ A = 0
+    left = left / np.conj(np.vdot(left, op.B @ r))  # lᴴ B r = 1
+    return NullVectors(complex(a0), r, left)
 
 
 def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) -> complex:
@@ -89,8 +100,7 @@ class BranchTracker:
     """
 
     def __init__(self, flow: SteadyFlow, n: int = N_DEFAULT, *, direction=(1.0, 0.0),
-                 n_max: int = N_MAX, drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
-                 check: bool = True):
+                 n_max: int = N_MAX, drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL):
         kx, kz = (float(direction[0]), float(direction[1]))
         norm = math.hypot(kx, kz)
         if norm == 0 or kx < 0:
@@ -100,7 +110,6 @@ class BranchTracker:
         self.three_d = self.direction[1] != 0.0
         self.flow, self.n, self.n_max = flow, _check_n(n), _check_n(n_max)
         self.drift_tol, self.tail_tol = _tols(drift_tol, tail_tol)
-        self.check = check
         self._start(self.n)
 
     def _start(self, n):
@@ -108,7 +117,9 @@ class BranchTracker:
         nv = null_vectors(op)
         self.nv = nv
         self.alpha1 = first_order(op, nv, self.direction)
-        self.history = [(0.0, complex(nv.alpha0), nv.right)]  # (s, α, v at N)
+        # (s, α, eigenvector of the equilibrated pencil at N)
+        self.history = [(0.0, complex(nv.alpha0), nv.right / op.col_eq)]
+        self._h = math.inf
         self.n = n
 
     def _pencil(self, s, n=None):
@@ -131,70 +142,69 @@ class BranchTracker:
                 + a2 * (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1)))
 
     def _step(self, s):
-        """Solve at s (> last s) from the prediction; returns (alpha, v) or None if the
-        answer is too far from the prediction (likely another branch)."""
+        """Solve at s (> last s) from the prediction. Returns (alpha, w, ratio) with ratio =
+        |miss| / |step| (how well the predictor did), or None if the answer is not
+        trustworthy: too far from the prediction, or an unresolved eigenvector (the
+        near-neutral continuum of the dilute top has Chebyshev tails ~1e-4)."""
         s_prev, a_prev, v_prev = self.history[-1]
         pred = self._predict(s)
         pencil = self._pencil(s)
-        alpha, v = nearest_eigenpair(pencil, pred, v0=v_prev)
-        miss = abs(alpha - pred)
-        scale = max(abs(pred - a_prev), 1e-14)
-        # the answer must lie closer to the prediction than the step is long, or the step
-        # was too long to trust (the nearest eigenvalue may belong to another branch)
-        if miss > 0.25 * scale:
+        alpha, w = nearest_eigenpair(pencil, pred, v0=v_prev)
+        ratio = abs(alpha - pred) / max(abs(pred - a_prev), 1e-300)
+        if ratio > 0.25:
             return None
-        return alpha, v
+        if tail(pencil.unscale(w), len(pencil.fields)) > ACCEPT_TAIL:
+            return None
+        return alpha, w, ratio
 
-    def advance(self, s_target: float, max_halvings: int = 12) -> tuple[complex, np.ndarray]:
-        """Continue the branch up to s_target (≥ the last point); returns (alpha, v)."""
+    def advance(self, s_target: float, max_halvings: int = 16) -> tuple[complex, np.ndarray]:
+        """Continue the branch up to s_target (≥ the last point); returns (alpha, w).
+
+        Steps grow geometrically (at most ×3 in k) while the predictor hits well, are held
+        when it is off by more than 5 % of the step, and halved when a step is rejected.
+        """
         s_last = self.history[-1][0]
         if s_target < s_last:
             raise ParameterError("the branch is tracked in increasing k only")
-        if s_target == s_last:
-            return self.history[-1][1], self.history[-1][2]
-        goal = s_target
         halvings = 0
-        while self.history[-1][0] < goal:
+        while self.history[-1][0] < s_target:
             s_last = self.history[-1][0]
-            s = goal
             if s_last == 0.0:
-                # first step: stay where α1 k is a good predictor (|α2| k² ≪ |α1| k)
-                s = min(goal, self._first_step())
-            elif s > 3.0 * s_last:
-                s = 3.0 * s_last
-            res = self._step(s)
+                # first step: α1 k predicts well while |α2| k² ≪ |α1| k; 1e-5 is inside
+                # the quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5)
+                h = min(s_target, FIRST_STEP)
+            else:
+                h = min(s_target - s_last, self._h, 2.0 * s_last)
+            res = self._step(s_last + h)
             while res is None:
                 halvings += 1
                 if halvings > max_halvings:
                     raise ConvergenceError(
-                        f"lost the branch near k = {s:.4g} (theta = {self.flow.theta:g}, "
-                        f"nu0 = {self.flow.nu0:g}, N = {self.n}): the continuation step "
-                        "shrank below any useful size")
-                s = s_last + 0.5 * (s - s_last)
-                res = self._step(s)
-            self.history.append((s, complex(res[0]), res[1]))
+                        f"lost the branch near k = {s_last + h:.4g} (theta = "
+                        f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
+                        "continuation step shrank below any useful size")
+                h *= 0.5
+                res = self._step(s_last + h)
+            alpha, w, ratio = res
+            self.history.append((s_last + h, complex(alpha), w))
+            self._h = h * (3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0)
         return self.history[-1][1], self.history[-1][2]
-
-    def _first_step(self):
-        # |α1| sets the wave speed; the continuum lies ~|α1| k away. 1e-5 is inside the
-        # quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5).
-        return 1e-5
 
     def mode(self, s: float) -> Mode:
         """The tracked mode at s with drift and tail; raises N until physical."""
         while True:
-            alpha, v = self.advance(s)
+            try:
+                alpha, v = self.advance(s)
+            except ConvergenceError:
+                if self.n >= self.n_max:
+                    raise
+                self._raise_n()
+                continue
             pencil = self._pencil(s)
             kx, kz = self.direction
-            if self.check:
-                drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d)
-            else:
-                drift, n2 = math.nan, self.n
-            mode = _make_mode(pencil, alpha, v, drift if self.check else 0.0, n2,
-                              self.drift_tol, self.tail_tol)
-            if not self.check:
-                mode = _replace(mode, drift=math.nan)
-            if mode.physical or not self.check or self.n >= self.n_max:
+            drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d)
+            mode = _make_mode(pencil, alpha, v, drift, n2, self.drift_tol, self.tail_tol)
+            if mode.physical or self.n >= self.n_max:
                 return mode
             self._raise_n()
 
@@ -210,11 +220,6 @@ class BranchTracker:
             pencil = self._pencil(s)
             alpha, v2 = nearest_eigenpair(pencil, a, v0=_interp_vector(v, nf, n_old, n_new))
             self.history.append((s, complex(alpha), v2))
-
-
-def _replace(mode: Mode, **kw) -> Mode:
-    from dataclasses import replace
-    return replace(mode, **kw)
 
 
 def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,

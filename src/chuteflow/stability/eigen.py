@@ -77,7 +77,7 @@ class ShiftInvert:
         """(A − σB)⁻¹ B x."""
         return self.solve(self.Bx(np.asarray(x, dtype=complex)))
 
-    def nearest(self, nev: int = 1, *, v0=None, tol: float = 0.0, ncv: int | None = None,
+    def nearest(self, nev: int = 1, *, v0=None, tol: float = 1e-13, ncv: int | None = None,
                 maxiter: int = 300):
         """The ``nev`` finite eigenvalues nearest σ by shift-invert Arnoldi (ARPACK).
 
@@ -99,16 +99,23 @@ class ShiftInvert:
             # start in the range of (A − σB)⁻¹B: no component along infinite eigenvalues
             rng = np.random.default_rng(12345)
             v0 = self.apply(rng.standard_normal(M) + 1j * rng.standard_normal(M))
-        try:
-            theta, V = eigs(op, k=nev, which="LM", v0=v0, tol=tol, ncv=ncv, maxiter=maxiter)
-        except ArpackNoConvergence as exc:
-            theta, V = exc.eigenvalues, exc.eigenvectors
-            if len(theta) == 0:
-                raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} found no "
-                                       "converged eigenvalue") from None
-        except ArpackError as exc:  # pragma: no cover - ARPACK internal failure
-            raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} failed: "
-                                   f"{exc}") from None
+        theta = np.empty(0)
+        # ARPACK's tolerance is relative to |θ|; 1e-13 leaves the last digits to the
+        # inverse-iteration polish below, and a wider Krylov space is the fallback
+        for tol_i, ncv_i in ((tol or 1e-13, ncv), (max(tol, 1e-11), min(M, 2 * ncv + 10))):
+            try:
+                theta, V = eigs(op, k=nev, which="LM", v0=v0, tol=tol_i, ncv=ncv_i,
+                                maxiter=maxiter)
+            except ArpackNoConvergence as exc:
+                theta, V = exc.eigenvalues, exc.eigenvectors
+            except ArpackError as exc:  # pragma: no cover - ARPACK internal failure
+                raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} failed: "
+                                       f"{exc}") from None
+            if len(theta):
+                break
+        if len(theta) == 0:
+            raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} found no "
+                                   "converged eigenvalue")
         keep = np.abs(theta) > 0
         alpha, V = self.sigma + 1.0 / theta[keep], V[:, keep]
         alpha, V, res = self.polish(alpha, V)

@@ -141,7 +141,7 @@ def tail(V: np.ndarray, nfields: int, m: int = TAIL_TERMS) -> float:
 
 
 def _make_mode(pencil: Pencil, alpha, v, drift, n_check, drift_tol, tail_tol) -> Mode:
-    v = normalise(pencil.physical(np.asarray(v)))
+    v = normalise(pencil.unscale(np.asarray(v)))
     t = tail(v, len(pencil.fields))
     flow = pencil.flow
     return Mode(alpha=complex(alpha), k=pencil.k, kz=pencil.kz, theta=flow.theta,
@@ -170,12 +170,17 @@ def _tols(drift_tol, tail_tol):
 
 
 def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
-    """The eigenpair (alpha, v) of ``pencil`` nearest σ (shift-invert Arnoldi)."""
+    """The eigenpair (alpha, w) nearest σ by shift-invert Arnoldi on the equilibrated pencil.
+
+    ``w`` is an eigenvector of the *equilibrated* pencil (:meth:`Pencil.equilibrated`; the
+    eigenvector of (A, B) is ``pencil.unscale(w)``); ``v0``, a start vector, lives there too.
+    """
+    A, B = pencil.equilibrated()
     try:
-        si = ShiftInvert(pencil.A, pencil.B, sigma)
+        si = ShiftInvert(A, B, sigma)
     except ConvergenceError:  # σ hit an eigenvalue to machine precision: nudge it
         sigma = complex(sigma) * (1 + 1e-12) + 1e-14 * (1 + 1j)
-        si = ShiftInvert(pencil.A, pencil.B, sigma)
+        si = ShiftInvert(A, B, sigma)
     start = None if v0 is None else si.apply(v0)
     alpha, V = si.nearest(1, v0=start)
     if len(alpha) == 0:
@@ -235,8 +240,8 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
     p1 = stability_operator(flow, n, three_d).pencil(k, kz)
     n2 = check_n(n)
     p2 = stability_operator(flow, n2, three_d).pencil(k, kz)
-    w1, V1 = qz(p1.A, p1.B)
-    w2, _ = qz(p2.A, p2.B, vectors=False)
+    w1, V1 = qz(*p1.equilibrated())
+    w2, _ = qz(*p2.equilibrated(), vectors=False)
     modes = []
     for j, a in enumerate(w1):
         drift = float(np.abs(w2 - a).min()) if len(w2) else math.inf

@@ -95,7 +95,8 @@ class Pencil:
     grid: ChebyshevGrid = field(repr=False)
     fields: tuple
     flow: SteadyFlow = field(repr=False)
-    col_scale: np.ndarray = field(repr=False, default=None)
+    row_eq: np.ndarray = field(repr=False, default=None)
+    col_eq: np.ndarray = field(repr=False, default=None)
 
     @property
     def k(self) -> float:
@@ -114,15 +115,24 @@ class Pencil:
         m = self.grid.n + 1
         return {f: slice(i * m, (i + 1) * m) for i, f in enumerate(self.fields)}
 
-    def physical(self, V: np.ndarray) -> np.ndarray:
-        """(ν̂, û, v̂, T̂) from the unknowns (ν̂/ν0, û, v̂, T̂) of the pencil."""
-        c = self.col_scale
-        return V if c is None else (c * V.T).T
-
     def split(self, V: np.ndarray) -> dict[str, np.ndarray]:
-        """Field name → nodal values (ν̂, not ν̂/ν0) of an eigenvector V of the pencil."""
-        P = self.physical(V)
-        return {f: P[s] for f, s in self.slices().items()}
+        """Field name → nodal values, for a vector V (or the leading axis of an array)."""
+        return {f: V[s] for f, s in self.slices().items()}
+
+    def equilibrated(self) -> tuple[np.ndarray, np.ndarray]:
+        """(R A C, R B C) with the diagonal equilibration R, C of the operator.
+
+        Same eigenvalues; an eigenvector W of the equilibrated pencil is V = C W here
+        (:meth:`unscale`). All solvers of this package work on it.
+        """
+        if self.row_eq is None:
+            return self.A, self.B
+        r, c = self.row_eq[:, None], self.col_eq[None, :]
+        return self.A * r * c, self.B * r * c
+
+    def unscale(self, W: np.ndarray) -> np.ndarray:
+        """Eigenvector(s) of the equilibrated pencil → of (A, B)."""
+        return W if self.col_eq is None else (self.col_eq * W.T).T
 
 
 class StabilityOperator:
@@ -230,21 +240,17 @@ class StabilityOperator:
                 pieces[(0, 0)][top, top] += cos / base["T"][-1]
             else:
                 K[top, top] = 1.0
-        # Unknown ν̂/ν0 instead of ν̂, and mass rows divided by ν0: an exact diagonal
-        # similarity that keeps the dilute top's mass rows, −(ν0 v̂)' ~ 1e-9 D v̂, from being
-        # numerically zero rows (which make A − σB singular to round-off in several
-        # directions at once and break shift-invert near the continuum).
-        nu_rows = slice(0, m)
-        col = np.ones(M)
-        col[nu_rows] = base["nu"]
-        rows = np.ones(M)
-        rows[1:m - 1] = 1.0 / base["nu"][1:m - 1]
-        for P in list(pieces.values()) + [K, B]:
-            P *= rows[:, None]
-            P *= col[None, :]
-        scale_all *= rows
         self.pieces, self.K, self.B = pieces, K, B
-        self.row_scale, self.col_scale, self.base = scale_all, col, base
+        self.row_scale, self.base = scale_all, base
+        # Equilibration used by the solvers (an exact diagonal similarity, not part of the
+        # public operator): mass rows divided by ν0 and ν̂ columns multiplied by ν0, i.e.
+        # unknown ν̂/ν0. Without it the dilute top's mass rows, −(ν0 v̂)' ~ 1e-9 D v̂, are
+        # numerically zero rows: A − σB is singular to round-off in several directions at
+        # once and shift-invert fails near the continuum (and at k = 0).
+        self.row_eq = np.ones(M)
+        self.row_eq[1:m - 1] = 1.0 / base["nu"][1:m - 1]
+        self.col_eq = np.ones(M)
+        self.col_eq[:m] = base["nu"]
 
     # -- evaluation ----------------------------------------------------------------------
     def matrix(self, kx: float, kz: float = 0.0) -> np.ndarray:
@@ -266,7 +272,7 @@ class StabilityOperator:
     def pencil(self, kx: float, kz: float = 0.0) -> Pencil:
         """The pencil (A, B) at wavevector (k_x, k_z)."""
         return Pencil(self.matrix(kx, kz), self.B, float(kx), float(kz), self.grid,
-                      self.fields, self.flow, self.col_scale)
+                      self.fields, self.flow, self.row_eq, self.col_eq)
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(A0, A1, A2) with A(k) = A0 + (ik) A1 + (ik)² A2 for k_z = 0, k ≥ 0 (eq:lin).
