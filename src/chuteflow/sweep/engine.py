@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ParameterError
 from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
-from .store import ConfigMismatchError, PartStore, atomic_write
+from .store import ConfigMismatchError, PartStore
 
 __all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset",
            "markers"]
@@ -414,4 +414,4 @@ def run_sweep(config: SweepConfig, out=None, *, workers: int | None = None, clie
         workers=workers, client=client, scheduler=scheduler, progress=progress)
 
 
-__all__ += ["ConfigMismatchError", "atomic_write"]
+__all__ += ["ConfigMismatchError"]

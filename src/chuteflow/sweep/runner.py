@@ -6,7 +6,6 @@ which is what makes resumed, local and Dask sweeps equal.
 """
 from __future__ import annotations
 
-import math
 import resource
 import time
 import traceback
@@ -178,8 +177,3 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                       seconds=time.perf_counter() - t_start, max_rss_kib=int(rss),
                       steady_retries=retries, point_seconds=pt_seconds)
 
-
-def is_missing(var, value) -> bool:
-    if var.kind == "float":
-        return not math.isfinite(value)
-    return value == -1
