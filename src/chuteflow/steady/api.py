@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from ..closures import ChuteModel
 from ..errors import ConvergenceError, NoSteadyFlowError
 from ..spectral import ChebyshevGrid
@@ -21,7 +23,8 @@ def _quantities(theta, st: _State, model):
 
 def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
                  nu_top: float = 1e-9, n: int = 64, rtol: float = 1e-8, n_max: int = 384,
-                 guess: SteadyFlow | None = None, min_thickness: float = 1.0) -> SteadyFlow:
+                 guess: SteadyFlow | None = None, min_thickness: float = 1.0,
+                 continuation: bool = True) -> SteadyFlow:
     """Steady flow at inclination ``theta`` (degrees) and floor density ``nu0`` (paper §3).
 
     Parameters
@@ -43,6 +46,18 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     min_thickness : float
         Flows whose thickness h falls below this (diameters) are rejected as unphysical
         (paper §3.2: decay length below one particle diameter). Set 0 to accept them.
+    continuation : bool
+        If the cold start fails, follow the branch in θ from an anchor angle (see Notes).
+        False: fail at once (faster where no flow exists, but a flow the cold start
+        cannot find is then reported as missing).
+
+    Notes
+    -----
+    Without ``guess`` Newton starts from an isothermal estimate of the layer. Where that
+    fails (e.g. the non-monotonic layers over a hot dilute cushion at large θ), the branch
+    is followed instead by continuation in θ at fixed ν0(0) from an angle where the cold
+    start works (15°, 13° or 12°), with adaptive steps; :class:`NoSteadyFlowError` then
+    means that this branch ends before ``theta``.
 
     Raises
     ------
@@ -56,15 +71,95 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     """
     model = model or ChuteModel()
     theta, nu0 = _validate(theta, nu0, model, nu_top)
-    start = None
     if guess is not None:
-        start = _State(guess.n, guess.log_nu, guess.u, guess.T, guess.y_max)
-    st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start)
+        start = _State(guess.n, np.asarray(guess.log_nu), np.asarray(guess.u),
+                       np.asarray(guess.T), guess.y_max)
+        return _solve(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
+    try:
+        return _solve(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
+    except ThinLayerError:
+        raise
+    except (NoSteadyFlowError, ConvergenceError) as exc:
+        if not continuation:
+            raise
+        first = exc
+    flow = _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first)
+    if flow.h < min_thickness:
+        raise ThinLayerError(_thin_message(theta, nu0, model, flow.h, min_thickness), flow)
+    return flow
+
+
+#: Angles tried as starting points of the θ-continuation fallback (cold start reliable).
+_ANCHORS = (12.0, 13.0, 15.0, 17.0, 19.0, 21.0)
+_MAX_ANCHORS = 3
+_MAX_STEPS = 24
+
+
+def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
+    """Follow the branch at fixed ν0 from an anchor angle to ``theta``; raises the
+    appropriate error if no anchor converges or the branch ends on the way."""
+    anchor = None
+    for th in sorted(_ANCHORS, key=lambda a: abs(a - theta))[:_MAX_ANCHORS]:
+        if abs(th - theta) < 1e-9:
+            continue
+        try:
+            anchor = _solve(th, nu0, model, nu_top, n, rtol, n_max, None, 0.0)
+            break
+        except (NoSteadyFlowError, ConvergenceError):
+            continue
+    if anchor is None:
+        raise first_error
+    cur, step, steps = anchor, 0.5, 0
+    direction = 1.0 if theta > anchor.theta else -1.0
+    while steps < _MAX_STEPS:
+        steps += 1
+        nxt = cur.theta + direction * min(step, abs(theta - cur.theta))
+        dxb, dxt = _tangent_vectors(cur, theta=True)
+        X = _State(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
+                   cur.y_max).pack()
+        pred = _State.unpack(cur.n, X + (nxt - cur.theta) * dxt)
+        if not (0.5 * cur.y_max < pred.L < 2 * cur.y_max and (pred.T > 0).all()):
+            pred = _State.unpack(cur.n, X)
+        try:
+            cur = _solve(nxt, nu0, model, nu_top, n, rtol, n_max, pred, 0.0,
+                         maxiter=15, lam_min=1.0 / 16)
+            if abs(cur.theta - theta) < 1e-12:
+                return cur
+            step = min(2.0, step * 1.5)
+        except (NoSteadyFlowError, ConvergenceError):
+            step *= 0.5
+            if step < 1.0 / 128:
+                break
+    too = "large" if direction > 0 else "small"
+    raise NoSteadyFlowError(
+        f"no steady flow found at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
+        f"{model.roughness:g}, wall_loss = {model.wall_loss:g}: the cold start failed and "
+        f"the branch followed in theta from {anchor.theta:g} deg ends near "
+        f"{cur.theta:.4g} deg (there h = {cur.h:.3g}, y_max = {cur.y_max:.3g}, peak "
+        f"density {cur.nu_peak:.3g}) — the angle is too {too} for this floor density")
+
+
+def _thin_message(theta, nu0, model, h, min_thickness):
+    return (f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
+            f"{model.roughness:g}: thickness h = {h:.3g} is below {min_thickness:g} "
+            "particle diameter — the angle is too small for this roughness (or the floor "
+            "density too low)")
+
+
+def _solve(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60,
+           lam_min=1e-6):
+    """solve_steady after validation; ``start`` is a :class:`_State` (or None: cold start)."""
+    st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter,
+                              lam_min=lam_min)
     _, q = _quantities(theta, st, model)
     change = math.inf
     while True:
         n2 = n + max(n // 2, 8)
-        st2, it2, res2 = solve_state(theta, nu0, model, nu_top, n2, guess=st)
+        # at least one Newton correction on the finer grid, so that the change measures
+        # the discretisation even when the interpolated coarse solution already passes tol
+        st2, it2, res2 = solve_state(theta, nu0, model, nu_top, n2, guess=st, maxiter=maxiter,
+                                     lam_min=lam_min, min_iter=1)
+        it += it2
         g2, q2 = _quantities(theta, st2, model)
         change = max(abs(q2[k] - q[k]) / max(abs(q2[k]), 1e-300) for k in _KEYS)
         if change <= rtol or n2 >= n_max:
@@ -73,17 +168,24 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     if change > rtol:
         raise ConvergenceError(
             f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
-            f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2}")
+            f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
+            f"(n_max = {n_max})")
+    flow = SteadyFlow(theta=theta, nu0=nu0, model=model, nu_top=nu_top, n=n2, y=g2.y,
+                      log_nu=st2.s, u=st2.u, T=st2.T, residual=float(res2), iterations=it,
+                      convergence=float(change),
+                      spectral_tail=spectral_tail(st2.s, st2.u, st2.T), **q2)
     if q2["h"] < min_thickness:
-        raise NoSteadyFlowError(
-            f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
-            f"{model.roughness:g}: thickness h = {q2['h']:.3g} is below {min_thickness:g} "
-            "particle diameter — the angle is too small for this roughness (or the floor "
-            "density too low)")
-    return SteadyFlow(theta=theta, nu0=nu0, model=model, nu_top=nu_top, n=n2, y=g2.y,
-                      log_nu=st2.s, u=st2.u, T=st2.T, residual=float(res2), iterations=it + it2,
-                      convergence=float(change), spectral_tail=spectral_tail(st2.s, st2.u, st2.T),
-                      **q2)
+        raise ThinLayerError(_thin_message(theta, nu0, model, q2["h"], min_thickness), flow)
+    return flow
+
+
+class ThinLayerError(NoSteadyFlowError):
+    """A converged solution thinner than ``min_thickness``; ``.flow`` keeps it (e.g. as a
+    continuation guess)."""
+
+    def __init__(self, message, flow):
+        super().__init__(message)
+        self.flow = flow
 
 
 def steady_tangent(flow: SteadyFlow) -> dict:
@@ -102,17 +204,13 @@ def steady_tangent(flow: SteadyFlow) -> dict:
         d/dβ of ``rho_bar``, ``Q``, ``T_mean``, ``h``, ``nu_mean``, ``u_floor``, ``T_floor``,
         plus ``dQ_drho`` = dQ0/dρ̄0 (label eq:dqdh).
     """
-    import numpy as np
-    import scipy.linalg as sla
-    from .solver import _Newton
+    return _tangent_from(flow, _tangent_vectors(flow, theta=False)[0])
 
-    newton = _Newton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
+
+def _tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
+    """steady_tangent's dict from the packed tangent dX/dβ."""
     st = _State(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
                 flow.y_max)
-    _, J = newton.evaluate(st)
-    dR = np.zeros(J.shape[0])
-    dR[0] = -1.0 / flow.nu0
-    dX = -sla.solve(J, dR)
     m = flow.n + 1
     out = {"log_nu": dX[:m], "u": dX[m:2 * m], "T": dX[2 * m:3 * m], "y_max": dX[-1]}
     X = st.pack()
@@ -123,3 +221,27 @@ def steady_tangent(flow: SteadyFlow) -> dict:
         out["d" + k] = (qp[k] - qm[k]) / (2 * eps)
     out["dQ_drho"] = out["dQ"] / out["drho_bar"]
     return out
+
+
+def _tangent_vectors(flow: SteadyFlow, theta: bool = True):
+    """Packed dX/dβ (β = ν0(0)) and, if ``theta``, dX/dθ (per degree), from one LU of the
+    exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
+    central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
+    import scipy.linalg as sla
+    from .solver import _Newton
+
+    newton = _Newton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
+    st = _State(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
+                flow.y_max)
+    _, J = newton.evaluate(st)
+    rhs = np.zeros((J.shape[0], 2 if theta else 1))
+    rhs[0, 0] = -1.0 / flow.nu0
+    if theta:
+        eps = 1e-3
+        Rp = _Newton(flow.n, flow.theta + eps, flow.nu0, flow.model, flow.nu_top).evaluate(
+            st, jac=False)[0]
+        Rm = _Newton(flow.n, flow.theta - eps, flow.nu0, flow.model, flow.nu_top).evaluate(
+            st, jac=False)[0]
+        rhs[:, 1] = (Rp - Rm) / (2 * eps)
+    sol = -sla.lu_solve(sla.lu_factor(J, check_finite=False), rhs, check_finite=False)
+    return sol[:, 0], (sol[:, 1] if theta else None)

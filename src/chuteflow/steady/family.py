@@ -1,0 +1,375 @@
+"""Families of steady flows at fixed inclination, by continuation in ν0(0) (paper §3.2).
+
+Along a family the neighbouring solution, advanced along the exact tangent dX/dβ
+(β = ν0(0), :func:`~chuteflow.steady.steady_tangent`), is an excellent Newton start: two
+or three iterations instead of a cold start's ten, and it follows the branch through
+parameter regions where the isothermal cold start fails (the non-monotonic layers with a
+dilute hot cushion under a denser band). Every point is nevertheless converged and
+checked at two resolutions exactly as :func:`~chuteflow.steady.solve_steady` does.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..closures import ChuteModel
+from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from .api import ThinLayerError, _solve, _tangent_from, _tangent_vectors
+from .result import SteadyFlow
+from .solver import _State, _validate
+
+#: Scalar variables of a family / map dataset (float, NaN where no steady flow).
+SCALARS = ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max", "y_peak",
+           "nu_peak", "convergence", "dQ_drho", "drho_dnu0", "dQ_dnu0")
+
+_ATTRS = {
+    "h": ("thickness h (ν0 = 1 % of its maximum)", "sigma"),
+    "nu_mean": ("mean density ν̄ = ρ̄0 / h", "1"),
+    "rho_bar": ("one-dimensional density ρ̄0 = ∫ν0 dy (label rho0q0)", "sigma"),
+    "Q": ("flux Q0 = ∫ν0 u0 dy (label rho0q0)", "sigma^2 sqrt(g/sigma)"),
+    "T_mean": ("density-weighted temperature T̄0", "g sigma"),
+    "u_floor": ("slip velocity u0(0)", "sqrt(g sigma)"),
+    "T_floor": ("floor temperature T0(0)", "g sigma"),
+    "y_max": ("top of the domain, ν0(y_max) = nu_top", "sigma"),
+    "y_peak": ("height of the density maximum (0 if monotonic)", "sigma"),
+    "nu_peak": ("maximum packing fraction", "1"),
+    "convergence": ("relative change of the scalars between resolutions n and 3n/2", "1"),
+    "dQ_drho": ("dQ0/dρ̄0 along the family (exact tangent; label eq:dqdh)",
+                "sqrt(g sigma)"),
+    "drho_dnu0": ("dρ̄0/dν0(0) along the family (exact tangent)", "sigma"),
+    "dQ_dnu0": ("dQ0/dν0(0) along the family (exact tangent)", "sigma^2 sqrt(g/sigma)"),
+    "monotonic": ("1 if ν0 decreases monotonically from the floor, 0 if its maximum is "
+                  "above the floor", "1"),
+    "n": ("Chebyshev intervals of the accepted resolution", "1"),
+    "status": ("'ok', 'thin' (h < min_thickness), 'no_steady_flow', 'not_converged' or "
+               "'unreached'", ""),
+    "error": ("message of the error for points without a steady flow", ""),
+}
+
+#: Newton settings from a continuation guess (a good guess needs 2–5 full steps): failing
+#: fast matters because beyond the existence boundary every point fails.
+_CONT_MAXITER = 10
+_CONT_LAM_MIN = 1.0 / 16
+
+
+@dataclass(frozen=True)
+class Options:
+    """Solver settings shared by every point of a family or map."""
+
+    nu_top: float = 1e-9
+    n: int = 64
+    rtol: float = 1e-8
+    n_max: int = 384
+    min_thickness: float = 1.0
+    tangent: bool = True
+    substeps: int = 2
+    max_cold: int = 4
+
+
+@dataclass
+class _Point:
+    """Outcome at one (θ, ν0): a flow (possibly thin) or an error, and the ν0-tangent."""
+
+    status: str
+    flow: SteadyFlow | None = None
+    error: str = ""
+    tangent: dict | None = None
+    vectors: tuple | None = None  # packed dX/dν0(0), dX/dθ
+
+    @property
+    def usable(self) -> bool:
+        """A converged solution (physical or thin) that can seed a neighbour."""
+        return self.flow is not None
+
+
+_UNREACHED = "unreached"
+
+
+def _attempt(theta, nu0, model, opts: Options, start: _State | None, n: int,
+             cold: bool = False) -> _Point:
+    kw = {} if cold else {"maxiter": _CONT_MAXITER, "lam_min": _CONT_LAM_MIN}
+    try:
+        flow = _solve(theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start,
+                      opts.min_thickness, **kw)
+        return _Point("ok", flow)
+    except ThinLayerError as exc:
+        return _Point("thin", exc.flow, str(exc))
+    except NoSteadyFlowError as exc:
+        return _Point("no_steady_flow", None, str(exc))
+    except ConvergenceError as exc:
+        return _Point("not_converged", None, str(exc))
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        return _Point("not_converged", None, f"{type(exc).__name__}: {exc}")
+
+
+def _start_n(flow: SteadyFlow, opts: Options) -> int:
+    """The coarser of the two resolutions the neighbour was accepted at."""
+    return max(opts.n, int(round(flow.n * 2 / 3)))
+
+
+def _predict(point: _Point, theta: float, nu0: float) -> _State:
+    """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor)."""
+    f = point.flow
+    X = _State(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
+    if point.vectors is not None:
+        Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
+        st = _State.unpack(f.n, Xp)
+        # near a fold a full Euler step can overshoot; keep it only where it is sane
+        if (0.5 * f.y_max < st.L < 2.0 * f.y_max and (st.T > 0).all()
+                and (st.s < np.log(f.model.nu_max)).all()):
+            return st
+    return _State.unpack(f.n, X)
+
+
+def _with_tangent(point: _Point, opts: Options) -> _Point:
+    if point.flow is not None and point.vectors is None:
+        try:
+            point.vectors = _tangent_vectors(point.flow, theta=True)
+            if opts.tangent and point.status == "ok":
+                point.tangent = _tangent_from(point.flow, point.vectors[0])
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+            point.vectors = None
+    return point
+
+
+def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Point:
+    """Solve at (θ, ν0) from the converged neighbour ``nb``; on failure retry through
+    2, then 4, … intermediate points on the straight path from the neighbour."""
+    p = _attempt(theta, nu0, model, opts, _predict(nb, theta, nu0), _start_n(nb.flow, opts))
+    th0, nu00 = nb.flow.theta, nb.flow.nu0
+    for depth in range(1, opts.substeps + 1):
+        if p.usable:
+            break
+        k = 2 ** depth
+        cur = nb
+        for j in range(1, k):
+            th, nu = th0 + (theta - th0) * j / k, nu00 + (nu0 - nu00) * j / k
+            q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
+            if not q.usable:
+                break
+            cur = _with_tangent(q, opts)
+        else:
+            p = _attempt(theta, nu0, model, opts, _predict(cur, theta, nu0),
+                         _start_n(cur.flow, opts))
+    return _with_tangent(p, opts)
+
+
+def _cold(theta, nu0, model, opts) -> _Point:
+    return _with_tangent(_attempt(theta, nu0, model, opts, None, opts.n, cold=True), opts)
+
+
+def _anchor_order(n: int) -> list[int]:
+    """Cold-start candidates spread over the row: middle, quartiles, eighths, …"""
+    order, seen = [], set()
+    k = 2
+    while len(order) < n:
+        for j in range(1, k, 2):
+            i = min(n - 1, (j * n) // k)
+            if i not in seen:
+                seen.add(i)
+                order.append(i)
+        k *= 2
+        if k > 4 * n:
+            order += [i for i in range(n) if i not in seen]
+            break
+    return order
+
+
+def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
+                 previous: list[_Point] | None = None) -> list[_Point]:
+    """Solve at every ν0 of a row (sorted ascending) by continuation.
+
+    A point is started from a converged neighbour: the one below or above in ν0 (predicted
+    along the exact tangent), or the same ν0 in ``previous`` (the neighbouring θ row of a
+    map; predicted along dX/dθ). Each source is tried once per point. Walks along ν0 go
+    first; when they stall, one point is seeded from ``previous`` and the walks resume.
+    Without any converged point, cold starts are tried at spread-out points (at most
+    ``opts.max_cold``). Points never attempted are marked 'unreached'.
+    """
+    nus = [float(v) for v in nu0_values]
+    N = len(nus)
+    pts: list[_Point | None] = [None] * N
+    tried: list[set] = [set() for _ in range(N)]
+    prev = previous if previous is not None else [None] * N
+    order = _anchor_order(N)
+
+    def usable(i):
+        return pts[i] is not None and pts[i].usable
+
+    def attempt(i, tag, make):
+        tried[i].add(tag)
+        p = make()
+        if pts[i] is None or p.usable:
+            pts[i] = p
+
+    cold = 0
+    while True:
+        walked = False
+        for i in range(1, N):
+            if not usable(i) and usable(i - 1) and "below" not in tried[i]:
+                attempt(i, "below", lambda: _continue(pts[i - 1], theta, nus[i], model, opts))
+                walked = True
+        for i in range(N - 2, -1, -1):
+            if not usable(i) and usable(i + 1) and "above" not in tried[i]:
+                attempt(i, "above", lambda: _continue(pts[i + 1], theta, nus[i], model, opts))
+                walked = True
+        if walked:
+            continue
+        cand = [i for i in order if not usable(i) and prev[i] is not None and prev[i].usable
+                and "theta" not in tried[i]]
+        if cand:
+            i = cand[0]
+            attempt(i, "theta", lambda: _continue(prev[i], theta, nus[i], model, opts))
+            continue
+        if any(usable(i) for i in range(N)):
+            break
+        cand = [i for i in order if "cold" not in tried[i]]
+        if not cand or cold >= (opts.max_cold if previous is None else 1):
+            break
+        cold += 1
+        attempt(cand[0], "cold", lambda: _cold(theta, nus[cand[0]], model, opts))
+    return [p if p is not None else
+            _Point(_UNREACHED, None, "not reached: no converged neighbour to continue from "
+                   "and no cold start tried here")
+            for p in pts]
+
+
+def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
+    N = len(points)
+    out = {k: np.full(N, np.nan) for k in SCALARS}
+    out["monotonic"] = np.full(N, np.nan)
+    out["n"] = np.zeros(N, dtype=int)
+    out["status"] = np.array([p.status for p in points], dtype=object)
+    out["error"] = np.array([p.error for p in points], dtype=object)
+    for i, p in enumerate(points):
+        if p.status != "ok":
+            continue
+        f = p.flow
+        for k in ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max",
+                  "y_peak", "nu_peak", "convergence"):
+            out[k][i] = getattr(f, k)
+        out["monotonic"][i] = 1.0 if f.monotonic else 0.0
+        out["n"][i] = f.n
+        if p.tangent is not None:
+            out["dQ_drho"][i] = p.tangent["dQ_drho"]
+            out["drho_dnu0"][i] = p.tangent["drho_bar"]
+            out["dQ_dnu0"][i] = p.tangent["dQ"]
+    return out
+
+
+def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
+    from .. import __version__
+    attrs = {k: v for k, v in model.as_dict().items()}
+    attrs.update(nu_top=opts.nu_top, rtol=opts.rtol, min_thickness=opts.min_thickness,
+                 chuteflow_version=__version__, source="Mitarai & Nakanishi §3.2")
+    return {k: (str(v) if isinstance(v, bool) else v) for k, v in attrs.items()}
+
+
+def _check_nu0(nu0_values, model) -> np.ndarray:
+    nus = np.atleast_1d(np.asarray(nu0_values, dtype=float))
+    if nus.ndim != 1 or len(nus) == 0:
+        raise ParameterError("nu0_values: expected a non-empty 1-D sequence of floor densities")
+    if len(nus) > 1 and not (np.all(np.diff(nus) > 0)):
+        raise ParameterError("nu0_values must be strictly increasing (continuation walks "
+                             "along them)")
+    for v in nus:
+        _validate(20.0, v, model, min(1e-9, 1e-4 * nus.min()))
+    return nus
+
+
+def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
+                  nu_top: float = 1e-9, n: int = 64, rtol: float = 1e-8, n_max: int = 384,
+                  min_thickness: float = 1.0, tangent: bool = True, return_flows: bool = False):
+    """Steady flows at inclination ``theta`` for each floor density in ``nu0_values``.
+
+    Parameters
+    ----------
+    theta : float
+        Inclination θ in degrees.
+    nu0_values : sequence of float
+        Floor densities ν0(0), strictly increasing.
+    model : ChuteModel, optional
+        Closure parameters (paper defaults).
+    nu_top, n, rtol, n_max, min_thickness
+        As for :func:`~chuteflow.steady.solve_steady`.
+    tangent : bool
+        Also compute dQ0/dρ̄0, dρ̄0/dν0(0), dQ0/dν0(0) from the exact family tangent
+        (label eq:dqdh); about 2 ms per point.
+    return_flows : bool
+        Also return the list of :class:`SteadyFlow` (None where there is none).
+
+    Returns
+    -------
+    xarray.Dataset
+        Over ``nu0``: the scalars of :data:`SCALARS`, ``monotonic`` (1/0), ``n``,
+        ``status`` and ``error`` (strings). Points without a physical steady flow are NaN
+        with their status; no exception is raised for them. Attributes: the model
+        parameters, ``theta``, ``nu_top``, ``rtol``, ``min_thickness`` and the chuteflow
+        version.
+    """
+    import xarray as xr
+    model = model or ChuteModel()
+    theta = _validate(theta, 0.5 * model.nu_max, model, 1e-9)[0]
+    nus = _check_nu0(nu0_values, model)
+    opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness,
+                   tangent=tangent)
+    _validate(theta, nus[0], model, nu_top)
+    pts = continue_row(theta, nus, model, opts)
+    arr = _row_arrays(pts)
+    ds = xr.Dataset({k: ("nu0", v, _var_attrs(k)) for k, v in arr.items()},
+                    coords={"nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)",
+                                                 "units": "1"})},
+                    attrs={**dataset_attrs(model, opts), "theta": theta})
+    if return_flows:
+        return ds, [p.flow if p.status == "ok" else None for p in pts]
+    return ds
+
+
+def _var_attrs(k):
+    name, units = _ATTRS.get(k, (k, ""))
+    return {"long_name": name, "units": units}
+
+
+def flux_minimum(theta: float, model: ChuteModel | None = None, *, family=None,
+                 nu_top: float = 1e-9, rtol: float = 1e-8) -> dict | None:
+    """Minimum of Q0(ρ̄0) at fixed θ: root of dQ0/dν0(0) along the family (eq:dqdh).
+
+    The sign change is bracketed on ``family`` (a dataset from :func:`steady_family`,
+    computed if None on ν0 ∈ [0.005, 0.3]) and refined with Brent's method on the exact
+    tangent. Returns None when dQ0/dρ̄0 keeps its sign on the family (monotonic Q0(ρ̄0)).
+
+    Returns
+    -------
+    dict or None
+        ``nu0``, ``rho_bar``, ``Q``, ``h``, ``nu_mean`` at the minimum, plus the bracket.
+    """
+    from scipy.optimize import brentq
+    model = model or ChuteModel()
+    if family is None:
+        family = steady_family(theta, np.geomspace(0.005, 0.3, 25), model, nu_top=nu_top,
+                               rtol=rtol)
+    ok = family.status.values == "ok"
+    nus = family.nu0.values[ok]
+    dq = family.dQ_dnu0.values[ok]
+    drho = family.drho_dnu0.values[ok]
+    slope = dq / drho
+    idx = np.nonzero((slope[:-1] < 0) & (slope[1:] > 0))[0]
+    if not len(idx):
+        return None
+    i = idx[0]
+    flows = {}
+
+    def g(nu0):
+        f = _solve(theta, nu0, model, nu_top, 64, rtol, 384, None, 0.0)
+        t = steady_tangent(f)
+        flows[nu0] = f
+        return t["dQ"] / t["drho_bar"]
+
+    root = brentq(g, nus[i], nus[i + 1], xtol=1e-10, rtol=1e-12)
+    f = flows.get(root) or _solve(theta, root, model, nu_top, 64, rtol, 384, None, 0.0)
+    return {"nu0": root, "rho_bar": f.rho_bar, "Q": f.Q, "h": f.h, "nu_mean": f.nu_mean,
+            "bracket": (float(nus[i]), float(nus[i + 1]))}
+
+
+__all__ = ["steady_family", "flux_minimum", "SCALARS", "Options", "continue_row"]
