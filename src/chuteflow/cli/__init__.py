@@ -15,6 +15,7 @@ from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
 
 # -- command modules: one line each ------------------------------------------------------
 from . import reproduce  # noqa: E402,F401
+from . import steady  # noqa: E402,F401
 from . import diagram  # noqa: E402,F401
 
 __all__ = ["app", "main"]

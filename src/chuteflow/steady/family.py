@@ -63,7 +63,7 @@ class Options:
     n_max: int = 384
     min_thickness: float = 1.0
     tangent: bool = True
-    substeps: int = 2
+    substeps: int = 1
     max_cold: int = 4
 
 
@@ -331,45 +331,51 @@ def _var_attrs(k):
     return {"long_name": name, "units": units}
 
 
-def flux_minimum(theta: float, model: ChuteModel | None = None, *, family=None,
-                 nu_top: float = 1e-9, rtol: float = 1e-8) -> dict | None:
-    """Minimum of Q0(ρ̄0) at fixed θ: root of dQ0/dν0(0) along the family (eq:dqdh).
+def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=None,
+                 nu_top: float = 1e-9, rtol: float = 1e-8, xtol: float = 1e-9):
+    """Minimum of Q0(ρ̄0) at fixed θ: the root of dQ0/dν0(0) along the family (eq:dqdh).
 
-    The sign change is bracketed on ``family`` (a dataset from :func:`steady_family`,
-    computed if None on ν0 ∈ [0.005, 0.3]) and refined with Brent's method on the exact
-    tangent. Returns None when dQ0/dρ̄0 keeps its sign on the family (monotonic Q0(ρ̄0)).
+    A family on ``nu0_values`` (default 30 values from 0.005 to 0.3, geometric) brackets a
+    sign change of dQ0/dρ̄0 from − to + (both from the exact tangent); Brent's method then
+    refines it, each evaluation continued from the nearest converged flow.
 
     Returns
     -------
     dict or None
-        ``nu0``, ``rho_bar``, ``Q``, ``h``, ``nu_mean`` at the minimum, plus the bracket.
+        None when dQ0/dρ̄0 keeps its sign on the family (Q0 monotonic in ρ̄0). Otherwise
+        ``nu0``, ``rho_bar``, ``Q``, ``h``, ``nu_mean`` at the minimum, ``bracket`` (the two
+        family points around it) and ``family`` (the dataset).
     """
     from scipy.optimize import brentq
     model = model or ChuteModel()
-    if family is None:
-        family = steady_family(theta, np.geomspace(0.005, 0.3, 25), model, nu_top=nu_top,
-                               rtol=rtol)
-    ok = family.status.values == "ok"
-    nus = family.nu0.values[ok]
-    dq = family.dQ_dnu0.values[ok]
-    drho = family.drho_dnu0.values[ok]
-    slope = dq / drho
-    idx = np.nonzero((slope[:-1] < 0) & (slope[1:] > 0))[0]
-    if not len(idx):
+    if nu0_values is None:
+        nu0_values = np.geomspace(0.005, 0.3, 30)
+    fam, flows = steady_family(theta, nu0_values, model, nu_top=nu_top, rtol=rtol,
+                               min_thickness=0.0, return_flows=True)
+    ok = np.nonzero(fam.status.values == "ok")[0]
+    slope = fam.dQ_drho.values
+    idx = [i for a, i in zip(ok[:-1], ok[1:]) if i == a + 1 and slope[a] < 0 < slope[i]]
+    if not idx:
         return None
     i = idx[0]
-    flows = {}
+    opts = Options(nu_top=nu_top, rtol=rtol, min_thickness=0.0)
+    cache: dict[float, _Point] = {}
+    seeds = [_with_tangent(_Point("ok", flows[i - 1]), opts),
+             _with_tangent(_Point("ok", flows[i]), opts)]
 
     def g(nu0):
-        f = _solve(theta, nu0, model, nu_top, 64, rtol, 384, None, 0.0)
-        t = steady_tangent(f)
-        flows[nu0] = f
-        return t["dQ"] / t["drho_bar"]
+        nb = min(seeds, key=lambda p: abs(p.flow.nu0 - nu0))
+        p = _continue(nb, theta, nu0, model, opts)
+        if not p.usable:
+            raise ConvergenceError(f"flux minimum at theta = {theta:g}: no converged flow at "
+                                   f"nu0 = {nu0:g} ({p.error})")
+        cache[nu0] = p
+        return p.tangent["dQ_drho"]
 
-    root = brentq(g, nus[i], nus[i + 1], xtol=1e-10, rtol=1e-12)
-    f = flows.get(root) or _solve(theta, root, model, nu_top, 64, rtol, 384, None, 0.0)
+    root = brentq(g, float(fam.nu0[i - 1]), float(fam.nu0[i]), xtol=xtol, rtol=1e-12)
+    f = (cache.get(root) or _continue(seeds[0], theta, root, model, opts)).flow
     return {"nu0": root, "rho_bar": f.rho_bar, "Q": f.Q, "h": f.h, "nu_mean": f.nu_mean,
-            "bracket": (float(nus[i]), float(nus[i + 1]))}
+            "bracket": (float(fam.nu0[i - 1]), float(fam.nu0[i])), "family": fam}
 
 
 __all__ = ["steady_family", "flux_minimum", "SCALARS", "Options", "continue_row"]

@@ -226,6 +226,12 @@ class _Newton:
         return R, J
 
     def solve(self, st: _State, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
+        # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
+        # is handled by the line search, so numpy's warnings about it are noise
+        with np.errstate(all="ignore"):
+            return self._solve(st, tol, maxiter, y_cap, lam_min, min_iter)
+
+    def _solve(self, st, tol, maxiter, y_cap, lam_min, min_iter):
         """Damped Newton. Converged when the scaled residual is below ``tol``, or when the
         relative Newton step falls below 1e-11 with the residual at its round-off floor.
         Fails when the backtracking step would fall below ``lam_min`` (a continuation
