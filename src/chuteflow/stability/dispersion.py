@@ -7,7 +7,7 @@ tangent ∂X0/∂β of the steady family and its left null vector the total-mass
 the previous points (linear, then quadratic extrapolation) and takes the eigenvalue nearest
 the prediction by shift-invert Arnoldi. Steps whose answer lands far from the prediction are
 halved, so the branch is not lost to the near-neutral continuum α ≈ −ik u0(y) that crowds
-it at small k. Each point is then checked at N' = ⌈1.25 N⌉ (drift) and by the Chebyshev
+it at small k. Each point is then checked at N' = round(0.8 N) (drift) and by the Chebyshev
 tail; N is raised along the branch when a point fails.
 """
 from __future__ import annotations
@@ -60,7 +60,7 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
 
     p = op.pencil(0.0)
     A, B = p.equilibrated()
-    si = ShiftInvert(A, B, 0.0)
+    si = ShiftInvert(A, B, 0.0, diagonal_B=True)
     alpha, W = si.nearest(1)
     a0, w = alpha[0], W[:, 0]
     ell = np.conj(B @ w)

@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -75,7 +76,7 @@ class Pencil:
     Attributes
     ----------
     A : ndarray, complex, (M, M)
-        Operator at (k_x, k_z); M = (N + 1) × number of fields.
+        Operator at (k_x, k_z); M = (N + 1) × number of fields. Built on first access.
     B : ndarray, real, (M, M)
         Diagonal mass matrix (zero on boundary rows).
     kx, kz : float
@@ -86,17 +87,33 @@ class Pencil:
         Order of the field blocks of V: ("nu", "u", "v", "T"), or with "w" in 3D.
     flow : SteadyFlow
         The base state.
+    operator : StabilityOperator
+        The operator this pencil was evaluated from.
     """
 
-    A: np.ndarray = field(repr=False)
-    B: np.ndarray = field(repr=False)
     kx: float
     kz: float
-    grid: ChebyshevGrid = field(repr=False)
-    fields: tuple
-    flow: SteadyFlow = field(repr=False)
-    row_eq: np.ndarray = field(repr=False, default=None)
-    col_eq: np.ndarray = field(repr=False, default=None)
+    operator: "StabilityOperator" = field(repr=False)
+
+    @property
+    def grid(self) -> ChebyshevGrid:
+        return self.operator.grid
+
+    @property
+    def fields(self) -> tuple:
+        return self.operator.fields
+
+    @property
+    def flow(self) -> SteadyFlow:
+        return self.operator.flow
+
+    @cached_property
+    def A(self) -> np.ndarray:
+        return self.operator.matrix(self.kx, self.kz)
+
+    @property
+    def B(self) -> np.ndarray:
+        return self.operator.B
 
     @property
     def k(self) -> float:
@@ -108,7 +125,7 @@ class Pencil:
 
     @property
     def size(self) -> int:
-        return self.A.shape[0]
+        return self.operator.size
 
     def slices(self) -> dict[str, slice]:
         """Field name → slice of its block in V."""
@@ -119,20 +136,22 @@ class Pencil:
         """Field name → nodal values, for a vector V (or the leading axis of an array)."""
         return {f: V[s] for f, s in self.slices().items()}
 
+    @cached_property
+    def _equilibrated(self):
+        op = self.operator
+        return op.matrix(self.kx, self.kz, equilibrated=True), op.B_eq
+
     def equilibrated(self) -> tuple[np.ndarray, np.ndarray]:
-        """(R A C, R B C) with the diagonal equilibration R, C of the operator.
+        """(R A C, R B C) with the operator's diagonal equilibration R, C.
 
         Same eigenvalues; an eigenvector W of the equilibrated pencil is V = C W here
         (:meth:`unscale`). All solvers of this package work on it.
         """
-        if self.row_eq is None:
-            return self.A, self.B
-        r, c = self.row_eq[:, None], self.col_eq[None, :]
-        return self.A * r * c, self.B * r * c
+        return self._equilibrated
 
     def unscale(self, W: np.ndarray) -> np.ndarray:
         """Eigenvector(s) of the equilibrated pencil → of (A, B)."""
-        return W if self.col_eq is None else (self.col_eq * W.T).T
+        return (self.operator.col_eq * W.T).T
 
 
 class StabilityOperator:
@@ -251,28 +270,49 @@ class StabilityOperator:
         self.row_eq[1:m - 1] = 1.0 / base["nu"][1:m - 1]
         self.col_eq = np.ones(M)
         self.col_eq[:m] = base["nu"]
+        r, c = self.row_eq[:, None], self.col_eq[None, :]
+        self._pieces_eq = {key: P * r * c for key, P in pieces.items()}
+        self.B_eq = B * r * c
+        nz = np.nonzero(K)
+        self._K_eq = (nz[0], nz[1], (K * r * c)[nz])
+        self._K_sparse = (nz[0], nz[1], K[nz])
 
     # -- evaluation ----------------------------------------------------------------------
-    def matrix(self, kx: float, kz: float = 0.0) -> np.ndarray:
-        """A(k_x, k_z), complex."""
+    def matrix(self, kx: float, kz: float = 0.0, *, equilibrated: bool = False) -> np.ndarray:
+        """A(k_x, k_z), complex (of the equilibrated pencil R A C if ``equilibrated``)."""
         kx, kz = _check_k(kx, "k"), _check_k(kz, "kz", signed=True)
         if kz and not self.three_d:
             raise ParameterError("kz != 0 needs the three-dimensional operator (three_d=True)")
-        A = self.pieces[(0, 0)].astype(complex)
-        for (b, d), P in self.pieces.items():
-            if b or d:
-                fac = (1j * kx) ** b * (1j * kz) ** d
-                if fac != 0:
-                    A += fac * P
+        pieces, K = ((self._pieces_eq, self._K_eq) if equilibrated else
+                     (self.pieces, self._K_sparse))
+        A = np.empty(pieces[(0, 0)].shape, dtype=complex)
+        # (ik)^b is real for even b, imaginary for odd: fill real and imaginary parts apart
+        re, im = pieces[(0, 0)].copy(), None
+        for (b, d), P in pieces.items():
+            if not (b or d):
+                continue
+            fac = (1j * kx) ** b * (1j * kz) ** d
+            if fac == 0:
+                continue
+            if fac.imag == 0:
+                re += fac.real * P
+            elif fac.real == 0:
+                im = fac.imag * P if im is None else im + fac.imag * P
+            else:  # pragma: no cover - (ik)^b (ik)^d is always real or imaginary
+                raise AssertionError(fac)
         k = math.hypot(kx, kz)
-        if k:
-            A += k * self.K
+        rows, cols, vals = K
+        re[rows, cols] += k * vals
+        A.real = re
+        A.imag = 0.0 if im is None else im
         return A
 
     def pencil(self, kx: float, kz: float = 0.0) -> Pencil:
         """The pencil (A, B) at wavevector (k_x, k_z)."""
-        return Pencil(self.matrix(kx, kz), self.B, float(kx), float(kz), self.grid,
-                      self.fields, self.flow, self.row_eq, self.col_eq)
+        kx, kz = _check_k(kx, "k"), _check_k(kz, "kz", signed=True)
+        if kz and not self.three_d:
+            raise ParameterError("kz != 0 needs the three-dimensional operator (three_d=True)")
+        return Pencil(kx, kz, self)
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(A0, A1, A2) with A(k) = A0 + (ik) A1 + (ik)² A2 for k_z = 0, k ≥ 0 (eq:lin).
