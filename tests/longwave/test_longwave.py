@@ -3,11 +3,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import scipy.linalg as sla
 
 from chuteflow.closures import ChuteModel
 from chuteflow.longwave import longwave
 from chuteflow.longwave.theory import coefficients, null_vector
+from chuteflow.stability import qz
+from chuteflow.stability.modes import nearest_eigenpair
 from chuteflow.stability.operator import StabilityOperator
 from chuteflow.steady import solve_steady, steady_tangent
 
@@ -18,15 +19,15 @@ def p1():
 
 
 def _qz_branch(op, k, alpha1):
-    """Eigenvalue of the row/column-equilibrated pencil closest to the kinematic wave."""
-    P = op.pencil(k)
-    A, B = P.A.copy(), np.asarray(P.B, dtype=complex)
-    r = 1.0 / np.maximum(abs(A).max(1), abs(B).max(1))
-    A, B = A * r[:, None], B * r[:, None]
-    c = 1.0 / np.maximum(abs(A).max(0), abs(B).max(0))
-    w = sla.eig(A * c, B * c, right=False)
-    w = w[np.isfinite(w)]
+    """Dense-QZ eigenvalue (equilibrated pencil) closest to the kinematic wave α1 k."""
+    w, _ = qz(*op.pencil(k).equilibrated(), vectors=False)
     return w[np.argmin(abs(w / k - alpha1))]
+
+
+def _shift_invert(op, k, guess):
+    """Shift-invert eigenvalue nearest ``guess``: accurate relative to |α − σ|, which QZ
+    (accurate relative to ‖A‖) is not for eigenvalues ~1e-7 with real parts ~1e-10."""
+    return nearest_eigenpair(op.pencil(k), guess)[0]
 
 
 def test_alpha1_is_minus_i_dQ_drho(p1):
@@ -59,29 +60,30 @@ def test_alpha2_matches_small_k_eigenvalue():
 
     With the domain top at ν0 = 1e-7 the near-neutral continuum of the dilute layer sits
     ~1e-6 below α = 0, so k = 1e-7 lies inside the k² regime: agreement to 0.5 % (measured
-    0.1 %, the O(k) remainder). Dense QZ on the equilibrated pencil is the reference.
+    0.1 %, the O(k) remainder). The eigenvalue comes from shift-invert started at α1 k.
     """
     flow = solve_steady(16, 0.05, nu_top=1e-7)
     op = StabilityOperator(flow, 200)
     a1, a2 = coefficients(op, steady_tangent(flow))
     k = 1e-7
-    alpha = _qz_branch(op, k, a1)
+    alpha = _shift_invert(op, k, a1 * k)
     assert abs(alpha.real / k**2 - a2.real) / abs(a2.real) < 5e-3
 
 
+@pytest.mark.slow
 def test_alpha2_vs_eigenvalue_at_paper_top(p1):
     """At the paper's top (ν0 = 1e-9) the continuum gap is ~1e-8 and eigenvalues at
     k = 1e-6 see Re α/k² a few per cent away from the strict α2 (measured 4 %): the
-    result reports both; they agree to 8 % and in sign. The inverse-iteration eigenvalue
-    equals dense QZ to 1e-6 of |α| (measured 3e-7: both are limited by the conditioning of
-    this non-normal pencil), i.e. to 2e-4 of Re α."""
+    result reports both; they agree to 8 % and in sign. Dense QZ, whose error is relative to
+    ‖A‖ rather than to |α| ~ 4e-6, confirms the shift-invert eigenvalue to 2e-5 of |α|
+    (measured 1e-5) and 2 % of Re α (measured 0.1 %)."""
     lw = longwave(p1, rtol=0.05)
     e2 = lw.alpha2_from_eigenvalue
     assert abs(e2.real - lw.alpha2.real) / abs(lw.alpha2.real) < 8e-2
     op = StabilityOperator(p1, lw.n)
     qz = _qz_branch(op, lw.k_check, lw.alpha1)
-    assert abs(qz - lw.alpha_check) < 1e-6 * abs(qz)
-    assert abs(qz.real - lw.alpha_check.real) < 2e-4 * abs(qz.real)
+    assert abs(qz - lw.alpha_check) < 2e-5 * abs(qz)
+    assert abs(qz.real - lw.alpha_check.real) < 2e-2 * abs(qz.real)
 
 
 @pytest.mark.parametrize("theta, nu0, roughness, unstable", [
