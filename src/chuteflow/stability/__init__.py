@@ -1,7 +1,58 @@
-"""Linear stability of steady chute flows (paper §4, Appendices A–B)."""
+"""Linear stability of steady chute flows (paper §4, Appendices A–B).
+
+Perturbations (ν̂, û, v̂, T̂)(y) exp(αt + ikx) (label eq:lin) of a :class:`SteadyFlow` solve
+the generalized eigenproblem A V = α B V, with A and B derived from the one statement of the
+equations in :mod:`chuteflow.equations` and collocated on N + 1 Chebyshev nodes of
+[0, y_max]. Re α > 0 is growth; Im α < 0 a wave running down the slope.
+
+Operator
+    ``op = StabilityOperator(flow, n, three_d=False)`` — built once per (flow, N).
+    ``op.pencil(k, kz=0)`` → :class:`Pencil` (``.A``, ``.B``, ``.grid``, ``.fields``,
+    ``.slices()``, ``.split(V)``). ``op.series()`` → (A0, A1, A2) with
+    A(k) = A0 + (ik) A1 + (ik)² A2 for k ≥ 0 (the top conditions' |k| folded into A1);
+    ``op.B`` is independent of k; ``op.pieces[(b, d)]`` are the coefficients of
+    (ik_x)^b (ik_z)^d in 3D. Rows: see :mod:`.operator`. ``operator(flow, k, n=None)`` is
+    the one-call form. ``stability_operator(flow, n)`` returns a cached operator.
+    Unknowns are the physical (ν̂, û, v̂, T̂); the solvers work on an internally equilibrated
+    copy (``pencil.equilibrated()``, unknown ν̂/ν0; ``pencil.unscale`` maps back).
+
+Solvers
+    ``qz(A, B)`` — dense QZ, all finite eigenvalues (reference, fallback).
+    ``ShiftInvert(A, B, σ)`` — one LU of A − σB reused: ``.iterate(v0)`` (inverse
+    iteration), ``.nearest(nev)`` (Arnoldi on x ↦ (A − σB)⁻¹Bx; not ``eigs(M=B)``).
+
+Modes (every one carries its convergence estimate)
+    :class:`Mode` — ``alpha``, ``k``, ``kz``, ``theta``, ``nu0``, ``n``, ``y``, ``fields``
+    (dict of nodal values, largest component 1), ``drift`` (|α(N) − α(N')|,
+    N' = round(0.8N)), ``tail`` (paper's Chebyshev-tail statistic), ``physical`` (both
+    < 1e-7), ``summary()``, ``to_xarray()``.
+    ``least_stable(flow, k, n=None, sigma=None, method="branch"|"qz")`` → Mode; N adaptive
+    (80, 100, 125, …, 256) unless given. ``spectrum(flow, k, n=80)`` → all physical modes
+    by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift.
+
+Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
+    ``null_vectors(op)`` → :class:`NullVectors` (``alpha0``, ``right`` ∝ ∂X0/∂β,
+    ``left``; lᴴ B r = 1). ``first_order(op, nv)`` → α1 estimate (a predictor; the
+    long-wave stage computes α1, α2 accurately). ``BranchTracker(flow, n)`` — continuation
+    in k with ``.advance(k)`` and ``.mode(k)``. ``dispersion(flow, ks)`` →
+    :class:`xarray.Dataset` (alpha_re, alpha_im, drift, tail, n, physical over k; the
+    flow's parameters as attributes). ``critical_k(flow, k_max=0.05)`` → k_c (brentq on the
+    tracked branch) or None; ``crossings(...)`` → all sign changes of Re α.
+
+Numerical notes (see also ERRATA.md): bulk rows are divided by μ0 or κ0, never by ν0
+(which would put 1e9 into the dilute top's rows and bury the dense layer's eigenvalues in
+round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) − 1e-8) passes the
+drift test but fails the tail test, and shift-invert estimates near it carry round-off of
+~1e-12 absolute.
+"""
 from .operator import Pencil, StabilityOperator, base_on_grid, operator
 from .eigen import ShiftInvert, qz
-from .modes import (Mode, choose_n, least_stable, mode_near, spectrum, stability_operator,
-                    tail)
+from .modes import (Mode, check_n, choose_n, least_stable, mode_near, spectrum,
+                    stability_operator, tail)
 from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
+
+__all__ = ["Pencil", "StabilityOperator", "base_on_grid", "operator", "ShiftInvert", "qz",
+           "Mode", "check_n", "choose_n", "least_stable", "mode_near", "spectrum",
+           "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
+           "critical_k", "crossings", "dispersion", "first_order", "null_vectors"]

@@ -68,7 +68,7 @@ class ShiftInvert:
             M.flat[::M.shape[0] + 1] -= self.sigma * self._bdiag
         else:
             M = A - self.sigma * B
-        self.lu = sla.lu_factor(M, check_finite=False)
+        self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
         piv = np.abs(np.diag(self.lu[0]))
         if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
             raise ConvergenceError(f"shift {self.sigma:.6g} is an eigenvalue: A − σB is "

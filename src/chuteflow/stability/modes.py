@@ -198,7 +198,15 @@ def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
         found = si.iterate(v0)
         if found is not None:
             return found
-    start = None if v0 is None else si.apply(v0)
+    else:
+        # inverse iteration from a vector in the range of (A − σB)⁻¹B converges as fast
+        # as Arnoldi when σ is close, for a fraction of the overhead
+        rng = np.random.default_rng(2024)
+        v0 = si.apply(rng.standard_normal(si.size) + 1j * rng.standard_normal(si.size))
+        found = si.iterate(v0, maxiter=16)
+        if found is not None:
+            return found
+    start = si.apply(v0)
     alpha, V = si.nearest(1, v0=start)
     if len(alpha) == 0:
         raise ConvergenceError(f"no eigenvalue converged near {complex(sigma):.6g} at "

@@ -1,0 +1,111 @@
+"""Benchmarks of the stability solvers (issue 3) against dense QZ, one BLAS thread.
+
+``run(quick)`` returns rows with keys name, seconds, baseline_seconds, ratio, note (the
+interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_stability.py
+[--quick]``. Flow: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), k = 0.002, N = 100. Times are the
+best of a few repetitions after a warm-up (sympy compilation is excluded).
+
+- ``shift_invert_vs_qz``: the targeted solver on one pencil — LU of A − σB and inverse
+  iteration / Arnoldi — from a shift 1e-4 away from the answer, against
+  ``scipy.linalg.eig(A, B)`` (eigenvalues only) on the same pencil. Target ≥ 20×, same
+  eigenvalue to 1e-9.
+- ``least_stable_vs_qz``: the whole ``least_stable(flow, k, n=100)`` — branch continuation
+  from k = 0, drift check at N' = 80, Chebyshev tail — against what the paper's method needs
+  for the same answer: QZ with eigenvectors at N (tail test) and QZ at N' (drift test).
+- ``dispersion_50``: ``solve_steady`` + ``dispersion`` at 50 wavenumbers on [0, 0.02]
+  (adaptive N, drift and tail at every point). Target < 2 s. Baseline: the paper's method
+  on the same 50 points, two dense QZ per point, timed on one point and multiplied.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+if __package__ in (None, ""):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+import numpy as np  # noqa: E402
+
+THETA, NU0, K, N = 16.0, 0.05, 2e-3, 100
+
+
+def _best(fn, repeat):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def run(quick: bool = False) -> list[dict]:
+    import scipy.linalg as sla
+
+    from chuteflow._threads import limit_blas_threads
+    from chuteflow.stability import dispersion, least_stable, qz, stability_operator
+    from chuteflow.stability.modes import check_n, nearest_eigenpair
+    from chuteflow.steady import solve_steady
+
+    limit_blas_threads(1)
+    rep = 2 if quick else 5
+    flow = solve_steady(THETA, NU0)
+    ref_mode = least_stable(flow, K, n=N)  # warm-up: compilation, caches
+    rows = []
+
+    # 1. one pencil: targeted vs QZ
+    op = stability_operator(flow, N)
+    A, B = op.pencil(K).equilibrated()
+    t_qz, w = _best(lambda: sla.eig(A, B, right=False, check_finite=False), max(1, rep // 2))
+    ref = w[np.argmin(np.abs(w - ref_mode.alpha))]
+
+    def targeted():
+        return nearest_eigenpair(op.pencil(K), ref_mode.alpha + 1e-4)[0]
+    t_si, alpha = _best(targeted, rep)
+    rows.append({"name": "shift_invert_vs_qz", "seconds": t_si, "baseline_seconds": t_qz,
+                 "ratio": t_qz / t_si,
+                 "note": f"N={N}, M={A.shape[0]}; |alpha - alpha_QZ| = {abs(alpha - ref):.1e} "
+                         "(target 1e-9); target ratio >= 20"})
+
+    # 2. least-stable mode with its convergence estimate, end to end
+    n2 = check_n(N)
+    A2, B2 = stability_operator(flow, n2).pencil(K).equilibrated()
+
+    def paper():
+        qz(A, B)  # with eigenvectors, for the tail test
+        qz(A2, B2, vectors=False)  # the drift test
+
+    t_paper, _ = _best(paper, 1)
+    t_ls, mode = _best(lambda: least_stable(flow, K, n=N), rep)
+    rows.append({"name": "least_stable_vs_qz", "seconds": t_ls, "baseline_seconds": t_paper,
+                 "ratio": t_paper / t_ls,
+                 "note": f"from k = 0 by continuation + drift at N'={n2} + tail; "
+                         f"|alpha - alpha_QZ| = {abs(mode.alpha - ref):.1e}, drift "
+                         f"{mode.drift:.1e}"})
+
+    # 3. a 50-point dispersion relation including the steady solve
+    ks = np.linspace(0.0, 0.02, 50)
+
+    def disp():
+        f = solve_steady(THETA, NU0)
+        return dispersion(f, ks)
+    t_disp, ds = _best(disp, max(1, rep // 2))
+    per_point = t_qz_vec = _best(lambda: qz(A, B), 1)[0]
+    baseline = len(ks) * (per_point + t_qz * (n2 / N) ** 3)
+    rows.append({"name": "dispersion_50", "seconds": t_disp, "baseline_seconds": baseline,
+                 "ratio": baseline / t_disp,
+                 "note": f"target < 2 s; N used {sorted(set(ds['n'].values.tolist()))}, max "
+                         f"drift {float(ds['drift'].max()):.1e}; baseline = 50 x (QZ with "
+                         f"vectors at N={N}: {t_qz_vec:.2f} s, + QZ at N'={n2}, scaled)"})
+    return rows
+
+
+def main(argv=None):
+    quick = "--quick" in (argv if argv is not None else sys.argv[1:])
+    for row in run(quick):
+        print(f"{row['name']:24s} {row['seconds']:9.4f} s  baseline {row['baseline_seconds']:9.3f} s"
+              f"  ratio {row['ratio']:7.1f}  {row['note']}")
+
+
+if __name__ == "__main__":
+    main()
