@@ -97,3 +97,13 @@ def test_bad_parameters_name_the_parameter(p1_flow):
         least_stable(p1_flow, K, drift_tol=0.0)
     with pytest.raises(ParameterError, match="n = 3"):
         spectrum(p1_flow, K, n=3)
+
+
+def test_spanwise_perturbation_matches_qz(p1_flow):
+    """3D: the least-stable mode for k along z (kx = 0), tracked from k = 0 with ŵ and the
+    z-momentum balance, is the least-stable physical mode of the whole 3D spectrum."""
+    kz = 2e-3
+    by_branch = least_stable(p1_flow, 0.0, kz=kz, n=64)
+    by_qz = spectrum(p1_flow, 0.0, kz=kz, n=64)[0]
+    assert set(by_branch.fields) == {"nu", "u", "v", "w", "T"}
+    assert abs(by_branch.alpha - by_qz.alpha) < 1e-10

@@ -28,7 +28,8 @@ Modes (every one carries its convergence estimate)
     < 1e-7), ``summary()``, ``to_xarray()``.
     ``least_stable(flow, k, n=None, sigma=None, method="branch"|"qz")`` → Mode; N adaptive
     (80, 100, 125, …, 256) unless given. ``spectrum(flow, k, n=80)`` → all physical modes
-    by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift.
+    by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift;
+    ``nearest_eigenpair(pencil, σ, v0=None)`` → (α, w) on the equilibrated pencil.
 
 Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     ``null_vectors(op)`` → :class:`NullVectors` (``alpha0``, ``right`` ∝ ∂X0/∂β,
@@ -47,12 +48,13 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 """
 from .operator import Pencil, StabilityOperator, base_on_grid, operator
 from .eigen import ShiftInvert, qz
-from .modes import (Mode, check_n, choose_n, least_stable, mode_near, spectrum,
-                    stability_operator, tail)
+from .modes import (Mode, check_n, choose_n, least_stable, mode_near, nearest_eigenpair,
+                    spectrum, stability_operator, tail)
 from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
 
 __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "operator", "ShiftInvert", "qz",
-           "Mode", "check_n", "choose_n", "least_stable", "mode_near", "spectrum",
+           "Mode", "check_n", "choose_n", "least_stable", "mode_near", "nearest_eigenpair",
+           "spectrum",
            "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
            "critical_k", "crossings", "dispersion", "first_order", "null_vectors"]

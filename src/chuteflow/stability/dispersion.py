@@ -78,18 +78,24 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
 
 
 def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) -> complex:
-    """α1 = dα/ds at s = 0 along k = s·(k̂x, k̂z): lᴴ (dA/ds) r / lᴴ B r (Appendix B).
+    """α1 = dα/ds at s = 0 along k = s·(k̂x, k̂z), from the mass balance (Appendix B).
 
-    First-order perturbation theory with the discrete null vectors. It seeds the
-    continuation; as a value it is good to ~1e-5 relative only (measured: −i·4.15235 against
-    −i dQ0/dρ̄0 = −i·4.15236 at P1), because the left null vector is ill-conditioned by the
-    continuum within ~1e-8 of α = 0. :mod:`chuteflow.longwave` computes α1, α2 accurately.
+    Integrating the linearised continuity equation over the layer (eq:omega) with the k = 0
+    eigenvector (ν̂0, û0, ŵ0) gives α1 = −i [k̂x ∫(ν0 û0 + u0 ν̂0) dy + k̂z ∫ ν0 ŵ0 dy] /
+    ∫ ν̂0 dy (eq:omega2): the continuous problem's left null vector is the total-mass
+    functional. It is used instead of the discrete left null vector, which the continuum
+    within ~1e-8 of α = 0 makes ill-conditioned. For k along x it equals
+    −i dQ0/dρ̄0 (eq:vp0) up to the top truncation (~1e-6 relative at ν_top = 1e-9).
     """
     kx, kz = direction
-    z = np.zeros_like(op.pieces[(0, 0)])
-    dA = (1j * kx * op.pieces.get((1, 0), z) + 1j * kz * op.pieces.get((0, 1), z)
-          + math.hypot(kx, kz) * op.K)
-    return complex(np.vdot(nv.left, dA @ nv.right) / np.vdot(nv.left, op.B @ nv.right))
+    norm = math.hypot(kx, kz)
+    kx, kz = kx / norm, kz / norm
+    r = op.pencil(0.0).split(nv.right)
+    w, nu0, u0 = op.grid.weights, op.base["nu"], op.base["u"]
+    flux = kx * (w @ (nu0 * r["u"] + u0 * r["nu"]))
+    if "w" in r:
+        flux = flux + kz * (w @ (nu0 * r["w"]))
+    return complex(-1j * flux / (w @ r["nu"]))
 
 
 class BranchTracker:
@@ -159,6 +165,10 @@ class BranchTracker:
         pencil = self._pencil(s)
         alpha, w = nearest_eigenpair(pencil, pred, v0=v_prev)
         ratio = abs(alpha - pred) / max(abs(pred - a_prev), 1e-300)
+        if len(self.history) == 1:
+            # from k = 0 the predictor α1 k may vanish (k along z: no advection); the
+            # nearest resolved eigenvector is the branch, as the continuum fails the tail
+            ratio = min(ratio, 0.25)
         if ratio > 0.25:
             return None
         if tail(pencil.unscale(w), len(pencil.fields)) > ACCEPT_TAIL:
@@ -183,18 +193,21 @@ class BranchTracker:
                 h = min(s_target, FIRST_STEP)
             else:
                 h = min(s_target - s_last, self._h, 2.0 * s_last)
-            res = self._step(s_last + h)
+
+            def at(h):  # land exactly on the target (s_last + (target − s_last) may not)
+                return s_target if h >= s_target - s_last else s_last + h
+            res = self._step(at(h))
             while res is None:
                 halvings += 1
                 if halvings > max_halvings:
                     raise ConvergenceError(
-                        f"lost the branch near k = {s_last + h:.4g} (theta = "
+                        f"lost the branch near k = {at(h):.4g} (theta = "
                         f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
                         "continuation step shrank below any useful size")
                 h *= 0.5
-                res = self._step(s_last + h)
+                res = self._step(at(h))
             alpha, w, ratio = res
-            self.history.append((s_last + h, complex(alpha), w))
+            self.history.append((at(h), complex(alpha), w))
             self._h = h * (3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0)
         return self.history[-1][1], self.history[-1][2]
 
@@ -249,10 +262,11 @@ def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAU
             pencil = op.pencil(k, kz)
             alpha, w = nearest_eigenpair(pencil, a_c, v0=_interp_vector(
                 w_c, len(op.fields), COARSE_N, n))
-            if (abs(alpha - a_c) < 1e-2 * abs(a_c)
-                    and tail(pencil.unscale(w), len(op.fields)) < ACCEPT_TAIL):
+            if abs(alpha - a_c) < 1e-2 * abs(a_c):
                 drift, n2 = drift_of(flow, alpha, w, n, k, kz, coarse.three_d)
-                return _make_mode(pencil, alpha, w, drift, n2, drift_tol, tail_tol)
+                mode = _make_mode(pencil, alpha, w, drift, n2, drift_tol, tail_tol)
+                if mode.physical:
+                    return mode
         except ConvergenceError:
             pass
     tr = BranchTracker(flow, n, direction=direction, n_max=n, drift_tol=drift_tol,
