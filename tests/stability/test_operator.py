@@ -228,5 +228,8 @@ def test_operator_rejects_bad_input(p1_flow):
 
 
 def test_p1_reference_values(p1_flow):
-    """Guard that the shared fixture is the flow the checkpoints refer to."""
-    assert abs(p1_flow.u_floor - 8.19453251) < 1e-7 and P1 == (16.0, 0.05)
+    """Guard that the shared fixture is the flow the checkpoints refer to (steady-stage
+    reference values; the steady solver's own tests pin them tighter)."""
+    assert P1 == (16.0, 0.05)
+    assert p1_flow.u_floor == pytest.approx(8.19453251, rel=1e-6)
+    assert p1_flow.rho_bar == pytest.approx(0.26388215, rel=1e-6)
