@@ -1,0 +1,17 @@
+"""The reduced one-dimensional model (§5.1.2) and nonlinear density waves (§5.2).
+
+- :func:`reduced_model` / :class:`ReducedModel`: F(ρ̄), T̄(ρ̄), a(ρ̄), U(ρ̄), μ̄(ρ̄) over a steady
+  family at fixed θ (labels onedv, oneaandu), with measured interpolation error.
+- :class:`LocalCoefficients` / :func:`local_coefficients`: the linear theory at one uniform
+  state: 2×2 dispersion relation, condition (errata-corrected), criterion, disp-oned, k_c.
+- :func:`reduced_diagram`, :func:`agreement`: 1D stability diagrams (fig phaseoned) and their
+  agreement with the full model's.
+- :func:`simulate`, :class:`WaveSolver`: nonlinear waves on a periodic slope.
+"""
+from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
+from .simulate import WaveSolver, default_cells, growth_rate_fit, simulate
+from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
+
+__all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
+           "WaveSolver", "default_cells", "growth_rate_fit", "simulate", "Reduced1D",
+           "agreement", "reduced_diagram", "reduced_diagram_config"]

@@ -1,0 +1,549 @@
+"""Nonlinear density waves of the 1D model (onedv, oneaandu) on a periodic slope of length L.
+
+Discretisation: finite volumes on a staggered periodic grid of N cells, dx = L/N. The density
+ρ̄ lives at cell centres x_i = (i + ½) dx, the momentum m = ρ̄ū on the faces x_{i+½}
+(staggering couples neighbouring cells in the pressure gradient, so no odd–even modes):
+
+    dρ_i/dt = −(m_{i+½} − m_{i−½}) / dx,
+    dm_{i+½}/dt = −(Π_{i+1} − Π_i) / dx + ρ_{i+½} sin θ − a(ρ_{i+½}) u_{i+½},
+    Π_i = ρ_i ū_i² + ρ_i T̄(ρ_i) − μ̄(ρ_i) (u_{i+½} − u_{i−½}) / dx,
+
+with ρ_{i+½} the mean of the two cells, u_{i+½} = m_{i+½}/ρ_{i+½} and ū_i the mean of the two
+face velocities. Second order in space. Mass Σ ρ_i dx changes only by a telescoping sum, so
+it is conserved to round-off by the semi-discrete system.
+
+Time: scipy's Radau IIA (implicit Runge–Kutta of order 5, L-stable; error control by
+``rtol``) with the exact sparse Jacobian of the discrete right-hand side. L-stability matters:
+the grid-scale acoustic modes are weakly damped and strongly oscillatory (Re α ≈ −0.3,
+Im α ≈ ±7 at θ = 14°, dx ≈ 1), where BDF of order 3–5 is unstable and crawls at dt ≈ 0.1;
+Radau's steps are limited by accuracy only. Because the exact Jacobian has the same
+telescoping structure as the right-hand side (its mass rows sum to zero), every simplified-
+Newton update conserves mass to round-off too — unlike a finite-difference Jacobian, whose
+column sums vanish only to ~1e-9.
+"""
+from __future__ import annotations
+
+import math
+import time as _time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.integrate import BDF, Radau
+
+from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from .model import LocalCoefficients, ReducedModel
+
+__all__ = ["WaveSolver", "simulate", "growth_rate_fit", "wave_diagnostics"]
+
+
+@dataclass
+class _Kernels:
+    a: np.ndarray
+    da: np.ndarray
+    P: np.ndarray
+    dP: np.ndarray
+    mu: np.ndarray
+    dmu: np.ndarray
+
+
+def _kernels(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
+    """a, a' at faces; P, P', μ̄, μ̄' at centres; NaN outside the family (no raise)."""
+    sT, sa = rm._splines["Tbar"], rm._splines["a"]
+    lnT = sT(rho_c)
+    T = np.exp(lnT)
+    a = np.exp(sa(rho_f))
+    c = rm.mu_prefactor
+    P = rho_c * T
+    mu = c * T * np.sqrt(T)
+    if not deriv:
+        return a, P, mu
+    dT = T * sT(rho_c, 1)
+    da = a * sa(rho_f, 1)
+    return _Kernels(a=a, da=da, P=P, dP=T + rho_c * dT, mu=mu, dmu=1.5 * c * np.sqrt(T) * dT)
+
+
+class WaveSolver:
+    """Semi-discrete 1D model on a periodic domain: right-hand side, Jacobian, linear modes.
+
+    Parameters
+    ----------
+    reduced : ReducedModel
+        F, T̄, a of the 1D model at the chosen θ.
+    length : float
+        Domain length L (particle diameters).
+    n_cells : int
+        Number of finite-volume cells N.
+    """
+
+    def __init__(self, reduced: ReducedModel, length: float, n_cells: int):
+        if not (math.isfinite(length) and length > 0):
+            raise ParameterError(f"length = {length!r} must be a positive number of diameters")
+        if int(n_cells) != n_cells or n_cells < 8:
+            raise ParameterError(f"n_cells = {n_cells!r} must be an integer >= 8")
+        self.rm = reduced
+        self.L, self.N = float(length), int(n_cells)
+        self.dx = self.L / self.N
+        self.sin = math.sin(math.radians(reduced.theta))
+        self.x = (np.arange(self.N) + 0.5) * self.dx
+        self.x_face = (np.arange(self.N) + 1.0) * self.dx
+        N, h = self.N, 1.0 / self.dx
+        i = np.arange(N)
+        ip = (i + 1) % N
+        im = (i - 1) % N
+        ones = np.ones(N)
+        # face j = j+½ from cells j, j+1; cell i from faces i−½ (= face i−1) and i+½ (= face i)
+        self.A_cf = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[i, ip])),
+                                  shape=(N, N))
+        self.D_cf = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[i, ip])),
+                                  shape=(N, N))
+        self.A_fc = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[im, i])),
+                                  shape=(N, N))
+        self.D_fc = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[im, i])),
+                                  shape=(N, N))
+        self.n_rhs = 0
+        self.n_jac = 0
+        self.out_of_range: tuple[float, float] | None = None
+
+    # -- state helpers -----------------------------------------------------------------
+    def split(self, y):
+        return y[:self.N], y[self.N:]
+
+    def mass(self, y) -> float:
+        """Total mass Σ ρ_i dx = ∫ ρ̄ dx."""
+        return float(np.sum(y[:self.N]) * self.dx)
+
+    def uniform(self, rho0: float) -> np.ndarray:
+        """The uniform state ρ̄ = ρ0, ū = U(ρ0): an exact equilibrium of the discrete system."""
+        U0 = float(self.rm.U(rho0))
+        return np.concatenate([np.full(self.N, rho0), np.full(self.N, rho0 * U0)])
+
+    def velocity(self, y) -> tuple[np.ndarray, np.ndarray]:
+        """Face velocities u_{i+½} and their cell-centre means ū_i."""
+        rho, m = self.split(y)
+        rf = 0.5 * (rho + np.roll(rho, -1))
+        u = m / rf
+        return u, 0.5 * (u + np.roll(u, 1))
+
+    # -- right-hand side and Jacobian ---------------------------------------------------
+    def rhs(self, t, y) -> np.ndarray:
+        """d(ρ, m)/dt. NaN (never an exception) if ρ leaves the family: BDF then cuts the
+        step; a real excursion ends the run with a clear error in :func:`simulate`."""
+        self.n_rhs += 1
+        N, h = self.N, 1.0 / self.dx
+        rho, m = y[:N], y[N:]
+        rf = 0.5 * (rho + np.roll(rho, -1))
+        lo, hi = self.rm.rho_range
+        if not (rho.min() >= lo and rho.max() <= hi):
+            bad = rho.min() if rho.min() < lo else rho.max()
+            self.out_of_range = (float(t), float(bad))
+            return np.full_like(y, np.nan)
+        a, P, mu = _kernels(self.rm, rho, rf, deriv=False)
+        u = m / rf
+        uc = 0.5 * (u + np.roll(u, 1))
+        du = (u - np.roll(u, 1)) * h
+        Pi = rho * uc * uc + P - mu * du
+        out = np.empty_like(y)
+        out[:N] = -(m - np.roll(m, 1)) * h
+        out[N:] = -(np.roll(Pi, -1) - Pi) * h + rf * self.sin - a * u
+        return out
+
+    def jacobian(self, t, y) -> sp.csc_matrix:
+        """Exact Jacobian of :meth:`rhs` (sparse, periodic band)."""
+        self.n_jac += 1
+        N = self.N
+        # the Jacobian only steers Newton: outside the family use the nearest defined state
+        rho, m = np.clip(y[:N], *self.rm.rho_range), y[N:]
+        rf = 0.5 * (rho + np.roll(rho, -1))
+        k = _kernels(self.rm, rho, rf, deriv=True)
+        u = m / rf
+        uc = 0.5 * (u + np.roll(u, 1))
+        du = (u - np.roll(u, 1)) / self.dx
+        dudr = sp.diags(-u / rf) @ self.A_cf  # ∂u_f/∂ρ of both cells: −u/(2ρ_f) each
+        dudm = sp.diags(1.0 / rf)
+        G = sp.diags(2.0 * rho * uc) @ self.A_fc - sp.diags(k.mu) @ self.D_fc  # ∂Π/∂u_f
+        dPi_r = sp.diags(uc * uc + k.dP - k.dmu * du) + G @ dudr
+        dPi_m = G @ dudm
+        dS_r = sp.diags(self.sin - k.da * u) @ self.A_cf - sp.diags(k.a) @ dudr
+        dS_m = -sp.diags(k.a) @ dudm
+        J = sp.bmat([[None, -self.D_fc], [-self.D_cf @ dPi_r + dS_r, -self.D_cf @ dPi_m + dS_m]],
+                    format="csc")
+        return J
+
+    # -- linear theory of the discrete system ---------------------------------------------
+    def mode_vectors(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """Fourier mode n on centres (for ρ) and on faces (for m): exp(i k x), k = 2πn/L."""
+        k = 2 * math.pi * n / self.L
+        return np.exp(1j * k * self.x), np.exp(1j * k * self.x_face)
+
+    def mode_matrix(self, rho0: float, n: int, *, numerical: bool = True,
+                    eps: float = 1e-7) -> np.ndarray:
+        """2×2 block of the linearised discrete operator on Fourier mode ``n`` about the
+        uniform state, in the variables (ρ̂, m̂).
+
+        ``numerical=True`` linearises :meth:`rhs` by central differences along the mode
+        (independent of :meth:`jacobian`); otherwise the exact Jacobian is used.
+        """
+        y0 = self.uniform(rho0)
+        er, ef = self.mode_vectors(n)
+        N = self.N
+        cols = []
+        for comp in (0, 1):
+            v = np.zeros(2 * N, dtype=complex)
+            if comp == 0:
+                v[:N] = er
+            else:
+                v[N:] = ef
+            if numerical:
+                scale = eps * max(abs(y0[comp * N]), 1.0)
+                Jv = np.zeros(2 * N, dtype=complex)
+                for part, fac in ((v.real, 1.0), (v.imag, 1j)):
+                    Jv += fac * (self.rhs(0, y0 + scale * part) - self.rhs(0, y0 - scale * part)
+                                 ) / (2 * scale)
+            else:
+                Jv = self.jacobian(0, y0) @ v
+            cols.append([np.vdot(er, Jv[:N]) / N, np.vdot(ef, Jv[N:]) / N])
+        return np.array(cols).T
+
+    def symbol(self, rho0: float, n) -> np.ndarray:
+        """Closed form of :meth:`mode_matrix` for modes ``n`` (array): shape ``n.shape + (2, 2)``.
+
+        With C = cos(k dx/2) (face ↔ centre averages) and K = 2 sin(k dx/2)/dx (staggered
+        differences): the continuum matrix in (ρ̂, m̂) with k → K and the averaged terms × C.
+        K → k and C → 1 as dx → 0, so the discrete growth rates differ from the 2×2
+        dispersion relation by O((k dx)²).
+        """
+        c = self.rm.coefficients(rho0)
+        n = np.asarray(n, dtype=float)
+        k = 2 * np.pi * n / self.L
+        C = np.cos(0.5 * k * self.dx)
+        K = 2.0 * np.sin(0.5 * k * self.dx) / self.dx
+        U, r, mu = c.U, c.rho0, c.mu_bar
+        G = 2.0 * r * U * C - 1j * K * mu  # ∂Π/∂u_f
+        M = np.empty(n.shape + (2, 2), dtype=complex)
+        M[..., 0, 0] = 0.0
+        M[..., 0, 1] = -1j * K
+        M[..., 1, 0] = (-1j * K * (U * U + c.dP) + 1j * K * G * U * C / r
+                        + (self.sin - c.da * U) * C + c.a * U * C / r)
+        M[..., 1, 1] = -1j * K * G / r - c.a / r
+        return M
+
+    def discrete_dispersion(self, rho0: float, n, **kw) -> np.ndarray:
+        """Growth rates of the linearised discrete system on modes ``n``, least stable first
+        (shape ``n.shape + (2,)``). ``kw`` given: eigenvalues of :meth:`mode_matrix` (one n)."""
+        if kw:
+            ev = np.linalg.eigvals(self.mode_matrix(rho0, int(n), **kw))
+            return ev[np.argsort(-ev.real)]
+        ev = np.linalg.eigvals(self.symbol(rho0, n))
+        order = np.argsort(-ev.real, axis=-1)
+        return np.take_along_axis(ev, order, axis=-1)
+
+    def eigenmode(self, rho0: float, n: int, amplitude: float) -> np.ndarray:
+        """Uniform state plus the least-stable discrete eigenmode n with density amplitude
+        ``amplitude`` (real part taken; n = 0 not allowed)."""
+        if n < 1 or n >= self.N // 2:
+            raise ParameterError(f"mode = {n!r} must be in [1, N/2 − 1] = [1, {self.N // 2 - 1}]")
+        w, V = np.linalg.eig(self.symbol(rho0, n))
+        v = V[:, int(np.argmax(w.real))]
+        v = v / v[0]
+        er, ef = self.mode_vectors(n)
+        y = self.uniform(rho0)
+        y[:self.N] += amplitude * (v[0] * er).real
+        y[self.N:] += amplitude * (v[1] * ef).real
+        return y
+
+
+# ---------------------------------------------------------------------------------------
+
+def wave_diagnostics(solver: WaveSolver, rho0: float, y: np.ndarray, n_modes: int):
+    """Amplitude max|ρ − ρ0|, mass and |ρ̂_n| (n = 1..n_modes, normalised like a cosine
+    amplitude) of one state."""
+    rho = y[:solver.N]
+    c = np.fft.rfft(rho - rho0) * (2.0 / solver.N)
+    return float(np.abs(rho - rho0).max()), solver.mass(y), np.abs(c[1:n_modes + 1])
+
+
+def default_cells(reduced: ReducedModel, rho0: float, length: float, *, tol: float = 0.05,
+                  n_max: int = 16384) -> int:
+    """Cells for a run: the growth rates of the discrete system must match the 2×2 dispersion
+    relation (label condition's exact form) to ``tol`` × the largest growth rate.
+
+    Starting from dx ≤ 2 (and ≥ 128 cells), N doubles until every mode with k < k_c (the
+    16 longest modes when every k grows or none does) has |Re α_discrete − Re α| ≤ tol ·
+    max(max Re α, 1e-3 |Im α|). The error is O((k dx)²); the growth rate being a small
+    difference of large terms (Im α ≈ k dq0/dρ0), this asks for ~100 cells per critical
+    wavelength.
+    """
+    coef = reduced.coefficients(rho0)
+    n = max(128, 2 ** int(math.ceil(math.log2(max(length / 2.0, 1.0)))))
+    while True:
+        solver = WaveSolver(reduced, length, n)
+        ns = np.arange(1, n // 2)
+        ks = 2 * np.pi * ns / length
+        sel = ks < coef.k_c if (coef.unstable and math.isfinite(coef.k_c)) else ns <= 16
+        sel[:1] = True
+        ana = coef.dispersion(ks[sel])[:, 0]
+        dis = solver.discrete_dispersion(rho0, ns[sel])[:, 0]
+        scale = max(float(ana.real.max()), 1e-3 * float(np.abs(ana.imag).max()), 1e-12)
+        if np.abs(dis.real - ana.real).max() <= tol * scale or 2 * n > n_max:
+            return n
+        n *= 2
+
+
+def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
+             nu0: float | None = None, n_cells: int | None = None, t_end: float | None = None,
+             mode: int | None = None, amplitude: float = 1e-3, seed: int = 0,
+             rtol: float = 1e-6, n_out: int = 200, saturation_tol: float = 0.02,
+             progress: Callable[[float, float], None] | None = None, max_steps: int = 200000,
+             method: str = "Radau", on_exit: str = "raise"):
+    """Integrate the 1D model in time from a perturbed uniform state; returns an xarray Dataset.
+
+    Parameters
+    ----------
+    reduced : ReducedModel
+        The 1D model at the chosen θ (:func:`~chuteflow.reduced.reduced_model`).
+    length : float
+        Periodic domain length L in particle diameters.
+    rho0, nu0 : float
+        The uniform state: one-dimensional density ρ0, or the floor density ν0(0) of the
+        steady flow it comes from (exactly one of them).
+    n_cells : int, optional
+        Grid cells; default :func:`default_cells` (discrete growth rates within 5 % of the
+        dispersion relation).
+    t_end : float, optional
+        Final time (units √(σ/g)). Default: run until the wave amplitude saturates (changes
+        by less than ``saturation_tol`` relative over the last 10 % of the run) or, for a
+        stable state, until the perturbation has decayed by e⁻¹⁰; capped at 40 e-foldings
+        of the fastest discrete mode.
+    mode : int, optional
+        Perturb with the least-stable discrete eigenmode ``mode`` (k = 2π mode/L). Default:
+        small random noise in every resolved density mode (zero mean, seeded).
+    amplitude : float
+        Initial density perturbation relative to ρ0 (max norm for noise, cosine amplitude
+        for a mode).
+    seed : int
+        Seed of the noise.
+    rtol : float
+        Relative tolerance of the time integrator (atol = rtol · 1e-3 · scale).
+    n_out : int
+        Snapshots stored (uniform in time).
+    saturation_tol : float
+        Relative amplitude change that counts as saturated.
+    progress : callable, optional
+        ``progress(t, t_end)`` after each time step.
+    max_steps : int
+        Give up (ConvergenceError) after this many time steps.
+    method : {"Radau", "BDF"}
+        Implicit integrator (scipy); BDF is slow here (see the module notes).
+    on_exit : {"raise", "stop"}
+        What to do when the density leaves the steady family's range (the model is undefined
+        there): raise :class:`NoSteadyFlowError`, or stop and return the run so far with
+        ``status = "left_family"`` (the last snapshot is the last accepted state).
+
+    Returns
+    -------
+    xarray.Dataset
+        ``rho(t, x)`` (cell centres), ``u(t, x)`` (face velocities averaged to centres),
+        ``mass(t)``, ``amplitude(t)`` (max|ρ − ρ0|), ``mode_amplitude(t, mode)``; attributes
+        with the parameters, the linear theory of the uniform state (k_c, L_c, growth rates
+        of the domain's modes: analytic and discrete), ``mass_drift`` (max relative change of
+        the mass), ``status`` ("completed" at t_end, "saturated", "decayed" or
+        "left_family"), steps and timing.
+
+    Raises
+    ------
+    ParameterError
+        Bad input.
+    NoSteadyFlowError
+        The density left the range of the steady family on which the model is defined.
+    ConvergenceError
+        The time integrator failed.
+    """
+    import xarray as xr
+
+    if (rho0 is None) == (nu0 is None):
+        raise ParameterError("give exactly one of rho0 (1D density) and nu0 (floor density)")
+    if nu0 is not None:
+        rho0 = reduced.rho_at_nu0(float(nu0))
+    rho0 = float(rho0)
+    lo, hi = reduced.rho_range
+    if not lo < rho0 < hi:
+        raise ParameterError(f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of the "
+                             f"steady family at theta = {reduced.theta:g} deg")
+    if not 0.0 < amplitude < 0.5:
+        raise ParameterError(f"amplitude = {amplitude!r} must be in (0, 0.5) (relative to rho0)")
+    if not 1e-12 < rtol < 1e-1:
+        raise ParameterError(f"rtol = {rtol!r} must be in (1e-12, 0.1)")
+    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"time = {t_end!r} must be a positive number")
+    if on_exit not in ("raise", "stop"):
+        raise ParameterError(f"on_exit = {on_exit!r}: choose 'raise' or 'stop'")
+    if method not in ("Radau", "BDF"):
+        raise ParameterError(f"method = {method!r}: choose 'Radau' or 'BDF'")
+    if n_out < 2:
+        raise ParameterError(f"n_out = {n_out!r} must be at least 2")
+    coef = reduced.coefficients(rho0)
+    n_cells = default_cells(reduced, rho0, length) if n_cells is None else n_cells
+    solver = WaveSolver(reduced, length, n_cells)
+    N = solver.N
+    n_modes = N // 2 - 1
+    # linear theory of the domain's modes (analytic 2×2 and the discrete operator)
+    ns = np.arange(1, n_modes + 1)
+    ks = 2 * np.pi * ns / solver.L
+    analytic = coef.dispersion(ks)[:, 0]
+    discrete = solver.discrete_dispersion(rho0, ns)[:, 0]
+    sigma = float(discrete.real.max())
+    # initial condition
+    if mode is None:
+        rng = np.random.default_rng(seed)
+        noise = rng.standard_normal(N)
+        noise -= noise.mean()
+        noise *= amplitude * rho0 / np.abs(noise).max()
+        y0 = solver.uniform(rho0)
+        y0[:N] += noise
+        y0[N:] = y0[:N] * coef.U  # uniform velocity
+        init = f"random noise (seed {seed}), max |δρ|/ρ0 = {amplitude:g}"
+        a0 = amplitude * rho0
+    else:
+        y0 = solver.eigenmode(rho0, int(mode), amplitude * rho0)
+        init = f"discrete eigenmode {mode} (k = {2 * math.pi * mode / solver.L:.5g}), " \
+               f"amplitude {amplitude:g} ρ0"
+        a0 = amplitude * rho0
+    # time span
+    auto = t_end is None
+    if auto:
+        rate = abs(sigma) if sigma != 0 else 1e-6
+        t_end = (40.0 if sigma > 0 else 10.0) / max(rate, 1e-6)
+        t_end = min(t_end, 1e6)
+    t_out = np.linspace(0.0, t_end, n_out)
+    # integrate the deviation z = y − y_u from the uniform state (an exact equilibrium of the
+    # discrete system), so that the error control is relative to the wave, not to ρ0: with
+    # tolerances relative to y a wave of amplitude 1e-5 ρ0 is erased by large steps
+    y_u = solver.uniform(rho0)
+    scale = a0 * np.concatenate([np.ones(N), np.full(N, abs(coef.U) + 1.0)])
+    ode = {"Radau": Radau, "BDF": BDF}[method](
+        lambda t, z: solver.rhs(t, y_u + z), 0.0, y0 - y_u, t_end, rtol=rtol,
+        atol=rtol * scale, jac=lambda t, z: solver.jacobian(t, y_u + z))
+    snaps, times = [y0.copy()], [0.0]
+    j = 1
+    t0 = _time.perf_counter()
+    steps = 0
+    status = "completed"
+    left = None
+    amps = [wave_diagnostics(solver, rho0, y0, 1)[0]]
+    while j < n_out and ode.status == "running":
+        msg = ode.step()
+        steps += 1
+        if ode.status == "failed":
+            if solver.out_of_range is None:
+                raise ConvergenceError(f"time integration failed at t = {ode.t:.6g}: {msg}")
+            tb, rb = solver.out_of_range
+            left = (f"the density wave left the steady family at t ≈ {ode.t:.4g}: rho_bar "
+                    f"reached {rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D "
+                    f"model are defined (theta = {reduced.theta:g} deg; family ends: "
+                    f"{reduced.ends[0]} / {reduced.ends[1]})")
+            if on_exit == "raise":
+                raise NoSteadyFlowError(left)
+            status = "left_family"
+            snaps.append(y_u + ode.y)  # last accepted state, at its own time
+            times.append(float(ode.t))
+            break
+        if steps > max_steps:
+            raise ConvergenceError(f"time integration needed more than {max_steps} steps "
+                                   f"(reached t = {ode.t:.6g} of {t_end:.6g})")
+        solver.out_of_range = None
+        if ode.t >= t_out[j] or ode.status == "finished":
+            dense = ode.dense_output()
+            while j < n_out and t_out[j] <= ode.t * (1 + 1e-14):
+                snaps.append(y_u + dense(t_out[j]))
+                times.append(float(t_out[j]))
+                amps.append(wave_diagnostics(solver, rho0, snaps[-1], 1)[0])
+                j += 1
+            if auto and j >= 10 and _saturated(np.array(amps), a0, saturation_tol, sigma):
+                status = "saturated" if sigma > 0 else "decayed"
+                break
+        if progress is not None:
+            progress(float(ode.t), float(t_end))
+    wall = _time.perf_counter() - t0
+    t_used = np.array(times)
+    Y = np.array(snaps)
+    rho = Y[:, :N]
+    u_f = Y[:, N:] / (0.5 * (rho + np.roll(rho, -1, axis=1)))
+    u_c = 0.5 * (u_f + np.roll(u_f, 1, axis=1))
+    mass = rho.sum(axis=1) * solver.dx
+    c = np.fft.rfft(rho - rho0, axis=1) * (2.0 / N)
+    amp = np.abs(rho - rho0).max(axis=1)
+    M0 = mass[0]
+    drift = float(np.abs(mass - M0).max() / M0)
+    ds = xr.Dataset(
+        {"rho": (("t", "x"), rho, {"long_name": "one-dimensional density ρ̄", "units": "sigma"}),
+         "u": (("t", "x"), u_c, {"long_name": "mean velocity ū", "units": "sqrt(g sigma)"}),
+         "mass": ("t", mass, {"long_name": "∫ ρ̄ dx", "units": "sigma^2"}),
+         "amplitude": ("t", amp, {"long_name": "max |ρ̄ − ρ0|", "units": "sigma"}),
+         "mode_amplitude": (("t", "mode"), np.abs(c[:, 1:n_modes + 1]),
+                            {"long_name": "|ρ̂_n| (cosine amplitude of mode n)",
+                             "units": "sigma"}),
+         "growth_analytic": ("mode", analytic.real,
+                             {"long_name": "Re α(k_n), 2×2 dispersion relation (1D model)"}),
+         "frequency_analytic": ("mode", analytic.imag, {"long_name": "Im α(k_n)"}),
+         },
+        coords={"t": ("t", t_used, {"long_name": "time", "units": "sqrt(sigma/g)"}),
+                "x": ("x", solver.x, {"long_name": "position down the slope", "units": "sigma"}),
+                "mode": ("mode", ns), "k": ("mode", ks, {"long_name": "wavenumber 2πn/L"})})
+    ds["growth_discrete"] = ("mode", discrete.real,
+                             {"long_name": "Re α of the linearised discrete system"})
+    ds.attrs.update({
+        "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
+        "theta": reduced.theta, "roughness": reduced.model.roughness,
+        "wall_loss": reduced.model.wall_loss, "restitution": reduced.model.restitution,
+        "nu_max": reduced.model.nu_max, "rho0": rho0, "nu0": coef.F, "U0": coef.U,
+        "length": solver.L, "n_cells": N, "dx": solver.dx, "rtol": rtol, "method": method,
+        "initial_condition": init, "t_end": float(t_used[-1]), "auto_time": str(auto),
+        "status": status, "left_family": left or "", "mass_drift": drift, "steps": steps,
+        "rhs_evaluations": solver.n_rhs, "jacobian_evaluations": solver.n_jac,
+        "wall_time_s": wall, "k_c": coef.k_c, "L_c": coef.L_c,
+        "criterion_margin": coef.criterion_margin,
+        "short_wave_unstable": str(coef.short_wave_unstable),
+        "max_growth_rate": sigma, "rho_range_family": [lo, hi],
+    })
+    return ds
+
+
+def _saturated(amps: np.ndarray, a0: float, tol: float, sigma: float) -> bool:
+    """Amplitude settled: grew (or decayed) well past its start and changed by less than
+    ``tol`` relative over the last tenth of the snapshots."""
+    n = len(amps)
+    w = max(n // 10, 3)
+    recent = amps[-w:]
+    if sigma > 0 and amps[-1] < 10 * a0:
+        return False
+    if sigma <= 0:
+        return amps[-1] < a0 * math.exp(-10.0)
+    return float(np.ptp(recent)) < tol * float(recent.max())
+
+
+def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 10.0
+                    ) -> tuple[float, float]:
+    """Least-squares rate of ln |ρ̂_mode|(t) over the early, linear stage.
+
+    The window runs from t = 0 until the amplitude has changed by ``factor`` from its
+    initial value (or ``t_max``). Returns (rate, rms residual of the fit in ln amplitude).
+    """
+    A = ds["mode_amplitude"].sel(mode=mode).values
+    t = ds["t"].values
+    lnA = np.log(A)
+    keep = np.abs(lnA - lnA[0]) <= math.log(factor)
+    if t_max is not None:
+        keep &= t <= t_max
+    idx = np.nonzero(keep)[0]
+    stop = idx[0]
+    while stop + 1 < len(t) and keep[stop + 1]:
+        stop += 1
+    sel = slice(0, stop + 1)
+    if stop < 3:
+        raise ConvergenceError(f"growth_rate_fit: only {stop + 1} snapshots in the linear "
+                               "window; store more snapshots (n_out) or shorten t_end")
+    p = np.polyfit(t[sel], lnA[sel], 1)
+    res = lnA[sel] - np.polyval(p, t[sel])
+    return float(p[0]), float(np.sqrt(np.mean(res**2)))
