@@ -17,6 +17,7 @@ from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
 from . import reproduce  # noqa: E402,F401
 from . import steady  # noqa: E402,F401
 from . import diagram  # noqa: E402,F401
+from . import stability  # noqa: E402,F401
 from . import reduced  # noqa: E402,F401
 
 __all__ = ["app", "main"]

@@ -1,0 +1,412 @@
+"""Linear stability commands (paper §4, Appendix B): ``eig``, ``dispersion``, ``longwave``, ``mode``.
+
+Each solves the steady flow at (θ, ν0(0)) first, then:
+
+- ``chuteflow eig``: the least-stable mode at one k (the α(0) = 0 branch, or the whole spectrum
+  by dense QZ with ``--method qz``), with its convergence estimates;
+- ``chuteflow dispersion``: α(k) of that branch on [0, k_max] and the critical k_c;
+- ``chuteflow longwave``: α1, α2 of α = α1 k + α2 k² + … and k_c where long-wave unstable;
+- ``chuteflow mode``: the eigenfunction figure at one k (figs eigens, eigenu, eigenu01).
+
+``--json`` prints one JSON object (non-finite numbers as null) and nothing else on standard
+output; progress goes to standard error.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Optional
+
+import typer
+
+from ._app import app
+
+#: Keys of ``eig --json`` (and of ``mode --json``), besides the nested ``steady`` summary.
+EIG_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "nu_top", "k",
+            "alpha_re", "alpha_im", "drift", "tail", "convergence", "physical", "n", "n_check",
+            "wave_speed", "unstable", "method")
+#: Keys of ``longwave --json``.
+LONGWAVE_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "nu_top",
+                 "alpha1_re", "alpha1_im", "alpha2_re", "alpha2_im", "dQ_drho",
+                 "convergence_alpha1", "convergence_alpha2", "n", "k_check",
+                 "alpha2_from_eigenvalue_re", "alpha2_from_eigenvalue_im",
+                 "long_wave_unstable", "k_c", "k_max")
+
+
+def _opt_theta():
+    return typer.Option(..., "--theta", help="Inclination θ in degrees.")
+
+
+def _opt_nu0():
+    return typer.Option(..., "--nu0", help="Floor packing fraction ν0(0).")
+
+
+_MODEL_HELP = {"roughness": "Floor roughness φ.", "wall_loss": "Floor energy loss Φ.",
+               "restitution": "Restitution e_p.", "nu_max": "Maximum packing ν_m.",
+               "nu_top": "Density where the domain ends (paper: 1e-9)."}
+
+
+def _plain(value):
+    """JSON-ready: numpy scalars to Python, non-finite floats to None."""
+    if isinstance(value, dict):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_plain(v) for v in value]
+    if hasattr(value, "item") and not isinstance(value, (str, bytes)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def _echo_json(obj) -> None:
+    import json
+
+    typer.echo(json.dumps(_plain(obj), allow_nan=False))
+
+
+def _console():
+    from rich.console import Console
+
+    return Console(stderr=True)
+
+
+def _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top):
+    import warnings
+
+    from chuteflow._threads import limit_blas_threads
+    from chuteflow.closures import ChuteModel
+    from chuteflow.steady import solve_steady
+
+    limit_blas_threads(1)
+    model = ChuteModel(restitution=restitution, nu_max=nu_max, roughness=roughness,
+                       wall_loss=wall_loss)
+    with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            return solve_steady(theta, nu0, model, nu_top=nu_top)
+
+
+def _params(flow) -> dict:
+    m = flow.model
+    return {"theta": flow.theta, "nu0": flow.nu0, "roughness": m.roughness,
+            "wall_loss": m.wall_loss, "restitution": m.restitution, "nu_max": m.nu_max,
+            "nu_top": flow.nu_top}
+
+
+def _caption(flow) -> str:
+    m = flow.model
+    return (f"φ = {m.roughness:g}, Φ = {m.wall_loss:g}, e_p = {m.restitution:g}, "
+            f"ν_m = {m.nu_max:g}, ν0(y_max) = {flow.nu_top:g}; steady h = {flow.h:.5g}, "
+            f"y_max = {flow.y_max:.5g}")
+
+
+def _check_positive(name, value, allow_zero=False):
+    from chuteflow.errors import ParameterError
+
+    if value is None:
+        return
+    if not math.isfinite(value) or value < 0 or (value == 0 and not allow_zero):
+        raise ParameterError(f"{name} = {value!r} is outside {'[0' if allow_zero else '(0'}, "
+                             "inf): a wavenumber range of perturbations exp(ikx)")
+
+
+def _mode_summary(mode, flow, method) -> dict:
+    s = mode.summary()
+    out = _params(flow)
+    out.update({k: s[k] for k in ("k", "alpha_re", "alpha_im", "drift", "tail", "physical",
+                                  "n", "n_check")})
+    out.update(convergence=s["drift"], wave_speed=mode.wave_speed,
+               unstable=bool(mode.alpha.real > 0), method=method)
+    out["steady"] = flow.summary()
+    return out
+
+
+def _least_stable(console, flow, k, n, method, n_max):
+    from chuteflow.stability import least_stable
+
+    with console.status(f"least-stable mode at k = {k:g} ({method})"):
+        return least_stable(flow, k, n=n, method=method, n_max=n_max)
+
+
+def _mode_table(title, summary, caption):
+    from rich.table import Table
+
+    t = Table(title=title, caption=caption)
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    rows = (("k", "wavenumber k (1/σ)", ".6g"), ("alpha_re", "growth rate Re α", ".10g"),
+            ("alpha_im", "Im α", ".10g"), ("wave_speed", "wave speed −Im α/k", ".8g"),
+            ("drift", "|α(N) − α(N')| (convergence)", ".1e"),
+            ("tail", "Chebyshev tail (10 highest)", ".1e"), ("n", "resolution N", "d"),
+            ("n_check", "check resolution N'", "d"), ("physical", "physical mode", ""),
+            ("unstable", "unstable (Re α > 0)", ""))
+    for key, label, fmt in rows:
+        v = summary[key]
+        t.add_row(label, ("yes" if v else "no") if fmt == "" else format(v, fmt))
+    return t
+
+
+_METHOD_HELP = ("branch: follow the α(0) = 0 branch from k = 0 (fast); qz: dense QZ of the "
+                "whole spectrum (reference, seconds).")
+
+
+@app.command("eig")
+def eig(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ) of exp(αt + ikx)."),
+    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
+    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
+    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
+    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
+                                    "adaptive, from 80 up until drift and tail < 1e-7)."),
+    n_max: int = typer.Option(256, "--n-max", help="Largest N of the adaptive choice."),
+    method: str = typer.Option("branch", "--method", help=_METHOD_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Least-stable eigenvalue α at one wavenumber, with its convergence estimate."""
+    console = _console()
+    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    mode = _least_stable(console, flow, k, n, method, n_max)
+    out = _mode_summary(mode, flow, method)
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+
+    Console().print(_mode_table(f"Least-stable mode at θ = {theta:g}°, ν0(0) = {nu0:g}, "
+                                f"k = {k:g}", out, _caption(flow)))
+
+
+@app.command("dispersion")
+def dispersion_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    k_max: float = typer.Option(0.02, "--k-max", help="Largest wavenumber (1/σ)."),
+    num: int = typer.Option(50, "--num", help="Number of wavenumbers on [0, k_max]."),
+    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
+    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
+    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
+    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
+    strict: bool = typer.Option(True, "--strict/--no-strict", help="Fail when a point does not "
+                                "pass the drift and tail tests by N = n_max (default), or keep "
+                                "it, flagged physical = false."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Save the figure (PNG)."),
+    out: Optional[Path] = typer.Option(None, "--out", "-o", help="Save the dispersion "
+                                       "relation as NetCDF (.nc)."),
+) -> None:
+    """Dispersion relation α(k) of the least-stable (α(0) = 0) branch, and k_c."""
+    import numpy as np
+
+    from chuteflow.errors import ConvergenceError, ParameterError
+    from chuteflow.stability import crossings, dispersion
+
+    _check_positive("k_max", k_max)
+    if num < 2:
+        raise ParameterError(f"num = {num}: need at least 2 wavenumbers")
+    console = _console()
+    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    ks = np.linspace(0.0, k_max, num)
+    with console.status(f"dispersion relation at {num} wavenumbers on [0, {k_max:g}]"):
+        ds = dispersion(flow, ks, n_max=n_max, strict=strict)
+    kc_error = None
+    with console.status("critical wavenumbers (sign changes of Re α, Brent)"):
+        try:
+            found = crossings(flow, k_max=k_max, num=max(num, 12), n_max=n_max)
+            k_c = _k_c(flow, found, n_max)
+        except ConvergenceError as exc:
+            if strict:
+                raise
+            found, k_c, kc_error = (), None, str(exc)
+    if found:
+        ds.attrs["crossings"] = np.asarray(found, dtype=float)
+    if k_c is not None:
+        ds.attrs["k_c"] = k_c
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(out, engine="h5netcdf")
+    if plot is not None:
+        from chuteflow.figures.stability import dispersion_figure
+
+        dispersion_figure([("", ds, k_c)], plot,
+                          title=f"Least-stable branch α(k), {_caption(flow)}")
+    v = {name: ds[name].values for name in ("k", "alpha_re", "alpha_im", "drift", "tail", "n",
+                                             "physical")}
+    i_max = int(np.argmax(v["alpha_re"]))
+    summary = {**_params(flow), "k_max": k_max, "num": num, "k_c": k_c,
+               "lambda_c": 2 * math.pi / k_c if k_c else None, "crossings": list(found),
+               "k_c_error": kc_error, "max_growth": float(v["alpha_re"][i_max]),
+               "k_max_growth": float(v["k"][i_max]), "max_drift": float(v["drift"].max()),
+               "max_tail": float(v["tail"].max()), "all_physical": bool(v["physical"].all()),
+               "alpha1_im": ds.attrs.get("alpha1_im"),
+               **{name: arr.tolist() for name, arr in v.items()}, "steady": flow.summary()}
+    if as_json:
+        _echo_json(summary)
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title=f"Dispersion relation at θ = {theta:g}°, ν0(0) = {nu0:g}",
+              caption=_caption(flow))
+    for col in ("k", "Re α", "Im α", "drift", "tail", "N"):
+        t.add_column(col, justify="right")
+    for i in range(len(ks)):
+        t.add_row(f"{v['k'][i]:.5g}", f"{v['alpha_re'][i]:.6e}", f"{v['alpha_im'][i]:.6e}",
+                  f"{v['drift'][i]:.1e}", f"{v['tail'][i]:.1e}", str(int(v['n'][i])))
+    c = Console()
+    c.print(t)
+    c.print(_kc_line(k_c, found, summary, k_max) if kc_error is None else
+            f"k_c not determined: {kc_error}", highlight=False)
+    for p in (out, plot):
+        if p is not None:
+            c.print(f"wrote {p}", highlight=False)
+
+
+def _k_c(flow, found, n_max):
+    """Upper edge of the long-wave unstable band 0 < k < k_c: the first crossing if Re α > 0
+    below it (Re α keeps its sign on (0, k_1), k_1 the first crossing), else None."""
+    from chuteflow.stability import least_stable
+
+    if not found:
+        return None
+    below = least_stable(flow, 0.5 * found[0], n_max=n_max)
+    return float(found[0]) if below.alpha.real > 0 else None
+
+
+def _kc_line(k_c, found, s, k_max):
+    if k_c is not None:
+        return (f"unstable for 0 < k < k_c = {k_c:.6g} (λ_c = 2π/k_c = {2 * math.pi / k_c:.5g});"
+                f" largest sampled Re α = {s['max_growth']:.4e} at k = {s['k_max_growth']:.4g}")
+    where = ", ".join(f"{v:.6g}" for v in found) or "none"
+    state = "Re α > 0 somewhere" if s["max_growth"] > 0 else "stable"
+    return (f"{state} on (0, {k_max:g}]: largest sampled Re α = {s['max_growth']:.4e} at k = "
+            f"{s['k_max_growth']:.4g}; sign changes of Re α at: {where}")
+
+
+@app.command("longwave")
+def longwave_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
+    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
+    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
+    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    n: int = typer.Option(200, "--n", help="Starting Chebyshev resolution N."),
+    rtol: float = typer.Option(0.01, "--rtol", help="Accepted relative change of α2 between "
+                               "resolutions (0.2 is enough for its sign)."),
+    n_max: int = typer.Option(480, "--n-max", help="Largest resolution."),
+    k_max: float = typer.Option(0.05, "--k-max", help="Search k_c on (0, k_max]."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Long-wave coefficients α1, α2 (α = α1 k + α2 k² + …) and k_c where unstable."""
+    from chuteflow.errors import ParameterError
+    from chuteflow.longwave import longwave
+    from chuteflow.stability import critical_k
+
+    _check_positive("k_max", k_max)
+    if not 0 < rtol < 1:
+        raise ParameterError(f"rtol = {rtol!r} is outside (0, 1): a relative change of α2")
+    console = _console()
+    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    with console.status("long-wave perturbation theory at k = 0"):
+        lw = longwave(flow, n=n, rtol=rtol, n_max=n_max)
+    k_c = None
+    if lw.unstable:
+        with console.status("critical wavenumber k_c (dispersion relation, Brent)"):
+            k_c = critical_k(flow, k_max=k_max)
+    s = lw.summary()
+    out = _params(flow)
+    out.update({k: s[k] for k in LONGWAVE_KEYS if k in s})
+    out.update(k_c=k_c, k_max=k_max, lambda_c=2 * math.pi / k_c if k_c else None,
+               steady=flow.summary())
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+    from rich.table import Table
+
+    t = Table(title=f"Long-wave expansion at θ = {theta:g}°, ν0(0) = {nu0:g}",
+              caption=_caption(flow))
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    t.add_row("α1 (= −i dQ0/dρ̄0)", f"{lw.alpha1.real:.3e} {lw.alpha1.imag:+.10g}i")
+    t.add_row("dQ0/dρ̄0 (steady family)", f"{lw.dQ_drho:.10g}")
+    t.add_row("α2", f"{lw.alpha2.real:.6g} {lw.alpha2.imag:+.6g}i")
+    t.add_row("relative change of α1, α2 (N → 4N/5)",
+              f"{lw.convergence_alpha1:.1e}, {lw.convergence_alpha2:.1e}")
+    eig = lw.alpha2_from_eigenvalue
+    t.add_row(f"(α(k) − α1 k)/k² at k = {lw.k_check:g}", f"{eig.real:.6g} {eig.imag:+.6g}i")
+    t.add_row("resolution N", str(lw.n))
+    t.add_row("long-wave stability", "unstable (Re α2 > 0)" if lw.unstable else
+              "stable (Re α2 < 0)")
+    t.add_row("k_c", "—" if k_c is None else f"{k_c:.6g} (λ_c = {2 * math.pi / k_c:.5g})")
+    Console().print(t)
+
+
+@app.command("mode")
+def mode_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ), > 0."),
+    plot: Path = typer.Option(..., "--plot", help="Eigenfunction figure (PNG)."),
+    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
+    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
+    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
+    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
+                                    "adaptive)."),
+    y_top: Optional[float] = typer.Option(None, "--y-top", help="Top of the plot (σ; default: "
+                                          "where ν0 falls to a tenth of its peak)."),
+    x_peak: float = typer.Option(0.0, "--x-peak", help="Put the density maximum at x = "
+                                 "x_peak·λ (the eigenvector's phase is arbitrary)."),
+    magnify: Optional[tuple[float, float, float, float]] = typer.Option(
+        None, "--magnify", metavar="X0 X1 Y0 Y1", help="Add panel (c): (a) on x/λ ∈ [X0, X1], "
+        "y ∈ [Y0, Y1]."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Eigenfunction of the least-stable mode over one wavelength (figs 10, 11, 14)."""
+    from chuteflow.errors import ParameterError
+    from chuteflow.figures.stability import eigenfunction_diagnostics, eigenfunction_figure
+
+    _check_positive("k", k)
+    if y_top is not None and not (math.isfinite(y_top) and y_top > 0):
+        raise ParameterError(f"y_top = {y_top!r} is outside (0, inf): a height in diameters")
+    if magnify is not None:
+        x0, x1, y0, y1 = magnify
+        if not (0 <= x0 < x1 <= 1 and 0 <= y0 < y1):
+            raise ParameterError(f"magnify = {magnify!r}: need 0 <= X0 < X1 <= 1 (fractions of "
+                                 "a wavelength) and 0 <= Y0 < Y1 (heights)")
+    console = _console()
+    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    mode = _least_stable(console, flow, k, n, "branch", 256)
+    with console.status("eigenfunction figure"):
+        path = eigenfunction_figure(mode, flow, plot, y_top=y_top, x_peak=x_peak,
+                                    magnify=magnify)
+    out = _mode_summary(mode, flow, "branch")
+    out["diagnostics"] = eigenfunction_diagnostics(mode, flow)
+    out["plot"] = str(path)
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+
+    c = Console()
+    c.print(_mode_table(f"Least-stable mode at θ = {theta:g}°, ν0(0) = {nu0:g}, k = {k:g}",
+                        out, _caption(flow)))
+    d = out["diagnostics"]
+    c.print(f"grains flow {'into' if d['compression'] > 0 else 'out of'} the region of "
+            f"positive density perturbation: ∫Re[ν̂*(−ν0∇·û)]/∫|ν̂|² = {d['compression']:.4e} "
+            f"(vertical advection {d['vertical_advection']:.4e}; sum = Re α to "
+            f"{d['identity_residual']:.0e})", highlight=False)
+    c.print(f"temperature vs density: mean cos(phase) = {d['temperature_density']:.3f} "
+            f"(at the density peak {d['temperature_at_peak']:.3f}); floor velocity vs density: "
+            f"{d['floor_velocity_density']:.3f}", highlight=False)
+    c.print(f"wrote {path}", highlight=False)
