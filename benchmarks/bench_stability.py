@@ -103,8 +103,8 @@ def run(quick: bool = False) -> list[dict]:
 def main(argv=None):
     quick = "--quick" in (argv if argv is not None else sys.argv[1:])
     for row in run(quick):
-        print(f"{row['name']:24s} {row['seconds']:9.4f} s  baseline {row['baseline_seconds']:9.3f} s"
-              f"  ratio {row['ratio']:7.1f}  {row['note']}")
+        print(f"{row['name']:24s} {row['seconds']:9.4f} s  baseline "
+              f"{row['baseline_seconds']:9.3f} s  ratio {row['ratio']:7.1f}  {row['note']}")
 
 
 if __name__ == "__main__":

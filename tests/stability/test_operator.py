@@ -127,7 +127,8 @@ def test_floor_conditions_agree_with_eq_bc0u_and_eq_bc0T(p1_flow):
     assert abs(T0y - (0.5 * Phi * f6 * T0 - phi * f6 * u0**2 / 3)) < 1e-9 * T0
 
     def row(name):
-        return {k: float(np.asarray(v).reshape(-1)[0]) for k, v in derived(p1_flow, y, name).items()}
+        return {k: float(np.asarray(v).reshape(-1)[0])
+                for k, v in derived(p1_flow, y, name).items()}
 
     fx, fe = row("floor_x"), row("floor_energy")
     # eq:bc0u: ∂_y u1 = φ [u0 f7,ν ν1 + f7 u1]
@@ -169,7 +170,8 @@ def test_pencil_solves_the_raw_linearised_equations(p1_flow):
         for t, c in zip(ce.terms, coefs):
             if t.field == "w" or t.d:
                 continue
-            term = np.broadcast_to(c, y.shape) * mode.alpha**t.a * (1j * k)**t.b * (D[t.c] @ F[t.field])
+            term = (np.broadcast_to(c, y.shape) * mode.alpha**t.a * (1j * k)**t.b
+                    * (D[t.c] @ F[t.field]))
             total += term
             size = np.maximum(size, np.abs(term))
         where = slice(1, -1) if name in ("mass", "xmom", "ymom", "energy") else slice(0, 1)

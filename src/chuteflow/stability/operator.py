@@ -47,7 +47,7 @@ BULK_OF = {"nu": "mass", "u": "xmom", "v": "ymom", "w": "zmom", "T": "energy"}
 #: Floor row of each block (the ν̂ block carries the y-momentum balance at the floor).
 FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "w": "floor_z", "T": "floor_energy"}
 
-N_RANGE = (16, 1000)
+N_RANGE = (8, 1000)
 
 
 def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
