@@ -165,7 +165,10 @@ class BranchTracker:
         s_prev, a_prev, v_prev = self.history[-1]
         pred = self._predict(s)
         pencil = self._pencil(s)
-        alpha, w = nearest_eigenpair(pencil, pred, v0=v_prev)
+        try:
+            alpha, w = nearest_eigenpair(pencil, pred, v0=v_prev)
+        except ConvergenceError:  # no eigenvalue settled near the prediction
+            return None
         ratio = abs(alpha - pred) / max(abs(pred - a_prev), 1e-300)
         if len(self.history) == 1:
             # from k = 0 the predictor α1 k may vanish (k along z: no advection); the
