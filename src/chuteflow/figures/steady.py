@@ -31,7 +31,7 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
     label_every : int, optional
         Label every k-th θ line (default: about eight labels).
     h_max : float, optional
-        Upper limit of the h axis (default: the 95th percentile of h, at least 40).
+        Upper limit of the h axis (default 50, as far as the paper's figures go).
     """
     import matplotlib.pyplot as plt
 
@@ -57,9 +57,7 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
             j = np.nonzero(ok)[0][-1]
             ax.annotate(f"{th:g}°", (h[i, j], nb[i, j]), fontsize=7, xytext=(2, 2),
                         textcoords="offset points")
-    if h_max is None:
-        h_max = max(40.0, float(np.nanpercentile(h, 95))) if valid.any() else 40.0
-    ax.set_xlim(0, h_max)
+    ax.set_xlim(0, h_max or 50.0)
     ax.set_ylim(0, min(0.6, float(np.nanmax(nb)) * 1.05) if valid.any() else 0.6)
     ax.set_xlabel("thickness h (σ)")
     ax.set_ylabel("mean density ν̄")

@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from ..closures import ChuteModel
-from ..errors import ConvergenceError, NoSteadyFlowError
+from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 from .result import SteadyFlow, derived_quantities, spectral_tail
 from .solver import _State, _validate, solve_state
@@ -109,27 +109,11 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
             continue
     if anchor is None:
         raise first_error
-    cur, step, steps = anchor, 0.5, 0
+    cur, reached = follow_theta(anchor, theta, max_steps=_MAX_STEPS, n=n, rtol=rtol,
+                                n_max=n_max)
+    if reached:
+        return cur
     direction = 1.0 if theta > anchor.theta else -1.0
-    while steps < _MAX_STEPS:
-        steps += 1
-        nxt = cur.theta + direction * min(step, abs(theta - cur.theta))
-        dxb, dxt = _tangent_vectors(cur, theta=True)
-        X = _State(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
-                   cur.y_max).pack()
-        pred = _State.unpack(cur.n, X + (nxt - cur.theta) * dxt)
-        if not (0.5 * cur.y_max < pred.L < 2 * cur.y_max and (pred.T > 0).all()):
-            pred = _State.unpack(cur.n, X)
-        try:
-            cur = _solve(nxt, nu0, model, nu_top, n, rtol, n_max, pred, 0.0,
-                         maxiter=15, lam_min=1.0 / 16)
-            if abs(cur.theta - theta) < 1e-12:
-                return cur
-            step = min(2.0, step * 1.5)
-        except (NoSteadyFlowError, ConvergenceError):
-            step *= 0.5
-            if step < 1.0 / 128:
-                break
     too = "large" if direction > 0 else "small"
     raise NoSteadyFlowError(
         f"no steady flow found at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
@@ -137,6 +121,63 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
         f"the branch followed in theta from {anchor.theta:g} deg ends near "
         f"{cur.theta:.4g} deg (there h = {cur.h:.3g}, y_max = {cur.y_max:.3g}, peak "
         f"density {cur.nu_peak:.3g}) — the angle is too {too} for this floor density")
+
+
+def follow_theta(flow: SteadyFlow, theta: float, **kw):
+    """Follow the branch of ``flow`` at fixed ν0(0) in θ towards ``theta``; see
+    :func:`follow`."""
+    return follow(flow, theta=theta, **kw)
+
+
+def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = None, *,
+           step: float = 0.5, min_step: float = 1.0 / 128, max_steps: int = 200, n: int = 64,
+           rtol: float = 1e-8, n_max: int = 384):
+    """Follow the branch of ``flow`` along the straight path to (``theta``, ``nu0``).
+
+    Adaptive natural-parameter continuation in the path parameter s ∈ [0, 1] (``step`` and
+    ``min_step`` are in degrees when θ moves, else in units of ν0(0)/10): Euler predictor
+    along the exact tangents dX/dθ, dX/dν0(0), Newton corrector (every point converged to
+    ``rtol`` between two resolutions, as :func:`solve_steady`), step ×1.5 after a success,
+    halved after a failure. Thin layers are kept.
+
+    Returns
+    -------
+    (SteadyFlow, bool)
+        The flow at the end of the path and True, or the last flow on the branch and False
+        when the step fell below ``min_step`` (the branch ends there) or after ``max_steps``.
+    """
+    th0, nu00 = flow.theta, flow.nu0
+    th1 = th0 if theta is None else float(theta)
+    nu1 = nu00 if nu0 is None else float(nu0)
+    if th1 != th0:
+        scale = abs(th1 - th0)  # degrees per unit s
+    else:
+        scale = abs(nu1 - nu00) * 10.0 / max(nu00, 1e-12)
+    if scale == 0:
+        return flow, True
+    cur, s, ds, steps = flow, 0.0, step / scale, 0
+    model, nu_top = flow.model, flow.nu_top
+    while steps < max_steps and s < 1.0:
+        steps += 1
+        s_new = min(1.0, s + ds)
+        th, nu = th0 + s_new * (th1 - th0), nu00 + s_new * (nu1 - nu00)
+        dxb, dxt = _tangent_vectors(cur, theta=True)
+        X = _State(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
+                   cur.y_max).pack()
+        pred = _State.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb)
+        if not (0.5 * cur.y_max < pred.L < 2 * cur.y_max and (pred.T > 0).all()
+                and (pred.s < np.log(model.nu_max)).all()):
+            pred = _State.unpack(cur.n, X)
+        try:
+            cur = _solve(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
+                         maxiter=15, lam_min=1.0 / 16)
+            s = s_new
+            ds = min(2.0 / scale, ds * 1.5)
+        except (NoSteadyFlowError, ConvergenceError, ParameterError):
+            ds *= 0.5
+            if ds * scale < min_step:
+                break
+    return cur, s >= 1.0
 
 
 def _thin_message(theta, nu0, model, h, min_thickness):

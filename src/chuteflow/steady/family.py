@@ -65,6 +65,7 @@ class Options:
     tangent: bool = True
     substeps: int = 1
     max_cold: int = 4
+    max_cold_seeded: int = 2
 
 
 @dataclass
@@ -76,6 +77,7 @@ class _Point:
     error: str = ""
     tangent: dict | None = None
     vectors: tuple | None = None  # packed dX/dν0(0), dX/dθ
+    tried: frozenset = frozenset()  # sources tried for this point (see continue_row)
 
     @property
     def usable(self) -> bool:
@@ -177,22 +179,30 @@ def _anchor_order(n: int) -> list[int]:
 
 
 def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
-                 previous: list[_Point] | None = None) -> list[_Point]:
+                 previous: list[_Point] | None = None, existing: list[_Point] | None = None,
+                 cold_starts: bool = True) -> list[_Point]:
     """Solve at every ν0 of a row (sorted ascending) by continuation.
 
     A point is started from a converged neighbour: the one below or above in ν0 (predicted
     along the exact tangent), or the same ν0 in ``previous`` (the neighbouring θ row of a
     map; predicted along dX/dθ). Each source is tried once per point. Walks along ν0 go
     first; when they stall, one point is seeded from ``previous`` and the walks resume.
-    Without any converged point, cold starts are tried at spread-out points (at most
-    ``opts.max_cold``). Points never attempted are marked 'unreached'.
+    When nothing more can be reached, a cold start is tried at a spread-out point not yet
+    attempted (at most ``opts.max_cold`` per row, ``opts.max_cold_seeded`` if ``previous``
+    has converged points). Points never attempted are marked 'unreached'.
     """
     nus = [float(v) for v in nu0_values]
     N = len(nus)
     pts: list[_Point | None] = [None] * N
     tried: list[set] = [set() for _ in range(N)]
+    if existing is not None:
+        for i, p in enumerate(existing):
+            if p is not None and p.status != _UNREACHED:
+                pts[i], tried[i] = p, set(p.tried)
     prev = previous if previous is not None else [None] * N
     order = _anchor_order(N)
+    # a θ source is identified by its angle, so that both neighbouring rows can be tried
+    ttag = ("theta", next((p.flow.theta for p in prev if p is not None and p.usable), None))
 
     def usable(i):
         return pts[i] is not None and pts[i].usable
@@ -217,22 +227,29 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         if walked:
             continue
         cand = [i for i in order if not usable(i) and prev[i] is not None and prev[i].usable
-                and "theta" not in tried[i]]
+                and ttag not in tried[i]]
         if cand:
             i = cand[0]
-            attempt(i, "theta", lambda: _continue(prev[i], theta, nus[i], model, opts))
+            attempt(i, ttag, lambda: _continue(prev[i], theta, nus[i], model, opts))
             continue
-        if any(usable(i) for i in range(N)):
+        if not cold_starts:
             break
-        cand = [i for i in order if "cold" not in tried[i]]
-        if not cand or cold >= (opts.max_cold if previous is None else 1):
+        # walks stalled: a cold start where nothing has been attempted yet (a separate
+        # piece of the branch, or no piece found so far)
+        cand = [i for i in order if not tried[i]]
+        seeded = any(p is not None and p.usable for p in prev)
+        if not cand or cold >= (opts.max_cold_seeded if seeded else opts.max_cold):
             break
         cold += 1
         attempt(cand[0], "cold", lambda: _cold(theta, nus[cand[0]], model, opts))
-    return [p if p is not None else
-            _Point(_UNREACHED, None, "not reached: no converged neighbour to continue from "
-                   "and no cold start tried here")
-            for p in pts]
+    out = []
+    for p, t in zip(pts, tried):
+        if p is None:
+            p = _Point(_UNREACHED, None, "not reached: no converged neighbour to continue "
+                       "from and no cold start tried here")
+        p.tried = frozenset(t)
+        out.append(p)
+    return out
 
 
 def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
@@ -351,7 +368,7 @@ def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=No
     if nu0_values is None:
         nu0_values = np.geomspace(0.005, 0.3, 30)
     fam, flows = steady_family(theta, nu0_values, model, nu_top=nu_top, rtol=rtol,
-                               min_thickness=0.0, return_flows=True)
+                               return_flows=True)
     ok = np.nonzero(fam.status.values == "ok")[0]
     slope = fam.dQ_drho.values
     idx = [i for a, i in zip(ok[:-1], ok[1:]) if i == a + 1 and slope[a] < 0 < slope[i]]
@@ -378,4 +395,55 @@ def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=No
             "bracket": (float(fam.nu0[i - 1]), float(fam.nu0[i])), "family": fam}
 
 
-__all__ = ["steady_family", "flux_minimum", "SCALARS", "Options", "continue_row"]
+def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
+               nu0_small: float = 0.006, nu0_ref: float = 0.012, xtol: float = 0.01,
+               nu_top: float = 1e-9) -> dict:
+    """Angle θ* separating contours of θ that collapse (h → 0) from those that diverge
+    (h → ∞) as ν̄ decreases (§3.2, fig steadyphase005(a)).
+
+    A family is *diverging* at θ when it reaches ν0(0) = ``nu0_small`` with h still growing
+    as ν0(0) decreases (h(nu0_small) > h(nu0_ref)); otherwise (h falling, or the branch ending
+    before ``nu0_small``) it is *collapsing*. θ* is bracketed in ``theta_range`` and bisected
+    to ``xtol``. Since ν0(0) cannot reach 0, this locates the separatrix at ν̄ ≈ 1e-3, not in
+    the limit.
+
+    Returns
+    -------
+    dict
+        ``theta`` (θ*, midpoint of the final bracket), ``bracket``, ``h`` (thickness at
+        ν0(0) = ``nu0_small`` on the diverging side of the bracket), ``nu_mean`` there, and
+        ``h_lo_side`` (the last h reached on the collapsing side).
+    """
+    model = model or ChuteModel()
+    nus = np.array(sorted({nu0_small, nu0_ref, 0.0085, 0.018, 0.025, 0.035, 0.05, 0.07}))
+    i_small, i_ref = int(np.argmin(abs(nus - nu0_small))), int(np.argmin(abs(nus - nu0_ref)))
+
+    def classify(theta):
+        ds = steady_family(theta, nus, model, nu_top=nu_top, min_thickness=0.0,
+                           tangent=False)
+        h = ds.h.values
+        ok = ds.status.values == "ok"
+        diverging = bool(ok[i_small] and ok[i_ref] and h[i_small] > h[i_ref])
+        last = h[np.nonzero(ok)[0][0]] if ok.any() else float("nan")
+        return diverging, ds, last
+
+    lo, hi = map(float, theta_range)
+    d_lo, _, last_lo = classify(lo)
+    d_hi, ds_hi, _ = classify(hi)
+    if d_lo or not d_hi:
+        raise ConvergenceError(
+            f"separatrix: theta_range = {theta_range} does not bracket it (diverging at "
+            f"{lo:g}: {d_lo}, at {hi:g}: {d_hi})")
+    while hi - lo > xtol:
+        mid = 0.5 * (lo + hi)
+        d, ds, last = classify(mid)
+        if d:
+            hi, ds_hi = mid, ds
+        else:
+            lo, last_lo = mid, last
+    return {"theta": 0.5 * (lo + hi), "bracket": (lo, hi),
+            "h": float(ds_hi.h.values[i_small]), "nu_mean": float(ds_hi.nu_mean.values[i_small]),
+            "h_lo_side": float(last_lo)}
+
+
+__all__ = ["steady_family", "flux_minimum", "separatrix", "SCALARS", "Options", "continue_row"]

@@ -1,27 +1,27 @@
 """Steady flows uniform along the slope (paper §3): Chebyshev–Newton on a free top boundary.
 
-For given θ and floor density ν0(0) the unknowns are ν0, u0, T0 at the Chebyshev nodes of
+For given θ and floor density ν0(0) the unknowns are ln ν0, u0, T0 at the Chebyshev nodes of
 [0, y_max] and the height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
-equations are the uniform-state residuals of :mod:`chuteflow.equations` (x- and y-momentum
-and energy, eq:steady1–3), the floor conditions eq:bc1 and eq:bc2 (equivalent to eq:T0b,
-eq:dT0b), stress-free top (u0' = 0, T0' = 0, eq:bcinf) and ν0(0) given. The Jacobian is the
-exact linearisation from the same equations, so Newton converges quadratically.
+equations are the uniform-state residuals of :mod:`chuteflow.equations`: y-momentum and
+energy (eq:steady2, eq:steady3) at the inner nodes, x-momentum in its integrated form
+eq:steady4 (μ u0' = tanθ p, the weight of the tail above y_max included), the floor
+conditions eq:bc1 and eq:bc2 (equivalent to eq:T0b, eq:dT0b), T0' = 0 on top (eq:bcinf) and
+ν0(0) given. The Jacobian is exact, so Newton converges quadratically.
 
 Unlike the paper's shooting on u0(0), no growing mode is integrated, so there is nothing to
-tune by hand; the cold start is an isothermal estimate of the layer (closed form in T).
+tune by hand. The cold start is an isothermal estimate of the layer (closed form in T),
+polished on a coarse grid; continuation (families, maps, the θ fallback of
+:func:`~chuteflow.steady.solve_steady`) starts from neighbouring solutions instead.
 """
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
-from scipy.integrate import quad
 
-from ..closures import ChuteModel
-from ..equations import BASE, base_state, compiled_equations
+from ..equations import compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 
@@ -68,15 +68,6 @@ def _validate(theta, nu0, model, nu_top):
         raise ParameterError(f"nu_top = {nu_top!r} must lie in (0, 1e-3·nu0): it is the "
                              "density at which the domain ends (paper: 1e-9)")
     return theta, nu0
-
-
-def _profile_weights(model, nu0):
-    """Isothermal layer in the scaled height ỹ = y cosθ / T: ν(ỹ) from p' = −ν cosθ."""
-    f1 = model.f
-
-    def dy_dlnnu(lnnu):  # dỹ/d(ln ν) = −f1'(ν)
-        return -float(f1(math.exp(lnnu))["f1"][1])
-    return dy_dlnnu
 
 
 def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
@@ -189,30 +180,31 @@ class _Newton:
                 Jr[r_idx, idx] -= res * scale**2 * kap[(1, 0)][sl] * nu[sl]
                 Jr[r_idx, 2 * m + idx] -= res * scale**2 * kap[(0, 1)][sl]
             J[rows] = Jr
-        # x-momentum in its once-integrated form (eq:steady4 with the stresses of the top):
-        # μ u0' = tanθ (p − p(y_max)) at nodes 1..n. The x- and y-momentum balances integrated
-        # from y to y_max give it exactly; being first order in u0 it avoids the D2 round-off
-        # (∝ n⁴) of (μ u0')' that otherwise sets the residual floor, and at y_max it is the
-        # stress-free condition u0' = 0.
+        # x-momentum in its once-integrated form, eq:steady4: Σxy = −tanθ Σyy, i.e.
+        # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from y to
+        # ∞ with the stresses vanishing at infinity (eq:inftycond) gives it exactly, so the
+        # weight of the dilute tail above y_max is kept: the result does not depend on where
+        # the domain ends (a stress-free top at y_max instead would make an O(ν_top) error,
+        # 1e-7 relative at ν_top = 1e-9). Being first order in u0 it also avoids the D2
+        # round-off (∝ n⁴) of (μ u0')' that otherwise sets the residual floor.
         tan, sc = self.sin / self.cos, 1.0 / self.nu0
         mu, p = part["mu"], part["p"]
         if not self.integrated:
             # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
-            # the cold start, where its residual does not favour the collapsed layer
+            # the cold start, where its residual does not favour the collapsed layer (the
+            # integrated form's does: every term vanishes with T0)
             R[m + n] = u1[n]
             if jac:
                 J[m + n, m:2 * m] = D1[n]
                 J[m + n, -1] = -R[m + n] / L
         else:
-            R[m + 1:m + m] = sc * (mu[(0, 0)][1:] * u1[1:] - tan * (p[(0, 0)][1:] - p[(0, 0)][n]))
+            R[m + 1:m + m] = sc * (mu[(0, 0)][1:] * u1[1:] - tan * p[(0, 0)][1:])
             if jac:
                 Jr = J[m + 1:m + m]
                 i = np.arange(n)
                 Jr[:, m:2 * m] = sc * mu[(0, 0)][1:, None] * D1[1:]
                 Jr[i, 1 + i] = sc * nu[1:] * (mu[(1, 0)][1:] * u1[1:] - tan * p[(1, 0)][1:])
                 Jr[i, 2 * m + 1 + i] = sc * (mu[(0, 1)][1:] * u1[1:] - tan * p[(0, 1)][1:])
-                Jr[:, n] += sc * tan * p[(1, 0)][n] * nu[n]
-                Jr[:, 2 * m + n] += sc * tan * p[(0, 1)][n]
                 Jr[:, -1] = -sc * mu[(0, 0)][1:] * u1[1:] / L
         # ν(0) = ν0; T' = 0 on top; free boundary ln ν(y_max) = ln ν_top
         R[0] = st.s[0] - self.ln0
@@ -235,7 +227,12 @@ class _Newton:
         """Damped Newton. Converged when the scaled residual is below ``tol``, or when the
         relative Newton step falls below 1e-11 with the residual at its round-off floor.
         Fails when the backtracking step would fall below ``lam_min`` (a continuation
-        guess that needs heavy damping is on the wrong side of a fold: fail fast)."""
+        guess that needs heavy damping is on the wrong side of a fold: fail fast).
+
+        The round-off floor of the residual grows like n⁴ (second derivatives near the ends),
+        so ``tol`` is raised accordingly above n = 64; the accuracy of a result is checked
+        independently by the change between two resolutions (:func:`solve_steady`)."""
+        tol = max(tol, 1e-11 * (self.n / 64.0) ** 4)
         hist = []
         R, J = self.evaluate(st)
         res = np.abs(R).max()
@@ -270,6 +267,10 @@ class _Newton:
                 lam *= 0.5
             else:
                 break
+        else:
+            if res < 1e-7 and len(hist) >= min_iter:
+                # iterations used up at the round-off floor (residual still creeping down)
+                return st, maxiter, res, hist
         hist.append(res)
         raise _NewtonFailure(st, hist)
 

@@ -12,6 +12,8 @@ from importlib import import_module
 
 #: Stage modules, imported in this order (run order is each stage's ``order``).
 STAGE_MODULES: tuple[str, ...] = (
+    "steady",
+    "stability",
 )
 
 #: Module name -> exception raised while importing it.

@@ -1,0 +1,65 @@
+"""``chuteflow steady``: JSON object, table, one-line errors (issue 2, CLI)."""
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from chuteflow.cli import app
+from chuteflow.steady import solve_steady
+
+runner = CliRunner()
+
+
+def test_json_output():
+    r = runner.invoke(app, ["steady", "--theta", "16", "--nu0", "0.05", "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    for k in ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
+              "T_floor", "h", "nu_mean", "rho_bar", "Q", "monotonic", "y_max", "convergence"):
+        assert k in d, k
+    f = solve_steady(16, 0.05)
+    assert d["rho_bar"] == pytest.approx(f.rho_bar, rel=1e-12)
+    assert d["monotonic"] is True and d["roughness"] == 0.05
+
+
+def test_model_options_reach_the_solver():
+    r = runner.invoke(app, ["steady", "--theta", "20", "--nu0", "0.1", "--roughness", "0.1",
+                            "--wall-loss", "0.39", "--restitution", "0.7", "--nu-max", "0.6",
+                            "--nu-top", "1e-9", "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)
+    from chuteflow.closures import ChuteModel
+    f = solve_steady(20, 0.1, ChuteModel(roughness=0.1))
+    assert d["roughness"] == 0.1 and d["h"] == pytest.approx(f.h, rel=1e-12)
+
+
+def test_table_output():
+    r = runner.invoke(app, ["steady", "--theta", "16", "--nu0", "0.05"])
+    assert r.exit_code == 0, r.output
+    assert "slip velocity" in r.stdout and "8.19453" in r.stdout
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--theta", "16", "--nu0", "0.7"], ["nu0", "nu_max"]),
+    (["--theta", "-2", "--nu0", "0.05"], ["theta"]),
+    (["--theta", "16", "--nu0", "0.05", "--roughness", "-1"], ["roughness"]),
+    (["--theta", "16", "--nu0", "0.05", "--restitution", "1.5"], ["restitution"]),
+])
+def test_bad_input_one_line_error(args, words):
+    r = runner.invoke(app, ["steady", *args])
+    assert r.exit_code == 2
+    err = r.stderr.strip()
+    assert "Traceback" not in r.output and len(err.splitlines()) == 1
+    assert err.startswith("error: ")
+    for w in words:
+        assert w in err
+
+
+@pytest.mark.slow
+def test_no_steady_flow_is_a_user_error():
+    r = runner.invoke(app, ["steady", "--theta", "12", "--nu0", "0.1"])
+    assert r.exit_code == 2
+    err = r.stderr.strip()
+    assert len(err.splitlines()) == 1 and "too small" in err

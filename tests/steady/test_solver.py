@@ -1,0 +1,231 @@
+"""Steady solver (paper §3): analytic identities, independent shooting, convergence, errors.
+
+Tolerances come from the convergence study in ``test_convergence_*`` (changes ≲ 1e-10 when
+the resolution or tolerance is tightened) and from the agreement with the independent
+shooting solution (≲ 1e-10 relative, the shooting's own rtol-stability being ~1e-12).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from chuteflow.closures import ChuteModel
+from chuteflow.errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from chuteflow.steady import solve_steady, steady_tangent
+
+from .shooting import Material, solve_by_shooting
+
+KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
+
+
+@pytest.fixture(scope="module")
+def p1():
+    """θ = 16°, ν0(0) = 0.05, φ = 0.05: the paper's main example (P1)."""
+    return solve_steady(16.0, 0.05)
+
+
+@pytest.fixture(scope="module")
+def dense():
+    """θ = 16°, ν0(0) = 0.15: non-monotonic, density maximum above the floor."""
+    return solve_steady(16.0, 0.15)
+
+
+def _table(model, nu):
+    f = model.f(nu)
+    return {k: float(v[0]) for k, v in f.items()}
+
+
+@pytest.mark.parametrize("which", ["p1", "dense"])
+def test_floor_conditions_T0b_dT0b(which, request):
+    """eq:T0b T0 = (φ f2 f7 u0 / (f1 tanθ))² and eq:dT0b T0' = −f6 (φ u0²/3 − Φ T0/2) at
+    y = 0 (analytic consequences of eq:bc1, eq:bc2 and eq:steady4). The solver imposes
+    eq:bc1/eq:bc2 and eq:steady4 at different nodes, so the identities hold to the
+    discretisation error (< 1e-9 by the convergence study)."""
+    f = request.getfixturevalue(which)
+    m = f.model
+    t = _table(m, f.nu0)
+    tan = math.tan(math.radians(f.theta))
+    T0b = (m.roughness * t["f2"] * t["f7"] * f.u_floor / (t["f1"] * tan)) ** 2
+    assert abs(f.T_floor - T0b) < 1e-9 * f.T_floor
+    dT = f.derivatives()["T_y"][0]
+    dT0b = -t["f6"] * (m.roughness * f.u_floor**2 / 3 - 0.5 * m.wall_loss * f.T_floor)
+    assert abs(dT - dT0b) < 1e-9 * max(abs(dT0b), f.T_floor)
+
+
+def test_floor_and_top_values(p1):
+    """ν0(0) = nu0 exactly, ν0(y_max) = ν_top, and |T0'(y_max)| < 1e-7 (issue 2)."""
+    assert p1.nu[0] == pytest.approx(0.05, rel=1e-13)
+    assert p1.nu[-1] == pytest.approx(1e-9, rel=1e-10)
+    assert abs(p1.derivatives()["T_y"][-1]) < 1e-7
+
+
+@pytest.mark.parametrize("which", ["p1", "dense"])
+def test_momentum_identity_steady4(which, request):
+    """eq:steady4, Σxy = −tanθ Σyy, i.e. μ u0' = tanθ p at every node including the floor
+    (where it is not imposed directly), relative to the floor stress."""
+    f = request.getfixturevalue(which)
+    ev = f.model.evaluate(f.nu, f.T)
+    lhs = ev["mu"][(0, 0)] * f.derivatives()["u_y"]
+    rhs = math.tan(math.radians(f.theta)) * ev["p"][(0, 0)]
+    assert np.abs(lhs - rhs).max() < 1e-9 * rhs[0]
+
+
+@pytest.mark.parametrize("which", ["p1", "dense"])
+def test_rho_bar_is_floor_pressure(which, request):
+    """Integrating eq:steady2 from 0 to ∞: ρ̄0 = p(0)/cosθ. The solver's ρ̄0 is a quadrature
+    of ν0 plus the tail above y_max, so this checks the quadrature and the tail term."""
+    f = request.getfixturevalue(which)
+    p0 = float(f.model.evaluate(f.nu0, f.T_floor)["p"][(0, 0)])
+    assert f.rho_bar == pytest.approx(p0 / math.cos(math.radians(f.theta)), rel=1e-10)
+
+
+def test_profiles_shape(p1, dense):
+    """fig steady(a): ν0(0) = 0.05 decays monotonically, 0.15 has its maximum above the
+    floor (paper: 'the maximum density appears at a finite height')."""
+    assert p1.monotonic and p1.y_peak == 0.0
+    assert not dense.monotonic
+    assert 0.5 < dense.y_peak < 3.0 and dense.nu_peak > 0.15
+    y = np.linspace(0, dense.y_max, 2001)
+    nu = dense.profiles(y)["nu"]
+    assert y[np.argmax(nu)] == pytest.approx(dense.y_peak, abs=dense.y_max / 1000)
+
+
+def test_against_independent_shooting(p1):
+    """ρ̄0 (tail included), Q0, u0(0), T0(0), h against the paper's method done independently
+    (tests/steady/shooting.py: Table 1 transcribed again, solve_ivp DOP853 rtol 1e-11 and
+    brentq on u0(0) by the sign of T0'). The shooting result is stable to ~1e-12 under its
+    rtol and independent of ν_top; the two agree to 1e-10 (measured 3e-12 … 3e-11)."""
+    s = solve_by_shooting(16.0, 0.05, Material())
+    for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"):
+        assert getattr(p1, k) == pytest.approx(getattr(s, k), rel=1e-10), k
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("theta, nu0, phi", [(16.0, 0.10, 0.05), (14.0, 0.08, 0.05),
+                                             (20.0, 0.10, 0.10)])
+def test_against_independent_shooting_more(theta, nu0, phi):
+    f = solve_steady(theta, nu0, ChuteModel(roughness=phi))
+    s = solve_by_shooting(theta, nu0, Material(phi=phi))
+    for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"):
+        assert getattr(f, k) == pytest.approx(getattr(s, k), rel=1e-9), k
+
+
+def test_convergence_under_resolution_and_tolerance(p1):
+    """Tightening rtol (1e-8 → 1e-10) or starting from a finer grid (n 64 → 96) changes the
+    scalars by < 1e-9 relative (measured ≲ 1e-10): ≥ 8 significant digits."""
+    for kw in ({"rtol": 1e-10}, {"n": 96}):
+        g = solve_steady(16.0, 0.05, **kw)
+        for k in KEYS:
+            assert getattr(g, k) == pytest.approx(getattr(p1, k), rel=1e-9), (kw, k)
+    assert p1.convergence < 1e-8 and p1.spectral_tail < 1e-12
+
+
+def test_independent_of_domain_top(p1):
+    """The weight of the tail above y_max is kept (eq:steady4 integrated to ∞), so moving
+    the top from ν_top = 1e-9 to 1e-11 changes the floor values, ρ̄0, Q0 and h by < 1e-9
+    (measured ~1e-11); y_max itself moves (by ≈ ln(100) decay lengths)."""
+    g = solve_steady(16.0, 0.05, nu_top=1e-11)
+    for k in ("u_floor", "T_floor", "h", "rho_bar", "Q"):
+        assert getattr(g, k) == pytest.approx(getattr(p1, k), rel=1e-9), k
+    assert g.y_max > p1.y_max + 10
+
+
+def test_tangent_against_finite_differences(p1):
+    """steady_tangent (exact, J dX/dβ = −∂R/∂β) against central differences of solve_steady
+    with δ = 1e-5: truncation O(δ²) ~ 1e-10 relative, noise ~1e-11/δ ~ 1e-6; agreement
+    to 1e-5 relative."""
+    t = steady_tangent(p1)
+    d = 1e-5
+    fp = solve_steady(16.0, 0.05 + d, guess=p1)
+    fm = solve_steady(16.0, 0.05 - d, guess=p1)
+    for k in ("rho_bar", "Q", "h", "u_floor", "T_floor"):
+        fd = (getattr(fp, k) - getattr(fm, k)) / (2 * d)
+        assert t["d" + k] == pytest.approx(fd, rel=1e-5), k
+    dq = (fp.Q - fm.Q) / (fp.rho_bar - fm.rho_bar)
+    assert t["dQ_drho"] == pytest.approx(dq, rel=1e-5)
+    # nodal tangent of u0(0) and y_max
+    assert t["u"][0] == pytest.approx((fp.u_floor - fm.u_floor) / (2 * d), rel=1e-5)
+    assert t["y_max"] == pytest.approx((fp.y_max - fm.y_max) / (2 * d), rel=1e-5)
+
+
+def test_guess_gives_same_solution(p1):
+    """Continuation from a neighbour converges to the same flow as the cold start."""
+    g = solve_steady(16.0, 0.06)
+    c = solve_steady(16.0, 0.06, guess=p1)
+    for k in KEYS:
+        assert getattr(c, k) == pytest.approx(getattr(g, k), rel=1e-9), k
+
+
+@pytest.mark.parametrize("theta, nu0, match", [
+    (16.0, 0.6, "nu0"), (16.0, 0.7, "nu0"), (16.0, 0.0, "nu0"), (16.0, -0.1, "nu0"),
+    (0.0, 0.05, "theta"), (-5.0, 0.05, "theta"), (90.0, 0.05, "theta"),
+    (float("nan"), 0.05, "theta"), ("abc", 0.05, "number")])
+def test_parameter_errors(theta, nu0, match):
+    with pytest.raises(ParameterError, match=match):
+        solve_steady(theta, nu0)
+
+
+def test_parameter_error_nu_top():
+    with pytest.raises(ParameterError, match="nu_top"):
+        solve_steady(16.0, 0.05, nu_top=0.01)
+
+
+def test_no_steady_flow_angle_too_small():
+    """θ = 12°, ν0(0) = 0.1 (φ = 0.05): the layer collapses (decay length below one
+    diameter, §3.2); the message names the case and the parameters."""
+    with pytest.raises(NoSteadyFlowError) as exc:
+        solve_steady(12.0, 0.1, continuation=False)
+    msg = str(exc.value)
+    assert "too small" in msg and "theta = 12" in msg and "nu0 = 0.1" in msg
+
+
+@pytest.mark.slow
+def test_no_steady_flow_angle_too_small_with_fallback():
+    """With the θ-continuation fallback the branch of ν0(0) = 0.1 is followed down from 13°
+    and ends above 12° (near 13.3°, where h ≈ 0.2): still 'too small'."""
+    with pytest.raises(NoSteadyFlowError) as exc:
+        solve_steady(12.0, 0.1)
+    assert "too small" in str(exc.value)
+
+
+def test_no_steady_flow_angle_too_large():
+    """θ = 19°, ν0(0) = 0.05: the branch of this floor density ends near 18.5° (the decay
+    length of the dilute cushion grows, §3.2); the message says the angle is too large."""
+    with pytest.raises(NoSteadyFlowError) as exc:
+        solve_steady(19.0, 0.05)
+    msg = str(exc.value)
+    assert "too large" in msg and "theta = 19" in msg and "roughness = 0.05" in msg
+
+
+def test_thin_layer_rejected_and_kept():
+    """A converged layer thinner than min_thickness is refused (h < 1 is unphysical, §3.2)
+    but is available with min_thickness = 0."""
+    f = solve_steady(14.0, 0.045, min_thickness=0.0)
+    assert 0 < f.h < 1
+    with pytest.raises(NoSteadyFlowError, match="below 1 particle"):
+        solve_steady(14.0, 0.045)
+
+
+def test_no_fallback_fails_fast():
+    """continuation=False reports the cold start's failure at once."""
+    with pytest.raises((NoSteadyFlowError, ConvergenceError)):
+        solve_steady(19.0, 0.05, continuation=False)
+
+
+def test_fallback_finds_non_monotonic_branch():
+    """θ = 18°, ν0(0) = 0.05: the isothermal cold start fails, the flow (a dense band over a
+    hot dilute cushion) is found by continuation in θ and agrees with shooting."""
+    f = solve_steady(18.0, 0.05)
+    assert not f.monotonic and f.nu_peak > 0.05
+    assert f.u_floor == pytest.approx(17.1727184, rel=1e-6)  # shooting: 17.17271897
+
+
+def test_summary_and_xarray(p1):
+    s = p1.summary()
+    for k in ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
+              "T_floor", "h", "nu_mean", "rho_bar", "Q", "monotonic", "y_max", "convergence"):
+        assert k in s
+    ds = p1.to_xarray()
+    assert ds.sizes["y"] == p1.n + 1 and ds.attrs["roughness"] == 0.05
