@@ -87,6 +87,7 @@ def test_dispersion_dataset(p1_flow):
     assert (ds["drift"].values < 1e-7).all() and (ds["tail"].values < 1e-7).all()
     assert abs(ds["alpha_re"].values[-1]) < 1e-11  # k = 0 (last, as given)
     assert ds.attrs["theta"] == P1[0] and ds.attrs["roughness"] == 0.05
+    assert ds.attrs["dQ_drho"] == pytest.approx(4.1524, abs=1e-4)
     assert ds["alpha_re"].attrs["units"]
 
 
@@ -158,3 +159,10 @@ def test_dispersion_rejects_bad_k(p1_flow):
         dispersion(p1_flow, [0.001, -0.001])
     with pytest.raises(ParameterError, match="k_max"):
         critical_k(p1_flow, k_max=0.0)
+
+
+@pytest.mark.slow
+def test_non_strict_dispersion_flags_instead_of_raising(flows):
+    ds = dispersion(flows("P4"), [1e-3, 0.05], n_max=100, strict=False)
+    assert ds["physical"].values.tolist() == [True, False]
+    assert ds["alpha_re"].values[0] > 0

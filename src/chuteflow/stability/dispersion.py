@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ConvergenceError, ParameterError
-from ..steady import SteadyFlow
+from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
 from .modes import (DRIFT_TOL, N_DEFAULT, N_MAX, TAIL_TOL, Mode, _interp_vector, _make_mode,
                     _tols, drift_of, nearest_eigenpair, stability_operator, tail)
@@ -295,15 +295,17 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
     n : int, optional
         Starting resolution (default 80); raised along the branch where a point fails.
     strict : bool
-        Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max``
-        (default); otherwise return it flagged ``physical = False``.
+        Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
+        the branch is lost (default); otherwise return such points flagged
+        ``physical = False`` (NaN from where the branch was lost).
 
     Returns
     -------
     xarray.Dataset
         Over ``k``: ``alpha_re``, ``alpha_im``, ``drift`` (|α(N) − α(N')|), ``tail``, ``n``,
-        ``physical``; attributes: the flow's parameters, ``dQ_drho`` and ``alpha1``
-        (first-order long-wave coefficient, α ≈ α1 k).
+        ``physical``; attributes: the flow's parameters, ``dQ_drho`` (dQ0/dρ̄0 of the
+        steady family, eq:dqdh: the long-wave slope −Im α/k, figure 8) and ``alpha1_re``,
+        ``alpha1_im`` (the continuation's first-order coefficient, α ≈ α1 k).
     """
     import xarray as xr
 
@@ -315,14 +317,17 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
     order = np.argsort(ks, kind="stable")
     tr = BranchTracker(flow, n or N_DEFAULT, n_max=n_max, drift_tol=drift_tol,
                        tail_tol=tail_tol)
-    out = {name: np.empty(len(ks)) for name in ("alpha_re", "alpha_im", "drift", "tail")}
-    nres = np.empty(len(ks), dtype=int)
-    phys = np.empty(len(ks), dtype=bool)
+    out = {name: np.full(len(ks), np.nan)
+           for name in ("alpha_re", "alpha_im", "drift", "tail")}
+    nres = np.zeros(len(ks), dtype=int)
+    phys = np.zeros(len(ks), dtype=bool)
     for i in order:
-        if ks[i] == 0.0:
-            mode = _zero_mode(tr)
-        else:
-            mode = tr.mode(ks[i])
+        try:
+            mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
+        except ConvergenceError:
+            if strict:
+                raise
+            break  # branch lost: this and the larger k stay NaN, physical = False
         if strict and not mode.physical:
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
@@ -333,7 +338,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
         nres[i], phys[i] = mode.n, mode.physical
     attrs = {"long_name": "dispersion relation of the alpha(0) = 0 branch",
              "source": "Mitarai & Nakanishi §4, eq:lin", "theta": flow.theta, "nu0": flow.nu0,
-             "nu_top": flow.nu_top, "y_max": flow.y_max, "alpha1_re": tr.alpha1.real,
+             "nu_top": flow.nu_top, "y_max": flow.y_max,
+             "dQ_drho": float(steady_tangent(flow)["dQ_drho"]), "alpha1_re": tr.alpha1.real,
              "alpha1_im": tr.alpha1.imag, "drift_tol": drift_tol, "tail_tol": tail_tol}
     attrs.update({name: getattr(flow.model, name)
                   for name in ("roughness", "wall_loss", "restitution", "nu_max")})
