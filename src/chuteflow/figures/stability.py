@@ -126,8 +126,9 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
             ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
             ax.set_xlim(0.0, k_max or float(k.max()))
         if marks:
-            axes[0, j].annotate(f"$k_c$ = {marks[0]:.4g}", (marks[0], 0.0),
-                                xytext=(4, 6), textcoords="offset points", fontsize=8)
+            axes[0, j].annotate(f"$k_c$ = {marks[0]:.4g}", (marks[0], 0.06),
+                                xycoords=axes[0, j].get_xaxis_transform(),
+                                xytext=(4, 0), textcoords="offset points", fontsize=8)
         axes[0, j].set_title(f"({chr(97 + j)}) {label}: {head}", fontsize=9)
         axes[1, j].set_xlabel(f"wavenumber $k$ [{_K_UNIT}]")
         axes[1, j].ticklabel_format(axis="x", style="sci", scilimits=(-2, 3))
