@@ -12,7 +12,6 @@ from importlib import import_module
 
 #: Stage modules, imported in this order (run order is each stage's ``order``).
 STAGE_MODULES: tuple[str, ...] = (
-    "stability",
     "steady",
     "stability",
 )
