@@ -59,15 +59,16 @@ def test_alpha2_matches_small_k_eigenvalue():
     """α2 equals (α(k) − α1 k)/k² of the eigenvalues at small k (ERRATA: k ≲ 1e-5).
 
     With the domain top at ν0 = 1e-7 the near-neutral continuum of the dilute layer sits
-    ~1e-6 below α = 0, so k = 1e-7 lies inside the k² regime: agreement to 0.5 % (measured
-    0.1 %, the O(k) remainder). The eigenvalue comes from shift-invert started at α1 k.
+    ~1e-6 below α = 0, so k = 1e-7 lies inside the k² regime. There Re α ≈ 1.2e-10, and
+    shift-invert near the continuum carries ~1e-12 absolute round-off (1 %; measured spread
+    over N = 160…256: ±0.6 %), plus an O(k) remainder of ~0.2 %: tolerance 2 %.
     """
     flow = solve_steady(16, 0.05, nu_top=1e-7)
     op = StabilityOperator(flow, 200)
     a1, a2 = coefficients(op, steady_tangent(flow))
     k = 1e-7
     alpha = _shift_invert(op, k, a1 * k)
-    assert abs(alpha.real / k**2 - a2.real) / abs(a2.real) < 5e-3
+    assert abs(alpha.real / k**2 - a2.real) / abs(a2.real) < 2e-2
 
 
 @pytest.mark.slow
