@@ -187,7 +187,8 @@ def test_reproduce_stage_quick(tmp_path):
                 "stability.P4_unstable", "stability.P5_unstable", "stability.Q3_unstable",
                 "stability.alpha0", "stability.k2", "stability.phase_velocity",
                 "stability.convergence", "stability.longwave_signs",
-                "stability.least_stable_qz", "stability.P1_inflow", "stability.P3_inflow"):
+                "stability.least_stable_qz", "stability.P1_inflow", "stability.P3_inflow",
+                "stability.Q3_inflow", "stability.floor_velocity", "stability.AC_velocity"):
         assert cid in ids, cid
     figs = {f.id: f.path for f in sec.figures}
     assert set(figs) == {"disp", "dispmag", "disp-AC", "disp01", "eigens", "eigenu",

@@ -114,7 +114,8 @@ def test_eigenfunction_diagnostics_mass_balance(p1):
     assert d["identity_residual"] < 1e-6
     assert d["compression"] + d["vertical_advection"] == pytest.approx(mode.alpha.real,
                                                                       rel=1e-6)
-    for key in ("temperature_density", "temperature_at_peak", "floor_velocity_density"):
+    for key in ("temperature_density", "temperature_at_peak", "floor_velocity_density",
+                "velocity_density"):
         assert -1 <= d[key] <= 1
     # paper §4.2, fig eigenu: P1 grains flow into the positive density region, T̂ < 0 there
     assert d["compression"] > 0 and d["temperature_at_peak"] < 0

@@ -298,6 +298,7 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
         ``temperature_at_peak``: that cosine at the height of largest |ν̂|;
         ``floor_velocity_density``: cosine of the phase difference of û(0) and ν̂(0) (> 0:
         the floor velocity perturbation is positive where the density perturbation is);
+        ``velocity_density``: ∫Re(û ν̂*) dy / ∫|û||ν̂| dy (> 0: the dense parts move faster);
         ``y_peak``: height of largest |ν̂|.
     """
     from ..stability.operator import base_on_grid
@@ -313,6 +314,7 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
     growth = float(mode.alpha.real)
     scale = abs(comp) + abs(vert)
     tnu = float(g.integrate((T * np.conj(nu)).real)) / float(g.integrate(np.abs(T) * np.abs(nu)))
+    unu = float(g.integrate((u * np.conj(nu)).real)) / float(g.integrate(np.abs(u) * np.abs(nu)))
 
     def cos(a, b):
         d = abs(a) * abs(b)
@@ -322,7 +324,8 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
             "identity_residual": abs(comp + vert - growth) / scale if scale > 0 else math.nan,
             "growth_rate": growth, "temperature_density": tnu,
             "temperature_at_peak": cos(T[j], nu[j]),
-            "floor_velocity_density": cos(u[0], nu[0]), "y_peak": float(g.y[j])}
+            "floor_velocity_density": cos(u[0], nu[0]), "velocity_density": unu,
+            "y_peak": float(g.y[j])}
 
 
 def _contour_panel(fig, ax, F, key, cbar_label, levels=15):

@@ -522,6 +522,7 @@ def _eigenfunctions(ctx, R):
                         "perturbation is positive at P1, P3, and positive at Q3 (grains move "
                         "faster where they are denser)",
               computed="; ".join(parts), passed=ok)
+    _regimes_a_c(ctx, R, diag)
     worst = max(d["identity_residual"] for d in diag.values())
     rep.check("stability.eigen_mass_balance", source="App. A, eq:leqnu",
               statement="The eigenfunctions satisfy the linearised mass balance: "
@@ -530,3 +531,48 @@ def _eigenfunctions(ctx, R):
                        f"{IDENTITY_TOL:g}: the discrete eigenvector satisfies the mass balance "
                        "at interior nodes only)",
               passed=worst < IDENTITY_TOL)
+
+
+def _regimes_a_c(ctx, R, diag):
+    """§4.2 on P4 (regime A) and P5 (regime C), whose eigenfunctions the paper describes but
+    does not show: the dense parts move faster (unlike P1, regime B), and the grains flow into
+    the region of positive density perturbation as at P1."""
+    from ...figures.stability import eigenfunction_diagnostics
+    from ...stability import least_stable
+
+    rep = ctx.report
+    d, ks = {}, {}
+    for name in ("P4", "P5"):
+        ds = R.disp.get(name)
+        kc = ds.attrs.get("k_c") if ds is not None else None
+        if not kc:
+            continue
+        ks[name] = 0.5 * kc  # inside the unstable band
+        d[name] = eigenfunction_diagnostics(least_stable(R.flows[name], ks[name]), R.flows[name])
+    if len(d) < 2 or "P1" not in diag:
+        return
+    vel = {n: d[n]["velocity_density"] for n in d}
+    rep.check("stability.AC_velocity", source="§4.2 (eigenfunctions at P4, P5; no figure)",
+              statement="At P4 (regime A) and P5 (regime C), unlike P1 (regime B), the denser "
+                        "parts of the density eigenfunction roughly correspond to where the "
+                        "velocity perturbation is positive (parallel to the mean flow)",
+              computed="; ".join(f"{n} (k = {ks[n]:.3g}): ∫Re(û ν̂*)/∫|û||ν̂| = {vel[n]:.3f}"
+                                 for n in d)
+                       + f"; P1 (k = {K_EIGEN:g}): {diag['P1']['velocity_density']:.3f}",
+              passed=all(v > 0 for v in vel.values()) and diag["P1"]["velocity_density"] < 0)
+    parts = [f"{n} (k = {ks[n]:.3g}, Re α = {d[n]['growth_rate']:.3e}): ∫Re[ν̂*(−ν0∇·û)]/∫|ν̂|² "
+             f"= {d[n]['compression']:.3e}, vertical advection ∫Re[ν̂*(−ν0'v̂)]/∫|ν̂|² = "
+             f"{d[n]['vertical_advection']:.3e}" for n in d]
+    agree = all(d[n]["compression"] > 0 for n in d)
+    rep.check("stability.AC_inflow", source="§4.2 (eigenfunctions at P4, P5; no figure)",
+              statement="For all three regimes the unstable modes show that the grains flow "
+                        "into the region of positive density perturbation",
+              computed="; ".join(parts) + (". Agrees at both points." if agree else
+                                           ". DISAGREES where the compression term is not "
+                                           "positive: there the growth comes from the vertical "
+                                           "advection of the base density (the layer "
+                                           "thickening), not from converging velocities."),
+              passed=None,
+              detail="Not decided pass/fail: the paper shows no figure for P4, P5 and the "
+                     "statement is a reading of velocity arrows; the same ν0-weighted measure "
+                     "decides the statements about P1, P3, Q3 (stability.*_inflow).")
