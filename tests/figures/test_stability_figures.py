@@ -154,3 +154,12 @@ def test_eigenfunction_errors(p1):
         eigenfunction_fields(mode, other)
     with pytest.raises(ValueError, match="y_top"):
         eigenfunction_fields(mode, flow, y_top=-1.0)
+
+
+def test_dispersion_figure_shows_where_the_branch_was_lost():
+    k = np.linspace(0, 0.01, 6)
+    a = -k**2 - 1j * k
+    a[4:] = np.nan
+    fig = dispersion_figure([("X", _synthetic(k, a, physical=[True] * 4 + [False] * 2))])
+    texts = [t.get_text() for t in fig.axes[0].texts]
+    assert any("branch lost from k = 0.008" in t for t in texts)

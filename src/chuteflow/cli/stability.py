@@ -238,7 +238,8 @@ def dispersion_cmd(
                           title=f"Least-stable branch α(k), {_caption(flow)}")
     v = {name: ds[name].values for name in ("k", "alpha_re", "alpha_im", "drift", "tail", "n",
                                              "physical")}
-    i_max = int(np.argmax(v["alpha_re"]))
+    finite = np.isfinite(v["alpha_re"])  # --no-strict: NaN where the branch was lost
+    i_max = int(np.argmax(np.where(finite, v["alpha_re"], -np.inf))) if finite.any() else 0
     summary = {**_params(flow), "k_max": k_max, "num": num, "k_c": k_c,
                "lambda_c": 2 * math.pi / k_c if k_c else None, "crossings": list(found),
                "k_c_error": kc_error, "max_growth": float(v["alpha_re"][i_max]),

@@ -115,10 +115,16 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
             ax = axes[i, j]
             ax.plot(k, vals, "k-", lw=1.2)
             ax.plot(k[phys], vals[phys], "k.", ms=3.5)
-            if (~phys).any():
-                ax.plot(k[~phys], vals[~phys], "rx", ms=5,
+            bad = ~phys & np.isfinite(vals)
+            if bad.any():
+                ax.plot(k[bad], vals[bad], "rx", ms=5,
                         label="not converged (drift or tail > 1e-7)")
                 ax.legend(fontsize=7, loc="best")
+            if not np.all(np.isfinite(vals)):
+                k_lost = float(k[~np.isfinite(vals)].min())
+                ax.axvspan(k_lost, k.max(), color="mistyrose", zorder=0)
+                ax.annotate(f"branch lost from k = {k_lost:.3g}", (0.98, 0.04),
+                            xycoords="axes fraction", ha="right", fontsize=7, color="red")
             ax.axhline(0.0, color="0.5", lw=0.6)
             for kc in marks:
                 ax.axvline(kc, color="0.3", ls=":", lw=1.0)

@@ -196,6 +196,8 @@ def _sampled_max(ds):
 
     k, re = ds.k.values, ds.alpha_re.values
     pos = k > 0
+    if not np.all(np.isfinite(re[pos])):  # a point where the branch was lost
+        return math.nan, math.nan
     i = int(np.argmax(np.where(pos, re, -np.inf)))
     return float(re[i]), float(k[i])
 
