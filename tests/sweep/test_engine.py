@@ -266,3 +266,69 @@ def test_tasks_cover_grid_once_and_hash_is_stable():
     assert [t for t in cfg.tasks() if t.i < 0][0].size == 5  # P1–P5 for φ = 0.05
     assert SweepConfig.grid(0.05, shape=(3, 7), chunk=3).digest() == cfg.digest()
     assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4).digest() != cfg.digest()
+
+
+def test_anchor_continuation_and_not_attempted(monkeypatch):
+    """Steady flows of a chunk: one cold start at the middle anchor, continuation to both
+    sides until a continued solve fails; points beyond are 'not attempted' (not_converged,
+    with a message), and without any flow at most max_cold cold starts are spent."""
+    import types
+
+    import chuteflow.steady as steady
+    from chuteflow.errors import NoSteadyFlowError
+    from chuteflow.sweep.runner import _anchor_order
+
+    assert _anchor_order(9) == [4, 2, 6, 1, 3, 5, 7, 0, 8]
+    nus = tuple(0.01 * (j + 1) for j in range(9))
+    exists = {0.03, 0.04, 0.05, 0.06}
+    calls = []
+
+    def fake(theta, nu0, model, *, guess=None, **kw):
+        calls.append((round(nu0, 6), guess is not None))
+        if round(nu0, 6) in exists:
+            return types.SimpleNamespace(h=nu0, nu0=nu0)
+        raise NoSteadyFlowError(f"none at {nu0:g}")
+
+    monkeypatch.setattr(steady, "solve_steady", fake)
+    metrics = ({"name": "test_faulty", "options": {}},)
+    ds = run_sweep(SweepConfig(theta=(16.0,), nu0=nus, metrics=metrics), workers=1)
+    st = ds["status"].values[0]
+    assert list(st[2:6]) == [STATUS["ok"]] * 4
+    assert st[1] == st[6] == STATUS["no_steady_flow"]
+    for j in (0, 7, 8):
+        assert st[j] == STATUS["not_converged"]
+        assert "not attempted" in ds["message"].values[0, j]
+    assert calls[0] == (0.05, False)  # the middle anchor, cold
+    assert sum(not g for _, g in calls) == 1
+    np.testing.assert_allclose(ds["twice_h"].values[0, 2:6], 2 * np.array(nus[2:6]))
+    # no flow anywhere: max_cold cold starts, then nothing
+    calls.clear()
+    exists.clear()
+    ds = run_sweep(SweepConfig(theta=(16.0,), nu0=nus, metrics=metrics, max_cold=2), workers=1)
+    assert calls == [(0.05, False), (0.03, False)]
+    assert (ds["status"].values[0] != STATUS["ok"]).all()
+
+
+def test_non_critical_metric_failure_keeps_status():
+    """A cross-check metric (critical = False) that raises leaves its variables missing and
+    the point ok; a point function's notes go to the message."""
+    from chuteflow.sweep import PointFunction, Variable, register_point_function
+
+    @register_point_function
+    class Check(PointFunction):
+        name = "test_check"
+        critical = False
+        variables = (Variable("checked", "1", "test"),)
+
+        def compute(self, flow, point):
+            if point.j == 0:
+                raise ValueError("test: check failed")
+            point.note("test: a remark")
+            return {"checked": 1.0}
+
+    cfg = SweepConfig(theta=(16.0,), nu0=(0.05, 0.06), metrics=("steady", "test_check"))
+    ds = run_sweep(cfg, workers=1)
+    assert list(ds["status"].values[0]) == [STATUS["ok"], STATUS["ok"]]
+    assert np.isnan(ds["checked"].values[0, 0]) and ds["checked"].values[0, 1] == 1.0
+    assert "test: check failed" in ds["message"].values[0, 0]
+    assert ds["message"].values[0, 1] == "test: a remark"

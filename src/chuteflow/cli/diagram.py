@@ -36,7 +36,8 @@ def diagram(
                                             help="Run on this Dask scheduler (needs the dask extra of chuteflow)."),
     workers: Optional[int] = typer.Option(None, "--workers", "-j",
                                           help="Local worker processes (default: all cores)."),
-    chunk: int = typer.Option(20, "--chunk", help="Points per task along ν0 (continuation)."),
+    chunk: Optional[int] = typer.Option(None, "--chunk", help="Points per task along ν0 "
+                                        "(continuation; default: whole θ rows)."),
     with_markers: bool = typer.Option(True, "--markers/--no-markers",
                                       help="Also compute the paper's points P1–P5 / Q1–Q3."),
     fresh: bool = typer.Option(False, "--fresh", help="Discard saved results of a different "

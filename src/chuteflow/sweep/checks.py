@@ -126,6 +126,8 @@ def check_finite_k(ds) -> dict | None:
         return None
     d = ds["finite_k_disagrees"].values
     n = int((d >= 0).sum())
+    failed = int(((ds["dispersion_sampled"].values == 1) & ~np.isfinite(ds["growth_max"].values)
+                  & (ds["status"].values == 0)).sum())
     bad = np.argwhere(d == 1)
     where = [f"(θ={ds['theta'].values[i]:.3g}°, ν0={ds['nu0'].values[j]:.3g}: Re α2 "
              f"{ds['alpha2_re'].values[i, j]:.3g}, max Re α {ds['growth_max'].values[i, j]:.3g}"
@@ -135,7 +137,9 @@ def check_finite_k(ds) -> dict | None:
             "statement": "no finite-k instability missed by the sign of Re α2 (dispersion "
                          "relation sampled on a k grid at a subset of points)",
             "computed": f"{len(bad)} of {n} sampled points disagree" +
-                        (": " + "; ".join(where) if where else ""),
+                        (": " + "; ".join(where) if where else "") +
+                        (f"; {failed} sampled points where the branch could not be tracked "
+                         "(listed in the file's message)" if failed else ""),
             "passed": n > 0 and len(bad) == 0}
 
 

@@ -8,9 +8,8 @@
   does not see). Such points are reported, never hidden.
 - ``regime``: 1 = A, 2 = B, 3 = C, 0 = stable, −1 = unknown. §4.2: in B the lighter flow is
   faster (dU/dρ̄0 < 0 with U = Q0/ρ̄0); in A and C the denser flow is faster (dU/dρ̄0 > 0). A lies
-  at small h and small ν̄, C at large h and large ν̄: the unstable points with dU/dρ̄0 > 0 are
-  split into connected regions of the (θ, ν0) grid, and a region is C when it lies above the
-  B regime in ν̄ and beyond the A/B separatrix in h (see :func:`regimes`).
+  on the fixed-θ contours that end at h → 0 (small h), C at the dense end of the contours that
+  end in B-type flows (large h, large ν̄); see :func:`regimes`.
 """
 from __future__ import annotations
 
@@ -81,33 +80,37 @@ def classify(ds):
 
 
 def regimes(unstable, dU, h, nu_mean):
-    """Regime codes (:data:`REGIMES`) on the (θ, ν0) grid.
+    """Regime codes (:data:`REGIMES`) on the (θ, ν0) grid (rows θ, columns ν0 ascending).
 
-    B: unstable with dU/dρ̄0 < 0. The unstable points with dU/dρ̄0 ≥ 0 form connected regions
-    (4-neighbour connectivity of the grid); each region is A or C by where its median lies:
-    C when its median ν̄ exceeds the largest ν̄ of the B regime's lower half … see the code:
-    a region is C when its median ν̄ is above the median ν̄ of all B points and its median h
-    is not below the smallest h of the B regime; otherwise A.
+    B: unstable with dU/dρ̄0 < 0 (the lighter flow is faster). The other unstable points
+    (denser flow faster) are A or C. §3.2 and §4.2 tell them apart by the fixed-θ contour
+    they lie on: contours left of the separatrix (θ ≤ 14° for φ = 0.05) end at h → 0 as the
+    density decreases, and their flows slow down as they get lighter all the way (A, small h);
+    contours right of it end with h → ∞ in the B-type flows that get faster as they get
+    lighter, and the denser-faster instability at the dense end of those contours is C. So a
+    θ row is of the A kind when its least dense flow has dU/dρ̄0 ≥ 0. Each connected region
+    (4-neighbour grid connectivity) of denser-faster unstable points takes the kind of the
+    majority of its points, so that the label does not flicker near the separatrix.
     """
     from scipy import ndimage
 
     unstable = np.asarray(unstable)
+    dU = np.asarray(dU, dtype=float)
     out = np.full(unstable.shape, -1, dtype=np.int8)
     known = (unstable >= 0) & np.isfinite(dU)
     out[known & (unstable == 0)] = REGIMES["stable"]
     isB = known & (unstable == 1) & (dU < 0)
     out[isB] = REGIMES["B"]
     faster = known & (unstable == 1) & (dU >= 0)
+    row_A = np.zeros(unstable.shape[0], dtype=bool)
+    for i in range(unstable.shape[0]):
+        js = np.nonzero(np.isfinite(dU[i]))[0]
+        row_A[i] = len(js) > 0 and dU[i, js[0]] >= 0
+    kindA = np.broadcast_to(row_A[:, None], unstable.shape)
     labels, nlab = ndimage.label(faster)
-    if isB.any():
-        nu_B = float(np.median(nu_mean[isB]))
-        h_B = float(np.min(h[isB]))
-    else:
-        nu_B, h_B = -np.inf, np.inf
     for lab in range(1, nlab + 1):
         sel = labels == lab
-        mh, mn = float(np.median(h[sel])), float(np.median(nu_mean[sel]))
-        out[sel] = REGIMES["C"] if (mn > nu_B and mh >= h_B) else REGIMES["A"]
+        out[sel] = REGIMES["A"] if 2 * int(kindA[sel].sum()) >= int(sel.sum()) else REGIMES["C"]
     return out
 
 

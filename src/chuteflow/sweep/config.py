@@ -117,12 +117,17 @@ class SweepConfig:
     nu_top, steady_rtol, n_max, min_thickness :
         Passed to :func:`~chuteflow.steady.solve_steady`. ``min_thickness`` defaults to 0:
         the diagrams show h < 1 (hatched, paper fig. phase005: "not examined").
-    chunk : int
-        Points per task along ν0. Tasks are computed with continuation from the previous
-        point, so results depend on the chunking at round-off level: it is part of the hash
-        and independent of the number of workers.
+    chunk : int, optional
+        Points per task along ν0 (default: the whole θ row). Tasks are computed with
+        continuation in ν0, so results depend on the chunking at round-off level: it is part
+        of the hash and independent of the number of workers.
+    max_cold : int
+        Cold starts per task, at anchors (middle of the chunk, then quartiles, …) until one
+        converges; the steady flows are continued from it to both sides. Points that no
+        continuation reaches are not attempted (status ``not_converged``, with a message):
+        cold starts that fail cost seconds each, continued ones milliseconds.
     retry_cold : bool
-        If a continued steady solve fails, retry once from the solver's cold start.
+        If a continued steady solve fails, retry it from the cold start (slower; off).
     markers : sequence of (name, theta, nu0)
         Extra points computed with the same point functions and stored on a ``marker``
         dimension (the paper's P1–P5, Q1–Q3; see :data:`DEFAULT_MARKERS`).
@@ -139,8 +144,9 @@ class SweepConfig:
     steady_rtol: float = 1e-8
     n_max: int = 384
     min_thickness: float = 0.0
-    chunk: int = 20
-    retry_cold: bool = True
+    chunk: int | None = None
+    max_cold: int = 3
+    retry_cold: bool = False
     markers: tuple = ()
 
     def __post_init__(self):
@@ -161,9 +167,15 @@ class SweepConfig:
             raise ParameterError(f"nu0: values must lie in (0, nu_max = {self.nu_max:g}) "
                                  f"(floor packing fraction), got [{self.nu0[0]:g}, "
                                  f"{self.nu0[-1]:g}]")
-        if int(self.chunk) < 1:
-            raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
-        object.__setattr__(self, "chunk", int(self.chunk))
+        if self.chunk is not None:
+            if int(self.chunk) < 1:
+                raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
+            object.__setattr__(self, "chunk", int(self.chunk))
+        if int(self.max_cold) < 1:
+            raise ParameterError(f"max_cold = {self.max_cold!r}: need at least one cold start "
+                                 "per task")
+        object.__setattr__(self, "max_cold", int(self.max_cold))
+        object.__setattr__(self, "retry_cold", bool(self.retry_cold))
         marks = []
         for mk in self.markers:
             try:
@@ -255,7 +267,7 @@ class SweepConfig:
         """Tasks in a fixed order: θ rows, each cut into chunks of ``chunk`` points."""
         out = []
         nn = len(self.nu0)
-        nchunks = math.ceil(nn / self.chunk)
+        nchunks = math.ceil(nn / (self.chunk or nn))
         # equal-sized chunks (sizes differ by at most one)
         edges = [round(k * nn / nchunks) for k in range(nchunks + 1)]
         for i in range(len(self.theta)):
@@ -279,7 +291,7 @@ class SweepConfig:
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
                 "steady_rtol": self.steady_rtol, "n_max": self.n_max,
                 "min_thickness": self.min_thickness, "chunk": self.chunk,
-                "retry_cold": self.retry_cold, "markers": [list(m) for m in self.markers],
+                "max_cold": self.max_cold, "retry_cold": self.retry_cold, "markers": [list(m) for m in self.markers],
                 "chuteflow_version": __version__}
 
     def digest(self) -> str:

@@ -48,6 +48,9 @@ class SweepStats:
         Largest peak resident memory of any process that computed a task.
     steady_retries : int
         Continued steady solves retried from the cold start.
+    metric_seconds : dict
+        Compute time per point function (``steady``: the steady solves, failed ones
+        included), summed over the tasks computed in this run.
     backend : str
         ``"serial"``, ``"processes"`` or ``"dask"``.
     workers : int
@@ -65,6 +68,7 @@ class SweepStats:
     backend: str = ""
     workers: int = 0
     point_seconds: list = field(default_factory=list, repr=False)
+    metric_seconds: dict = field(default_factory=dict)
 
 
 ProgressFn = Callable[..., None]
@@ -147,6 +151,8 @@ class Sweep:
             st.max_rss_mib = max(st.max_rss_mib, res.max_rss_kib / 1024.0)
             st.steady_retries += res.steady_retries
             st.point_seconds.extend(res.point_seconds.tolist())
+            for name, sec in res.metric_seconds.items():
+                st.metric_seconds[name] = st.metric_seconds.get(name, 0.0) + sec
             bar.advance(res.j1 - res.j0)
 
         npts_done = sum(t.size for t in tasks if t.key in done)
@@ -359,8 +365,9 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
         "metrics": " ".join(json.loads(s)["name"] for s in config.metrics),
     })
     for k in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top", "steady_rtol",
-              "n_max", "min_thickness", "chunk"):
+              "n_max", "min_thickness", "max_cold"):
         ds.attrs[k] = d[k]
+    ds.attrs["chunk"] = config.chunk or len(config.nu0)
     ds.attrs["retry_cold"] = int(config.retry_cold)
     from .classify import classify
     return classify(ds)

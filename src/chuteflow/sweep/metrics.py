@@ -2,12 +2,11 @@
 
 - ``longwave``: α1, α2 of α(k) = α1 k + α2 k² + … (§5.1.1, Appendix B) from
   :func:`chuteflow.longwave.longwave`; Re α2 > 0 is long-wave instability (§4.2).
-- ``growth``: the dispersion relation of the α(0) = 0 branch sampled on a k grid
-  (:func:`chuteflow.stability.dispersion`): maximum growth rate, its k, and the critical k_c
-  (first sign change of Re α, refined). Computed where Re α2 > 0 (unless
-  ``unstable_points=False``) and on a sample of the other points (every ``stride``-th point in θ
-  and ν0, and every marked point), which is the check that no finite-k instability is missed by
-  the long-wave criterion.
+- ``growth``: the dispersion relation of the α(0) = 0 branch tracked over a k grid: maximum
+  growth rate, its k, and the critical k_c (first sign change of Re α, refined). Computed on a
+  sample of the points (every ``stride``-th point in θ and ν0, and every marked point), which
+  is the check that no finite-k instability is missed by the long-wave criterion, and, with
+  ``unstable_points=True``, at every long-wave unstable point.
 
 The stability layer is imported inside ``compute``, so registering these classes never depends
 on it.
@@ -28,12 +27,22 @@ _RATE = "sqrt(g/sigma)"
 
 @register_point_function
 class LongWaveMetric(PointFunction):
-    """Long-wave coefficients α1, α2 (perturbation theory at k = 0, with its convergence)."""
+    """Long-wave coefficients α1, α2, adaptively resolved for the sign of Re α2.
+
+    A diagram needs the sign of Re α2 at every point, and α2 converges slowly in N (ERRATA,
+    numerical notes; :func:`chuteflow.longwave.longwave`). First pass: ``longwave`` to the
+    relative accuracy ``rtol`` (default 0.5: the two finest resolutions then agree on the
+    sign) with ``n_max``. The result is accepted when its sign agrees with the independent
+    estimate from the eigenvalue at k = 1e-6, (α(k) − α1 k)/k², which converges much faster in
+    N; otherwise (or if the first pass does not converge) it is recomputed to ``refine_rtol``
+    with ``refine_n_max``. ``alpha2_convergence`` records the accuracy reached at each point
+    and ``longwave_consistent`` whether the two estimates agree in sign.
+    """
 
     name = "longwave"
-    version = "1"
+    version = "2"
     requires = ("steady",)
-    defaults = {"n": 96, "rtol": 0.1, "n_max": 480}
+    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_rtol": 0.1, "refine_n_max": 480}
     variables = (
         Variable("alpha1_im", "sqrt(g sigma)", "Im α1 (= −dQ0/dρ̄0, long-wave phase velocity)",
                  source="App. B, eq:vp0"),
@@ -44,45 +53,74 @@ class LongWaveMetric(PointFunction):
                  "relative change of α2 between the two finest resolutions"),
         Variable("alpha2_eig_re", "sigma^(3/2) g^(1/2)",
                  "Re (α(k) − α1 k)/k² from the eigenvalue at k = 1e-6 (cross-check of α2)"),
+        Variable("longwave_consistent", "1",
+                 "Re α2 and the eigenvalue estimate agree in sign", kind="flag"),
         Variable("longwave_n", "1", "Chebyshev intervals of the long-wave computation",
                  kind="int"),
     )
 
     def validate(self):
         o = self.options
-        if not (int(o["n"]) >= 24 and int(o["n_max"]) >= int(o["n"])):
-            raise ParameterError("longwave: need 24 <= n <= n_max (Chebyshev intervals)")
-        if not (0 < float(o["rtol"]) < 1):
-            raise ParameterError("longwave: rtol must lie in (0, 1): below 1 the two finest "
-                                 "resolutions agree on the sign of Re α2")
+        if not (24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])):
+            raise ParameterError("longwave: need 24 <= n <= n_max <= refine_n_max (Chebyshev "
+                                 "intervals)")
+        if not (0 < float(o["refine_rtol"]) <= float(o["rtol"]) < 1):
+            raise ParameterError("longwave: need 0 < refine_rtol <= rtol < 1: below 1 the two "
+                                 "finest resolutions agree on the sign of Re α2")
+
+    @staticmethod
+    def _consistent(lw) -> bool:
+        eig = lw.alpha2_from_eigenvalue.real
+        return math.isfinite(eig) and (eig > 0) == (lw.alpha2.real > 0)
 
     def compute(self, flow, point):
+        from ..errors import ConvergenceError
         from ..longwave import longwave
 
         o = self.options
-        lw = longwave(flow, n=int(o["n"]), rtol=float(o["rtol"]), n_max=int(o["n_max"]))
+        lw = None
+        try:
+            lw = longwave(flow, n=int(o["n"]), rtol=float(o["rtol"]), n_max=int(o["n_max"]))
+        except ConvergenceError:
+            lw = None
+        if lw is None or not self._consistent(lw):
+            start = max(int(o["n"]), lw.n if lw is not None else 0)
+            lw = longwave(flow, n=min(start, int(o["refine_n_max"])),
+                          rtol=float(o["refine_rtol"]), n_max=int(o["refine_n_max"]))
         eig = lw.alpha2_from_eigenvalue
         return {"alpha1_im": lw.alpha1.imag, "alpha2_re": lw.alpha2.real,
                 "alpha2_im": lw.alpha2.imag, "alpha2_convergence": lw.convergence_alpha2,
                 "alpha2_eig_re": eig.real if math.isfinite(eig.real) else None,
-                "longwave_n": lw.n}
+                "longwave_consistent": self._consistent(lw), "longwave_n": lw.n}
 
 
 @register_point_function
 class GrowthMetric(PointFunction):
-    """Maximum growth rate, its wavenumber and k_c from the sampled dispersion relation."""
+    """Maximum growth rate, its wavenumber and k_c from the tracked dispersion relation.
+
+    The α(0) = 0 branch is tracked from k = 0 (:class:`chuteflow.stability.BranchTracker`,
+    drift and tail checked at every k, N raised where needed) over ``num`` wavenumbers
+    geometrically spaced in [k_min, k_max]. k_c, the first sign change of Re α from + to −,
+    is refined by Brent's method on the mode nearest the linear prediction inside the bracket
+    (relative tolerance 1e-6). A failure (branch lost, N = ``n_max`` not enough) leaves the
+    values missing (``dispersion_sampled`` = 1) and is noted in the point's message. Evaluated at the sampled points (every ``stride``-th point in θ
+    and in ν0, and every marked point) and, if ``unstable_points``, at every point with
+    Re α2 > 0 (about 5 s a point: off by default for diagrams).
+    """
 
     name = "growth"
-    version = "1"
+    version = "2"
     requires = ("steady", "longwave")
-    defaults = {"k_min": 1e-4, "k_max": 0.05, "num": 24, "stride": 4, "n": None,
-                "n_max": 320, "unstable_points": True}
+    critical = False  # a cross-check: its failure leaves the point's classification alone
+    defaults = {"k_min": 1e-4, "k_max": 0.05, "num": 16, "stride": 6, "n": 80,
+                "n_max": 160, "unstable_points": False}
     variables = (
         Variable("growth_max", _RATE, "largest Re α of the α(0) = 0 branch on the k grid",
                  source="figs disp, disp-AC, disp01"),
-        Variable("k_growth_max", "1/sigma", "wavenumber of the largest Re α"),
+        Variable("k_growth_max", "1/sigma", "wavenumber of the largest Re α on the k grid"),
         Variable("k_c", "1/sigma", "critical wavenumber: first sign change of Re α "
                  "(upper edge of the unstable band 0 < k < k_c)", source="§4.2"),
+        Variable("growth_n", "1", "largest Chebyshev N used along the branch", kind="int"),
         Variable("dispersion_sampled", "1",
                  "the dispersion relation was sampled here (unstable or check point)",
                  kind="flag"),
@@ -96,19 +134,22 @@ class GrowthMetric(PointFunction):
             raise ParameterError("growth: num (k grid points) must be at least 3")
         if int(o["stride"]) < 1:
             raise ParameterError("growth: stride must be >= 1 (1 = check every point)")
+        if not (24 <= int(o["n"]) <= int(o["n_max"])):
+            raise ParameterError("growth: need 24 <= n <= n_max (Chebyshev intervals)")
 
     def k_grid(self) -> np.ndarray:
         o = self.options
         return np.geomspace(float(o["k_min"]), float(o["k_max"]), int(o["num"]))
 
     def sampled(self, point) -> bool:
+        """Marked points, and every ``stride``-th point in θ and ν0 offset by stride // 2 (off
+        the grid's edges, where the existence boundaries make every solver slowest)."""
         s = int(self.options["stride"])
-        return point.i < 0 or (point.i % s == 0 and point.j % s == 0)
+        return point.i < 0 or (point.i % s == s // 2 and point.j % s == s // 2)
 
     def compute(self, flow, point):
-        from scipy.optimize import brentq
-
-        from ..stability import dispersion
+        from ..errors import ConvergenceError
+        from ..stability import BranchTracker
 
         a2 = point.values.get("alpha2_re", np.nan)
         unstable = bool(np.isfinite(a2) and a2 > 0)
@@ -116,37 +157,45 @@ class GrowthMetric(PointFunction):
             return {"dispersion_sampled": False}
         o = self.options
         ks = self.k_grid()
-        kw = {"n_max": int(o["n_max"])}
-        if o["n"] is not None:
-            kw["n"] = int(o["n"])
-        d = dispersion(flow, ks, **kw)
-        re = np.asarray(d["alpha_re"].values)
+        try:
+            tr = BranchTracker(flow, int(o["n"]), n_max=int(o["n_max"]))
+            modes = [tr.mode(k) for k in ks]
+            bad = [m for m in modes if not m.physical]
+            if bad:
+                m = bad[0]
+                raise ConvergenceError(
+                    f"dispersion at k = {m.k:.3g} not converged at N = {m.n} (drift "
+                    f"{m.drift:.1e}, tail {m.tail:.1e})")
+        except ConvergenceError as exc:
+            # sampled, but no trustworthy branch: the values stay missing, the message says why
+            point.note(f"growth: {exc}")
+            return {"dispersion_sampled": True}
+        re = np.array([m.alpha.real for m in modes])
         imax = int(np.argmax(re))
         out = {"dispersion_sampled": True, "growth_max": float(re[imax]),
-               "k_growth_max": float(ks[imax])}
-        # k_c: first change of sign from unstable to stable along the grid, refined on the
-        # tracked branch (Brent on the eigenvalue nearest the linear prediction)
-        k_c = None
+               "k_growth_max": float(ks[imax]), "growth_n": max(m.n for m in modes)}
         for i in range(len(ks) - 1):
             if re[i] > 0 >= re[i + 1]:
-                k_c = self._refine(flow, ks[i], ks[i + 1], kw, brentq)
+                out["k_c"] = self._refine(flow, modes[i], modes[i + 1])
                 break
-        if unstable and k_c is None and re[-1] > 0:
-            k_c = None  # unstable up to k_max: k_c beyond the grid, left missing
-        out["k_c"] = k_c
         return out
 
     @staticmethod
-    def _refine(flow, ka, kb, kw, brentq):
-        from ..stability import dispersion
+    def _refine(flow, ma, mb):
+        """Brent on Re α(k) of the mode nearest the linear prediction between two tracked
+        modes (at the finer of their resolutions)."""
+        from scipy.optimize import brentq
+
+        from ..stability import mode_near
+
+        ka, kb, aa, ab = ma.k, mb.k, ma.alpha, mb.alpha
+        n = max(ma.n, mb.n)
 
         def f(k):
-            return float(dispersion(flow, [k], **kw)["alpha_re"].values[0])
+            pred = aa + (ab - aa) * (k - ka) / (kb - ka)
+            return float(mode_near(flow, k, pred, n=n).alpha.real)
 
-        fa, fb = f(ka), f(kb)
-        if not (fa > 0 >= fb):
-            return 0.5 * (ka + kb)
-        return float(brentq(f, ka, kb, xtol=1e-6 * kb, rtol=1e-8))
+        return float(brentq(f, ka, kb, xtol=1e-6 * kb, rtol=1e-6))
 
 
 def default_metrics() -> list[str]:

@@ -95,6 +95,8 @@ class Point:
         Inclination (degrees) and floor packing fraction.
     values : dict
         Outputs of the point functions already evaluated at this point.
+    notes : list of str
+        Remarks added with :meth:`note`; they go to the point's ``message``.
     """
 
     i: int
@@ -102,6 +104,11 @@ class Point:
     theta: float
     nu0: float
     values: dict = field(default_factory=dict)
+    notes: list = field(default_factory=list)
+
+    def note(self, text: str) -> None:
+        """Add a remark to this point's message (e.g. why an optional value is missing)."""
+        self.notes.append(str(text))
 
 
 class PointFunction:
@@ -111,6 +118,11 @@ class PointFunction:
     ``requires`` (names of point functions whose outputs they read from ``point.values``),
     and implement :meth:`compute`. Constructor keyword arguments are options; declare their
     defaults in ``defaults`` so that they can be validated and hashed.
+
+    When a critical point function (the default) raises, the point's ``status`` becomes
+    ``not_converged`` (a :class:`~chuteflow.errors.ConvergenceError`) or ``error`` and the
+    later point functions are skipped. A point function with ``critical = False`` (a
+    cross-check) only leaves its own variables missing and appends to ``message``.
     """
 
     name: ClassVar[str] = ""
@@ -118,6 +130,7 @@ class PointFunction:
     variables: ClassVar[tuple[Variable, ...]] = ()
     requires: ClassVar[tuple[str, ...]] = ()
     defaults: ClassVar[Mapping[str, Any]] = {}
+    critical: ClassVar[bool] = True
 
     def __init__(self, **options):
         unknown = set(options) - set(self.defaults)
