@@ -65,7 +65,7 @@ class Options:
     tangent: bool = True
     substeps: int = 1
     max_cold: int = 4
-    max_cold_seeded: int = 2
+    max_cold_seeded: int = 1
 
 
 @dataclass
@@ -189,7 +189,7 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     first; when they stall, one point is seeded from ``previous`` and the walks resume.
     When nothing more can be reached, a cold start is tried at a spread-out point not yet
     attempted (at most ``opts.max_cold`` per row, ``opts.max_cold_seeded`` if ``previous``
-    has converged points). Points never attempted are marked 'unreached'.
+    is given: in a map the existence region is reached from the neighbouring rows). Points never attempted are marked 'unreached'.
     """
     nus = [float(v) for v in nu0_values]
     N = len(nus)
@@ -237,8 +237,7 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         # walks stalled: a cold start where nothing has been attempted yet (a separate
         # piece of the branch, or no piece found so far)
         cand = [i for i in order if not tried[i]]
-        seeded = any(p is not None and p.usable for p in prev)
-        if not cand or cold >= (opts.max_cold_seeded if seeded else opts.max_cold):
+        if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
             break
         cold += 1
         attempt(cand[0], "cold", lambda: _cold(theta, nus[cand[0]], model, opts))

@@ -155,15 +155,17 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
     return ds
 
 
-def existence_limit(flows, ds, side: str, *, columns: int = 2, min_step: float = 1.0 / 64,
-                    margin: float = 8.0) -> dict:
+def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float = 1.0 / 64,
+                    margin: float = 8.0, rtol: float = 1e-6, n_max: int = 256) -> dict:
     """Refine the lowest (``side='low'``) or highest (``'high'``) angle with a steady flow.
 
     From the map's extreme converged points (in the ``columns`` ν0 columns that reach
     furthest, and in the densest / most dilute column with a flow), the branch is followed
     beyond the map (:func:`~chuteflow.steady.api.follow`): in θ at fixed ν0(0) until it
     ends, then in ν0(0) towards the grid's extreme floor density, and in θ again (up to
-    three times). Thin layers count.
+    three times). Thin layers count. Only the angle where the branch ends is sought (to
+    ~2·``min_step``), so the flows on the way are converged to ``rtol`` = 1e-6 with at most
+    ``n_max`` intervals (dense thin layers near the end would otherwise need n ≈ 500).
 
     Returns
     -------
@@ -198,10 +200,12 @@ def existence_limit(flows, ds, side: str, *, columns: int = 2, min_step: float =
         for _ in range(3):
             # along θ until the branch ends, then along ν0(0) towards the extreme floor
             # density (the end may move further there), and along θ again
-            g, reached = follow(g, theta=th + sign * margin, min_step=min_step, max_steps=60)
+            g, reached = follow(g, theta=th + sign * margin, min_step=min_step, max_steps=40,
+                                rtol=rtol, n_max=n_max)
             if reached:
                 break
-            g2, _ = follow(g, nu0=nu_end, min_step=0.01, max_steps=30)
+            g2, _ = follow(g, nu0=nu_end, min_step=0.01, max_steps=30, rtol=rtol,
+                           n_max=n_max)
             if abs(g2.nu0 - g.nu0) < 1e-12:
                 break
             g = g2

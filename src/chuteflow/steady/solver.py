@@ -319,18 +319,23 @@ _COARSE = 32
 
 def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
     """Isothermal guess polished by Newton (second-order x-momentum form, see
-    :meth:`_Newton.evaluate`) on the coarse grid, else on the n grid; (state, iterations).
-    A cold start that converges needs at most ~15 iterations: failing after ``maxiter``
-    keeps the cost of a point without a steady flow bounded."""
+    :meth:`_Newton.evaluate`) on the coarse grid; (state, iterations). If the coarse Newton
+    got close (residual < 1e-3) but not below tolerance, the layer may be under-resolved
+    and the n grid is tried too. A cold start that converges needs at most ~15 iterations:
+    failing after ``maxiter`` (and backtracking at most 10 halvings) keeps the cost of a
+    point without a steady flow bounded."""
+    levels = (_COARSE, n) if n > _COARSE else (n,)
     first = None
-    for m in ((_COARSE, n) if n > _COARSE else (n,)):
+    for m in levels:
         newton = _Newton(m, theta, nu0, model, nu_top, integrated=False)
         try:
             st, it, _, _ = newton.solve(isothermal_guess(theta, nu0, model, nu_top, newton.ref),
-                                        tol=1e-9, maxiter=maxiter)
+                                        tol=1e-9, maxiter=maxiter, lam_min=2.0**-10)
             return st, it
         except _NewtonFailure as fail:
             first = first or fail
+            if not (min(fail.history) < 1e-3):
+                break
     raise _diagnose(theta, nu0, model, first)
 
 

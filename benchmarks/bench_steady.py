@@ -1,0 +1,93 @@
+"""Benchmarks of the steady solver (issue 2): one converged solution and a 40 × 40 map.
+
+``run(quick)`` returns rows with keys name, seconds, baseline_seconds, ratio (baseline /
+chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
+``python benchmarks/bench_steady.py [--quick]``.
+
+- ``steady_one_solution``: median wall time of ``solve_steady(16, 0.05)`` from the cold start,
+  every quantity computed and converged (change < 1e-8 between n and 3n/2). Baseline: the
+  paper's method done plainly — scipy ``solve_ivp`` (DOP853, rtol 1e-11) shooting on u0(0)
+  with a bracketing scan and ``brentq`` (``tests/steady/shooting.py``), which reaches the same
+  accuracy (the two agree to 1e-10). Target: < 20 ms.
+- ``steady_one_solution_continued``: the same from a neighbouring solution (ν0(0) = 0.051),
+  as inside families and maps.
+- ``steady_map_40x40``: φ = 0.05, θ ∈ [10°, 20°] × ν0(0) ∈ [0.005, 0.5] (geometric), 40 × 40,
+  two processes (one BLAS thread each). Baseline: the shooting baseline's median time per
+  solution times the number of points with a flow (estimated, not run: ~half an hour).
+  Target: < 20 s. The note also gives the one-process time.
+"""
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+import warnings
+from pathlib import Path
+
+if __package__ in (None, ""):
+    root = Path(__file__).resolve().parents[1]
+    sys.path[:0] = [str(root / "src"), str(root)]
+
+import numpy as np  # noqa: E402
+
+
+def _median_time(fn, repeat):
+    ts = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts)
+
+
+def run(quick: bool = False) -> list[dict]:
+    from chuteflow._threads import limit_blas_threads
+    from chuteflow.steady import solve_steady, steady_map
+    from tests.steady.shooting import Material, solve_by_shooting
+
+    limit_blas_threads(1)
+    warnings.simplefilter("ignore", RuntimeWarning)
+    rows = []
+    ref = solve_steady(16.0, 0.05)  # compiles the closures and equations (≈2 s, once)
+    t_one = _median_time(lambda: solve_steady(16.0, 0.05), 5 if quick else 30)
+    shot = solve_by_shooting(16.0, 0.05, Material())
+    t_base = _median_time(lambda: solve_by_shooting(16.0, 0.05, Material()), 1 if quick else 3)
+    agree = max(abs(getattr(shot, k) / getattr(ref, k) - 1)
+                for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"))
+    rows.append({"name": "steady_one_solution", "seconds": t_one, "baseline_seconds": t_base,
+                 "ratio": t_base / t_one,
+                 "note": f"θ=16°, ν0=0.05, cold start, n={ref.n}, change {ref.convergence:.0e}; "
+                         f"baseline solve_ivp+brentq ({shot.shots} shots), agrees to "
+                         f"{agree:.0e}; target < 0.020 s"})
+    near = solve_steady(16.0, 0.051)
+    t_cont = _median_time(lambda: solve_steady(16.0, 0.05, guess=near), 5 if quick else 30)
+    rows.append({"name": "steady_one_solution_continued", "seconds": t_cont,
+                 "baseline_seconds": t_base, "ratio": t_base / t_cont,
+                 "note": "from the solution at ν0=0.051 (as in families and maps)"})
+
+    size = 20 if quick else 40
+    ths = np.linspace(10.0, 20.0, size)
+    nus = np.geomspace(0.005, 0.5, size)
+    t0 = time.perf_counter()
+    ds = steady_map(ths, nus, workers=2)
+    t_map = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ds1 = steady_map(ths, nus, workers=1)
+    t_map1 = time.perf_counter() - t0
+    st = ds.status.values
+    n_ok = int(((st == "ok") | (st == "thin")).sum())
+    same = bool((st == ds1.status.values).all())
+    counts = ", ".join(f"{k} {int((st == k).sum())}" for k in
+                       ("ok", "thin", "no_steady_flow", "not_converged", "unreached"))
+    rows.append({"name": f"steady_map_{size}x{size}", "seconds": t_map,
+                 "baseline_seconds": n_ok * t_base, "ratio": n_ok * t_base / t_map,
+                 "note": f"φ=0.05, θ∈[10,20]°, ν0∈[0.005,0.5]; 2 processes; 1 process "
+                         f"{t_map1:.1f} s (same statuses: {same}); {counts}; baseline "
+                         f"estimated = {n_ok} flows × shooting time; target < 20 s"})
+    return rows
+
+
+if __name__ == "__main__":
+    import json
+    out = run(quick="--quick" in sys.argv)
+    print(json.dumps(out, indent=1))
