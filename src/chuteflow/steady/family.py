@@ -237,6 +237,11 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         # walks stalled: a cold start where nothing has been attempted yet (a separate
         # piece of the branch, or no piece found so far)
         cand = [i for i in order if not tried[i]]
+        if previous is None and not cand:
+            # a family: points where continuation failed get a cold start too (the
+            # isothermal start sometimes succeeds where a far neighbour's predictor does not)
+            cand = [i for i in order if not usable(i) and "cold" not in tried[i]
+                    and ((i > 0 and usable(i - 1)) or (i < N - 1 and usable(i + 1)))]
         if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
             break
         cold += 1
