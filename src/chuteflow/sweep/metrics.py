@@ -34,15 +34,17 @@ class LongWaveMetric(PointFunction):
     relative accuracy ``rtol`` (default 0.5: the two finest resolutions then agree on the
     sign) with ``n_max``. The result is accepted when its sign agrees with the independent
     estimate from the eigenvalue at k = 1e-6, (α(k) − α1 k)/k², which converges much faster in
-    N; otherwise (or if the first pass does not converge) it is recomputed to ``refine_rtol``
+    N; otherwise (or if the first pass does not converge) it is recomputed from N =
+    ``refine_n`` (the eigenvalue estimate itself can be wrong at N ≲ 64) to ``refine_rtol``
     with ``refine_n_max``. ``alpha2_convergence`` records the accuracy reached at each point
     and ``longwave_consistent`` whether the two estimates agree in sign.
     """
 
     name = "longwave"
-    version = "2"
+    version = "3"
     requires = ("steady",)
-    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_rtol": 0.1, "refine_n_max": 480}
+    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_n": 128, "refine_rtol": 0.1,
+                "refine_n_max": 480}
     variables = (
         Variable("alpha1_im", "sqrt(g sigma)", "Im α1 (= −dQ0/dρ̄0, long-wave phase velocity)",
                  source="App. B, eq:vp0"),
@@ -61,9 +63,10 @@ class LongWaveMetric(PointFunction):
 
     def validate(self):
         o = self.options
-        if not (24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])):
-            raise ParameterError("longwave: need 24 <= n <= n_max <= refine_n_max (Chebyshev "
-                                 "intervals)")
+        if not (24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])
+                and int(o["refine_n"]) <= int(o["refine_n_max"])):
+            raise ParameterError("longwave: need 24 <= n <= n_max <= refine_n_max and "
+                                 "refine_n <= refine_n_max (Chebyshev intervals)")
         if not (0 < float(o["refine_rtol"]) <= float(o["rtol"]) < 1):
             raise ParameterError("longwave: need 0 < refine_rtol <= rtol < 1: below 1 the two "
                                  "finest resolutions agree on the sign of Re α2")
@@ -84,7 +87,7 @@ class LongWaveMetric(PointFunction):
         except ConvergenceError:
             lw = None
         if lw is None or not self._consistent(lw):
-            start = max(int(o["n"]), lw.n if lw is not None else 0)
+            start = max(int(o["refine_n"]), lw.n if lw is not None else 0)
             lw = longwave(flow, n=min(start, int(o["refine_n_max"])),
                           rtol=float(o["refine_rtol"]), n_max=int(o["refine_n_max"]))
         eig = lw.alpha2_from_eigenvalue

@@ -102,9 +102,10 @@ def _steady_chunk(config, theta: float, nus, model, kw):
 
     Cold starts at anchors (middle of the chunk, then quartiles, …; at most
     ``config.max_cold``) until one converges; from there the flows are continued to both
-    sides, each point from its converged neighbour. A continued solve that fails ends that
-    walk (it is retried from the cold start if ``config.retry_cold``). Points beyond are not
-    attempted: failed cold starts cost seconds each, continued ones milliseconds.
+    sides, each point from its converged neighbour (through intermediate densities when the
+    direct step fails). A continued solve that still fails ends that walk (it is retried from
+    the cold start if ``config.retry_cold``). Points beyond are not attempted: failed cold
+    starts cost seconds each, continued ones milliseconds.
 
     Returns a list over the chunk of (flow or exception or None for not attempted,
     seconds), and the number of cold retries.
@@ -118,13 +119,33 @@ def _steady_chunk(config, theta: float, nus, model, kw):
     retries = 0
     cold = 0
 
+    def continued(guess, nu):
+        """Solve at nu from the converged neighbour ``guess``; when that fails, walk there
+        through 1, then 3 intermediate densities (a step too long for Newton is the usual
+        reason, not the absence of a flow)."""
+        try:
+            return solve_steady(theta, nu, model, guess=guess, **kw)
+        except (NoSteadyFlowError, ConvergenceError) as exc:
+            first = exc
+        for parts in (2, 4):
+            cur = guess
+            try:
+                for q in range(1, parts):
+                    cur = solve_steady(theta, guess.nu0 + (nu - guess.nu0) * q / parts, model,
+                                       guess=cur, **kw)
+                return solve_steady(theta, nu, model, guess=cur, **kw)
+            except (NoSteadyFlowError, ConvergenceError):
+                continue
+        raise first
+
     def attempt(j, guess, tag):
         nonlocal retries
         tried[j].add(tag)
         t0 = time.perf_counter()
         try:
             try:
-                out = solve_steady(theta, nus[j], model, guess=guess, **kw)
+                out = (continued(guess, nus[j]) if guess is not None
+                       else solve_steady(theta, nus[j], model, **kw))
             except (NoSteadyFlowError, ConvergenceError):
                 if guess is None or not config.retry_cold:
                     raise
