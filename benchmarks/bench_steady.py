@@ -31,12 +31,17 @@ if __package__ in (None, ""):
 import numpy as np  # noqa: E402
 
 
-def _median_time(fn, repeat):
-    ts = []
+def _median_time(fn, repeat, cpu=None):
+    """Median wall time; if ``cpu`` is a list, the median CPU time of this process is
+    appended to it (less sensitive to other jobs on a shared machine)."""
+    ts, cs = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         fn()
         ts.append(time.perf_counter() - t0)
+        cs.append(time.process_time() - c0)
+    if cpu is not None:
+        cpu.append(statistics.median(cs))
     return statistics.median(ts)
 
 
@@ -49,21 +54,25 @@ def run(quick: bool = False) -> list[dict]:
     warnings.simplefilter("ignore", RuntimeWarning)
     rows = []
     ref = solve_steady(16.0, 0.05)  # compiles the closures and equations (≈2 s, once)
-    t_one = _median_time(lambda: solve_steady(16.0, 0.05), 5 if quick else 30)
+    cpu = []
+    t_one = _median_time(lambda: solve_steady(16.0, 0.05), 5 if quick else 30, cpu)
     shot = solve_by_shooting(16.0, 0.05, Material())
     t_base = _median_time(lambda: solve_by_shooting(16.0, 0.05, Material()), 1 if quick else 3)
     agree = max(abs(getattr(shot, k) / getattr(ref, k) - 1)
                 for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"))
     rows.append({"name": "steady_one_solution", "seconds": t_one, "baseline_seconds": t_base,
                  "ratio": t_base / t_one,
-                 "note": f"θ=16°, ν0=0.05, cold start, n={ref.n}, change {ref.convergence:.0e}; "
+                 "note": f"θ=16°, ν0=0.05, cold start, n={ref.n}, change {ref.convergence:.0e}, "
+                         f"CPU {cpu[-1] * 1e3:.1f} ms; "
                          f"baseline solve_ivp+brentq ({shot.shots} shots), agrees to "
                          f"{agree:.0e}; target < 0.020 s"})
     near = solve_steady(16.0, 0.051)
-    t_cont = _median_time(lambda: solve_steady(16.0, 0.05, guess=near), 5 if quick else 30)
+    t_cont = _median_time(lambda: solve_steady(16.0, 0.05, guess=near), 5 if quick else 30,
+                          cpu)
     rows.append({"name": "steady_one_solution_continued", "seconds": t_cont,
                  "baseline_seconds": t_base, "ratio": t_base / t_cont,
-                 "note": "from the solution at ν0=0.051 (as in families and maps)"})
+                 "note": f"from the solution at ν0=0.051 (as in families and maps), CPU "
+                         f"{cpu[-1] * 1e3:.1f} ms"})
 
     size = 20 if quick else 40
     ths = np.linspace(10.0, 20.0, size)
@@ -71,9 +80,9 @@ def run(quick: bool = False) -> list[dict]:
     t0 = time.perf_counter()
     ds = steady_map(ths, nus, workers=2)
     t_map = time.perf_counter() - t0
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     ds1 = steady_map(ths, nus, workers=1)
-    t_map1 = time.perf_counter() - t0
+    t_map1, c_map1 = time.perf_counter() - t0, time.process_time() - c0
     st = ds.status.values
     n_ok = int(((st == "ok") | (st == "thin")).sum())
     same = bool((st == ds1.status.values).all())
@@ -82,7 +91,8 @@ def run(quick: bool = False) -> list[dict]:
     rows.append({"name": f"steady_map_{size}x{size}", "seconds": t_map,
                  "baseline_seconds": n_ok * t_base, "ratio": n_ok * t_base / t_map,
                  "note": f"φ=0.05, θ∈[10,20]°, ν0∈[0.005,0.5]; 2 processes; 1 process "
-                         f"{t_map1:.1f} s (same statuses: {same}); {counts}; baseline "
+                         f"{t_map1:.1f} s, CPU {c_map1:.1f} s (same statuses: {same}); "
+                         f"{counts}; baseline "
                          f"estimated = {n_ok} flows × shooting time; target < 20 s"})
     return rows
 

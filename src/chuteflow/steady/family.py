@@ -189,7 +189,8 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     first; when they stall, one point is seeded from ``previous`` and the walks resume.
     When nothing more can be reached, a cold start is tried at a spread-out point not yet
     attempted (at most ``opts.max_cold`` per row, ``opts.max_cold_seeded`` if ``previous``
-    is given: in a map the existence region is reached from the neighbouring rows). Points never attempted are marked 'unreached'.
+    is given: in a map the existence region is reached from the neighbouring rows).
+    Points never attempted are marked 'unreached'.
     """
     nus = [float(v) for v in nu0_values]
     N = len(nus)

@@ -8,7 +8,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..closures import ChuteModel
-from ..spectral import ChebyshevGrid, tail
+from ..spectral import ChebyshevGrid, coefficients, tail
 
 
 @dataclass(frozen=True)
@@ -139,24 +139,29 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     rho_bar = grid.integrate(nu) + tail_rho
     Q = grid.integrate(nu * u) + u[-1] * tail_rho
     T_mean = (grid.integrate(nu * T) + T[-1] * tail_rho) / rho_bar
-    # density maximum: sign of d ln ν/dy on a fine sampling, refined by root finding
-    ds = grid.D @ log_nu
-    yf = np.linspace(0.0, grid.b, 20 * grid.n + 1)
-    dsf = grid.interpolate(ds, yf)
-    if dsf[0] <= 0 and (dsf[1:] <= 0).all():
+    # density maximum: sign of d ln ν/dy on a fine sampling, refined by root finding; the
+    # Chebyshev coefficients are computed once (x ∈ [-1, 1] ↔ y ∈ [0, y_max])
+    from numpy.polynomial.chebyshev import chebval
+    L = grid.b - grid.a
+    c_s = coefficients(log_nu)
+    c_ds = coefficients(grid.D @ log_nu)
+    xf = np.linspace(-1.0, 1.0, 8 * grid.n + 1)
+    yf = grid.a + 0.5 * L * (xf + 1.0)
+    dsf = chebval(xf, c_ds)
+    to_x = lambda y: 2.0 * (y - grid.a) / L - 1.0  # noqa: E731
+    if (dsf <= 0).all():
         monotonic, y_peak = True, 0.0
     else:
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
-        i = idx[0] if len(idx) else 0
-        y_peak = brentq(lambda y: grid.interpolate(ds, y), yf[i], yf[i + 1], xtol=1e-13) \
-            if len(idx) else 0.0
-    s_peak = float(grid.interpolate(log_nu, y_peak))
+        y_peak = brentq(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1],
+                        xtol=1e-13) if len(idx) else 0.0
+    s_peak = float(chebval(to_x(y_peak), c_s))
     target = s_peak + math.log(0.01)
-    sf = grid.interpolate(log_nu, yf)
+    sf = chebval(xf, c_s)
     above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
     j = above[0]
-    h = brentq(lambda y: grid.interpolate(log_nu, y) - target, yf[j - 1], yf[j], xtol=1e-14)
+    h = brentq(lambda y: chebval(to_x(y), c_s) - target, yf[j - 1], yf[j], xtol=1e-14)
     return {"h": h, "nu_mean": rho_bar / h, "rho_bar": rho_bar, "Q": Q, "T_mean": T_mean,
             "monotonic": monotonic, "y_peak": y_peak, "nu_peak": math.exp(s_peak)}
 

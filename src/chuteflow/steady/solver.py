@@ -261,7 +261,8 @@ class _Newton:
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
                     Rt, Jt = self.evaluate(trial)
                     rt = np.abs(Rt).max()
-                    if np.isfinite(rt) and (rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)):
+                    better = rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)
+                    if np.isfinite(rt) and better:
                         st, R, J, res = trial, Rt, Jt, rt
                         break
                 lam *= 0.5

@@ -129,7 +129,8 @@ def _run(ctx: StageContext) -> None:
                   statement=f"φ = {phi:g}: Q0 increases monotonically with ρ̄0 at θ = "
                             f"{th_mono:g}°",
                   computed=(f"dQ0/dρ̄0 (exact tangent) > 0 at all {int(okm.sum())} solved "
-                            f"points, min {slope.min():.4g}, ρ̄0 ∈ [{fm.rho_bar.values[okm].min():.4g}, "
+                            f"points, min {slope.min():.4g}, ρ̄0 ∈ "
+                            f"[{fm.rho_bar.values[okm].min():.4g}, "
                             f"{fm.rho_bar.values[okm].max():.4g}]") if okm.any() else
                            "no solved point", passed=mono)
         mn = minima[th_min]
