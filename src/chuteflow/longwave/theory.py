@@ -29,7 +29,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import ConvergenceError
-from ..stability.modes import nearest_eigenpair
+from ..stability.modes import nearest_eigenpair, stability_operator
 from ..stability.operator import StabilityOperator
 from ..steady import SteadyFlow, steady_tangent
 
@@ -143,7 +143,7 @@ def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex
 
 
 def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
-             n_max: int = 480, k_check: float = 1e-6) -> LongWave:
+             n_max: int = 480, k_check: float | None = 1e-6) -> LongWave:
     """Long-wave coefficients α1, α2 of the least-stable branch (perturbation theory at k = 0).
 
     Parameters
@@ -160,6 +160,8 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
         (``flow.nu_top`` = 1e-9 needs N ≈ 300–400 for 1 %); for a sign only, 0.2 suffices.
     n_max : int
         Largest resolution tried.
+    k_check : float or None
+        Wavenumber of the eigenvalue cross-check; None skips it (sign-only sweeps).
 
     Raises
     ------
@@ -177,9 +179,10 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
     tangent = steady_tangent(flow)
     n = int(n)
     n2 = max(24, (4 * n) // 5)
-    b1, b2 = coefficients(StabilityOperator(flow, n2), tangent)
+    b1, b2 = coefficients(stability_operator(flow, n2), tangent)
     while True:
-        a1, a2 = coefficients(StabilityOperator(flow, n), tangent)
+        op = stability_operator(flow, n)
+        a1, a2 = coefficients(op, tangent)
         c1 = abs(a1 - b1) / max(abs(a1), 1e-300)
         c2 = abs(a2 - b2) / max(abs(a2), 1e-300)
         ok = math.isfinite(c1) and math.isfinite(c2) and c2 <= rtol and c1 <= rtol / 100
@@ -191,7 +194,8 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
             f"long-wave coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did not "
             f"converge: relative change of alpha1 {c1:.1e}, alpha2 {c2:.1e} between n = {n2} "
             f"and n = {n} (rtol = {rtol:g}); raise n_max or rtol")
-    op = StabilityOperator(flow, n)
-    check, _ = nearest_eigenpair(op.pencil(k_check), a1 * k_check + a2 * k_check**2)
+    check = complex("nan")
+    if k_check:
+        check, _ = nearest_eigenpair(op.pencil(k_check), a1 * k_check + a2 * k_check**2)
     return LongWave(flow.theta, flow.nu0, a1, a2, float(tangent["dQ_drho"]), n, float(c1),
-                    float(c2), float(k_check), check)
+                    float(c2), float(k_check or float("nan")), check)
