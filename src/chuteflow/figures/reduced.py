@@ -192,7 +192,8 @@ def plot_spacetime(ds, *, profiles: int = 3):
     pm = ax.pcolormesh(x, t, dev, shading="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
                        rasterized=True)
     fig.colorbar(pm, ax=ax, label="ρ̄ − ρ₀")
-    ax.set_xlabel("x (down the slope, σ)")
+    c = float(ds.attrs.get("frame_speed", 0.0))
+    ax.set_xlabel("x (down the slope, σ)" if c == 0 else f"ξ = x − {c:.3g} t (σ)")
     ax.set_ylabel("t (√(σ/g))")
     ax.set_title("density wave formation", fontsize=10)
     ax = axs[1]
