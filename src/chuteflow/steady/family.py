@@ -66,6 +66,8 @@ class Options:
     substeps: int = 1
     max_cold: int = 4
     max_cold_seeded: int = 1
+    maxiter: int = _CONT_MAXITER
+    lam_min: float = _CONT_LAM_MIN
 
 
 @dataclass
@@ -90,7 +92,7 @@ _UNREACHED = "unreached"
 
 def _attempt(theta, nu0, model, opts: Options, start: _State | None, n: int,
              cold: bool = False) -> _Point:
-    kw = {} if cold else {"maxiter": _CONT_MAXITER, "lam_min": _CONT_LAM_MIN}
+    kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
     try:
         flow = _solve(theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start,
                       opts.min_thickness, **kw)
