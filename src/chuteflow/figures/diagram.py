@@ -220,18 +220,21 @@ def _grid_panel(ax, ds):
 
     th, nu = ds["theta"].values, ds["nu0"].values
     st = ds["status"].values
-    # codes: 0 no flow, 1 not converged/error, 2 stable, 3 A, 4 B, 5 C, 6 ok (unclassified)
+    # codes: 0 no flow, 1 not converged/error, 2 stable, 3 A, 4 B, 5 C, 6 ok (unclassified),
+    # 7 not attempted (beyond the continuation from the row's flows)
     code = np.full(st.shape, 6, dtype=int)
     if "regime" in ds:
         reg = ds["regime"].values
         code = np.where(reg == 0, 2, np.where(reg == 1, 3, np.where(reg == 2, 4,
                         np.where(reg == 3, 5, 6))))
-    code = np.where(st == 1, 0, np.where(st >= 2, 1, code))
-    colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd"]
+    skipped = np.char.find(ds["message"].values.astype(str), "not attempted") >= 0
+    code = np.where(st == 1, 0, np.where(skipped, 7, np.where(st >= 2, 1, code)))
+    colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd",
+               "#f6e0e0"]
     names = ["no steady flow", "not converged / error", "stable", "A", "B", "C",
-             "steady only"]
+             "steady only", "not attempted"]
     ax.pcolormesh(_edges(nu), _edges(th), code, cmap=ListedColormap(colours), vmin=-0.5,
-                  vmax=6.5, shading="flat", edgecolors="0.85", linewidth=0.2)
+                  vmax=7.5, shading="flat", edgecolors="0.85", linewidth=0.2)
     if "monotonic" in ds and len(th) > 1 and len(nu) > 1:
         mono = np.where((st == 0) & (ds["monotonic"].values >= 0),
                         ds["monotonic"].values.astype(float), np.nan)

@@ -14,6 +14,7 @@ from importlib import import_module
 STAGE_MODULES: tuple[str, ...] = (
     "steady",
     "stability",
+    "diagrams",
     "reduced",
 )
 

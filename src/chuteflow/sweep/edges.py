@@ -1,0 +1,119 @@
+"""The least dense flow of each fixed-θ contour, located beyond the grid's resolution (§4.2).
+
+The paper: "when we decrease the density with a constant inclination angle ... eventually we
+will encounter either the regime A or the regime B". On a grid, the least dense flow found on a
+θ row lies up to one grid step above the end of the contour (where the layer collapses, h → 0)
+or at the grid's lowest ν0 (where h grows without bound). :func:`row_ends` goes further along
+each contour by continuation from the row's least dense grid flow: bisection towards the first
+failed density below it, or halving ν0 below the grid, and classifies the last flow reached
+with the sweep's own point functions.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ChuteflowError
+from .points import Point, point_function
+
+__all__ = ["row_ends"]
+
+
+def _classify_flow(flow, fns):
+    point = Point(-1, 0, flow.theta, flow.nu0)
+    for f in fns:
+        point.values.update(f.compute(flow, point))
+    v = point.values
+    a2, dU = v["alpha2_re"], v["dU_drho"]
+    if a2 > 0:
+        kind = "B" if dU < 0 else "A"
+    else:
+        kind = "stable"
+    return {"alpha2_re": float(a2), "dU_drho": float(dU), "kind": kind,
+            "consistent": bool(v.get("longwave_consistent", True))}
+
+
+def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 3):
+    """Least dense flow reached on each θ row and its stability (A, B or stable).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep with the ``steady``, ``kinematic`` and ``longwave`` point functions.
+    rows : sequence of int, optional
+        Row indices (default: every row with a steady flow).
+    bisections : int
+        Bisection steps towards the failed density below the least dense grid flow.
+    halvings : int
+        Halvings of ν0 below the grid when the row's least dense flow is at its lowest ν0.
+
+    Returns
+    -------
+    list of dict
+        Per row: ``theta``, ``nu0`` (of the least dense flow reached), ``h``, ``nu_mean``,
+        ``alpha2_re``, ``dU_drho``, ``kind`` ("A", "B", "stable"), ``consistent`` (long-wave
+        sign cross-check), ``how`` (grid / bisection / below grid), and ``error`` if none.
+    """
+    import json
+
+    from ..steady import solve_steady
+    from .config import SweepConfig
+
+    cfg = SweepConfig.from_dict(json.loads(ds.attrs["config_json"]))
+    specs = {json.loads(s)["name"]: json.loads(s) for s in cfg.metrics}
+    fns = [point_function(specs[name]) for name in ("steady", "kinematic", "longwave")]
+    model = cfg.model()
+    kw = dict(nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max,
+              min_thickness=cfg.min_thickness)
+    st = ds["status"].values
+    nus = ds["nu0"].values
+    out = []
+    idx = range(len(ds["theta"])) if rows is None else rows
+    for i in idx:
+        theta = float(ds["theta"].values[i])
+        ok = np.nonzero(st[i] == 0)[0]
+        if len(ok) == 0:
+            continue
+        j = int(ok[0])
+        rec = {"theta": theta}
+        reg = int(ds["regime"].values[i, j]) if "regime" in ds else -1
+        if j == 0 and reg in (1, 2):
+            # already unstable at the grid's lowest density: nothing to extend
+            rec.update(nu0=float(nus[0]), h=float(ds["h"].values[i, 0]),
+                       nu_mean=float(ds["nu_mean"].values[i, 0]),
+                       alpha2_re=float(ds["alpha2_re"].values[i, 0]),
+                       dU_drho=float(ds["dU_drho"].values[i, 0]),
+                       kind="A" if reg == 1 else "B",
+                       consistent=bool(ds["longwave_consistent"].values[i, 0] != 0)
+                       if "longwave_consistent" in ds else True, how="grid")
+            out.append(rec)
+            continue
+        try:
+            flow = solve_steady(theta, float(nus[j]), model, **kw)
+            how = "grid"
+            if j > 0:
+                lo, hi = float(nus[j - 1]), float(nus[j])  # no flow at lo, flow at hi
+                for _ in range(bisections):
+                    mid = 0.5 * (lo + hi)
+                    try:
+                        flow = solve_steady(theta, mid, model, guess=flow, **kw)
+                        hi = mid
+                        how = "bisection"
+                    except ChuteflowError:
+                        lo = mid
+            else:
+                nu = float(nus[0])
+                for _ in range(halvings):
+                    nu *= 0.5
+                    try:
+                        flow = solve_steady(theta, nu, model, guess=flow, **kw)
+                        how = "below grid"
+                    except ChuteflowError:
+                        break
+            rec.update(nu0=flow.nu0, h=flow.h, nu_mean=flow.nu_mean, how=how)
+            rec.update(_classify_flow(flow, fns))
+        except ChuteflowError as exc:
+            rec.update(nu0=math.nan, kind="error", error=str(exc))
+        out.append(rec)
+    return out
