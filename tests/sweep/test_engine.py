@@ -153,7 +153,7 @@ _KILL_SCRIPT = textwrap.dedent("""
 
 def _kill_config():
     return dict(theta=THETA, nu0=NU0, roughness=0.05, chunk=2,
-                metrics=("steady", {"name": "test_slow", "options": {"seconds": 0.3}}))
+                metrics=({"name": "test_slow", "options": {"seconds": 0.2}},))
 
 
 def test_resume_after_sigkill_equals_uninterrupted(tmp_path):

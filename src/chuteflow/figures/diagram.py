@@ -227,7 +227,8 @@ def _grid_panel(ax, ds):
         reg = ds["regime"].values
         code = np.where(reg == 0, 2, np.where(reg == 1, 3, np.where(reg == 2, 4,
                         np.where(reg == 3, 5, 6))))
-    skipped = np.char.find(ds["message"].values.astype(str), "not attempted") >= 0
+    skipped = (np.char.find(ds["message"].values.astype(str), "not attempted") >= 0
+               if "message" in ds else np.zeros(st.shape, bool))
     code = np.where(st == 1, 0, np.where(skipped, 7, np.where(st >= 2, 1, code)))
     colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd",
                "#f6e0e0"]
