@@ -47,6 +47,9 @@ def reduced(
     nu0: float | None = typer.Option(None, "--nu0",
                                      help="Also give the linear theory at this floor density."),
     tol: float = typer.Option(1e-4, "--tol", help="Interpolation tolerance of F, T̄, a."),
+    nu0_min: float = typer.Option(5e-3, "--nu0-min", help="Lowest floor density of the family."),
+    nu0_max: float | None = typer.Option(None, "--nu0-max",
+                                         help="Highest floor density (default 0.75 ν_m)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     plot: Path | None = typer.Option(None, "--plot", help="Save a figure of the functions."),
 ) -> None:
@@ -60,7 +63,7 @@ def reduced(
     model = _model(roughness, wall_loss, restitution, nu_max)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        rm = reduced_model(theta, model, tol=tol)
+        rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max)
         state = None
         if nu0 is not None:
             state = rm.coefficients(rm.rho_at_nu0(nu0))
@@ -137,6 +140,10 @@ def simulate(
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
     rtol: float = typer.Option(1e-6, "--rtol", help="Time integrator tolerance."),
     snapshots: int = typer.Option(200, "--snapshots", help="Stored snapshots."),
+    nu0_min: float = typer.Option(5e-3, "--nu0-min",
+                                  help="Lowest floor density of the steady family."),
+    nu0_max: float | None = typer.Option(None, "--nu0-max",
+                                         help="Highest floor density (default 0.75 ν_m)."),
     out: Path | None = typer.Option(None, "--out", help="Write the run to this NetCDF file."),
     plot: Path | None = typer.Option(None, "--plot", help="Save the space–time figure."),
     as_json: bool = typer.Option(False, "--json", help="Print a JSON summary."),
@@ -151,12 +158,16 @@ def simulate(
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
 
+    from chuteflow.errors import ParameterError
+
+    if not (math.isfinite(length) and length > 0):  # before the family is built
+        raise ParameterError(f"length = {length!r} must be a positive number of diameters")
     con = Console(stderr=True)
     model = _model(roughness, wall_loss, restitution, nu_max)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         with con.status("building the 1D model from the steady family…"):
-            rm = reduced_model(theta, model)
+            rm = reduced_model(theta, model, tol=1e-4, nu0_min=nu0_min, nu0_max=nu0_max)
         coef = rm.coefficients(rm.rho_at_nu0(nu0))
         if coef.short_wave_unstable:
             con.print("warning: (ρ0 T̄)' < 0 here: the 1D model is unstable at every "
@@ -175,7 +186,7 @@ def simulate(
                      progress=progress, on_exit="stop")
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
-        ds.to_netcdf(out, engine="h5netcdf", invalid_netcdf=True)
+        ds.to_netcdf(out, engine="h5netcdf")
     if plot is not None:
         from chuteflow.figures.reduced import plot_spacetime, save
 

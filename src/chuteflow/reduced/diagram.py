@@ -146,7 +146,7 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     flows = _walk_grid(thetas, nus, model, progress)
     ds = _dataset(thetas, nus, flows, model)
     if out is not None:
-        ds.to_netcdf(out, engine="h5netcdf", invalid_netcdf=True)
+        ds.to_netcdf(out, engine="h5netcdf")
     return ds
 
 

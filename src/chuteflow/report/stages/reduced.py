@@ -147,7 +147,7 @@ def _waves(ctx: StageContext) -> None:
     ds = simulate(rm, L, rho0=coef.rho0, n_cells=N, amplitude=1e-3, n_out=200,
                   on_exit="stop", progress=lambda t, te: ctx.progress(
                       f"density waves, t = {t:.0f} / {te:.0f}"))
-    ds.to_netcdf(ctx.path("waves.nc"), engine="h5netcdf", invalid_netcdf=True)
+    ds.to_netcdf(ctx.path("waves.nc"), engine="h5netcdf")
     png = save(plot_spacetime(ds), ctx.path("waves.png"))
     ctx.report.add_figure(
         png, f"Density waves of the 1D model from noise: θ = {WAVE_THETA:g}°, ν0(0) = "
