@@ -60,7 +60,7 @@ def test_point_status_and_messages():
     cfg = SweepConfig(theta=(13.0,), nu0=(0.1,), metrics=metrics, min_thickness=3.0)
     ds = run_sweep(cfg, workers=1)
     assert ds["status"].values[0, 0] == STATUS["no_steady_flow"]
-    assert ds["message"].values[0, 0].startswith("no steady flow")
+    assert ds["message"].values[0, 0].startswith("steady: no steady flow")
     assert np.isnan(ds["h"].values[0, 0])
     cfg = SweepConfig(theta=(16.0,), nu0=(0.04, 0.05, 0.06, 0.07), metrics=metrics)
     ds = run_sweep(cfg, workers=1)
@@ -268,45 +268,38 @@ def test_tasks_cover_grid_once_and_hash_is_stable():
     assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4).digest() != cfg.digest()
 
 
-def test_anchor_continuation_and_not_attempted(monkeypatch):
-    """Steady flows of a chunk: one cold start at the middle anchor, continuation to both
-    sides until a continued solve fails; points beyond are 'not attempted' (not_converged,
-    with a message), and without any flow at most max_cold cold starts are spent."""
+def test_steady_family_statuses_map_to_point_status(monkeypatch):
+    """The steady flows of a task come from steady_family (continuation in ν0); its statuses
+    become the points' status, its messages their message: no_steady_flow and thin → no
+    steady flow, not_converged → not_converged, unreached → not_converged 'not attempted'."""
     import types
 
     import chuteflow.steady as steady
-    from chuteflow.errors import NoSteadyFlowError
-    from chuteflow.sweep.runner import _anchor_order
 
-    assert _anchor_order(9) == [4, 2, 6, 1, 3, 5, 7, 0, 8]
-    nus = tuple(0.01 * (j + 1) for j in range(9))
-    exists = {0.03, 0.04, 0.05, 0.06}
-    calls = []
+    nus = (0.04, 0.05, 0.06, 0.07, 0.08)
+    fam_status = ["unreached", "no_steady_flow", "ok", "thin", "not_converged"]
+    seen = {}
 
-    def fake(theta, nu0, model, *, guess=None, **kw):
-        calls.append((round(nu0, 6), guess is not None))
-        if round(nu0, 6) in exists:
-            return types.SimpleNamespace(h=nu0, nu0=nu0)
-        raise NoSteadyFlowError(f"none at {nu0:g}")
+    def fake(theta, nu0_values, model, **kw):
+        seen.update(kw, theta=theta, nus=list(nu0_values))
+        ds = xr.Dataset({"status": ("nu0", np.array(fam_status)),
+                         "error": ("nu0", np.array([f"why {s}" for s in fam_status]))})
+        flows = [types.SimpleNamespace(h=1.5) if s == "ok" else None for s in fam_status]
+        return ds, flows
 
-    monkeypatch.setattr(steady, "solve_steady", fake)
-    metrics = ({"name": "test_faulty", "options": {}},)
-    ds = run_sweep(SweepConfig(theta=(16.0,), nu0=nus, metrics=metrics), workers=1)
-    st = ds["status"].values[0]
-    assert list(st[2:6]) == [STATUS["ok"]] * 4
-    assert st[1] == st[6] == STATUS["no_steady_flow"]
-    for j in (0, 7, 8):
-        assert st[j] == STATUS["not_converged"]
-        assert "not attempted" in ds["message"].values[0, j]
-    assert calls[0] == (0.05, False)  # the middle anchor, cold
-    assert sum(not g for _, g in calls) == 1
-    np.testing.assert_allclose(ds["twice_h"].values[0, 2:6], 2 * np.array(nus[2:6]))
-    # no flow anywhere: max_cold cold starts, then nothing
-    calls.clear()
-    exists.clear()
-    ds = run_sweep(SweepConfig(theta=(16.0,), nu0=nus, metrics=metrics, max_cold=2), workers=1)
-    assert calls == [(0.05, False), (0.03, False)]
-    assert (ds["status"].values[0] != STATUS["ok"]).all()
+    monkeypatch.setattr(steady, "steady_family", fake)
+    cfg = SweepConfig(theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},),
+                      min_thickness=0.5, nu_top=1e-10)
+    ds = run_sweep(cfg, workers=1)
+    assert seen["nus"] == list(nus) and seen["theta"] == 16.0
+    assert seen["min_thickness"] == 0.5 and seen["nu_top"] == 1e-10
+    assert seen["return_flows"] is True
+    st, msg = ds["status"].values[0], ds["message"].values[0]
+    assert list(st) == [STATUS["not_converged"], STATUS["no_steady_flow"], STATUS["ok"],
+                        STATUS["no_steady_flow"], STATUS["not_converged"]]
+    assert msg[0] == "steady: not attempted: why unreached"
+    assert msg[1] == "steady: why no_steady_flow" and msg[2] == ""
+    assert ds["twice_h"].values[0, 2] == 3.0 and np.isnan(ds["twice_h"].values[0, [0, 1, 3, 4]]).all()
 
 
 def test_non_critical_metric_failure_keeps_status():

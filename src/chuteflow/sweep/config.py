@@ -118,16 +118,10 @@ class SweepConfig:
         Passed to :func:`~chuteflow.steady.solve_steady`. ``min_thickness`` defaults to 0:
         the diagrams show h < 1 (hatched, paper fig. phase005: "not examined").
     chunk : int, optional
-        Points per task along ν0 (default: the whole θ row). Tasks are computed with
-        continuation in ν0, so results depend on the chunking at round-off level: it is part
-        of the hash and independent of the number of workers.
-    max_cold : int
-        Cold starts per task, at anchors (middle of the chunk, then quartiles, …) until one
-        converges; the steady flows are continued from it to both sides. Points that no
-        continuation reaches are not attempted (status ``not_converged``, with a message):
-        cold starts that fail cost seconds each, continued ones milliseconds.
-    retry_cold : bool
-        If a continued steady solve fails, retry it from the cold start (slower; off).
+        Points per task along ν0 (default: the whole θ row). The steady flows of a task are
+        one :func:`~chuteflow.steady.steady_family` (continuation in ν0), so results depend on
+        the chunking at round-off level: it is part of the hash and independent of the
+        number of workers.
     markers : sequence of (name, theta, nu0)
         Extra points computed with the same point functions and stored on a ``marker``
         dimension (the paper's P1–P5, Q1–Q3; see :data:`DEFAULT_MARKERS`).
@@ -145,8 +139,6 @@ class SweepConfig:
     n_max: int = 384
     min_thickness: float = 0.0
     chunk: int | None = None
-    max_cold: int = 3
-    retry_cold: bool = False
     markers: tuple = ()
 
     def __post_init__(self):
@@ -171,11 +163,6 @@ class SweepConfig:
             if int(self.chunk) < 1:
                 raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
             object.__setattr__(self, "chunk", int(self.chunk))
-        if int(self.max_cold) < 1:
-            raise ParameterError(f"max_cold = {self.max_cold!r}: need at least one cold start "
-                                 "per task")
-        object.__setattr__(self, "max_cold", int(self.max_cold))
-        object.__setattr__(self, "retry_cold", bool(self.retry_cold))
         marks = []
         for mk in self.markers:
             try:
@@ -290,8 +277,7 @@ class SweepConfig:
                 "restitution": self.restitution, "nu_max": self.nu_max,
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
                 "steady_rtol": self.steady_rtol, "n_max": self.n_max,
-                "min_thickness": self.min_thickness, "chunk": self.chunk,
-                "max_cold": self.max_cold, "retry_cold": self.retry_cold, "markers": [list(m) for m in self.markers],
+                "min_thickness": self.min_thickness, "chunk": self.chunk, "markers": [list(m) for m in self.markers],
                 "chuteflow_version": __version__}
 
     def digest(self) -> str:

@@ -46,8 +46,6 @@ class SweepStats:
         Sum of the tasks' own compute times (CPU-bound: ≈ core-seconds).
     max_rss_mib : float
         Largest peak resident memory of any process that computed a task.
-    steady_retries : int
-        Continued steady solves retried from the cold start.
     metric_seconds : dict
         Compute time per point function (``steady``: the steady solves, failed ones
         included), summed over the tasks computed in this run.
@@ -64,7 +62,6 @@ class SweepStats:
     seconds: float = 0.0
     task_seconds: float = 0.0
     max_rss_mib: float = 0.0
-    steady_retries: int = 0
     backend: str = ""
     workers: int = 0
     point_seconds: list = field(default_factory=list, repr=False)
@@ -149,7 +146,6 @@ class Sweep:
             st.computed += 1
             st.task_seconds += res.seconds
             st.max_rss_mib = max(st.max_rss_mib, res.max_rss_kib / 1024.0)
-            st.steady_retries += res.steady_retries
             st.point_seconds.extend(res.point_seconds.tolist())
             for name, sec in res.metric_seconds.items():
                 st.metric_seconds[name] = st.metric_seconds.get(name, 0.0) + sec
@@ -365,10 +361,9 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
         "metrics": " ".join(json.loads(s)["name"] for s in config.metrics),
     })
     for k in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top", "steady_rtol",
-              "n_max", "min_thickness", "max_cold"):
+              "n_max", "min_thickness"):
         ds.attrs[k] = d[k]
     ds.attrs["chunk"] = config.chunk or len(config.nu0)
-    ds.attrs["retry_cold"] = int(config.retry_cold)
     from .classify import classify
     return classify(ds)
 

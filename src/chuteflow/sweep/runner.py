@@ -42,7 +42,6 @@ class TaskResult:
     message: np.ndarray
     seconds: float = 0.0
     max_rss_kib: int = 0
-    steady_retries: int = 0
     point_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     metric_seconds: dict = field(default_factory=dict)
 
@@ -84,111 +83,41 @@ def _coerce(var, value):
     return v
 
 
-def _anchor_order(n: int) -> list[int]:
-    """Cold-start candidates spread over a chunk: middle, quartiles, eighths, …"""
-    order, seen, k = [], set(), 2
-    while len(order) < n and k <= 4 * n:
-        for j in range(1, k, 2):
-            i = min(n - 1, (j * n) // k)
-            if i not in seen:
-                seen.add(i)
-                order.append(i)
-        k *= 2
-    return order + [i for i in range(n) if i not in seen]
+#: steady_family status → sweep status
+_FAMILY_STATUS = {"ok": "ok", "no_steady_flow": "no_steady_flow", "thin": "no_steady_flow",
+                  "not_converged": "not_converged", "unreached": "not_converged"}
 
 
-def _steady_chunk(config, theta: float, nus, model, kw):
-    """Steady flows along one chunk of a θ row by continuation in ν0.
+def _steady_chunk(config, theta: float, nus, model):
+    """Steady flows along one chunk of a θ row: :func:`chuteflow.steady.steady_family`
+    (continuation in ν0 along the exact family tangent, intermediate steps where a step fails,
+    a few spread-out cold starts where there is nothing to continue from).
 
-    Cold starts at anchors (middle of the chunk, then quartiles, …; at most
-    ``config.max_cold``) until one converges; from there the flows are continued to both
-    sides, each point from its converged neighbour (through intermediate densities when the
-    direct step fails). A continued solve that still fails ends that walk (it is retried from
-    the cold start if ``config.retry_cold``). Points beyond are not attempted: failed cold
-    starts cost seconds each, continued ones milliseconds.
-
-    Returns a list over the chunk of (flow or exception or None for not attempted,
-    seconds), and the number of cold retries.
+    Returns a list over the chunk of (flow or None, status name, message).
     """
-    from ..steady import solve_steady
+    from ..steady import steady_family
 
-    n = len(nus)
-    res: list = [None] * n
-    secs = np.zeros(n)
-    tried = [set() for _ in range(n)]
-    retries = 0
-    cold = 0
-
-    def continued(guess, nu):
-        """Solve at nu from the converged neighbour ``guess``; when that fails, walk there
-        through 1, then 3 intermediate densities (a step too long for Newton is the usual
-        reason, not the absence of a flow)."""
-        try:
-            return solve_steady(theta, nu, model, guess=guess, **kw)
-        except (NoSteadyFlowError, ConvergenceError) as exc:
-            first = exc
-        for parts in (2, 4):
-            cur = guess
-            try:
-                for q in range(1, parts):
-                    cur = solve_steady(theta, guess.nu0 + (nu - guess.nu0) * q / parts, model,
-                                       guess=cur, **kw)
-                return solve_steady(theta, nu, model, guess=cur, **kw)
-            except (NoSteadyFlowError, ConvergenceError):
-                continue
-        raise first
-
-    def attempt(j, guess, tag):
-        nonlocal retries
-        tried[j].add(tag)
-        t0 = time.perf_counter()
-        try:
-            try:
-                out = (continued(guess, nus[j]) if guess is not None
-                       else solve_steady(theta, nus[j], model, **kw))
-            except (NoSteadyFlowError, ConvergenceError):
-                if guess is None or not config.retry_cold:
-                    raise
-                retries += 1
-                out = solve_steady(theta, nus[j], model, **kw)
-        except Exception as exc:  # noqa: BLE001 - the point's outcome
-            out = exc
-        secs[j] += time.perf_counter() - t0
-        if res[j] is None or not isinstance(out, Exception):
-            res[j] = out
-
-    def ok(j):
-        return res[j] is not None and not isinstance(res[j], Exception)
-
-    order = _anchor_order(n)
-    while True:
-        walked = True
-        while walked:
-            walked = False
-            for j in range(1, n):
-                if not ok(j) and ok(j - 1) and "below" not in tried[j]:
-                    attempt(j, res[j - 1], "below")
-                    walked = True
-            for j in range(n - 2, -1, -1):
-                if not ok(j) and ok(j + 1) and "above" not in tried[j]:
-                    attempt(j, res[j + 1], "above")
-                    walked = True
-        if cold >= config.max_cold or any(ok(j) for j in range(n)):
-            break
-        # no flow yet: next anchor, spread out over the chunk
-        cand = [j for j in order if res[j] is None]
-        if not cand:
-            break
-        cold += 1
-        attempt(cand[0], None, "cold")
-    return list(zip(res, secs)), retries
+    fam, flows = steady_family(theta, list(nus), model, nu_top=config.nu_top,
+                               rtol=config.steady_rtol, n_max=config.n_max,
+                               min_thickness=config.min_thickness, tangent=False,
+                               return_flows=True)
+    out = []
+    for k, flow in enumerate(flows):
+        st = str(fam["status"].values[k])
+        msg = str(fam["error"].values[k]) if "error" in fam else ""
+        if st == "unreached":
+            msg = f"steady: not attempted: {msg}"
+        elif st != "ok":
+            msg = f"steady: {msg}"
+        out.append((flow, _FAMILY_STATUS.get(st, "error"), "" if st == "ok" else msg))
+    return out
 
 
 def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     """Compute every point of ``task`` (see :class:`~chuteflow.sweep.config.Task`).
 
-    Steady flows come from :func:`_steady_chunk` (anchors and continuation along ν0; each
-    marked point from its own cold start). Errors at a point become its status and message;
+    Steady flows come from :func:`_steady_chunk` (continuation along ν0; each marked point
+    from its own cold start). Errors at a point become its status and message;
     nothing here raises for a single point.
     """
     from ..steady import solve_steady
@@ -207,7 +136,6 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     pt_seconds = np.zeros(m)
     model = config.model()
     marker = task.i < 0
-    retries = 0
     msec = {"steady": 0.0}
     kw = dict(nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max,
               min_thickness=config.min_thickness)
@@ -215,45 +143,38 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         # overflow in trial Newton steps is expected and handled by the solvers
         warnings.simplefilter("ignore", RuntimeWarning)
+        t0 = time.perf_counter()
         if marker:
             # marked points are unrelated: each from the cold start
             pts = [(config.markers[j][1], config.markers[j][2]) for j in range(task.j0, task.j1)]
             steady = []
             for th, nu in pts:
-                t0 = time.perf_counter()
                 try:
-                    out = solve_steady(th, nu, model, **kw)
+                    steady.append((solve_steady(th, nu, model, **kw), "ok", ""))
+                except NoSteadyFlowError as exc:
+                    steady.append((None, "no_steady_flow", str(exc)))
+                except ConvergenceError as exc:
+                    steady.append((None, "not_converged", f"steady: {exc}"))
                 except Exception as exc:  # noqa: BLE001
-                    out = exc
-                steady.append((out, time.perf_counter() - t0))
+                    steady.append((None, "error", f"steady: {type(exc).__name__}: {exc}"))
         else:
             th = config.theta[task.i]
             pts = [(th, config.nu0[j]) for j in range(task.j0, task.j1)]
-            steady, retries = _steady_chunk(config, th, [p[1] for p in pts], model, kw)
+            try:
+                steady = _steady_chunk(config, th, [p[1] for p in pts], model)
+            except Exception as exc:  # noqa: BLE001 - the whole chunk failed
+                steady = [(None, "error", f"steady: {type(exc).__name__}: {exc}")] * len(pts)
+        msec["steady"] += time.perf_counter() - t0
+        # the steady solves of a chunk are shared: spread their time evenly
+        pt_seconds[:] = (time.perf_counter() - t0) / max(m, 1)
         for k, j in enumerate(range(task.j0, task.j1)):
             theta, nu0 = pts[k]
-            flow, t_steady = steady[k]
-            msec["steady"] += t_steady
-            pt_seconds[k] = t_steady
-            t0 = time.perf_counter()
+            flow, st_name, msg = steady[k]
             point = Point(task.i, j, theta, nu0)
             if flow is None:
-                status[k] = STATUS["not_converged"]
-                messages[k] = _clip(
-                    "steady: not attempted: beyond a failed continuation, or no flow at the "
-                    f"cold-start anchors of this chunk of the theta = {theta:g} row (max_cold = "
-                    f"{config.max_cold})")
+                status[k], messages[k] = STATUS[st_name], _clip(msg)
                 continue
-            if isinstance(flow, NoSteadyFlowError):
-                status[k], messages[k] = STATUS["no_steady_flow"], _clip(flow)
-                continue
-            if isinstance(flow, ConvergenceError):
-                status[k], messages[k] = STATUS["not_converged"], _clip(f"steady: {flow}")
-                continue
-            if isinstance(flow, Exception):
-                status[k] = STATUS["error"]
-                messages[k] = _clip(f"steady: {type(flow).__name__}: {flow}")
-                continue
+            t0 = time.perf_counter()
             for f in fns:
                 tm = time.perf_counter()
                 try:
@@ -284,11 +205,11 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                 finally:
                     msec[f.name] = msec.get(f.name, 0.0) + time.perf_counter() - tm
             if point.notes:
-                messages[k] = _clip("; ".join([m for m in [messages[k]] if m] + point.notes))
+                messages[k] = _clip("; ".join([x for x in [messages[k]] if x] + point.notes))
             pt_seconds[k] += time.perf_counter() - t0
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return TaskResult(key=task.key, digest=config.digest(), i=task.i, j0=task.j0, j1=task.j1,
                       values=values, status=status, message=np.array(messages, dtype=str),
                       seconds=time.perf_counter() - t_start, max_rss_kib=int(rss),
-                      steady_retries=retries, point_seconds=pt_seconds, metric_seconds=msec)
+                      point_seconds=pt_seconds, metric_seconds=msec)
 
