@@ -88,7 +88,9 @@ def regimes(unstable, dU, h, nu_mean):
     density decreases, and their flows slow down as they get lighter all the way (A, small h);
     contours right of it end with h → ∞ in the B-type flows that get faster as they get
     lighter, and the denser-faster instability at the dense end of those contours is C. So a
-    θ row is of the A kind when its least dense flow has dU/dρ̄0 ≥ 0. Each connected region
+    θ row is of the A kind when its least dense flow has dU/dρ̄0 ≥ 0; the rows are then split
+    at the one θ (the separatrix) that agrees with the most rows, because a row whose least
+    dense flows were not found would look A-kind (θ ascending). Each connected region
     (4-neighbour grid connectivity) of denser-faster unstable points takes the kind of the
     majority of its points, so that the label does not flicker near the separatrix.
     """
@@ -102,10 +104,17 @@ def regimes(unstable, dU, h, nu_mean):
     isB = known & (unstable == 1) & (dU < 0)
     out[isB] = REGIMES["B"]
     faster = known & (unstable == 1) & (dU >= 0)
-    row_A = np.zeros(unstable.shape[0], dtype=bool)
+    # kind of each row from its least dense flow (+1: A kind, −1: B kind, 0: no flow); a row
+    # whose low-density flows were not found can look A-kind, so the kinds are reduced to one
+    # separatrix in θ (contours below it end at h → 0, §3.2) that misplaces the fewest rows
+    raw = np.zeros(unstable.shape[0], dtype=int)
     for i in range(unstable.shape[0]):
         js = np.nonzero(np.isfinite(dU[i]))[0]
-        row_A[i] = len(js) > 0 and dU[i, js[0]] >= 0
+        if len(js):
+            raw[i] = 1 if dU[i, js[0]] >= 0 else -1
+    cost = [int((raw[:t] == -1).sum() + (raw[t:] == 1).sum()) for t in range(len(raw) + 1)]
+    split = int(np.argmin(cost))
+    row_A = np.arange(len(raw)) < split
     kindA = np.broadcast_to(row_A[:, None], unstable.shape)
     labels, nlab = ndimage.label(faster)
     for lab in range(1, nlab + 1):
