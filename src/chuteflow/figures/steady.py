@@ -29,7 +29,8 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
         A map from :func:`chuteflow.steady.steady_map` (dims theta, nu0).
     ax : matplotlib Axes, optional
     label_every : int, optional
-        Label every k-th θ line (default: about eight labels).
+        Label every k-th drawn θ line (default 2). At most ~14 rows are drawn as lines
+        (every k-th row of a finer map); the grey region uses every row.
     h_max : float, optional
         Upper limit of the h axis (default 50, as far as the paper's figures go).
     """
@@ -47,13 +48,17 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
         if tri is not None:
             nonmono = np.where(valid, 1.0 - np.nan_to_num(ds.monotonic.values, nan=1.0), 0.0)
             ax.tricontourf(tri, nonmono.ravel(), levels=[0.5, 1.5], colors=["0.8"])
-    k = label_every or max(1, len(thetas) // 8)
+    # at most ~14 lines (a fine map is shaded from every row but drawn every k-th row)
+    stride = max(1, -(-len(thetas) // 14))
+    k = label_every or 2
+    drawn = 0
     for i, th in enumerate(thetas):
         ok = valid[i]
-        if ok.sum() < 2:
+        if ok.sum() < 2 or i % stride:
             continue
         ax.plot(h[i, ok], nb[i, ok], "k-", lw=0.7)
-        if i % k == 0:
+        drawn += 1
+        if (drawn - 1) % k == 0:
             j = np.nonzero(ok)[0][-1]
             ax.annotate(f"{th:g}°", (h[i, j], nb[i, j]), fontsize=7, xytext=(2, 2),
                         textcoords="offset points")
