@@ -7,6 +7,7 @@ end (y = y_max).
 from __future__ import annotations
 
 import functools
+from functools import cached_property
 
 import numpy as np
 from scipy.fft import dct
@@ -69,8 +70,12 @@ class ChebyshevGrid:
         half = 0.5 * (self.b - self.a)
         self.y = self.a + half * (x + 1.0)
         self.D = D / half
-        self.D2 = self.D @ self.D
         self.weights = w * half
+
+    @cached_property
+    def D2(self) -> np.ndarray:
+        """Second-derivative matrix (built on first use: O(n³))."""
+        return self.D @ self.D
 
     def __len__(self):
         return self.n + 1

@@ -112,9 +112,7 @@ class ChuteModel:
         out, it = {}, iter(flat)
         shape = np.broadcast(nu, T).shape
         for name in FUNCTIONS:
-            # identically-zero partials come back as Python ints: make every entry a float array
-            out[name] = {o: np.broadcast_to(np.asarray(next(it), dtype=float), shape)
-                         for o in ORDERS}
+            out[name] = {o: _as_float(next(it), shape) for o in ORDERS}
         return out
 
     def f(self, nu) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -135,6 +133,12 @@ class ChuteModel:
         d = asdict(self)
         d["radial"] = self.radial.name
         return d
+
+
+def _as_float(v, shape):
+    """Float array of ``shape``: identically-zero partials come back as Python ints."""
+    v = np.asarray(v, dtype=float)
+    return v if v.shape == shape else np.broadcast_to(v, shape)
 
 
 def _check(name, value, lo, hi, *, lo_open=False, why=""):
