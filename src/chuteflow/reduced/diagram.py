@@ -77,8 +77,8 @@ def reduced_diagram_config(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_
 
 
 def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=None,
-                    nu0_range=None, engine: str = "walk", out=None, workers: int | None = 1,
-                    progress=None, full: bool = False, model=None):
+                    nu0_range=None, grid=None, engine: str = "walk", out=None,
+                    workers: int | None = 1, progress=None, full: bool = False, model=None):
     """The 1D model's stability over a (θ, ν0(0)) grid (figure phaseoned), as a Dataset.
 
     Parameters
@@ -89,6 +89,9 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
         Grid (n_theta, n_nu0).
     theta_range, nu0_range : (float, float), optional
         Grid ranges (default: the full-model diagrams' ranges for this φ).
+    grid : (sequence, sequence), optional
+        Walk engine: explicit θ and ν0(0) values (increasing) instead of ``shape`` and the
+        ranges — e.g. those of a full-model diagram, for a point-by-point comparison.
     engine : {"walk", "sweep"}
         ``"walk"`` (default, fast): each θ row by continuation along ν0 from a seed (the row
         before, or a cold start), stopping a direction at its first failure — the existence
@@ -132,17 +135,26 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     if not math.isclose(model.roughness, roughness):
         raise ParameterError(f"model.roughness = {model.roughness:g} differs from roughness = "
                              f"{roughness:g}")
-    dt, dn = default_ranges(roughness)
-    tr = tuple(theta_range) if theta_range is not None else dt
-    nr = tuple(nu0_range) if nu0_range is not None else dn
-    nt, nn = (int(x) for x in shape)
-    if nt < 1 or nn < 2:
-        raise ParameterError(f"shape = {shape!r}: need n_theta >= 1 and n_nu0 >= 2")
+    if grid is not None:
+        thetas, nus = (np.asarray(g, dtype=float).ravel() for g in grid)
+        if (len(thetas) < 1 or len(nus) < 2 or np.any(np.diff(thetas) <= 0)
+                or np.any(np.diff(nus) <= 0)):
+            raise ParameterError("grid: need increasing theta values and at least two "
+                                 "increasing nu0 values")
+        tr, nr = (thetas[0], thetas[-1]), (nus[0], nus[-1])
+    else:
+        dt, dn = default_ranges(roughness)
+        tr = tuple(theta_range) if theta_range is not None else dt
+        nr = tuple(nu0_range) if nu0_range is not None else dn
+        nt, nn = (int(x) for x in shape)
+        if nt < 1 or nn < 2:
+            raise ParameterError(f"shape = {shape!r}: need n_theta >= 1 and n_nu0 >= 2")
     if not (0 < tr[0] <= tr[1] < 90 and 0 < nr[0] < nr[1] < model.nu_max):
         raise ParameterError(f"theta_range = {tr!r}, nu0_range = {nr!r}: need 0 < theta < 90 "
                              f"degrees and 0 < nu0 < nu_max = {model.nu_max:g}, low < high")
-    thetas = np.round(np.linspace(tr[0], tr[1], nt), 12)
-    nus = np.round(np.linspace(nr[0], nr[1], nn), 12)
+    if grid is None:
+        thetas = np.round(np.linspace(tr[0], tr[1], nt), 12)
+        nus = np.round(np.linspace(nr[0], nr[1], nn), 12)
     flows = _walk_grid(thetas, nus, model, progress)
     ds = _dataset(thetas, nus, flows, model)
     if out is not None:
