@@ -156,7 +156,7 @@ def _marker_regimes(ds, reg):
 
 
 def regime_summary(ds) -> dict:
-    """Per regime: number of grid points and median (h, ν̄), θ range; for reports."""
+    """Per regime: number of grid points, median (h, ν̄), largest ν̄, θ range; for reports."""
     out = {}
     if "regime" not in ds:
         return out
@@ -170,6 +170,7 @@ def regime_summary(ds) -> dict:
         out[name] = {"points": int(sel.sum()),
                      "h_median": float(np.median(ds["h"].values[sel])),
                      "nu_mean_median": float(np.median(ds["nu_mean"].values[sel])),
+                     "nu_mean_max": float(np.max(ds["nu_mean"].values[sel])),
                      "theta_min": float(T[sel].min()), "theta_max": float(T[sel].max())}
         if "monotonic" in ds:
             out[name]["monotonic_fraction"] = float(np.mean(ds["monotonic"].values[sel] == 1))

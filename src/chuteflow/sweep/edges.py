@@ -5,8 +5,8 @@ will encounter either the regime A or the regime B". On a grid, the least dense 
 θ row lies up to one grid step above the end of the contour (where the layer collapses, h → 0)
 or at the grid's lowest ν0 (where h grows without bound). :func:`row_ends` goes further along
 each contour by continuation from the row's least dense grid flow: bisection towards the first
-failed density below it, or halving ν0 below the grid, and classifies the last flow reached
-with the sweep's own point functions.
+failed density below it, or a family at ν0 halved repeatedly below the grid, and classifies the
+least dense flow reached with the sweep's own point functions.
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ def _classify_flow(flow, fns):
             "consistent": bool(v.get("longwave_consistent", True))}
 
 
-def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 3):
+def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     """Least dense flow reached on each θ row and its stability (A, B or stable).
 
     Parameters
@@ -46,7 +46,8 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 3):
     bisections : int
         Bisection steps towards the failed density below the least dense grid flow.
     halvings : int
-        Halvings of ν0 below the grid when the row's least dense flow is at its lowest ν0.
+        When the row's least dense grid flow is at the grid's lowest ν0 and stable: the
+        contour is followed down to ν0_min / 2^halvings (steady family, continuation).
 
     Returns
     -------
@@ -57,7 +58,7 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 3):
     """
     import json
 
-    from ..steady import solve_steady
+    from ..steady import solve_steady, steady_family
     from .config import SweepConfig
 
     cfg = SweepConfig.from_dict(json.loads(ds.attrs["config_json"]))
@@ -103,14 +104,14 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 3):
                     except ChuteflowError:
                         lo = mid
             else:
-                nu = float(nus[0])
-                for _ in range(halvings):
-                    nu *= 0.5
-                    try:
-                        flow = solve_steady(theta, nu, model, guess=flow, **kw)
-                        how = "below grid"
-                    except ChuteflowError:
-                        break
+                # below the grid: the family at ν0 = ν0_min / 2^q, q = halvings … 1, by
+                # continuation down from the grid's least dense flow
+                below = [float(nus[0]) * 0.5 ** q for q in range(halvings, 0, -1)]
+                _, flows = steady_family(theta, below + [float(nus[0])], model,
+                                         tangent=False, return_flows=True, **kw)
+                lowest = next((f for f in flows if f is not None), None)
+                if lowest is not None and lowest.nu0 < flow.nu0:
+                    flow, how = lowest, "below grid"
             rec.update(nu0=flow.nu0, h=flow.h, nu_mean=flow.nu_mean, how=how)
             rec.update(_classify_flow(flow, fns))
         except ChuteflowError as exc:

@@ -6,7 +6,7 @@ from ..registry import StageContext, register_stage
 
 #: (n_theta, n_nu0) per roughness. Quick: coarse (the regimes are a few grid points each);
 #: full: the benchmark's 60 × 60.
-QUICK_SHAPE = {0.05: (9, 10), 0.10: (9, 10)}
+QUICK_SHAPE = {0.05: (11, 12), 0.10: (11, 12)}
 FULL_SHAPE = {0.05: (60, 60), 0.10: (60, 60)}
 #: Rows whose least dense flow is followed beyond the grid (every row in full mode).
 QUICK_ROW_STEP = 2
