@@ -48,18 +48,28 @@ def test_agreement_rejects_foreign_grids_and_missing_variables():
         agreement(full, full)
 
 
-def test_walk_diagram_values_are_the_local_coefficients():
+@pytest.fixture(scope="module")
+def tiny():
+    """The same 2 × 3 diagram from both engines."""
+    kw = dict(shape=(2, 3), theta_range=(15.0, 16.0), nu0_range=(0.05, 0.15))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return {e: reduced_diagram(0.05, engine=e, **kw) for e in ("sweep", "walk")}
+
+
+@pytest.mark.parametrize("engine", ["sweep", "walk"])
+def test_diagram_values_are_the_local_coefficients(tiny, engine):
     from chuteflow.closures import ChuteModel
     from chuteflow.steady import solve_steady
 
+    ds = tiny[engine]
+    assert (ds["status"].values == 0).all()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        ds = reduced_diagram(0.05, shape=(2, 3), theta_range=(15.0, 16.0),
-                             nu0_range=(0.05, 0.15))
-        assert (ds["status"].values == 0).all()
         f = solve_steady(16.0, 0.1, ChuteModel())
     c = local_coefficients(f)
     i, j = 1, 1
+    # both engines converge every flow to rtol 1e-8 between resolutions
     assert ds["rho_bar"].values[i, j] == pytest.approx(f.rho_bar, rel=1e-7)
     assert ds["r1d_margin"].values[i, j] == pytest.approx(c.criterion_margin, rel=1e-5)
     assert ds["r1d_unstable"].values[i, j] == int(c.unstable)
@@ -68,10 +78,19 @@ def test_walk_diagram_values_are_the_local_coefficients():
     assert ds["r1d_unstable"].values[1, 0] == 1 and ds["r1d_short_wave"].values[1, 0] == 1
 
 
+def test_engines_agree(tiny):
+    a, b = tiny["sweep"], tiny["walk"]
+    for v in ("h", "nu_mean", "r1d_margin", "r1d_alpha2", "r1d_dq0"):
+        assert np.allclose(a[v].values, b[v].values, rtol=1e-5), v
+    assert np.array_equal(a["r1d_unstable"].values, b["r1d_unstable"].values)
+
+
 def test_bad_diagram_arguments():
     with pytest.raises(ParameterError, match="engine"):
         reduced_diagram(0.05, engine="magic")
     with pytest.raises(ParameterError, match="full"):
-        reduced_diagram(0.05, full=True)
+        reduced_diagram(0.05, engine="walk", full=True)
     with pytest.raises(ParameterError, match="shape"):
         reduced_diagram(0.05, shape=(1, 1))
+    with pytest.raises(ParameterError, match="grid"):
+        reduced_diagram(0.05, grid=([16.0], [0.2, 0.1]))

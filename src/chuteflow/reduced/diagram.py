@@ -64,73 +64,77 @@ class Reduced1D(PointFunction):
 
 
 def reduced_diagram_config(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=None,
-                           nu0_range=None, full: bool = False, **kw) -> SweepConfig:
+                           nu0_range=None, grid=None, full: bool = False,
+                           **kw) -> SweepConfig:
     """Sweep configuration of a 1D diagram (``full=True``: with the full model's long-wave
     stability too, for a point-by-point comparison on the same grid).
 
-    Ranges default to those of the full-model diagrams (:func:`chuteflow.sweep.default_ranges`).
+    ``grid = (theta values, nu0 values)`` gives the grid explicitly; otherwise ``shape``
+    points over the ranges, which default to those of the full-model diagrams
+    (:func:`chuteflow.sweep.default_ranges`). Other keywords go to :class:`SweepConfig`.
     """
     metrics = ["steady", "kinematic", "longwave"] if full else ["steady"]
     metrics.append(Reduced1D())
+    kw.setdefault("markers", ())
+    if grid is not None:
+        th, nu = (tuple(float(v) for v in np.asarray(g, dtype=float).ravel()) for g in grid)
+        return SweepConfig(theta=th, nu0=nu, roughness=roughness, metrics=tuple(metrics), **kw)
     return SweepConfig.grid(roughness, shape=tuple(shape), theta_range=theta_range,
                             nu0_range=nu0_range, metrics=tuple(metrics), **kw)
 
 
 def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=None,
-                    nu0_range=None, grid=None, engine: str = "walk", out=None,
-                    workers: int | None = 1, progress=None, full: bool = False, model=None):
+                    nu0_range=None, grid=None, engine: str = "sweep", out=None,
+                    workers: int | None = 1, progress=None, full: bool = False, model=None,
+                    fresh: bool = False):
     """The 1D model's stability over a (θ, ν0(0)) grid (figure phaseoned), as a Dataset.
 
     Parameters
     ----------
     roughness : float
-        Floor roughness φ (other closure parameters: ``model``, paper defaults otherwise).
+        Floor roughness φ.
     shape : (int, int)
         Grid (n_theta, n_nu0).
     theta_range, nu0_range : (float, float), optional
         Grid ranges (default: the full-model diagrams' ranges for this φ).
     grid : (sequence, sequence), optional
-        Walk engine: explicit θ and ν0(0) values (increasing) instead of ``shape`` and the
-        ranges — e.g. those of a full-model diagram, for a point-by-point comparison.
-    engine : {"walk", "sweep"}
-        ``"walk"`` (default, fast): each θ row by continuation along ν0 from a seed (the row
-        before, or a cold start), stopping a direction at its first failure — the existence
-        band of a row is an interval of ν0, and failed steady solves at its edges are what
-        costs time. ``"sweep"``: the sweep engine (every point attempted, workers,
-        persistence to ``out``, resume; ``full=True`` adds the full model's criterion).
+        Explicit θ and ν0(0) values (increasing) instead of ``shape`` and the ranges — e.g.
+        those of a full-model diagram, for a point-by-point comparison.
+    engine : {"sweep", "walk"}
+        ``"sweep"`` (default): the sweep engine of :mod:`chuteflow.sweep` (continuation along
+        rows from anchors, workers, persistence to ``out`` and resume; ``full=True`` adds the
+        full model's criterion). ``"walk"``: a minimal driver without the sweep engine — each
+        θ row by continuation along ν0 from a seed (the row before, or a cold start),
+        stopping a direction at its first failure; kept as a cross-check.
     out : path, optional
         NetCDF file to write (sweep engine: also to resume from).
     workers : int, optional
-        Sweep engine only: worker processes.
+        Sweep engine only: worker processes (1: this process; None: all cores).
     progress : callable, optional
         ``progress(message, advance=n, total=N)``.
     full : bool
         Sweep engine only: also compute the full model's long-wave criterion.
     model : ChuteModel, optional
-        Walk engine only: closure parameters (its ``roughness`` must equal ``roughness``).
+        Closure parameters other than the roughness (paper defaults); its ``roughness``
+        must equal ``roughness``.
+    fresh : bool
+        Sweep engine: discard saved results of another configuration at ``out``.
 
     Returns
     -------
     xarray.Dataset
         Over (theta, nu0): ``h``, ``nu_mean``, ``rho_bar``, ``monotonic`` (1/0/−1),
-        ``status`` (0 steady flow, 1 none found), and the ``r1d_*`` variables of
-        :class:`Reduced1D`; with ``full`` also ``unstable`` of the full model.
+        ``status`` (0 steady flow, > 0 none found or not converged), and the ``r1d_*``
+        variables of :class:`Reduced1D`; with ``full`` also ``unstable`` of the full model.
     """
-    if engine == "sweep":
-        from ..sweep import classify
-
-        cfg = reduced_diagram_config(roughness, shape=shape, theta_range=theta_range,
-                                     nu0_range=nu0_range, full=full)
-        ds = run_sweep(cfg, out, workers=workers, progress=progress or False)
-        return classify(ds) if full else ds
-    if engine != "walk":
-        raise ParameterError(f"engine = {engine!r}: choose 'walk' or 'sweep'")
-    if full:
-        raise ParameterError("full = True needs engine = 'sweep' (the full model's stability "
-                             "is a sweep metric)")
+    from ..closures import ChuteModel
     from ..sweep import default_ranges
 
-    from ..closures import ChuteModel
+    if engine not in ("sweep", "walk"):
+        raise ParameterError(f"engine = {engine!r}: choose 'sweep' or 'walk'")
+    if full and engine != "sweep":
+        raise ParameterError("full = True needs engine = 'sweep' (the full model's stability "
+                             "is a sweep metric)")
     model = model or ChuteModel(roughness=roughness)
     if not math.isclose(model.roughness, roughness):
         raise ParameterError(f"model.roughness = {model.roughness:g} differs from roughness = "
@@ -155,6 +159,14 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     if grid is None:
         thetas = np.round(np.linspace(tr[0], tr[1], nt), 12)
         nus = np.round(np.linspace(nr[0], nr[1], nn), 12)
+    if engine == "sweep":
+        from ..sweep import classify
+
+        cfg = reduced_diagram_config(roughness, grid=(thetas, nus), full=full,
+                                     wall_loss=model.wall_loss,
+                                     restitution=model.restitution, nu_max=model.nu_max)
+        ds = run_sweep(cfg, out, workers=workers, progress=progress or False, fresh=fresh)
+        return classify(ds) if full else ds
     flows = _walk_grid(thetas, nus, model, progress)
     ds = _dataset(thetas, nus, flows, model)
     if out is not None:

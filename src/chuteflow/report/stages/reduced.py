@@ -56,7 +56,7 @@ def _diagrams(ctx: StageContext) -> None:
             grid = (full["theta"].values[::step], full["nu0"].values[::step])
             shape = (len(grid[0]), len(grid[1]))
         ctx.progress(f"1D diagram φ = {phi:g} ({shape[0]}×{shape[1]})")
-        ds = reduced_diagram(phi, shape=shape, grid=grid,
+        ds = reduced_diagram(phi, shape=shape, grid=grid, fresh=True,
                              out=ctx.path(f"reduced_diagram_phi{phi:g}.nc"))
         agr = None
         if full is not None and "unstable" in full:
@@ -202,7 +202,28 @@ def _waves(ctx: StageContext) -> None:
                  f"{a14[0]:.2g} → {a14[-1]:.2g} at t = {float(st['t'][-1]):.4g} "
                  f"({st.attrs['status']})",
         passed=bool(not c14.unstable and a14[-1] < 1e-3 * a14[0]))
+    _lc_check(ctx, rm, coef, simulate)
     _md_check(ctx, rm)
+
+
+def _lc_check(ctx: StageContext, rm, coef, simulate) -> None:
+    """A periodic slope shorter than L_c = 2π/k_c stays uniform, a longer one grows waves."""
+    out = {}
+    for f in (0.8, 1.25):
+        L = f * coef.L_c
+        ds = simulate(rm, L, rho0=coef.rho0, n_cells=128, mode=1, amplitude=1e-3,
+                      t_end=400.0, n_out=41)
+        a = ds["amplitude"].values
+        out[f] = (L, a[-1] / a[0], float(ds["growth_discrete"].values[0]))
+    ok = out[0.8][1] < 1e-2 and out[1.25][1] > 1e2
+    ctx.report.check(
+        "reduced.L_c_simulation", source="label condition (ERRATA 4), §5.2",
+        statement="Waves grow only on slopes longer than the critical length L_c = 2π/k_c.",
+        computed=f"θ = {rm.theta:g}°, ν0(0) = {coef.F:.3g}, L_c = {coef.L_c:.4g}σ: at L = "
+                 f"{out[0.8][0]:.3g}σ (0.8 L_c) the amplitude changes ×{out[0.8][1]:.2g} by "
+                 f"t = 400 (longest mode Re α = {out[0.8][2]:.3g}); at L = {out[1.25][0]:.3g}σ "
+                 f"(1.25 L_c) ×{out[1.25][1]:.2g} (Re α = {out[1.25][2]:.3g})",
+        passed=bool(ok))
 
 
 def _md_check(ctx: StageContext, rm) -> None:
