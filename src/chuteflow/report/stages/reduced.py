@@ -186,10 +186,11 @@ def _waves(ctx: StageContext) -> None:
         ctx.report.add_note(
             "No saturated wave: the wave steepens into a cluster whose density leaves the range "
             "of the steady family (the closures F, T̄ of the 1D model exist only there) — "
-            f"{ds.attrs['left_family']}. The same happens at every unstable state tried (θ = "
-            "14°, 15°, 16° at φ = 0.05; 20°, 21° at φ = 0.10; near threshold too): the "
-            "instability grows with density along the family, and (ρ̄T̄)' < 0 at high density "
-            "removes the pressure that could arrest the cluster.")
+            f"{ds.attrs['left_family']}. In development runs the same happened at every unstable "
+            "state tried (θ = 14°, 15°, 16° at φ = 0.05; 20°, 21° at φ = 0.10; near the "
+            "threshold too, and on grids fine enough to resolve the fronts): the instability "
+            "grows with density along the family, and (ρ̄T̄)' < 0 at high (or, for θ ≥ 15°, "
+            "low) density removes the pressure that could arrest a cluster or a void.")
     # a stable state decays
     rm14 = reduced_model(14.0, ChuteModel(), nu0_min=0.06, nu0_max=0.16)
     c14 = rm14.coefficients(rm14.rho_at_nu0(0.1))
