@@ -223,6 +223,9 @@ def plot_spacetime(ds, *, profiles: int = 3):
     ax.set_title("wave profiles", fontsize=10)
     fig.suptitle(f"1D model, θ = {ds.attrs['theta']:g}°, φ = {ds.attrs['roughness']:g}, "
                  f"ρ₀ = {rho0:.4g} (ν₀(0) = {ds.attrs['nu0']:.4g}), L = {ds.attrs['length']:g}, "
-                 f"N = {ds.attrs['n_cells']}; L_c = {ds.attrs['L_c']:.4g}", fontsize=11)
+                 f"N = {ds.attrs['n_cells']}; " +
+                 ("(ρ̄T̄)′ < 0: every k grows, no L_c"
+                  if str(ds.attrs.get("short_wave_unstable")) == "True"
+                  else f"L_c = {ds.attrs['L_c']:.4g}"), fontsize=11)
     fig.tight_layout()
     return fig
