@@ -37,6 +37,17 @@ def test_agreement_counts_on_a_sub_grid():
     assert a["only_1d_unstable"] == 0 and a["both_stable"] == 0
 
 
+def test_agreement_leaves_out_thin_layers():
+    th, nu = np.array([12.0, 13.0]), np.array([0.1, 0.2])
+    full = _full(th, nu, [[1, 0], [0, 1]])
+    red = _red(th, nu, [[0, 0], [0, 1]])
+    red["h"] = (("theta", "nu0"), np.array([[0.5, 3.0], [4.0, 5.0]]))
+    a = agreement(red, full)  # h < 1 not examined (paper, fig phase005)
+    assert a["compared"] == 3 and a["thin_excluded"] == 1 and a["fraction"] == 1.0
+    b = agreement(red, full, h_min=0)
+    assert b["compared"] == 4 and b["only_full_unstable"] == 1
+
+
 def test_agreement_rejects_foreign_grids_and_missing_variables():
     th, nu = np.array([12.0, 13.0]), np.array([0.1, 0.2])
     full = _full(th, nu, [[1, 0], [0, 1]])

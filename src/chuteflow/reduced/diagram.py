@@ -306,20 +306,23 @@ def _grid_match(a, b):
     return best
 
 
-def agreement(reduced_ds, full_ds, *, full_var: str = "unstable") -> dict:
+def agreement(reduced_ds, full_ds, *, full_var: str = "unstable", h_min: float = 1.0) -> dict:
     """Fraction of grid points classified alike by the 1D model and the full model.
 
     Compares ``r1d_unstable`` of ``reduced_ds`` with ``full_var`` (a 0/1 flag, −1 or NaN
     missing; default ``unstable``, Re α2 > 0, from :func:`chuteflow.sweep.classify`) of
     ``full_ds`` at the (θ, ν0) points the two grids share (the 1D grid may be a sub-grid).
-    Only points where both are known count.
+    Only points where both are known count, and only flows with thickness h ≥ ``h_min``
+    (paper, fig phase005: "the region of h < 1 … was not examined … physically
+    unacceptable"; needs ``h`` in ``reduced_ds``; 0 compares all).
 
     Returns
     -------
     dict
         ``fraction`` (agreeing / compared), ``compared``, ``agree``, and the confusion counts
         ``both_unstable``, ``both_stable``, ``only_1d_unstable``, ``only_full_unstable``;
-        ``short_wave`` (compared points where the 1D model is unstable at every k).
+        ``short_wave`` (compared points where the 1D model is unstable at every k);
+        ``thin_excluded`` (points left out for h < ``h_min``).
     """
     if "r1d_unstable" not in reduced_ds:
         raise ParameterError("reduced_ds: no variable 'r1d_unstable' (a 1D diagram from "
@@ -337,6 +340,11 @@ def agreement(reduced_ds, full_ds, *, full_var: str = "unstable") -> dict:
     sw = reduced_ds["r1d_short_wave"].values.astype(float) if "r1d_short_wave" in reduced_ds \
         else np.zeros_like(r)
     known = (r >= 0) & np.isfinite(r) & (f >= 0) & np.isfinite(f)
+    thin = np.zeros_like(known)
+    if h_min > 0 and "h" in reduced_ds:
+        h = reduced_ds["h"].values
+        thin = known & np.isfinite(h) & (h < h_min)
+        known &= ~thin
     rb, fb = r[known] == 1, f[known] == 1
     n = int(known.sum())
     agree = int((rb == fb).sum())
@@ -344,4 +352,4 @@ def agreement(reduced_ds, full_ds, *, full_var: str = "unstable") -> dict:
             "both_unstable": int((rb & fb).sum()), "both_stable": int((~rb & ~fb).sum()),
             "only_1d_unstable": int((rb & ~fb).sum()),
             "only_full_unstable": int((~rb & fb).sum()),
-            "short_wave": int((sw[known] == 1).sum())}
+            "short_wave": int((sw[known] == 1).sum()), "thin_excluded": int(thin.sum())}

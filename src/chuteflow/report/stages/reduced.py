@@ -97,7 +97,8 @@ def _diagrams(ctx: StageContext) -> None:
                          f"{n_full} unstable points of the full model ({100 * recall:.0f} %) and "
                          f"calls {agr['only_1d_unstable']} of its {n_stable} "
                          f"stable points unstable ({agr['short_wave']} compared points have "
-                         "(ρ̄T̄)' < 0)",
+                         f"(ρ̄T̄)' < 0); {agr['thin_excluded']} points with h < 1 left out "
+                         "(not examined in the paper)",
                 passed=bool(recall >= 0.9), detail=str(agr))
     png = save(plot_phase_diagrams(reds, [f for f in fulls if f is not None] or None,
                                    agreement=agrs if any(agrs) else None),
