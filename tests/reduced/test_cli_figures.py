@@ -78,7 +78,7 @@ def test_phase_diagram_figure_with_full_model(tmp_path):
     full = xr.Dataset({**base, "unstable": (("theta", "nu0"), (T > 15.0).astype(np.int8))},
                       coords={"theta": th, "nu0": nu}, attrs={"roughness": 0.05})
     from chuteflow.reduced import agreement
-    a = agreement(red, full)
+    a = agreement(red, full, h_min=0)
     assert a["compared"] == 20 and a["only_1d_unstable"] == 5
     png = save(plot_phase_diagrams([red], [full], agreement=[a]), tmp_path / "pd.png")
     assert png.stat().st_size > 10_000
