@@ -50,10 +50,9 @@ def _diagrams(ctx: StageContext) -> None:
         full = _full_diagram(ctx, phi)
         grid = None
         if full is not None:
-            # the full model's grid (at quick every other point if it is large): compare
-            # point by point
-            step = 2 if ctx.quick and full["h"].size > 120 else 1
-            grid = (full["theta"].values[::step], full["nu0"].values[::step])
+            # the full model's own grid, point by point (a sub-grid leaves too few unstable
+            # points at quick for a fraction to mean anything)
+            grid = (full["theta"].values, full["nu0"].values)
             shape = (len(grid[0]), len(grid[1]))
         ctx.progress(f"1D diagram φ = {phi:g} ({shape[0]}×{shape[1]})")
         ds = reduced_diagram(phi, shape=shape, grid=grid, fresh=True,
