@@ -54,7 +54,8 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     list of dict
         Per row: ``theta``, ``nu0`` (of the least dense flow reached), ``h``, ``nu_mean``,
         ``alpha2_re``, ``dU_drho``, ``kind`` ("A", "B", "stable"), ``consistent`` (long-wave
-        sign cross-check), ``how`` (grid / bisection / below grid), and ``error`` if none.
+        sign cross-check), ``how`` ("grid", "bisection", "below grid", or "grid, no flow found
+        below": the contour could not be followed below the grid), and ``error`` if none.
     """
     import json
 
@@ -112,6 +113,8 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
                 lowest = next((f for f in flows if f is not None), None)
                 if lowest is not None and lowest.nu0 < flow.nu0:
                     flow, how = lowest, "below grid"
+                else:
+                    how = "grid, no flow found below"
             rec.update(nu0=flow.nu0, h=flow.h, nu_mean=flow.nu_mean, how=how)
             rec.update(_classify_flow(flow, fns))
         except ChuteflowError as exc:
