@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import ParameterError
 from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
-from .store import ConfigMismatchError, PartStore
+from .store import ConfigMismatchError, PartStore, atomic_target
 
 __all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset",
            "markers"]
@@ -372,18 +372,8 @@ def write_dataset(ds, path) -> Path:
     """Write ``ds`` to NetCDF (h5netcdf) atomically: a temporary file, then ``os.replace``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    import tempfile
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_target(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf", invalid_netcdf=False)
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
     return path
 
 
