@@ -111,10 +111,8 @@ def run(quick: bool = False) -> list[dict]:
 
 
 def main(argv=None):
-    quick = "--quick" in (argv if argv is not None else sys.argv[1:])
-    for row in run(quick):
-        print(f"{row['name']:22s} {row['seconds']:9.4f} s  baseline {row['baseline_seconds']:9.3f} s"
-              f"  ratio {row['ratio']:7.1f}  {row['note']}")
+    from run import print_table  # the harness's table, when run as a script from benchmarks/
+    print_table(run("--quick" in (argv if argv is not None else sys.argv[1:])))
 
 
 if __name__ == "__main__":
