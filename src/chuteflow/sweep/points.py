@@ -146,6 +146,7 @@ class PointFunction:
     def spec(self) -> dict:
         """JSON-ready description (name, version, options): what the configuration hashes."""
         return {"name": self.name, "version": str(self.version),
+                "module": type(self).__module__,
                 "options": {k: _plain(v) for k, v in sorted(self.options.items())}}
 
     def compute(self, flow, point: Point) -> Mapping[str, Any]:
@@ -202,6 +203,11 @@ def point_function(spec) -> PointFunction:
         name, options = spec, {}
     elif isinstance(spec, Mapping):
         name, options = spec.get("name"), dict(spec.get("options", {}))
+        if name not in _REGISTRY and spec.get("module"):
+            # a point function defined above this layer (e.g. chuteflow.reduced) registers
+            # on import: a fresh worker (spawn, Dask) learns of it from the spec's module
+            import importlib
+            importlib.import_module(str(spec["module"]))
     else:
         raise ParameterError(f"metrics: cannot make a point function from {spec!r}")
     try:
