@@ -157,3 +157,12 @@ def test_python_dash_m(tmp_path):
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert "reproduce" in result.stdout
+
+
+def test_cli_model_defaults_are_the_model_defaults():
+    """The CLI's model-option defaults equal ChuteModel's (paper §2: e_p 0.7, ν_m 0.6, φ 0.05, Φ 0.39)."""
+    from chuteflow.cli._app import MODEL_OPTIONS
+    from chuteflow.closures import ChuteModel
+
+    m = ChuteModel()
+    assert {k: v[0] for k, v in MODEL_OPTIONS.items()} == {k: getattr(m, k) for k in MODEL_OPTIONS}

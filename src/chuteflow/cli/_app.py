@@ -62,3 +62,19 @@ def _root(
                                  is_eager=True, help="Show the version and exit."),
 ) -> None:
     """chuteflow: steady chute flows, linear stability, stability diagrams."""
+
+
+#: CLI defaults and help of the model parameters (the same as ChuteModel's defaults, which
+#: tests/cli/test_cli.py checks; kept here so ``chuteflow --help`` need not import sympy).
+MODEL_OPTIONS: dict[str, tuple[float, str]] = {
+    "roughness": (0.05, "Floor roughness φ (eq:bc1, etastar)."),
+    "wall_loss": (0.39, "Floor energy loss Φ (eq:bc2, gammastar)."),
+    "restitution": (0.7, "Particle restitution coefficient e_p."),
+    "nu_max": (0.6, "Maximum packing ν_m of g0(ν)."),
+}
+
+
+def model_option(name: str):
+    """The typer option ``--<name>`` of a model parameter, with its default and help."""
+    default, text = MODEL_OPTIONS[name]
+    return typer.Option(default, "--" + name.replace("_", "-"), help=text)

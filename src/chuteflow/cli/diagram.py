@@ -6,7 +6,7 @@ from typing import Optional
 
 import typer
 
-from ._app import app
+from ._app import app, model_option
 
 
 def _default_out(roughness: float) -> Path:
@@ -15,16 +15,16 @@ def _default_out(roughness: float) -> Path:
 
 @app.command("diagram")
 def diagram(
-    roughness: float = typer.Option(0.05, "--roughness", help="Floor roughness φ."),
+    roughness: float = model_option("roughness"),
     grid: str = typer.Option("60x60", "--grid", help="Grid size N_THETAxN_NU0."),
     theta_range: Optional[tuple[float, float]] = typer.Option(
         None, "--theta-range", metavar="LOW HIGH",
         help="Inclination range in degrees (default: where the paper's flows exist)."),
     nu0_range: Optional[tuple[float, float]] = typer.Option(
         None, "--nu0-range", metavar="LOW HIGH", help="Floor density ν0(0) range."),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help="Floor energy loss Φ."),
-    restitution: float = typer.Option(0.7, "--restitution", help="Restitution e_p."),
-    nu_max: float = typer.Option(0.6, "--nu-max", help="Maximum packing ν_m."),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     metrics: Optional[str] = typer.Option(
         None, "--metrics", help="Comma-separated point functions (default: steady,"
         "kinematic,longwave,growth)."),

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import typer
 
-from ._app import app
+from ._app import app, model_option
 
 #: Per-point keys of ``chuteflow reduced --json`` (``points``: the family's knots, exact).
 POINT_KEYS = ("nu0", "rho0", "F", "Tbar", "a", "U", "dU", "dP", "mu_bar", "q0", "dq0",
@@ -40,10 +40,10 @@ def _point(c, nu0=None):
 @app.command("reduced")
 def reduced(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
-    roughness: float = typer.Option(0.05, "--roughness", help="Floor roughness φ."),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help="Floor energy loss Φ."),
-    restitution: float = typer.Option(0.7, "--restitution", help="Restitution e_p."),
-    nu_max: float = typer.Option(0.6, "--nu-max", help="Maximum packing ν_m."),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu0: float | None = typer.Option(None, "--nu0",
                                      help="Also give the linear theory at this floor density."),
     tol: float = typer.Option(1e-4, "--tol", help="Interpolation tolerance of F, T̄, a."),
@@ -129,10 +129,10 @@ def simulate(
     time: float | None = typer.Option(None, "--time",
                                       help="Final time (default: until saturation, decay "
                                            "or leaving the steady family)."),
-    roughness: float = typer.Option(0.05, "--roughness", help="Floor roughness φ."),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help="Floor energy loss Φ."),
-    restitution: float = typer.Option(0.7, "--restitution", help="Restitution e_p."),
-    nu_max: float = typer.Option(0.6, "--nu-max", help="Maximum packing ν_m."),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     cells: int | None = typer.Option(None, "--cells", help="Grid cells (default: automatic)."),
     mode: int | None = typer.Option(None, "--mode",
                                     help="Start from this discrete eigenmode instead of noise."),

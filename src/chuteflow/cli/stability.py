@@ -19,7 +19,7 @@ from typing import Optional
 
 import typer
 
-from ._app import app
+from ._app import app, model_option
 
 #: Keys of ``eig --json`` (and of ``mode --json``), besides the nested ``steady`` summary.
 EIG_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "nu_top", "k",
@@ -156,10 +156,10 @@ def eig(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
     k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ) of exp(αt + ikx)."),
-    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
-    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
-    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
     n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
                                     "adaptive, from 80 up until drift and tail < 1e-7)."),
@@ -187,10 +187,10 @@ def dispersion_cmd(
     nu0: float = _opt_nu0(),
     k_max: float = typer.Option(0.02, "--k-max", help="Largest wavenumber (1/σ)."),
     num: int = typer.Option(50, "--num", help="Number of wavenumbers on [0, k_max]."),
-    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
-    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
-    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
     n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
     strict: bool = typer.Option(True, "--strict/--no-strict", help="Fail when a point does not "
@@ -294,10 +294,10 @@ def _kc_line(k_c, found, s, k_max):
 def longwave_cmd(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
-    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
-    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
-    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
     n: int = typer.Option(200, "--n", help="Starting Chebyshev resolution N."),
     rtol: float = typer.Option(0.01, "--rtol", help="Accepted relative change of α2 between "
@@ -357,10 +357,10 @@ def mode_cmd(
     nu0: float = _opt_nu0(),
     k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ), > 0."),
     plot: Path = typer.Option(..., "--plot", help="Eigenfunction figure (PNG)."),
-    roughness: float = typer.Option(0.05, "--roughness", help=_MODEL_HELP["roughness"]),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help=_MODEL_HELP["wall_loss"]),
-    restitution: float = typer.Option(0.7, "--restitution", help=_MODEL_HELP["restitution"]),
-    nu_max: float = typer.Option(0.6, "--nu-max", help=_MODEL_HELP["nu_max"]),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
     n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
                                     "adaptive)."),

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import typer
 
-from ._app import app
+from ._app import app, model_option
 
 #: Keys of the JSON output, in order (the summary of :class:`~chuteflow.steady.SteadyFlow`).
 JSON_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
@@ -25,10 +25,10 @@ _ROWS = (("u_floor", "slip velocity u0(0)", ".8g"), ("T_floor", "floor temperatu
 def steady(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
     nu0: float = typer.Option(..., "--nu0", help="Floor packing fraction ν0(0)."),
-    roughness: float = typer.Option(0.05, "--roughness", help="Floor roughness φ."),
-    wall_loss: float = typer.Option(0.39, "--wall-loss", help="Floor energy loss Φ."),
-    restitution: float = typer.Option(0.7, "--restitution", help="Restitution e_p."),
-    nu_max: float = typer.Option(0.6, "--nu-max", help="Maximum packing ν_m."),
+    roughness: float = model_option("roughness"),
+    wall_loss: float = model_option("wall_loss"),
+    restitution: float = model_option("restitution"),
+    nu_max: float = model_option("nu_max"),
     nu_top: float = typer.Option(1e-9, "--nu-top",
                                  help="Density where the domain ends (paper: 1e-9)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
