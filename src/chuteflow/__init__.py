@@ -10,12 +10,8 @@ numerics. ``ChuteModel`` and ``solve_steady`` are resolved on first access.
 from __future__ import annotations
 
 from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
 
-try:
-    __version__: str = version("chuteflow")
-except PackageNotFoundError:  # running from a source tree (PYTHONPATH=src)
-    __version__ = "0.1.0"
+from ._version import __version__
 
 #: Public names resolved lazily: name -> module that defines it.
 _LAZY = {
