@@ -97,10 +97,13 @@ def cache_dir() -> Path | None:
         if env.strip().lower() in _DISABLED:
             return None
         return Path(env).expanduser()
-    xdg = os.environ.get("XDG_CACHE_HOME")
-    base = Path(xdg).expanduser() if xdg and os.path.isabs(os.path.expanduser(xdg)) \
-        else Path.home() / ".cache"
-    return base / "chuteflow"
+    xdg = os.path.expanduser(os.environ.get("XDG_CACHE_HOME", ""))
+    if os.path.isabs(xdg):  # the XDG spec ignores relative paths
+        return Path(xdg) / "chuteflow"
+    try:
+        return Path.home() / ".cache" / "chuteflow"
+    except RuntimeError:  # no home folder: no disk cache
+        return None
 
 
 def lazy_module(name: str) -> types.ModuleType:
@@ -171,7 +174,10 @@ def _source_modules(objs: Iterable[Any]) -> set[str]:
 
 
 def _source_digest(module: str) -> str | None:
-    mod = sys.modules.get(module) or importlib.import_module(module)
+    try:
+        mod = sys.modules.get(module) or importlib.import_module(module)
+    except ImportError:
+        return None
     path = getattr(mod, "__file__", None)
     if not path:
         return None
@@ -242,7 +248,10 @@ def cached_lambdify(name: str, key: str,
     else:
         material = json.dumps({"name": name, "key": key, "uncached": True})
         digest = hashlib.sha256(material.encode()).hexdigest()
-    text = _generate(name, material, digest, build_exprs, cse)
+    try:
+        text = _generate(name, material, digest, build_exprs, cse)
+    except _NotReproducible as exc:  # code that only lambdify's own namespace can run
+        return GeneratedCode(exc.functions, exc.data, digest, None)
     if path is not None:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -254,6 +263,14 @@ def cached_lambdify(name: str, key: str,
             if loaded is not None:
                 return loaded
     return _from_namespace(_exec(text, f"<chuteflow generated {name}>"), digest, None)
+
+
+class _NotReproducible(Exception):
+    """The generated code needs names that the cached module's namespace lacks."""
+
+    def __init__(self, functions, data):
+        super().__init__("generated code not reproducible outside sympy.lambdify")
+        self.functions, self.data = functions, data
 
 
 def _safe(name: str) -> str:
@@ -310,21 +327,24 @@ def _generate(name, material, digest, build_exprs, cse) -> str:
              "# Delete this file (or the whole folder) to derive the code again.",
              f"KEY = {digest!r}", f"MATERIAL = {material!r}", f"DATA = {data!r}",
              f"FUNCTIONS = {defnames!r}", _PRELUDE]
+    lambdified, reproducible = {}, True
     for fname, item in spec.items():
         args, exprs = item[0], item[1]
         fcse = item[2] if len(item) > 2 else cse
         f = sp.lambdify(tuple(args), list(exprs), modules="numpy", cse=fcse)
+        lambdified[fname] = f
         src = inspect.getsource(f)
         head = "def _lambdifygenerated("
-        if not src.startswith(head):
-            raise RuntimeError(f"{name}: unexpected lambdify output")
-        _check_names(f, prelude, name)
+        reproducible = reproducible and src.startswith(head) and _same_names(f, prelude)
         parts.append(f"def {defnames[fname]}(" + src[len(head):])
+    if not reproducible:
+        raise _NotReproducible(lambdified, data)
     return "\n".join(parts) + "\n"
 
 
-def _check_names(f, prelude, name) -> None:
-    """Every global the generated code uses means the same here as in lambdify's namespace."""
+def _same_names(f, prelude) -> bool:
+    """Whether every global the generated code uses means the same in the cached module's
+    namespace as in lambdify's."""
     names: set[str] = set()
     stack = [f.__code__]
     while stack:
@@ -339,8 +359,8 @@ def _check_names(f, prelude, name) -> None:
         theirs = glob[n]
         if mine is not theirs and not (isinstance(theirs, (int, float, complex))
                                        and mine == theirs):
-            raise RuntimeError(f"{name}: generated code uses {n!r}, which the cached "
-                               "module's namespace does not reproduce")
+            return False
+    return True
 
 
 def _literal(text: str):
