@@ -190,3 +190,13 @@ def test_fresh_processes_cold_and_warm_agree_and_warm_needs_no_sympy(cache):
     warm = run()
     assert cold.pop("sympy") is True and warm.pop("sympy") is False
     assert cold == warm
+
+
+def test_old_generated_modules_are_pruned(cache, monkeypatch):
+    paths = [cached_lambdify("test", f"k{i}", _exprs).path for i in range(6)]
+    for i, p in enumerate(paths):
+        os.utime(p, (1000.0 + i, 1000.0 + i))  # distinct ages, oldest first
+    monkeypatch.setattr(_codegen, "KEEP", 3)
+    newest = cached_lambdify("test", "k6", _exprs).path
+    left = set((cache / "codegen").glob("test-*.py"))
+    assert newest in left and len(left) == 3 and paths[0] not in left

@@ -259,6 +259,7 @@ def cached_lambdify(name: str, key: str,
         except OSError:
             pass
         else:
+            _prune(path.parent, _safe(name), keep=path)
             loaded = _load(path, digest)
             if loaded is not None:
                 return loaded
@@ -271,6 +272,25 @@ class _NotReproducible(Exception):
     def __init__(self, functions, data):
         super().__init__("generated code not reproducible outside sympy.lambdify")
         self.functions, self.data = functions, data
+
+
+#: Generated modules kept per derivation name (older ones belong to edited sources or
+#: other versions; the oldest beyond this number are deleted when a new one is written).
+KEEP = 16
+
+
+def _prune(folder: Path, stem: str, keep: Path) -> None:
+    """Delete all but the :data:`KEEP` most recent modules named ``stem-*.py`` (best effort)."""
+    try:
+        files = sorted(folder.glob(f"{stem}-*.py"), key=lambda p: p.stat().st_mtime,
+                       reverse=True)
+        for old in files[KEEP:]:
+            if old != keep:
+                old.unlink(missing_ok=True)
+                for pyc in (folder / "__pycache__").glob(old.stem + ".*"):
+                    pyc.unlink(missing_ok=True)
+    except OSError:
+        pass
 
 
 def _safe(name: str) -> str:
