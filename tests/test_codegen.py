@@ -200,3 +200,36 @@ def test_old_generated_modules_are_pruned(cache, monkeypatch):
     newest = cached_lambdify("test", "k6", _exprs).path
     left = set((cache / "codegen").glob("test-*.py"))
     assert newest in left and len(left) == 3 and paths[0] not in left
+
+
+_CLI = textwrap.dedent("""
+    import io, json, sys, contextlib
+    from chuteflow.cli import main
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(sys.argv[1:])
+    heavy = sorted(m for m in ("sympy", "matplotlib", "xarray", "dask", "pandas", "h5py")
+                   if m in sys.modules)
+    print(json.dumps({"rc": rc, "heavy": heavy}))
+""")
+
+
+@pytest.fixture(scope="module")
+def shared_cache(tmp_path_factory):
+    return tmp_path_factory.mktemp("cache")
+
+
+@pytest.mark.parametrize("argv", [
+    ["steady", "--theta", "16", "--nu0", "0.05", "--json"],
+    ["eig", "--theta", "16", "--nu0", "0.05", "--k", "0.002", "--json"],
+])
+def test_warm_cli_imports_no_heavy_modules(argv, shared_cache):
+    """A fresh ``chuteflow steady`` / ``eig`` with a warm cache loads neither sympy nor the
+    plotting and data-set libraries (start-up in a fraction of a second)."""
+    env = dict(os.environ, CHUTEFLOW_CACHE_DIR=str(shared_cache),
+               PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+    for _ in range(2):  # the first run fills the cache if it is cold
+        res = subprocess.run([sys.executable, "-c", _CLI, *argv], env=env,
+                             capture_output=True, text=True, timeout=600, check=True)
+    out = json.loads(res.stdout.strip().splitlines()[-1])
+    assert out == {"rc": 0, "heavy": []}

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import functools
 import hashlib
 import importlib
 import importlib.util
@@ -127,6 +128,7 @@ class _LazyModule(types.ModuleType):
         return value
 
 
+@functools.lru_cache(maxsize=None)
 def _package_version(dist: str) -> str:
     mod = sys.modules.get(dist)
     if mod is not None and isinstance(getattr(mod, "__version__", None), str):
