@@ -7,7 +7,6 @@ import os
 import subprocess
 import sys
 import textwrap
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -104,8 +103,13 @@ def test_corrupt_cache_file_is_rederived_and_repaired(cache):
     first = cached_lambdify("test", "k1", _exprs)
     for damage in ("def f(:\n", "KEY = 'other'\nDATA = None\nFUNCTIONS = {}\n", ""):
         first.path.write_text(damage)
-        calls = []
-        again = cached_lambdify("test", "k1", lambda: calls.append(1) or _exprs())
+        calls: list[int] = []
+
+        def build(calls=calls):
+            calls.append(1)
+            return _exprs()
+
+        again = cached_lambdify("test", "k1", build)
         assert calls == [1] and again.path == first.path
         assert again["g"](np.array([4.0]))[0][0] == 2.5 / 8.0
         assert cached_lambdify("test", "k1", _never).path == first.path  # repaired

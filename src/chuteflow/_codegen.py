@@ -211,7 +211,8 @@ def cache_key(name: str, key: str, sources: Iterable[Any] = ()) -> tuple[str, st
 
 
 def cached_lambdify(name: str, key: str,
-                    build_exprs: Callable[[], Mapping[str, tuple] | tuple[Mapping[str, tuple], Any]],
+                    build_exprs: Callable[[], Mapping[str, tuple]
+                                          | tuple[Mapping[str, tuple], Any]],
                     *, sources: Iterable[Any] = (), cse: bool = True) -> GeneratedCode:
     """Numeric functions of derived sympy expressions, from the disk cache when possible.
 
@@ -278,7 +279,7 @@ class _NotReproducible(Exception):
 
 #: Generated modules kept per derivation name (older ones belong to edited sources or
 #: other versions; the oldest beyond this number are deleted when a new one is written).
-KEEP = 16
+KEEP = 32
 
 
 def _prune(folder: Path, stem: str, keep: Path) -> None:
