@@ -8,8 +8,9 @@ or Dask worker). :func:`cached_lambdify` therefore writes the Python source code
 a hash of
 
 * the caller's description of what is derived (e.g. the ``repr`` of the closure objects),
-* the source files of the modules that state the expressions (so that editing a closure or
-  an equation invalidates the cache without a version change),
+* the source files of the modules that state the expressions, and of this module (so that
+  editing a closure, an equation or the generator invalidates the cache without a version
+  change),
 * the chuteflow and sympy versions and the format of the generated module.
 
 A later process with the same key loads the module (Python keeps its bytecode next to it)
@@ -199,7 +200,7 @@ def cache_key(name: str, key: str, sources: Iterable[Any] = ()) -> tuple[str, st
     if re.search(r" at 0x[0-9a-fA-F]+", key):
         return None
     digests = {}
-    for mod in sorted(_source_modules(sources)):
+    for mod in sorted(_source_modules(sources) | {__name__}):  # this generator, too
         d = _source_digest(mod)
         if d is None:
             return None
