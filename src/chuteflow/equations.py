@@ -29,8 +29,8 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-import sympy as sp
 
+from . import _codegen
 from .closures.model import FUNCTIONS, ORDERS
 
 FIELDS = ("nu", "u", "v", "w", "T")
@@ -40,7 +40,13 @@ BASE = ("nu", "nu_y", "nu_yy", "u", "u_y", "u_yy", "T", "T_y", "T_yy")
 BULK = ("mass", "xmom", "ymom", "zmom", "energy")
 FLOOR = ("floor_v", "floor_x", "floor_z", "floor_energy")
 
-_SIN, _COS = sp.symbols("sin_theta cos_theta", real=True)
+#: sympy, imported on first use: a process whose generated code is cached never needs it.
+sp = _codegen.lazy_module("sympy")
+
+
+def _gravity_symbols():
+    """Symbols sin θ and cos θ of the gravity vector (sympy caches equal symbols)."""
+    return sp.symbols("sin_theta cos_theta", real=True)
 
 
 def jet(field: str, t: int = 0, x: int = 0, y: int = 0, z: int = 0) -> sp.Symbol:
@@ -91,7 +97,8 @@ def governing_equations() -> dict[str, sp.Expr]:
     Sigma = [[(F["p"] - F["zeta"] * div if i == j else 0) - 2 * F["mu"] * S[i][j]
               for j in range(3)] for i in range(3)]
     q = [-F["kappa"] * D(T, a) for a in sp_axes]
-    g = (_SIN, -_COS, sp.S.Zero)
+    sin_theta, cos_theta = _gravity_symbols()
+    g = (sin_theta, -cos_theta, sp.S.Zero)
 
     def material(fld):  # ∂_t f + u·∇f
         return D(fld, "t") + sum(vel[j] * D(fld, sp_axes[j]) for j in range(3))
@@ -175,7 +182,24 @@ def _args(base, partials, s, c):
 
 @functools.lru_cache(maxsize=None)
 def compiled_equations() -> dict[str, CompiledEquation]:
-    """Derive (once per process) and lambdify every equation's residual and coefficients."""
+    """Every equation's residual and coefficients as numeric functions (once per process).
+
+    Derived from :func:`governing_equations` by :func:`_derive_compiled`; the generated code
+    is cached on disk (:func:`chuteflow._codegen.cached_lambdify`, keyed by this module's and
+    the closure model's source), so a fresh process loads it instead of deriving again.
+    """
+    code = _codegen.cached_lambdify("equations", "compiled_equations", _derive_compiled,
+                                    sources=(__name__, "chuteflow.closures.model"))
+    return {name: CompiledEquation(name, tuple(Term(*t) for t in terms), code[name])
+            for name, terms in code.data}
+
+
+def _derive_compiled():
+    """Residual and nonzero coefficients of each equation at a y-dependent base state.
+
+    Returns ``({equation: (args, [residual, coefficients ...])}, ((equation, terms), ...))``
+    with each term as the fields of :class:`Term`.
+    """
     eqs = governing_equations()
     sub, base_syms = _base_substitution()
     psyms, repl = _partial_symbols()
@@ -189,8 +213,8 @@ def compiled_equations() -> dict[str, CompiledEquation]:
                 continue
             zero_jets[s] = sp.S.Zero
     args = [base_syms[b] for b in BASE] + [psyms[(n, o)] for n in FUNCTIONS for o in ORDERS]
-    args += [_SIN, _COS]
-    out = {}
+    args += list(_gravity_symbols())
+    spec, data = {}, []
     for name, R in eqs.items():
         jets = sorted((s for s in R.free_symbols if _is_jet(s)), key=lambda s: s.name)
         exprs = [R]
@@ -207,10 +231,9 @@ def compiled_equations() -> dict[str, CompiledEquation]:
         keep = [i for i, e in enumerate(at_base[1:]) if e != 0]
         terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j) for j, t in
                       enumerate(terms[i] for i in keep))
-        fun = sp.lambdify(args, [at_base[0]] + [at_base[1 + i] for i in keep],
-                          modules="numpy", cse=True)
-        out[name] = CompiledEquation(name, terms, fun)
-    return out
+        spec[name] = (args, [at_base[0]] + [at_base[1 + i] for i in keep])
+        data.append((name, tuple((t.field, t.a, t.b, t.c, t.d, t.index) for t in terms)))
+    return spec, tuple(data)
 
 
 def base_state(nu, u, T, D1, D2) -> dict[str, np.ndarray]:

@@ -92,3 +92,15 @@ def test_cli_errors_are_one_line(tmp_path, capsys):
     assert main(["diagram", "--grid", "2x2", "--nu0-range", "0.05", "0.9",
                  "--out", str(tmp_path / "y.nc")]) == 2
     assert "nu0" in capsys.readouterr().err
+
+
+def test_plot_of_a_file_that_is_not_netcdf_is_one_line(tmp_path, capsys):
+    """``chuteflow plot`` on a text file, a folder or an unrelated NetCDF file: a one-line
+    error naming the file and why (no HDF5 traceback)."""
+    text = tmp_path / "notes.nc"
+    text.write_text("not a NetCDF file\n")
+    for path, why in ((text, "is not a NetCDF-4 file"), (tmp_path, "is a directory")):
+        assert main(["plot", str(path)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith(f"error: file: {path} ") and why in err and err.count("\n") == 1
+        assert "Traceback" not in err

@@ -118,7 +118,28 @@ def plot(
     from chuteflow.figures.diagram import save_diagram
     from chuteflow.sweep import load_sweep
 
-    ds = load_sweep(file)
+    ds = _load_for_plot(file, load_sweep)
     path = save_diagram(ds, out or file.with_suffix(".png"), h_max=h_max, nu_max=nu_max,
                         grid_panel=grid_panel)
     typer.echo(str(path))
+
+
+def _load_for_plot(file: Path, load_sweep):
+    """``load_sweep(file)``, with a one-line :class:`ParameterError` naming the file if it
+    is not a NetCDF-4 file that can be read (instead of the HDF5 library's traceback)."""
+    from chuteflow.errors import ParameterError
+
+    if file.is_dir():
+        raise ParameterError(f"file: {file} is a directory, not a NetCDF file written by "
+                             "chuteflow diagram")
+    try:
+        return load_sweep(file)
+    except ParameterError:
+        raise
+    except (OSError, ValueError) as exc:
+        why = " ".join(str(exc).split()) or type(exc).__name__
+        why = why.removeprefix("Unable to synchronously open file ").strip("() ")
+        if isinstance(exc, PermissionError):
+            raise ParameterError(f"file: {file} cannot be read ({why})") from None
+        raise ParameterError(f"file: {file} is not a NetCDF-4 file written by chuteflow "
+                             f"diagram ({why})") from None

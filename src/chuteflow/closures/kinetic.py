@@ -11,9 +11,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import sympy as sp
-
+from .._codegen import lazy_module
 from .radial import LunSavage, RadialDistribution
+
+sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
 
 
 def lun_functions(nu, e, nu_max, g0):

@@ -14,8 +14,8 @@ import math
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-import sympy as sp
 
+from .._codegen import cached_lambdify, lazy_module
 from ..errors import ParameterError
 from .kinetic import LunClosure
 from .radial import RADIAL_FUNCTIONS, LunSavage, RadialDistribution
@@ -28,26 +28,39 @@ FUNCTIONS = TRANSPORT + FLOOR
 #: Partial-derivative orders (i, j) meaning ∂^i/∂ν^i ∂^j/∂T^j, up to second order.
 ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
 
-_NU, _T, _E, _NUM, _PHI, _PHIW = sp.symbols("nu T e nu_m phi Phi", positive=True)
+sp = lazy_module("sympy")  # only needed to derive code that is not cached yet
 
 
 @functools.lru_cache(maxsize=None)
 def _compiled(closure: LunClosure, wall: JohnsonJackson):
-    """Lambdify all partials of all functions, and f1 … f7 with two ν-derivatives."""
-    fs = closure.functions(_NU, _E, _NUM)
-    exprs = dict(closure.transport(_NU, _T, _E, _NUM))
-    exprs.update(wall.terms(fs, _T, _PHI, _PHIW))
+    """Numeric functions of all partials of all functions, and f1 … f7 with two ν-derivatives.
+
+    Returns ``(partials, f, g0, names of f)``. The derivation (:func:`_derive`) is symbolic;
+    its generated code is cached on disk keyed by the closure objects' ``repr`` and the
+    source of the modules stating them (:func:`chuteflow._codegen.cached_lambdify`), so a
+    fresh process loads it instead of deriving again.
+    """
+    code = cached_lambdify("closure", repr((closure, wall)), lambda: _derive(closure, wall),
+                           sources=(__name__, closure, wall))
+    return code["partials"], code["f"], code["g0"], list(code.data)
+
+
+def _derive(closure, wall):
+    """Sympy expressions of :func:`_compiled`: {name: (args, exprs[, cse])}, names of f."""
+    nu, T, e, num, phi, phiw = sp.symbols("nu T e nu_m phi Phi", positive=True)
+    fs = closure.functions(nu, e, num)
+    exprs = dict(closure.transport(nu, T, e, num))
+    exprs.update(wall.terms(fs, T, phi, phiw))
     flat = []
     for name in FUNCTIONS:
         for i, j in ORDERS:
-            flat.append(sp.diff(exprs[name], _NU, i, _T, j) if (i or j) else exprs[name])
-    args = (_NU, _T, _E, _NUM, _PHI, _PHIW)
-    partials = sp.lambdify(args, flat, modules="numpy", cse=True)
-    fflat = [sp.diff(fs[k], _NU, n) for k in sorted(fs) for n in range(3)]
-    ffun = sp.lambdify((_NU, _E, _NUM), fflat, modules="numpy", cse=True)
-    g0 = closure.radial.expr(_NU, _NUM)
-    gfun = sp.lambdify((_NU, _NUM), [g0, sp.diff(g0, _NU), sp.diff(g0, _NU, 2)], modules="numpy")
-    return partials, ffun, gfun, sorted(fs)
+            flat.append(sp.diff(exprs[name], nu, i, T, j) if (i or j) else exprs[name])
+    fflat = [sp.diff(fs[k], nu, n) for k in sorted(fs) for n in range(3)]
+    g0 = closure.radial.expr(nu, num)
+    spec = {"partials": ((nu, T, e, num, phi, phiw), flat),
+            "f": ((nu, e, num), fflat),
+            "g0": ((nu, num), [g0, sp.diff(g0, nu), sp.diff(g0, nu, 2)], False)}
+    return spec, tuple(sorted(fs))
 
 
 @dataclass(frozen=True)

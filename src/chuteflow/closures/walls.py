@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import sympy as sp
+from .._codegen import lazy_module
+
+sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
 
 
 @dataclass(frozen=True)

@@ -7,23 +7,22 @@ Layout::
 
 A part is written to a temporary file in the same folder and moved into place with
 :func:`os.replace`, so a part either exists complete or not at all, whatever kills the
-process. A folder made for another configuration is never reused silently.
+process (:func:`chuteflow._files.atomic_target`; the file gets the mode the umask implies).
+A folder made for another configuration is never reused silently.
 """
 from __future__ import annotations
 
 import json
-import os
 import shutil
-import tempfile
-from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
+from .._files import atomic_target, atomic_write
 from ..errors import ParameterError
 from .runner import TaskResult
 
-__all__ = ["PartStore", "ConfigMismatchError", "parts_dir", "atomic_write"]
+__all__ = ["PartStore", "ConfigMismatchError", "parts_dir", "atomic_target", "atomic_write"]
 
 
 class ConfigMismatchError(ParameterError):
@@ -33,35 +32,6 @@ class ConfigMismatchError(ParameterError):
 def parts_dir(out: str | Path) -> Path:
     out = Path(out)
     return out.with_name(out.name + ".parts")
-
-
-@contextmanager
-def atomic_target(path: str | Path):
-    """Yield a temporary path next to ``path``; move it onto ``path`` if the block succeeds.
-
-    A reader (or a resumed sweep) never sees a half-written file, even after SIGKILL.
-    """
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.name + ".", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-
-
-def atomic_write(path: Path, write) -> None:
-    """Call ``write(file_object)`` on a temporary file next to ``path``, then move it there."""
-    with atomic_target(path) as tmp:
-        with open(tmp, "wb") as fh:
-            write(fh)
-            fh.flush()
-            os.fsync(fh.fileno())
 
 
 class PartStore:
