@@ -21,7 +21,14 @@ the caller's: a tangent predictor for the steady flows, a quadratic extrapolatio
   its first failure.
 
 A step never passes the target: it lands exactly on it when the step reaches it. Every
-attempt is recorded as a :class:`Step` in the :class:`Continuation` returned.
+attempt is recorded as a :class:`Step` in the :class:`Continuation` returned;
+:func:`march` walks a list of grid points, each from the last, until the first failure.
+
+Which neighbour seeds which point of a (θ, ν0(0)) row — the point below or above in ν0, the
+neighbouring θ row, spread-out cold starts — is decided by one row scheduler,
+:func:`chuteflow.steady.family.continue_row`, shared by steady families, maps
+(:mod:`chuteflow.steady.maps`) and sweep rows (:mod:`chuteflow.sweep.runner`); each single
+continuation it starts goes through :func:`continue_to`.
 
 This module is the bottom of the layer order (it imports nothing from chuteflow).
 """
@@ -32,7 +39,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-__all__ = ["StepRules", "Trial", "Step", "Continuation", "continue_to", "march"]
+__all__ = ["Continuation", "Step", "StepRules", "Trial", "continue_to", "march"]
 
 RETRIES = ("halve", "subdivide")
 
@@ -75,7 +82,7 @@ class StepRules:
     """
 
     retry: str = "halve"
-    grow: float | Callable[[float], float] = 1.5
+    grow: float | Callable[[float | None], float] = 1.5
     shrink: float = 0.5
     max_step: float = math.inf
     max_step_ratio: float = math.inf
@@ -211,7 +218,8 @@ def continue_to(solve: Callable[[Any, float], Trial], state: Any, s0: float, tar
     sign = 1.0 if target >= s0 else -1.0
     origin = s0 if origin is None else origin
     h_next = abs(target - s0) if h is None else float(h)
-    s, steps, attempts = s0, [], 0
+    s, attempts = s0, 0
+    steps: list[Step] = []
 
     def stop(reason):
         return Continuation(state, s, s == target, reason, h_next, steps)
@@ -247,7 +255,7 @@ def continue_to(solve: Callable[[Any, float], Trial], state: Any, s0: float, tar
 
 
 def _subdivide(solve, state, s0, target, rules) -> Continuation:
-    steps = []
+    steps: list[Step] = []
     for depth in range(rules.max_depth + 1):
         k = 2 ** depth
         cur, s = state, s0
@@ -272,7 +280,7 @@ def march(solve: Callable[[Any, int], Trial], state: Any, indices) -> list:
     list of (int, object)
         The accepted (index, value) pairs, in order.
     """
-    out = []
+    out: list = []
     for i in indices:
         trial = solve(state, i)
         if not trial.ok:

@@ -8,8 +8,13 @@ import numpy as np
 import pytest
 
 from chuteflow.errors import ParameterError
-from chuteflow.stability import (DEFAULT_POLICY, OperatorCache, RejectionPolicy, least_stable,
-                                 stability_operator)
+from chuteflow.stability import (
+    DEFAULT_POLICY,
+    OperatorCache,
+    RejectionPolicy,
+    least_stable,
+    stability_operator,
+)
 from chuteflow.stability.modes import resolve_policy
 
 K = 0.01

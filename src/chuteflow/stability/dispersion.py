@@ -36,9 +36,10 @@ COARSE_N = 48
 ACCEPT_TAIL = DEFAULT_POLICY.track_tail_tol
 
 
-def _growth(ratio: float) -> float:
+def _growth(ratio: float | None) -> float:
     """Step factor after an accepted step whose predictor missed by ``ratio`` of the step:
     ×3 while it hits well, ×1.5 when fair, held when off by more than 5 %."""
+    assert ratio is not None  # every accepted step of the tracker reports its miss
     return 3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0
 
 
@@ -251,7 +252,7 @@ class BranchTracker:
             self._h = res.h
             if not res.reached:
                 raise ConvergenceError(
-                    f"lost the branch near k = {res.last.s:.4g} (theta = "
+                    f"lost the branch near k = {res.steps[-1].s:.4g} (theta = "
                     f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
                     "continuation step shrank below any useful size")
         return self.history[-1][1], self.history[-1][2]

@@ -390,6 +390,7 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
     ns = [_check_n(n)] if n is not None else policy.ladder()
     last = None
     for nn in ns:
+        mode: Mode | None
         if sigma is not None:
             mode = mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy)
         elif method == "qz":

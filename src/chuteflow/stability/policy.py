@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from ..errors import ParameterError
 from .operator import _check_n
 
-__all__ = ["RejectionPolicy", "DEFAULT_POLICY"]
+__all__ = ["DEFAULT_POLICY", "RejectionPolicy"]
 
 
 @dataclass(frozen=True)
@@ -81,7 +81,7 @@ class RejectionPolicy:
 
     def next_n(self, n: int) -> int:
         """The rung after N: min(``n_max``, round(``n_growth`` N))."""
-        return min(self.n_max, int(round(n * self.n_growth)))
+        return min(self.n_max, round(n * self.n_growth))
 
     def ladder(self, start: int | None = None) -> list[int]:
         """Resolutions tried in turn: ``start`` (default ``n_start``, at most ``n_max``),
