@@ -10,7 +10,12 @@ A computed eigenpair is *physical* when both of the paper's tests pass:
 
 Drift alone is not enough: the dilute top carries a continuum of near-neutral modes
 α ≈ −ik u0(y) − 1e-8 that barely move with N but whose eigenvectors are not resolved
-(tails ~1e-4; ERRATA). Every :class:`Mode` carries both numbers.
+(tails ~1e-4; ERRATA). Every :class:`Mode` carries both numbers. The thresholds, the number
+of tail coefficients and the ladder of resolutions N tried are one
+:class:`~chuteflow.stability.policy.RejectionPolicy`, passed as ``policy=``.
+
+Operators come from an :class:`OperatorCache` (``cache=``; default the shared
+:data:`OPERATORS`), which never hands one flow's operator to another flow.
 """
 from __future__ import annotations
 
