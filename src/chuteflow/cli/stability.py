@@ -122,11 +122,11 @@ def _mode_summary(mode, flow, method) -> dict:
     return out
 
 
-def _least_stable(console, flow, k, n, method, n_max):
+def _least_stable(console, flow, k, n, method, policy):
     from chuteflow.stability import least_stable
 
     with console.status(f"least-stable mode at k = {k:g} ({method})"):
-        return least_stable(flow, k, n=n, method=method, n_max=n_max)
+        return least_stable(flow, k, n=n, method=method, policy=policy)
 
 
 def _mode_table(title, summary, caption):
@@ -170,7 +170,9 @@ def eig(
     """Least-stable eigenvalue α at one wavenumber, with its convergence estimate."""
     console = _console()
     flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
-    mode = _least_stable(console, flow, k, n, method, n_max)
+    from chuteflow.stability import RejectionPolicy
+
+    mode = _least_stable(console, flow, k, n, method, RejectionPolicy(n_max=n_max))
     out = _mode_summary(mode, flow, method)
     if as_json:
         _echo_json(out)
@@ -205,7 +207,7 @@ def dispersion_cmd(
     import numpy as np
 
     from chuteflow.errors import ConvergenceError, ParameterError
-    from chuteflow.stability import crossings, dispersion
+    from chuteflow.stability import RejectionPolicy, crossings, dispersion
 
     _check_positive("k_max", k_max)
     if num < 2:
@@ -213,13 +215,14 @@ def dispersion_cmd(
     console = _console()
     flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
     ks = np.linspace(0.0, k_max, num)
+    policy = RejectionPolicy(n_max=n_max)
     with console.status(f"dispersion relation at {num} wavenumbers on [0, {k_max:g}]"):
-        ds = dispersion(flow, ks, n_max=n_max, strict=strict)
+        ds = dispersion(flow, ks, policy=policy, strict=strict)
     kc_error = None
     with console.status("critical wavenumbers (sign changes of Re α, Brent)"):
         try:
-            found = crossings(flow, k_max=k_max, num=max(num, 12), n_max=n_max)
-            k_c = _k_c(flow, found, n_max)
+            found = crossings(flow, k_max=k_max, num=max(num, 12), policy=policy)
+            k_c = _k_c(flow, found, policy)
         except ConvergenceError as exc:
             if strict:
                 raise
@@ -269,14 +272,14 @@ def dispersion_cmd(
             c.print(f"wrote {p}", highlight=False)
 
 
-def _k_c(flow, found, n_max):
+def _k_c(flow, found, policy):
     """Upper edge of the long-wave unstable band 0 < k < k_c: the first crossing if Re α > 0
     below it (Re α keeps its sign on (0, k_1), k_1 the first crossing), else None."""
     from chuteflow.stability import least_stable
 
     if not found:
         return None
-    below = least_stable(flow, 0.5 * found[0], n_max=n_max)
+    below = least_stable(flow, 0.5 * found[0], policy=policy)
     return float(found[0]) if below.alpha.real > 0 else None
 
 
@@ -387,7 +390,7 @@ def mode_cmd(
                                  "a wavelength) and 0 <= Y0 < Y1 (heights)")
     console = _console()
     flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
-    mode = _least_stable(console, flow, k, n, "branch", 256)
+    mode = _least_stable(console, flow, k, n, "branch", None)
     with console.status("eigenfunction figure"):
         path = eigenfunction_figure(mode, flow, plot, y_top=y_top, x_peak=x_peak,
                                     magnify=magnify)

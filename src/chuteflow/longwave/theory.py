@@ -30,6 +30,7 @@ import scipy.linalg as sla
 
 from ..errors import ConvergenceError
 from ..stability.modes import nearest_eigenpair, stability_operator
+from ..stability.policy import RejectionPolicy
 from ..stability.operator import StabilityOperator
 from ..steady import SteadyFlow, steady_tangent
 
@@ -178,6 +179,8 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
     """
     tangent = steady_tangent(flow)
     n = int(n)
+    # the stability solvers' resolution ladder (N → round(1.25 N)), from n up to n_max
+    ladder = RejectionPolicy(n_start=n, n_max=int(n_max))
     n2 = max(24, (4 * n) // 5)
     b1, b2 = coefficients(stability_operator(flow, n2), tangent)
     while True:
@@ -188,7 +191,7 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
         ok = math.isfinite(c1) and math.isfinite(c2) and c2 <= rtol and c1 <= rtol / 100
         if ok or n >= n_max:
             break
-        b1, b2, n2, n = a1, a2, n, min(n_max, int(round(1.25 * n)))
+        b1, b2, n2, n = a1, a2, n, ladder.next_n(n)
     if not ok:
         raise ConvergenceError(
             f"long-wave coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did not "

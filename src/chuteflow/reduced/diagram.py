@@ -12,7 +12,9 @@ import math
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..continuation import StepRules, Trial, continue_to, march
+from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from ..steady import solve_steady
 from ..sweep import PointFunction, SweepConfig, Variable, register_point_function, run_sweep
 from .model import local_coefficients
 
@@ -174,28 +176,39 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     return ds
 
 
-def _try(theta, nu0, model, guess, depth: int = 1):
-    """Steady flow at (θ, ν0) from ``guess`` (a flow or None: cold start), else None.
-
-    A failed continuation is retried through the midpoint between the guess and the target
-    (θ linear, ν0 geometric), ``depth`` times recursively: grid steps of the diagrams are
-    large at small ν0."""
-    from ..errors import ConvergenceError, NoSteadyFlowError
-    from ..steady import solve_steady
-
+def _solve_from(theta, nu0, model, guess):
+    """Steady flow at (θ, ν0) from ``guess`` (a flow or None: cold start), or None."""
     try:
         if guess is None:
             return solve_steady(theta, nu0, model, continuation=False)
         return solve_steady(theta, nu0, model, guess=guess, continuation=False)
     except (NoSteadyFlowError, ConvergenceError, ArithmeticError, ValueError,
             np.linalg.LinAlgError):
-        pass
-    if guess is None or depth <= 0:
         return None
-    th_m = 0.5 * (theta + guess.theta)
-    nu_m = math.sqrt(nu0 * guess.nu0)
-    mid = _try(th_m, nu_m, model, guess, depth - 1)
-    return None if mid is None else _try(theta, nu0, model, mid, depth - 1)
+
+
+def _try(theta, nu0, model, guess, depth: int = 1):
+    """Steady flow at (θ, ν0) from ``guess`` (a flow or None: cold start), else None.
+
+    A failed continuation is retried through 2, …, 2**``depth`` equal steps between the
+    guess and the target (θ linear, ν0 geometric; :func:`~chuteflow.continuation.continue_to`,
+    ``retry="subdivide"``): grid steps of the diagrams are large at small ν0."""
+    if guess is None:
+        return _solve_from(theta, nu0, model, None)
+    th0, nu00 = guess.theta, guess.nu0
+
+    def solve(start, s):
+        if s == 1.0:
+            th, nu = theta, nu0
+        elif s == 0.5:
+            th, nu = 0.5 * (theta + th0), math.sqrt(nu0 * nu00)
+        else:
+            th, nu = th0 + s * (theta - th0), nu00 * (nu0 / nu00) ** s
+        f = _solve_from(th, nu, model, start)
+        return Trial(f is not None, f)
+
+    res = continue_to(solve, guess, 0.0, 1.0, StepRules(retry="subdivide", max_depth=depth))
+    return res.state if res.reached else None
 
 
 def _walk_grid(thetas, nus, model, progress):
@@ -230,16 +243,19 @@ def _walk_grid(thetas, nus, model, progress):
                     break
         start = next((j for j in range(nn) if row[j] is not None), None)
         if start is not None:
+
+            def step(flow, j, th=th, prev=prev):
+                # from the neighbour along the row, else from the row before
+                f = _try(th, nus[j], model, flow)
+                if f is None and prev is not None and prev[j] is not None:
+                    f = _try(th, nus[j], model, prev[j])
+                return Trial(f is not None, f)
+
+            # each direction until its first failure
             for direction in (+1, -1):
-                j = start + direction
-                while 0 <= j < nn:
-                    f = _try(th, nus[j], model, row[j - direction])
-                    if f is None and prev is not None and prev[j] is not None:
-                        f = _try(th, nus[j], model, prev[j])
-                    if f is None:
-                        break
+                stop = nn if direction > 0 else -1
+                for j, f in march(step, row[start], range(start + direction, stop, direction)):
                     row[j] = f
-                    j += direction
         done_rows[i] = row
         if progress:
             progress(f"1D diagram: θ = {th:g}°", advance=1, total=nt)

@@ -12,7 +12,8 @@ Operator
     A(k) = A0 + (ik) A1 + (ik)² A2 for k ≥ 0 (the top conditions' |k| folded into A1);
     ``op.B`` is independent of k; ``op.pieces[(b, d)]`` are the coefficients of
     (ik_x)^b (ik_z)^d in 3D. Rows: see :mod:`.operator`. ``operator(flow, k, n=None)`` is
-    the one-call form. ``stability_operator(flow, n)`` returns a cached operator.
+    the one-call form. ``stability_operator(flow, n, cache=None)`` returns a cached
+    operator (:class:`OperatorCache`: per flow object, never shared between two flows).
     Unknowns are the physical (ν̂, û, v̂, T̂); the solvers work on an internally equilibrated
     copy (``pencil.equilibrated()``, unknown ν̂/ν0; ``pencil.unscale`` maps back).
 
@@ -20,6 +21,13 @@ Solvers
     ``qz(A, B)`` — dense QZ, all finite eigenvalues (reference, fallback).
     ``ShiftInvert(A, B, σ)`` — one LU of A − σB reused: ``.iterate(v0)`` (inverse
     iteration), ``.nearest(nev)`` (Arnoldi on x ↦ (A − σB)⁻¹Bx; not ``eigs(M=B)``).
+
+Rejection policy
+    :class:`RejectionPolicy` — ``drift_tol``, ``tail_tol``, ``tail_terms``,
+    ``track_tail_tol``, and the resolution ladder ``n_start``, ``n_max``, ``n_growth``
+    (``.ladder()``, ``.next_n(n)``, ``.accepts(drift, tail)``); every solver below takes it
+    as ``policy=`` (default :data:`DEFAULT_POLICY`, the paper's values). The keywords
+    ``drift_tol``, ``tail_tol``, ``n_max`` remain as overrides of its fields.
 
 Modes (every one carries its convergence estimate)
     :class:`Mode` — ``alpha``, ``k``, ``kz``, ``theta``, ``nu0``, ``n``, ``y``, ``fields``
@@ -48,8 +56,9 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 """
 from .operator import Pencil, StabilityOperator, base_on_grid, operator
 from .eigen import ShiftInvert, qz
-from .modes import (Mode, check_n, choose_n, least_stable, mode_near, nearest_eigenpair,
-                    spectrum, stability_operator, tail)
+from .policy import DEFAULT_POLICY, RejectionPolicy
+from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_stable, mode_near,
+                    nearest_eigenpair, spectrum, stability_operator, tail)
 from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
 
@@ -57,4 +66,5 @@ __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "operator", "ShiftInve
            "Mode", "check_n", "choose_n", "least_stable", "mode_near", "nearest_eigenpair",
            "spectrum",
            "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
-           "critical_k", "crossings", "dispersion", "first_order", "null_vectors"]
+           "critical_k", "crossings", "dispersion", "first_order", "null_vectors",
+           "RejectionPolicy", "DEFAULT_POLICY", "OperatorCache", "OPERATORS"]

@@ -18,20 +18,37 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
-from .modes import (DRIFT_TOL, N_DEFAULT, N_MAX, TAIL_TOL, Mode, _interp_vector, _make_mode,
-                    _tols, drift_of, nearest_eigenpair, stability_operator, tail)
+from .modes import (Mode, OperatorCache, _interp_vector, _make_mode, drift_of,
+                    nearest_eigenpair, resolve_policy, stability_operator, tail)
 from .operator import StabilityOperator, _check_k, _check_n
+from .policy import DEFAULT_POLICY, RejectionPolicy
 
 #: First continuation step from k = 0.
 FIRST_STEP = 1e-5
 #: Resolution of the coarse continuation that seeds single-k solves.
 COARSE_N = 48
 #: Largest Chebyshev tail a tracked eigenvector may have (the physical test is stricter;
-#: the continuum's tails are ~1e-4).
-ACCEPT_TAIL = 1e-5
+#: the continuum's tails are ~1e-4): ``RejectionPolicy.track_tail_tol``.
+ACCEPT_TAIL = DEFAULT_POLICY.track_tail_tol
+
+
+def _growth(ratio: float | None) -> float:
+    """Step factor after an accepted step whose predictor missed by ``ratio`` of the step:
+    ×3 while it hits well, ×1.5 when fair, held when off by more than 5 %."""
+    assert ratio is not None  # every accepted step of the tracker reports its miss
+    return 3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0
+
+
+def _track_rules(max_halvings: int) -> StepRules:
+    """Retry rules of the branch in k (:func:`chuteflow.continuation.continue_to`): steps
+    grow by :func:`_growth`, at most ×3 in k (a step at most twice the k reached), halved
+    when rejected, at most ``max_halvings`` times per step."""
+    return StepRules(grow=_growth, shrink=0.5, max_step_ratio=2.0,
+                     max_halvings=max_halvings)
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,16 +124,23 @@ class BranchTracker:
     ----------
     flow : SteadyFlow
         Base state.
-    n : int
-        Starting resolution N (raised when a point fails the drift or tail test).
+    n : int, optional
+        Starting resolution N (default ``policy.n_start``; raised along the policy's
+        ladder when a point fails the drift or tail test).
     direction : (float, float)
         Unit direction (k̂x, k̂z) of the wavevector; (1, 0) for the paper's perturbations.
-    n_max : int
-        Largest resolution tried.
+    policy : RejectionPolicy, optional
+        Drift and tail thresholds and the resolution ladder (default: the paper's).
+    n_max, drift_tol, tail_tol : optional
+        Overrides of the policy's fields of the same names.
+    cache : OperatorCache, optional
+        Where the operators come from (default: the module's shared cache).
     """
 
-    def __init__(self, flow: SteadyFlow, n: int = N_DEFAULT, *, direction=(1.0, 0.0),
-                 n_max: int = N_MAX, drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL):
+    def __init__(self, flow: SteadyFlow, n: int | None = None, *, direction=(1.0, 0.0),
+                 policy: RejectionPolicy | None = None, n_max: int | None = None,
+                 drift_tol: float | None = None, tail_tol: float | None = None,
+                 cache: OperatorCache | None = None):
         kx, kz = (float(direction[0]), float(direction[1]))
         norm = math.hypot(kx, kz)
         if norm == 0 or kx < 0:
@@ -124,12 +148,29 @@ class BranchTracker:
                                  "direction with k̂x ≥ 0")
         self.direction = (kx / norm, kz / norm)
         self.three_d = self.direction[1] != 0.0
-        self.flow, self.n, self.n_max = flow, _check_n(n), _check_n(n_max)
-        self.drift_tol, self.tail_tol = _tols(drift_tol, tail_tol)
+        self.policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol,
+                                     n_max=n_max)
+        self.cache = cache
+        self.flow = flow
+        self.n = _check_n(self.policy.n_start if n is None else n)
+        self.n_max = self.policy.n_max
         self._start(self.n)
 
+    @property
+    def drift_tol(self) -> float:
+        """Drift threshold of the policy."""
+        return self.policy.drift_tol
+
+    @property
+    def tail_tol(self) -> float:
+        """Tail threshold of the policy."""
+        return self.policy.tail_tol
+
+    def _operator(self, n):
+        return stability_operator(self.flow, n, self.three_d, cache=self.cache)
+
     def _start(self, n):
-        op = stability_operator(self.flow, n, self.three_d)
+        op = self._operator(n)
         nv = null_vectors(op)
         self.nv = nv
         self.alpha1 = first_order(op, nv, self.direction)
@@ -140,7 +181,7 @@ class BranchTracker:
 
     def _pencil(self, s, n=None):
         kx, kz = self.direction
-        return stability_operator(self.flow, n or self.n, self.three_d).pencil(s * kx, s * kz)
+        return self._operator(n or self.n).pencil(s * kx, s * kz)
 
     def _predict(self, s):
         h = self.history
@@ -176,45 +217,44 @@ class BranchTracker:
             ratio = min(ratio, 0.25)
         if ratio > 0.25:
             return None
-        if tail(pencil.unscale(w), len(pencil.fields)) > ACCEPT_TAIL:
+        if tail(pencil.unscale(w), len(pencil.fields),
+                self.policy.tail_terms) > self.policy.track_tail_tol:
             return None
         return alpha, w, ratio
+
+    def _solve(self, state, s) -> Trial:
+        """One continuation attempt at s; an accepted point joins the history (the
+        predictor's memory)."""
+        res = self._step(s)
+        if res is None:
+            return Trial(False)
+        alpha, w, ratio = res
+        self.history.append((s, complex(alpha), w))
+        return Trial(True, s, ratio)
 
     def advance(self, s_target: float, max_halvings: int = 16) -> tuple[complex, np.ndarray]:
         """Continue the branch up to s_target (≥ the last point); returns (alpha, w).
 
-        Steps grow geometrically (at most ×3 in k) while the predictor hits well, are held
-        when it is off by more than 5 % of the step, and halved when a step is rejected
-        (at most ``max_halvings`` times per step, then :class:`ConvergenceError`).
+        Steps (:func:`chuteflow.continuation.continue_to`) start at 1e-5 from k = 0, grow
+        geometrically (at most ×3 in k) while the predictor hits well, are held when it is
+        off by more than 5 % of the step, and halved when a step is rejected (at most
+        ``max_halvings`` times per step, then :class:`ConvergenceError`).
         """
         s_last = self.history[-1][0]
         if s_target < s_last:
             raise ParameterError("the branch is tracked in increasing k only")
-        while self.history[-1][0] < s_target:
-            s_last = self.history[-1][0]
-            halvings = 0
-            if s_last == 0.0:
-                # first step: α1 k predicts well while |α2| k² ≪ |α1| k; 1e-5 is inside
-                # the quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5)
-                h = min(s_target, FIRST_STEP)
-            else:
-                h = min(s_target - s_last, self._h, 2.0 * s_last)
-
-            def at(h):  # land exactly on the target (s_last + (target − s_last) may not)
-                return s_target if h >= s_target - s_last else s_last + h
-            res = self._step(at(h))
-            while res is None:
-                halvings += 1
-                if halvings > max_halvings:
-                    raise ConvergenceError(
-                        f"lost the branch near k = {at(h):.4g} (theta = "
-                        f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
-                        "continuation step shrank below any useful size")
-                h *= 0.5
-                res = self._step(at(h))
-            alpha, w, ratio = res
-            self.history.append((at(h), complex(alpha), w))
-            self._h = h * (3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0)
+        if s_target > s_last:
+            # first step: α1 k predicts well while |α2| k² ≪ |α1| k; 1e-5 is inside the
+            # quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5)
+            h = FIRST_STEP if s_last == 0.0 else self._h
+            res = continue_to(self._solve, s_last, s_last, s_target,
+                              _track_rules(max_halvings), h=h, origin=0.0)
+            self._h = res.h
+            if not res.reached:
+                raise ConvergenceError(
+                    f"lost the branch near k = {res.steps[-1].s:.4g} (theta = "
+                    f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
+                    "continuation step shrank below any useful size")
         return self.history[-1][1], self.history[-1][2]
 
     def mode(self, s: float) -> Mode:
@@ -229,8 +269,9 @@ class BranchTracker:
                 continue
             pencil = self._pencil(s)
             kx, kz = self.direction
-            drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d)
-            mode = _make_mode(pencil, alpha, v, drift, n2, self.drift_tol, self.tail_tol)
+            drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d,
+                                 cache=self.cache)
+            mode = _make_mode(pencil, alpha, v, drift, n2, self.policy)
             if mode.physical or self.n >= self.n_max:
                 return mode
             self._raise_n()
@@ -238,7 +279,7 @@ class BranchTracker:
     def _raise_n(self):
         """Move the branch to a finer grid: the k = 0 point and the last two points (all the
         predictor needs) are re-solved there; earlier points are dropped."""
-        n_new = min(self.n_max, int(round(self.n * 1.25)))
+        n_new = self.policy.next_n(self.n)
         old = self.history[1:][-2:]
         n_old = self.n
         nf = len(self._pencil(0.0).fields)
@@ -249,41 +290,47 @@ class BranchTracker:
             self.history.append((s, complex(alpha), v2))
 
 
-def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
-                drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL) -> Mode:
+def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
+                policy: RejectionPolicy | None = None, drift_tol: float | None = None,
+                tail_tol: float | None = None, cache: OperatorCache | None = None) -> Mode:
     """The mode of the α(0) = 0 branch at (k, kz), tracked from k = 0, at resolution N.
 
     The continuation runs on a coarse grid (N_c = 48, an LU ~10× cheaper), whose eigenvalue
     (accurate to ~1e-4 relative) is the shift of a single solve at N, followed by the drift
     check at N'. If the coarse branch is lost, or the fine solve does not land on a resolved
-    eigenvector close to it, the continuation is redone at N.
+    eigenvector close to it, the continuation is redone at N. ``n`` defaults to
+    ``policy.n_start``; the mode is judged by ``policy`` (``drift_tol``, ``tail_tol``:
+    overrides of its thresholds).
     """
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
+    n = _check_n(policy.n_start if n is None else n)
     kk = math.hypot(k, kz)
     direction = (k, kz) if kk else (1.0, 0.0)
     if kk > 0 and n > COARSE_N + 16:
         try:
-            coarse = BranchTracker(flow, COARSE_N, direction=direction, n_max=COARSE_N)
+            coarse = BranchTracker(flow, COARSE_N, direction=direction, policy=policy,
+                                   n_max=COARSE_N, cache=cache)
             a_c, w_c = coarse.advance(kk)
-            op = stability_operator(flow, n, coarse.three_d)
+            op = stability_operator(flow, n, coarse.three_d, cache=cache)
             pencil = op.pencil(k, kz)
             alpha, w = nearest_eigenpair(pencil, a_c, v0=_interp_vector(
                 w_c, len(op.fields), COARSE_N, n))
             if abs(alpha - a_c) < 1e-2 * abs(a_c):
-                drift, n2 = drift_of(flow, alpha, w, n, k, kz, coarse.three_d)
-                mode = _make_mode(pencil, alpha, w, drift, n2, drift_tol, tail_tol)
+                drift, n2 = drift_of(flow, alpha, w, n, k, kz, coarse.three_d, cache=cache)
+                mode = _make_mode(pencil, alpha, w, drift, n2, policy)
                 if mode.physical:
                     return mode
         except ConvergenceError:
             pass
-    tr = BranchTracker(flow, n, direction=direction, n_max=n, drift_tol=drift_tol,
-                       tail_tol=tail_tol)
+    tr = BranchTracker(flow, n, direction=direction, policy=policy, n_max=n, cache=cache)
     return tr.mode(kk)
 
 
 # -- dispersion relation -----------------------------------------------------------------
-def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
-               drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
-               strict: bool = True):
+def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
+               policy: RejectionPolicy | None = None, n_max: int | None = None,
+               drift_tol: float | None = None, tail_tol: float | None = None,
+               strict: bool = True, cache: OperatorCache | None = None):
     """Dispersion relation α(k) of the α(0) = 0 branch (figures 7–9, 13).
 
     Parameters
@@ -293,7 +340,12 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
     k : array_like
         Wavenumbers ≥ 0 (any order; computed in increasing order by continuation).
     n : int, optional
-        Starting resolution (default 80); raised along the branch where a point fails.
+        Starting resolution (default ``policy.n_start``, 80); raised along the policy's
+        ladder where a point fails.
+    policy : RejectionPolicy, optional
+        Drift and tail thresholds and the resolution ladder (default: the paper's, §4.1).
+    n_max, drift_tol, tail_tol : optional
+        Overrides of the policy's fields of the same names.
     strict : bool
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
@@ -315,8 +367,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
     for kk in ks:
         _check_k(kk, "k")
     order = np.argsort(ks, kind="stable")
-    tr = BranchTracker(flow, n or N_DEFAULT, n_max=n_max, drift_tol=drift_tol,
-                       tail_tol=tail_tol)
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
+    tr = BranchTracker(flow, n or None, policy=policy, cache=cache)
     out = {name: np.full(len(ks), np.nan)
            for name in ("alpha_re", "alpha_im", "drift", "tail")}
     nres = np.zeros(len(ks), dtype=int)
@@ -332,7 +384,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
                 f"converged at N = {mode.n} (drift {mode.drift:.1e}, tail {mode.tail:.1e}; "
-                f"thresholds {drift_tol:g}, {tail_tol:g}); raise n_max or pass strict=False")
+                f"thresholds {policy.drift_tol:g}, {policy.tail_tol:g}); raise n_max or pass "
+                "strict=False")
         out["alpha_re"][i], out["alpha_im"][i] = mode.alpha.real, mode.alpha.imag
         out["drift"][i], out["tail"][i] = mode.drift, mode.tail
         nres[i], phys[i] = mode.n, mode.physical
@@ -340,7 +393,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
              "source": "Mitarai & Nakanishi §4, eq:lin", "theta": flow.theta, "nu0": flow.nu0,
              "nu_top": flow.nu_top, "y_max": flow.y_max,
              "dQ_drho": float(steady_tangent(flow)["dQ_drho"]), "alpha1_re": tr.alpha1.real,
-             "alpha1_im": tr.alpha1.imag, "drift_tol": drift_tol, "tail_tol": tail_tol}
+             "alpha1_im": tr.alpha1.imag, "drift_tol": policy.drift_tol,
+             "tail_tol": policy.tail_tol}
     attrs.update({name: getattr(flow.model, name)
                   for name in ("roughness", "wall_loss", "restitution", "nu_max")})
     u = "1/sqrt(sigma/g)"
@@ -362,13 +416,14 @@ def _zero_mode(tr: BranchTracker) -> Mode:
     a0 = tr.history[0][1]
     v = tr.history[0][2]
     pencil = tr._pencil(0.0)
-    drift, n2 = drift_of(tr.flow, a0, v, tr.n, 0.0, 0.0, tr.three_d)
-    return _make_mode(pencil, a0, v, drift, n2, tr.drift_tol, tr.tail_tol)
+    drift, n2 = drift_of(tr.flow, a0, v, tr.n, 0.0, 0.0, tr.three_d, cache=tr.cache)
+    return _make_mode(pencil, a0, v, drift, n2, tr.policy)
 
 
 # -- critical wavenumber -----------------------------------------------------------------
 def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
-               n_max: int = N_MAX, xtol: float = 1e-10):
+               n_max: int | None = None, xtol: float = 1e-10,
+               policy: RejectionPolicy | None = None, cache: OperatorCache | None = None):
     """Critical wavenumber k_c where Re α of the α(0) = 0 branch changes sign (brentq).
 
     The branch is tracked on a grid of ``num`` points up to ``k_max`` (denser at small k);
@@ -381,13 +436,17 @@ def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int |
         when the flow is long-wave unstable); None when Re α does not change sign in
         (0, k_max]. All crossings are in :func:`crossings`.
     """
-    found = crossings(flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol)
+    found = crossings(flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol, policy=policy,
+                      cache=cache)
     return found[0] if found else None
 
 
 def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
-              n_max: int = N_MAX, xtol: float = 1e-10) -> tuple[float, ...]:
-    """All wavenumbers in (0, k_max] where Re α of the tracked branch changes sign."""
+              n_max: int | None = None, xtol: float = 1e-10,
+              policy: RejectionPolicy | None = None,
+              cache: OperatorCache | None = None) -> tuple[float, ...]:
+    """All wavenumbers in (0, k_max] where Re α of the tracked branch changes sign
+    (each grid point judged by ``policy``; ``n_max`` overrides its largest N)."""
     from scipy.optimize import brentq
 
     k_max = _check_k(k_max, "k_max")
@@ -396,7 +455,7 @@ def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | 
     # geometric start resolves the narrow quadratic regime, then uniform
     ks = np.unique(np.concatenate([np.geomspace(1e-5, k_max, num // 3),
                                    np.linspace(0, k_max, num - num // 3 + 1)[1:]]))
-    tr = BranchTracker(flow, n or N_DEFAULT, n_max=n_max)
+    tr = BranchTracker(flow, n or None, policy=policy, n_max=n_max, cache=cache)
     vals = []  # (k, α, eigenvector of the equilibrated pencil, N) per grid point
     for kk in ks:
         mode = tr.mode(kk)
@@ -410,7 +469,7 @@ def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | 
     for (ka, aa, wa, na), (kb, ab, _, nb) in zip(vals[:-1], vals[1:]):
         if aa.real == 0 or np.sign(aa.real) == np.sign(ab.real):
             continue
-        op = stability_operator(flow, nb)
+        op = stability_operator(flow, nb, cache=cache)
         start = wa if na == nb else _interp_vector(wa, len(op.fields), na, nb)
 
         def f(kk, ka=ka, kb=kb, aa=aa, ab=ab, start=start, op=op):

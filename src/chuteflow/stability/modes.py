@@ -10,12 +10,18 @@ A computed eigenpair is *physical* when both of the paper's tests pass:
 
 Drift alone is not enough: the dilute top carries a continuum of near-neutral modes
 α ≈ −ik u0(y) − 1e-8 that barely move with N but whose eigenvectors are not resolved
-(tails ~1e-4; ERRATA). Every :class:`Mode` carries both numbers.
+(tails ~1e-4; ERRATA). Every :class:`Mode` carries both numbers. The thresholds, the number
+of tail coefficients and the ladder of resolutions N tried are one
+:class:`~chuteflow.stability.policy.RejectionPolicy`, passed as ``policy=``.
+
+Operators come from an :class:`OperatorCache` (``cache=``; default the shared
+:data:`OPERATORS`), which never hands one flow's operator to another flow.
 """
 from __future__ import annotations
 
 import functools
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -25,13 +31,29 @@ from ..spectral import ChebyshevGrid, coefficients
 from ..steady import SteadyFlow
 from .eigen import ShiftInvert, qz
 from .operator import Pencil, StabilityOperator, _check_k, _check_n
+from .policy import DEFAULT_POLICY, RejectionPolicy
 
-DRIFT_TOL = 1e-7
-TAIL_TOL = 1e-7
-TAIL_TERMS = 10
+#: The paper's thresholds and ladder (fields of :data:`DEFAULT_POLICY`, kept as names).
+DRIFT_TOL = DEFAULT_POLICY.drift_tol
+TAIL_TOL = DEFAULT_POLICY.tail_tol
+TAIL_TERMS = DEFAULT_POLICY.tail_terms
 #: Default and largest resolution of the adaptive choice of N.
-N_DEFAULT = 80
-N_MAX = 256
+N_DEFAULT = DEFAULT_POLICY.n_start
+N_MAX = DEFAULT_POLICY.n_max
+
+
+def resolve_policy(policy: RejectionPolicy | None = None, *, drift_tol: float | None = None,
+                   tail_tol: float | None = None, n_max: int | None = None) -> RejectionPolicy:
+    """``policy`` (default :data:`DEFAULT_POLICY`) with the given fields overridden.
+
+    The keywords ``drift_tol``, ``tail_tol`` and ``n_max`` of the solvers are shorthands for
+    these overrides (``None``: the policy's value).
+    """
+    if policy is None:
+        policy = DEFAULT_POLICY
+    elif not isinstance(policy, RejectionPolicy):
+        raise ParameterError(f"policy = {policy!r}: expected a RejectionPolicy")
+    return policy.replace(drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
 
 
 def check_n(n: int) -> int:
@@ -45,19 +67,64 @@ def check_n(n: int) -> int:
 
 
 # -- operator cache ----------------------------------------------------------------------
-_CACHE: list = []
-_CACHE_SIZE = 6  # an operator at N = 256 holds ~60 MB
+def _fingerprint(flow: SteadyFlow) -> tuple:
+    """What an operator depends on and could change in place: the profiles' bytes."""
+    return (flow.theta, flow.nu0, flow.nu_top, flow.n, flow.y_max, id(flow.model),
+            hash(np.asarray(flow.log_nu).tobytes()), hash(np.asarray(flow.u).tobytes()),
+            hash(np.asarray(flow.T).tobytes()))
 
 
-def stability_operator(flow: SteadyFlow, n: int, three_d: bool = False) -> StabilityOperator:
-    """A :class:`StabilityOperator`, cached for the last few (flow, N) pairs."""
-    for entry in _CACHE:
-        if entry[0] is flow and entry[1] == n and entry[2] == three_d:
-            return entry[3]
-    op = StabilityOperator(flow, n, three_d=three_d)
-    _CACHE.insert(0, (flow, n, three_d, op))
-    del _CACHE[_CACHE_SIZE:]
-    return op
+class OperatorCache:
+    """The last few :class:`StabilityOperator` s built, per (flow, N, three_d).
+
+    A flow is matched by identity *and* by a fingerprint of its profiles, so two different
+    flow objects never share an operator (even if one is freed and the other reuses its
+    address: an operator keeps its flow alive while cached) and a flow whose arrays were
+    changed in place gets a new one. Least recently used entries are dropped beyond
+    ``maxsize`` (an operator at N = 256 holds ~60 MB).
+
+    The solvers take ``cache=`` (default: one cache shared by the module's functions,
+    :data:`OPERATORS`); pass an own cache to keep a computation's operators apart.
+    """
+
+    def __init__(self, maxsize: int = 6):
+        if int(maxsize) < 1:
+            raise ParameterError(f"maxsize = {maxsize!r}: an operator cache holds at least one")
+        self.maxsize = int(maxsize)
+        self._entries: OrderedDict = OrderedDict()
+
+    def get(self, flow: SteadyFlow, n: int, three_d: bool = False) -> StabilityOperator:
+        """The operator of ``flow`` at N = ``n``, built on the first request."""
+        key = (id(flow), int(n), bool(three_d))
+        fp = _fingerprint(flow)
+        entry = self._entries.get(key)
+        if entry is not None and entry[0].flow is flow and entry[1] == fp:
+            self._entries.move_to_end(key)
+            return entry[0]
+        op = StabilityOperator(flow, n, three_d=three_d)
+        self._entries[key] = (op, fp)
+        self._entries.move_to_end(key)
+        while len(self._entries) > self.maxsize:
+            self._entries.popitem(last=False)
+        return op
+
+    def clear(self) -> None:
+        """Drop every cached operator."""
+        self._entries.clear()
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+
+#: The cache the module's functions use unless given another.
+OPERATORS = OperatorCache(6)
+
+
+def stability_operator(flow: SteadyFlow, n: int, three_d: bool = False, *,
+                       cache: OperatorCache | None = None) -> StabilityOperator:
+    """A :class:`StabilityOperator` of ``flow`` at N = ``n``, from ``cache`` (default
+    :data:`OPERATORS`)."""
+    return (OPERATORS if cache is None else cache).get(flow, n, three_d)
 
 
 # -- the mode object ---------------------------------------------------------------------
@@ -146,16 +213,17 @@ def tail(V: np.ndarray, nfields: int, m: int = TAIL_TERMS) -> float:
     return float(c[:, -m:].max())
 
 
-def _make_mode(pencil: Pencil, alpha, v, drift, n_check, drift_tol, tail_tol) -> Mode:
+def _make_mode(pencil: Pencil, alpha, v, drift, n_check,
+               policy: RejectionPolicy = DEFAULT_POLICY) -> Mode:
     v = normalise(pencil.unscale(np.asarray(v)))
-    t = tail(v, len(pencil.fields))
+    t = tail(v, len(pencil.fields), policy.tail_terms)
     flow = pencil.flow
     return Mode(alpha=complex(alpha), k=pencil.k, kz=pencil.kz, theta=flow.theta,
                 nu0=flow.nu0, n=pencil.n, y=pencil.grid.y,
                 fields={f: v[s].copy() for f, s in pencil.slices().items()},
                 drift=float(drift), tail=t, n_check=int(n_check),
-                physical=bool(drift < drift_tol and t < tail_tol),
-                drift_tol=drift_tol, tail_tol=tail_tol)
+                physical=policy.accepts(drift, t),
+                drift_tol=policy.drift_tol, tail_tol=policy.tail_tol)
 
 
 @functools.lru_cache(maxsize=32)
@@ -170,14 +238,6 @@ def _interp_vector(v: np.ndarray, nfields: int, n_from: int, n_to: int) -> np.nd
     """Move an eigenvector between Chebyshev grids on the same interval (per field)."""
     M = _interp_matrix(n_from, n_to)
     return (v.reshape(nfields, n_from + 1) @ M.T).reshape(-1)
-
-
-def _tols(drift_tol, tail_tol):
-    for name, v in (("drift_tol", drift_tol), ("tail_tol", tail_tol)):
-        if not (isinstance(v, (int, float)) and 0 < v < 1):
-            raise ParameterError(f"{name} = {v!r} is outside (0, 1): it is a threshold on an "
-                                 "eigenvalue change or a normalised Chebyshev coefficient")
-    return float(drift_tol), float(tail_tol)
 
 
 def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
@@ -218,29 +278,34 @@ def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
     return alpha[0], V[:, 0]
 
 
-def drift_of(flow, alpha, v, n, kx, kz, three_d):
+def drift_of(flow, alpha, v, n, kx, kz, three_d, *, cache: OperatorCache | None = None):
     """|α(N) − α(N')| with α(N') the eigenvalue at N' = check_n(N) nearest α(N)."""
     n2 = check_n(n)
-    p2 = stability_operator(flow, n2, three_d).pencil(kx, kz)
+    p2 = stability_operator(flow, n2, three_d, cache=cache).pencil(kx, kz)
     nf = len(p2.fields)
     a2, _ = nearest_eigenpair(p2, alpha, v0=_interp_vector(v, nf, n, n2))
     return abs(a2 - alpha), n2
 
 
 def mode_near(flow: SteadyFlow, k: float, sigma: complex, *, kz: float = 0.0, n: int,
-              drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL, v0=None) -> Mode:
-    """The eigenmode nearest the shift σ at resolution N, with drift and tail."""
+              policy: RejectionPolicy | None = None, drift_tol: float | None = None,
+              tail_tol: float | None = None, v0=None,
+              cache: OperatorCache | None = None) -> Mode:
+    """The eigenmode nearest the shift σ at resolution N, with drift and tail judged by
+    ``policy`` (``drift_tol``, ``tail_tol``: overrides of its thresholds)."""
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
     three_d = bool(kz)
-    pencil = stability_operator(flow, n, three_d).pencil(k, kz)
+    pencil = stability_operator(flow, n, three_d, cache=cache).pencil(k, kz)
     alpha, v = nearest_eigenpair(pencil, sigma, v0=v0)
-    drift, n2 = drift_of(flow, alpha, v, n, k, kz, three_d)
-    return _make_mode(pencil, alpha, v, drift, n2, drift_tol, tail_tol)
+    drift, n2 = drift_of(flow, alpha, v, n, k, kz, three_d, cache=cache)
+    return _make_mode(pencil, alpha, v, drift, n2, policy)
 
 
 # -- whole spectrum (dense QZ) -----------------------------------------------------------
-def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
-             drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
-             physical_only: bool = True) -> list[Mode]:
+def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
+             policy: RejectionPolicy | None = None, drift_tol: float | None = None,
+             tail_tol: float | None = None, physical_only: bool = True,
+             cache: OperatorCache | None = None) -> list[Mode]:
     """All eigenmodes at wavenumber ``k`` by dense QZ at N and N', best first.
 
     Parameters
@@ -249,12 +314,17 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
         Base state.
     k, kz : float
         Wavenumbers (k ≥ 0; kz ≠ 0 for three-dimensional perturbations).
-    n : int
-        Resolution N; the drift is measured against N' = round(0.8 N).
-    drift_tol, tail_tol : float
-        Thresholds of the physical-mode tests (paper: 1e-7 both).
+    n : int, optional
+        Resolution N (default ``policy.n_start``, 80); the drift is measured against
+        N' = round(0.8 N).
+    policy : RejectionPolicy, optional
+        Thresholds of the physical-mode tests (default: the paper's, 1e-7 both).
+    drift_tol, tail_tol : float, optional
+        Overrides of the policy's thresholds.
     physical_only : bool
         Return only physical modes (default) or every finite eigenvalue.
+    cache : OperatorCache, optional
+        Where the operators come from (default: the module's shared cache).
 
     Returns
     -------
@@ -263,18 +333,18 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
         against; it costs two dense QZ decompositions (seconds at N ~ 100).
     """
     k, kz = _check_k(k, "k"), _check_k(kz, "kz", signed=True)
-    n = _check_n(n)
-    drift_tol, tail_tol = _tols(drift_tol, tail_tol)
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
+    n = _check_n(policy.n_start if n is None else n)
     three_d = bool(kz)
-    p1 = stability_operator(flow, n, three_d).pencil(k, kz)
+    p1 = stability_operator(flow, n, three_d, cache=cache).pencil(k, kz)
     n2 = check_n(n)
-    p2 = stability_operator(flow, n2, three_d).pencil(k, kz)
+    p2 = stability_operator(flow, n2, three_d, cache=cache).pencil(k, kz)
     w1, V1 = qz(*p1.equilibrated())
     w2, _ = qz(*p2.equilibrated(), vectors=False)
     modes = []
     for j, a in enumerate(w1):
         drift = float(np.abs(w2 - a).min()) if len(w2) else math.inf
-        mode = _make_mode(p1, a, V1[:, j], drift, n2, drift_tol, tail_tol)
+        mode = _make_mode(p1, a, V1[:, j], drift, n2, policy)
         if mode.physical or not physical_only:
             modes.append(mode)
     return modes
@@ -283,8 +353,8 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int = N_DEFAULT,
 # -- the least-stable mode ---------------------------------------------------------------
 def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
                  sigma: complex | None = None, method: str = "branch",
-                 drift_tol: float = DRIFT_TOL, tail_tol: float = TAIL_TOL,
-                 n_max: int = N_MAX) -> Mode:
+                 policy: RejectionPolicy | None = None, drift_tol: float | None = None,
+                 tail_tol: float | None = None, n_max: int | None = None) -> Mode:
     """The least-stable physical mode at wavenumber ``k``.
 
     Parameters
@@ -294,8 +364,8 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
     k, kz : float
         Wavenumber(s).
     n : int, optional
-        Resolution N. Default: adaptive, from N = 80 upwards by factors 1.25 until the
-        mode is physical (drift and tail below their thresholds), at most ``n_max``.
+        Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
+        factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
     sigma : complex, optional
         Shift: return the physical mode nearest σ (shift-invert Arnoldi at N, drift at N').
     method : {"branch", "qz"}
@@ -303,29 +373,36 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
         mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
         continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
         reference, seconds.
+    policy : RejectionPolicy, optional
+        Thresholds of the drift and tail tests and the resolution ladder (default: the
+        paper's, §4.1).
+    drift_tol, tail_tol, n_max : optional
+        Overrides of the policy's fields of the same names.
 
     Raises
     ------
     ConvergenceError
         No physical mode reaches the thresholds by N = ``n_max``.
     """
+    # the branch solver lives in the module above this one (it tracks the modes judged here)
+    from .dispersion import branch_mode
+
     k, kz = _check_k(k, "k"), _check_k(kz, "kz", signed=True)
-    drift_tol, tail_tol = _tols(drift_tol, tail_tol)
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
     if method not in ("branch", "qz"):
         raise ParameterError(f"method = {method!r}: choose 'branch' (continuation from k = 0) "
                              "or 'qz' (dense scan of the whole spectrum)")
-    ns = [_check_n(n)] if n is not None else _ladder(n_max)
+    ns = [_check_n(n)] if n is not None else policy.ladder()
     last = None
     for nn in ns:
+        mode: Mode | None
         if sigma is not None:
-            mode = mode_near(flow, k, sigma, kz=kz, n=nn, drift_tol=drift_tol,
-                             tail_tol=tail_tol)
+            mode = mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy)
         elif method == "qz":
-            found = spectrum(flow, k, kz=kz, n=nn, drift_tol=drift_tol, tail_tol=tail_tol)
+            found = spectrum(flow, k, kz=kz, n=nn, policy=policy)
             mode = found[0] if found else None
         else:
-            from .dispersion import branch_mode
-            mode = branch_mode(flow, k, kz=kz, n=nn, drift_tol=drift_tol, tail_tol=tail_tol)
+            mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy)
         if mode is not None and mode.physical:
             return mode
         last = mode
@@ -336,21 +413,14 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
             f"{last.tail:.1e}")
     raise ConvergenceError(
         f"least-stable mode at theta = {flow.theta:g}, nu0 = {flow.nu0:g}, k = {k:g}: "
-        f"{what} (thresholds drift {drift_tol:g}, tail {tail_tol:g}) up to N = "
+        f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
         f"{ns[-1]}; raise n_max or relax the thresholds")
 
 
-def _ladder(n_max: int, start: int = N_DEFAULT) -> list[int]:
-    n_max = _check_n(n_max)
-    out = [min(start, n_max)]
-    while out[-1] < n_max:
-        out.append(min(n_max, int(round(out[-1] * 1.25))))
-    return out
-
-
-def choose_n(flow: SteadyFlow, k: float, *, kz: float = 0.0, drift_tol: float = DRIFT_TOL,
-             tail_tol: float = TAIL_TOL, n_max: int = N_MAX) -> int:
-    """Smallest N of the ladder 80, 100, 125, … at which the least-stable (α(0) = 0 branch)
-    mode at (k, kz) passes the drift and tail tests."""
-    return least_stable(flow, k, kz=kz, drift_tol=drift_tol, tail_tol=tail_tol,
-                        n_max=n_max).n
+def choose_n(flow: SteadyFlow, k: float, *, kz: float = 0.0,
+             policy: RejectionPolicy | None = None, drift_tol: float | None = None,
+             tail_tol: float | None = None, n_max: int | None = None) -> int:
+    """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
+    (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
+    return least_stable(flow, k, kz=kz, policy=policy, drift_tol=drift_tol,
+                        tail_tol=tail_tol, n_max=n_max).n

@@ -6,6 +6,7 @@ import math
 import numpy as np
 
 from ..closures import ChuteModel
+from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 from .result import SteadyFlow, derived_quantities, spectral_tail
@@ -134,7 +135,8 @@ def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = Non
            rtol: float = 1e-8, n_max: int = 384):
     """Follow the branch of ``flow`` along the straight path to (``theta``, ``nu0``).
 
-    Adaptive natural-parameter continuation in the path parameter s ∈ [0, 1] (``step`` and
+    Adaptive natural-parameter continuation (:func:`chuteflow.continuation.continue_to`,
+    ``retry="halve"``) in the path parameter s ∈ [0, 1] (``step`` and
     ``min_step`` are in degrees when θ moves, else in units of ν0(0)/10): Euler predictor
     along the exact tangents dX/dθ, dX/dν0(0), Newton corrector (every point converged to
     ``rtol`` between two resolutions, as :func:`solve_steady`), step ×1.5 after a success,
@@ -155,12 +157,10 @@ def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = Non
         scale = abs(nu1 - nu00) * 10.0 / max(nu00, 1e-12)
     if scale == 0:
         return flow, True
-    cur, s, ds, steps = flow, 0.0, step / scale, 0
     model, nu_top = flow.model, flow.nu_top
-    while steps < max_steps and s < 1.0:
-        steps += 1
-        s_new = min(1.0, s + ds)
-        th, nu = th0 + s_new * (th1 - th0), nu00 + s_new * (nu1 - nu00)
+
+    def solve(cur, s):
+        th, nu = th0 + s * (th1 - th0), nu00 + s * (nu1 - nu00)
         dxb, dxt = _tangent_vectors(cur, theta=True)
         X = _State(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
                    cur.y_max).pack()
@@ -169,15 +169,17 @@ def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = Non
                 and (pred.s < np.log(model.nu_max)).all()):
             pred = _State.unpack(cur.n, X)
         try:
-            cur = _solve(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
-                         maxiter=15, lam_min=1.0 / 16)
-            s = s_new
-            ds = min(2.0 / scale, ds * 1.5)
-        except (NoSteadyFlowError, ConvergenceError, ParameterError):
-            ds *= 0.5
-            if ds * scale < min_step:
-                break
-    return cur, s >= 1.0
+            return Trial(True, _solve(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
+                                      maxiter=15, lam_min=1.0 / 16))
+        except (NoSteadyFlowError, ConvergenceError, ParameterError) as exc:
+            return Trial(False, str(exc))
+
+    # steps in degrees (θ moves) or ν0(0)/10 per unit s; a failed step onto the end of the
+    # path is retried there with the halved nominal step (clip=False)
+    rules = StepRules(grow=1.5, shrink=0.5, max_step=2.0, min_step=min_step,
+                      max_attempts=max_steps, clip=False, scale=scale)
+    res = continue_to(solve, flow, 0.0, 1.0, rules, h=step / scale)
+    return res.state, res.reached
 
 
 def _thin_message(theta, nu0, model, h, min_thickness):

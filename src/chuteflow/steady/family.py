@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..closures import ChuteModel
+from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from .api import ThinLayerError, _solve, _tangent_from, _tangent_vectors
 from .result import SteadyFlow
@@ -139,24 +140,24 @@ def _with_tangent(point: _Point, opts: Options) -> _Point:
 
 def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Point:
     """Solve at (θ, ν0) from the converged neighbour ``nb``; on failure retry through
-    2, then 4, … intermediate points on the straight path from the neighbour."""
-    p = _attempt(theta, nu0, model, opts, _predict(nb, theta, nu0), _start_n(nb.flow, opts))
+    2, then 4, … (up to 2**``opts.substeps``) equal steps on the straight path from the
+    neighbour (:func:`~chuteflow.continuation.continue_to`, ``retry="subdivide"``)."""
     th0, nu00 = nb.flow.theta, nb.flow.nu0
-    for depth in range(1, opts.substeps + 1):
-        if p.usable:
-            break
-        k = 2 ** depth
-        cur = nb
-        for j in range(1, k):
-            th, nu = th0 + (theta - th0) * j / k, nu00 + (nu0 - nu00) * j / k
-            q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
-            if not q.usable:
-                break
-            cur = _with_tangent(q, opts)
+
+    def solve(cur: _Point, s: float) -> Trial:
+        if s == 1.0:
+            th, nu = theta, nu0
         else:
-            p = _attempt(theta, nu0, model, opts, _predict(cur, theta, nu0),
-                         _start_n(cur.flow, opts))
-    return _with_tangent(p, opts)
+            th, nu = th0 + (theta - th0) * s, nu00 + (nu0 - nu00) * s
+        q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
+        if q.usable and s != 1.0:
+            q = _with_tangent(q, opts)
+        return Trial(q.usable, q)
+
+    res = continue_to(solve, nb, 0.0, 1.0, StepRules(retry="subdivide",
+                                                     max_depth=opts.substeps))
+    # the answer is the last attempt at the target (a failed one carries the error)
+    return _with_tangent(res.last_at(1.0).value, opts)
 
 
 def _cold(theta, nu0, model, opts) -> _Point:

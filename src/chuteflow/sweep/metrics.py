@@ -152,7 +152,7 @@ class GrowthMetric(PointFunction):
 
     def compute(self, flow, point):
         from ..errors import ConvergenceError
-        from ..stability import BranchTracker
+        from ..stability import BranchTracker, RejectionPolicy
 
         a2 = point.values.get("alpha2_re", np.nan)
         unstable = bool(np.isfinite(a2) and a2 > 0)
@@ -161,7 +161,7 @@ class GrowthMetric(PointFunction):
         o = self.options
         ks = self.k_grid()
         try:
-            tr = BranchTracker(flow, int(o["n"]), n_max=int(o["n_max"]))
+            tr = BranchTracker(flow, int(o["n"]), policy=RejectionPolicy(n_max=int(o["n_max"])))
             modes = [tr.mode(k) for k in ks]
             bad = [m for m in modes if not m.physical]
             if bad:

@@ -1,0 +1,96 @@
+"""When a computed eigenpair is accepted: one rejection policy for every solver (paper §4.1).
+
+A :class:`RejectionPolicy` holds the paper's two tests of a physical mode — the *drift* of
+the eigenvalue between the resolutions N and N' = round(0.8 N), and the *tail* of its
+eigenvector (the highest ``tail_terms`` Chebyshev coefficients) — with their thresholds, and
+the ladder of resolutions N tried until a mode passes them. Every function of
+:mod:`chuteflow.stability` that judges modes takes it as ``policy=`` (default
+:data:`DEFAULT_POLICY`, the paper's values).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+from .operator import _check_n
+
+__all__ = ["DEFAULT_POLICY", "RejectionPolicy"]
+
+
+@dataclass(frozen=True)
+class RejectionPolicy:
+    """Thresholds of the physical-mode tests and the resolution ladder (paper §4.1).
+
+    Parameters
+    ----------
+    drift_tol : float
+        Largest accepted |α(N) − α(N')| (paper: 1e-7).
+    tail_tol : float
+        Largest accepted coefficient among the highest ``tail_terms`` Chebyshev
+        coefficients of the normalised eigenvector (paper: 1e-7).
+    tail_terms : int
+        Number of highest Chebyshev coefficients of the tail test (paper: 10).
+    track_tail_tol : float
+        Largest tail of an eigenvector accepted as a continuation step of the branch
+        α(0) = 0 (looser than ``tail_tol``; the near-neutral continuum of the dilute top
+        has tails ~1e-4).
+    n_start : int
+        First resolution N of the adaptive choice.
+    n_max : int
+        Largest resolution N tried.
+    n_growth : float
+        Each rung of the ladder is round(``n_growth`` × the one before) (at most ``n_max``).
+    """
+
+    drift_tol: float = 1e-7
+    tail_tol: float = 1e-7
+    tail_terms: int = 10
+    track_tail_tol: float = 1e-5
+    n_start: int = 80
+    n_max: int = 256
+    n_growth: float = 1.25
+
+    def __post_init__(self):
+        for name in ("drift_tol", "tail_tol", "track_tail_tol"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < 1):
+                raise ParameterError(f"{name} = {v!r} is outside (0, 1): it is a threshold on "
+                                     "an eigenvalue change or a normalised Chebyshev "
+                                     "coefficient")
+            object.__setattr__(self, name, float(v))
+        if isinstance(self.tail_terms, bool) or not (isinstance(self.tail_terms, int)
+                                                      and self.tail_terms >= 1):
+            raise ParameterError(f"tail_terms = {self.tail_terms!r}: need an integer >= 1")
+        for name in ("n_start", "n_max"):
+            try:
+                object.__setattr__(self, name, _check_n(getattr(self, name)))
+            except ParameterError as exc:
+                raise ParameterError(f"{name}: {exc}") from None
+        if not (isinstance(self.n_growth, (int, float)) and self.n_growth > 1):
+            raise ParameterError(f"n_growth = {self.n_growth!r}: the ladder must grow (> 1)")
+
+    def replace(self, **changes) -> RejectionPolicy:
+        """A copy with the given fields changed; ``None`` values leave a field as it is."""
+        changes = {k: v for k, v in changes.items() if v is not None}
+        return dataclasses.replace(self, **changes) if changes else self
+
+    def accepts(self, drift: float, tail: float) -> bool:
+        """Both tests pass: drift < ``drift_tol`` and tail < ``tail_tol``."""
+        return bool(drift < self.drift_tol and tail < self.tail_tol)
+
+    def next_n(self, n: int) -> int:
+        """The rung after N: min(``n_max``, round(``n_growth`` N))."""
+        return min(self.n_max, round(n * self.n_growth))
+
+    def ladder(self, start: int | None = None) -> list[int]:
+        """Resolutions tried in turn: ``start`` (default ``n_start``, at most ``n_max``),
+        then :meth:`next_n` until ``n_max`` (80, 100, 125, 156, 195, 244, 256 by default)."""
+        out = [min(self.n_start if start is None else start, self.n_max)]
+        while out[-1] < self.n_max:
+            out.append(self.next_n(out[-1]))
+        return out
+
+
+#: The paper's thresholds (§4.1) and the default ladder 80 … 256.
+DEFAULT_POLICY = RejectionPolicy()

@@ -1,0 +1,75 @@
+"""The rejection policy object and the operator cache of the stability solvers."""
+from __future__ import annotations
+
+import dataclasses
+import gc
+
+import numpy as np
+import pytest
+
+from chuteflow.errors import ParameterError
+from chuteflow.stability import (
+    DEFAULT_POLICY,
+    OperatorCache,
+    RejectionPolicy,
+    least_stable,
+    stability_operator,
+)
+from chuteflow.stability.modes import resolve_policy
+
+K = 0.01
+
+
+def test_default_policy_is_the_papers():
+    # §4.1: drift and tail below 1e-7, ten highest Chebyshev coefficients
+    p = DEFAULT_POLICY
+    assert (p.drift_tol, p.tail_tol, p.tail_terms) == (1e-7, 1e-7, 10)
+    assert p.ladder() == [80, 100, 125, 156, 195, 244, 256]
+    assert RejectionPolicy(n_max=100).ladder() == [80, 100]
+    assert RejectionPolicy(n_max=64).ladder() == [64]
+    assert p.accepts(9e-8, 9e-8) and not p.accepts(1e-7, 0.0)
+
+
+def test_policy_is_frozen_and_checked():
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        DEFAULT_POLICY.drift_tol = 1.0
+    with pytest.raises(ParameterError, match="tail_tol"):
+        RejectionPolicy(tail_tol=2.0)
+    with pytest.raises(ParameterError, match="n_max"):
+        RejectionPolicy(n_max=4)
+    with pytest.raises(ParameterError, match="policy"):
+        resolve_policy("strict")
+    assert resolve_policy(None, drift_tol=1e-6).drift_tol == 1e-6
+    assert resolve_policy(RejectionPolicy(n_max=100), n_max=None).n_max == 100
+    assert hash(RejectionPolicy()) == hash(DEFAULT_POLICY)
+
+
+def test_policy_and_keywords_agree(p1_flow):
+    a = least_stable(p1_flow, K, n=80, policy=RejectionPolicy(drift_tol=1e-6))
+    b = least_stable(p1_flow, K, n=80, drift_tol=1e-6)
+    assert a.alpha == b.alpha and a.drift_tol == b.drift_tol == 1e-6 and a.physical
+
+
+def test_two_flows_never_share_an_operator(p1_flow):
+    cache = OperatorCache(4)
+    twin = dataclasses.replace(p1_flow)  # equal content, another object
+    op1 = stability_operator(p1_flow, 24, cache=cache)
+    op2 = stability_operator(twin, 24, cache=cache)
+    assert op1 is not op2 and op1.flow is p1_flow and op2.flow is twin
+    assert stability_operator(p1_flow, 24, cache=cache) is op1  # a hit
+    assert stability_operator(p1_flow, 24, True, cache=cache) is not op1  # 3D: another one
+
+
+def test_cache_survives_address_reuse_and_in_place_changes(p1_flow):
+    cache = OperatorCache(2)
+    for _ in range(5):
+        # short-lived flows: a new one may get the address of a freed one
+        f = dataclasses.replace(p1_flow, log_nu=np.array(p1_flow.log_nu))
+        assert stability_operator(f, 24, cache=cache).flow is f
+        del f
+        gc.collect()
+    assert len(cache) <= 2
+    f = dataclasses.replace(p1_flow, log_nu=np.array(p1_flow.log_nu))
+    op = stability_operator(f, 24, cache=cache)
+    f.log_nu[0] += 1e-3  # the arrays are writable: a changed flow gets a new operator
+    assert stability_operator(f, 24, cache=cache) is not op
