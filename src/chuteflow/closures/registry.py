@@ -48,7 +48,7 @@ class Registry(Generic[T]):
         """Register the frozen dataclass ``cls`` under ``cls.name`` (usable as a decorator)."""
         if not (isinstance(cls, type) and issubclass(cls, self.base)):
             raise TypeError(f"{self.kind}: {cls!r} is not a subclass of {self.base.__name__}")
-        params = getattr(cls, "__dataclass_params__", None)
+        params = cls.__dict__.get("__dataclass_params__")  # its own, not a base's
         if params is None or not params.frozen:
             raise TypeError(f"{self.kind}: {cls.__name__} must be a frozen dataclass")
         name = getattr(cls, "name", None)
@@ -59,6 +59,10 @@ class Registry(Generic[T]):
                              f"{self._classes[name].__name__}")
         self._classes[name] = cls
         return cls
+
+    def unregister(self, name: str) -> None:
+        """Remove the closure registered as ``name`` (e.g. one a test registered)."""
+        self._classes.pop(name, None)
 
     def names(self) -> tuple[str, ...]:
         """Registered names, sorted."""
