@@ -12,9 +12,21 @@ from typing import ClassVar
 import numpy as np
 import pytest
 
-from chuteflow.closures import (CLOSURES, FIELDS, RADIALS, TRANSPORTS, WALLS, CarnahanStarling,
-                                ChuteModel, JohnsonJackson, LunClosure, LunSavage,
-                                RadialDistribution, Registry, register_radial)
+from chuteflow.closures import (
+    CLOSURES,
+    FIELDS,
+    RADIALS,
+    TRANSPORTS,
+    WALLS,
+    CarnahanStarling,
+    ChuteModel,
+    JohnsonJackson,
+    LunClosure,
+    LunSavage,
+    RadialDistribution,
+    Registry,
+    register_radial,
+)
 from chuteflow.errors import ParameterError
 
 

@@ -19,7 +19,7 @@ def test_equal_flows_compare_and_hash_equal():
     a, b = solve_steady(16.0, 0.05), solve_steady(16.0, 0.05)
     assert a is not b and a == b and hash(a) == hash(b)
     assert {a: 1}[b] == 1
-    assert not (a != b)
+    assert (a != b) is False
 
 
 def test_different_flows_differ():

@@ -16,12 +16,18 @@ from chuteflow.closures import CarnahanStarling, ChuteModel
 from chuteflow.reduced import reduced_diagram
 from chuteflow.reduced.diagram import reduced_diagram_config
 from chuteflow.steady import solve_steady
-from chuteflow.sweep import (ConfigMismatchError, PartStore, SweepConfig, load_sweep,
-                             resolve_model, run_sweep)
+from chuteflow.sweep import (
+    ConfigMismatchError,
+    PartStore,
+    SweepConfig,
+    load_sweep,
+    resolve_model,
+    run_sweep,
+)
 
 LS = ChuteModel()
 CS = ChuteModel(radial="carnahan_starling")
-GRID = dict(theta=(16.0,), nu0=(0.05, 0.08), metrics=("steady",), markers=())
+GRID = {"theta": (16.0,), "nu0": (0.05, 0.08), "metrics": ("steady",), "markers": ()}
 
 
 def test_config_holds_the_model():

@@ -84,7 +84,8 @@ _FIELDS = {f.name: f for f in dataclasses.fields(ChuteModel)}
 #: CLI defaults and help of the numeric model parameters, taken from ChuteModel's fields
 #: (tests/cli/test_cli.py checks them against ChuteModel()).
 MODEL_OPTIONS: dict[str, tuple[float, str]] = {
-    name: (_FIELDS[name].default, _FIELDS[name].metadata["help"]) for name in PARAMETERS}
+    name: (float(_FIELDS[name].default), _FIELDS[name].metadata["help"])  # type: ignore[arg-type]
+    for name in PARAMETERS}
 #: CLI defaults (registered names), help and choices of the closure fields of ChuteModel.
 CLOSURE_OPTIONS: dict[str, tuple[str, str, type[enum.Enum]]] = {
     name: (str(reg.spec(_FIELDS[name].default)), _FIELDS[name].metadata["help"],
@@ -96,10 +97,10 @@ def model_option(name: str):
     (closure fields: the registered names as choices)."""
     flag = "--" + name.replace("_", "-")
     if name in CLOSURE_OPTIONS:
-        default, text, _ = CLOSURE_OPTIONS[name]
-        return typer.Option(default, flag, help=text)
-    default, text = MODEL_OPTIONS[name]
-    return typer.Option(default, flag, help=text)
+        choice, text, _ = CLOSURE_OPTIONS[name]
+        return typer.Option(choice, flag, help=text)
+    value, text = MODEL_OPTIONS[name]
+    return typer.Option(value, flag, help=text)
 
 
 def model_from_options(**values: Any) -> ChuteModel:

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
@@ -50,8 +50,8 @@ def diagram(
     from chuteflow.sweep import Sweep, SweepConfig, parse_grid, parts_dir
 
     shape = parse_grid(grid)
-    kw = dict(shape=shape, theta_range=theta_range, nu0_range=nu0_range, model=model,
-              chunk=chunk)
+    kw: dict[str, Any] = {"shape": shape, "theta_range": theta_range,
+                          "nu0_range": nu0_range, "model": model, "chunk": chunk}
     if not with_markers:
         kw["markers"] = ()
     if metrics:

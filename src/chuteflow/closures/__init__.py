@@ -4,14 +4,55 @@ Each kind of closure has a registry (:class:`Registry`): :data:`RADIALS` (g0),
 :data:`WALLS` (floor conditions) and :data:`TRANSPORTS` (kinetic-theory transport closures).
 :class:`ChuteModel` carries one of each with the material and floor parameters.
 """
-from .kinetic import TRANSPORTS, LunClosure, TransportClosure, lun_functions, register_transport
-from .model import CLOSURES, FIELDS, FLOOR, FUNCTIONS, ORDERS, PARAMETERS, TRANSPORT, ChuteModel
-from .radial import RADIALS, CarnahanStarling, LunSavage, RadialDistribution, register_radial
+from .kinetic import (
+           TRANSPORTS,
+           LunClosure,
+           TransportClosure,
+           lun_functions,
+           register_transport,
+)
+from .model import (
+           CLOSURES,
+           FIELDS,
+           FLOOR,
+           FUNCTIONS,
+           ORDERS,
+           PARAMETERS,
+           TRANSPORT,
+           ChuteModel,
+)
+from .radial import (
+           RADIALS,
+           CarnahanStarling,
+           LunSavage,
+           RadialDistribution,
+           register_radial,
+)
 from .registry import Registry
 from .walls import WALLS, JohnsonJackson, WallCondition, register_wall
 
-__all__ = ["ChuteModel", "LunClosure", "TransportClosure", "lun_functions", "LunSavage",
-           "CarnahanStarling", "RadialDistribution", "JohnsonJackson", "WallCondition",
-           "Registry", "RADIALS", "WALLS", "TRANSPORTS", "CLOSURES", "FIELDS", "PARAMETERS",
-           "register_radial", "register_wall", "register_transport", "TRANSPORT", "FLOOR",
-           "FUNCTIONS", "ORDERS"]
+__all__ = [
+           "CLOSURES",
+           "FIELDS",
+           "FLOOR",
+           "FUNCTIONS",
+           "ORDERS",
+           "PARAMETERS",
+           "RADIALS",
+           "TRANSPORT",
+           "TRANSPORTS",
+           "WALLS",
+           "CarnahanStarling",
+           "ChuteModel",
+           "JohnsonJackson",
+           "LunClosure",
+           "LunSavage",
+           "RadialDistribution",
+           "Registry",
+           "TransportClosure",
+           "WallCondition",
+           "lun_functions",
+           "register_radial",
+           "register_transport",
+           "register_wall",
+]

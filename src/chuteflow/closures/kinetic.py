@@ -18,8 +18,13 @@ import sympy as sp
 
 from .registry import Registry
 
-__all__ = ["TransportClosure", "LunClosure", "lun_functions", "TRANSPORTS",
-           "register_transport"]
+__all__ = [
+    "TRANSPORTS",
+    "LunClosure",
+    "TransportClosure",
+    "lun_functions",
+    "register_transport",
+]
 
 
 def lun_functions(nu, e, nu_max, g0):

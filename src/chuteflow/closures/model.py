@@ -75,8 +75,8 @@ def _param(default: float, help: str, symbol: str):
     return field(default=default, metadata={"help": help, "symbol": symbol})
 
 
-def _closure(default, registry: Registry, help: str):
-    return field(default=default, metadata={"help": help, "registry": registry})
+#: The paper's closures (the defaults of ChuteModel).
+_LUN_SAVAGE, _JOHNSON_JACKSON, _LUN = LunSavage(), JohnsonJackson(), LunClosure()
 
 
 @dataclass(frozen=True)
@@ -110,11 +110,12 @@ class ChuteModel:
     nu_max: float = _param(0.6, "Maximum packing ν_m of g0(ν).", "ν_m")
     roughness: float = _param(0.05, "Floor roughness φ (§2.2).", "φ")
     wall_loss: float = _param(0.39, "Floor energy loss Φ (§2.2).", "Φ")
-    radial: RadialDistribution = _closure(LunSavage(), RADIALS,
-                                          "Radial distribution function g0(ν) at contact.")
-    wall: WallCondition = _closure(JohnsonJackson(), WALLS, "Floor (wall) condition.")
-    transport: TransportClosure = _closure(LunClosure(), TRANSPORTS,
-                                           "Kinetic-theory transport closure.")
+    radial: RadialDistribution = field(default=_LUN_SAVAGE, metadata={
+        "help": "Radial distribution function g0(ν) at contact.", "registry": RADIALS})
+    wall: WallCondition = field(default=_JOHNSON_JACKSON, metadata={
+        "help": "Floor (wall) condition.", "registry": WALLS})
+    transport: TransportClosure = field(default=_LUN, metadata={
+        "help": "Kinetic-theory transport closure.", "registry": TRANSPORTS})
 
     def __post_init__(self):
         _check("restitution", self.restitution, 0.0, 1.0, lo_open=True,

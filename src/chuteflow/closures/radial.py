@@ -13,8 +13,13 @@ import sympy as sp
 
 from .registry import Registry
 
-__all__ = ["RadialDistribution", "LunSavage", "CarnahanStarling", "RADIALS",
-           "register_radial"]
+__all__ = [
+    "RADIALS",
+    "CarnahanStarling",
+    "LunSavage",
+    "RadialDistribution",
+    "register_radial",
+]
 
 
 @dataclass(frozen=True)

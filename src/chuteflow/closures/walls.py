@@ -14,7 +14,7 @@ import sympy as sp
 
 from .registry import Registry
 
-__all__ = ["WallCondition", "JohnsonJackson", "WALLS", "register_wall"]
+__all__ = ["WALLS", "JohnsonJackson", "WallCondition", "register_wall"]
 
 
 @dataclass(frozen=True)

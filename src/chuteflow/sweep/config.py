@@ -23,8 +23,16 @@ from ..closures import FIELDS as MODEL_FIELDS
 from ..closures import ChuteModel
 from ..errors import ParameterError
 
-__all__ = ["SweepConfig", "Task", "resolve_model", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_ranges",
-           "default_markers", "parse_grid"]
+__all__ = [
+    "DEFAULT_MARKERS",
+    "DEFAULT_RANGES",
+    "SweepConfig",
+    "Task",
+    "default_markers",
+    "default_ranges",
+    "parse_grid",
+    "resolve_model",
+]
 
 #: (θ range in degrees, ν0(0) range) covering the paper's stability diagrams, where steady
 #: flows exist (found by scanning with chuteflow.steady; beyond them no steady flow exists
@@ -171,9 +179,10 @@ class SweepConfig:
                  nu_top: float = 1e-9, steady_rtol: float = 1e-8, n_max: int = 384,
                  min_thickness: float = 0.0, chunk: int | None = None, markers=(),
                  **model_fields):
-        values = dict(theta=theta, nu0=nu0, model=resolve_model(model, **model_fields),
-                      metrics=metrics, nu_top=nu_top, steady_rtol=steady_rtol, n_max=n_max,
-                      min_thickness=min_thickness, chunk=chunk, markers=markers)
+        values = {"theta": theta, "nu0": nu0, "model": resolve_model(model, **model_fields),
+                  "metrics": metrics, "nu_top": nu_top, "steady_rtol": steady_rtol,
+                  "n_max": n_max, "min_thickness": min_thickness, "chunk": chunk,
+                  "markers": markers}
         for name, value in values.items():
             object.__setattr__(self, name, value)
         self.__post_init__()
@@ -291,7 +300,7 @@ class SweepConfig:
 
     def tasks(self) -> list[Task]:
         """Tasks in a fixed order: θ rows, each cut into chunks of ``chunk`` points."""
-        out = []
+        out: list[Task] = []
         nn = len(self.nu0)
         nchunks = math.ceil(nn / (self.chunk or nn))
         # equal-sized chunks (sizes differ by at most one)
