@@ -1,7 +1,8 @@
 """The typer application shared by the command modules, its error handling, and the model
 options: one option per :class:`~chuteflow.closures.ChuteModel` field, generated from the
 fields (defaults, help, and the registered closure names as choices), added to a command by
-:func:`with_model_options`."""
+:func:`with_model_options`. Generating them imports :mod:`chuteflow.closures` (and so sympy,
+~0.3 s) at start-up; nothing is derived or compiled until a command runs."""
 from __future__ import annotations
 
 import dataclasses
