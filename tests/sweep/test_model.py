@@ -7,6 +7,7 @@ sweep must reproduce them to the steady solver's tolerance (rtol 1e-8, margin 10
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -39,6 +40,8 @@ def test_config_holds_the_model():
     assert SweepConfig(**GRID, model=CS, roughness=0.1).model == ChuteModel(
         roughness=0.1, radial="carnahan_starling")
     assert resolve_model(CS.to_dict()) == CS
+    again = dataclasses.replace(cfg, chunk=1)
+    assert again.model == CS and again.chunk == 1 and dataclasses.replace(cfg) == cfg
     with pytest.raises(ValueError, match="unknown parameters"):
         SweepConfig(**GRID, roughnes=0.1)
 

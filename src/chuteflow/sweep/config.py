@@ -232,7 +232,9 @@ class SweepConfig:
             from .metrics import default_metrics
             specs = default_metrics()
         else:
-            specs = self.metrics
+            # the canonical form stored by a configuration is JSON text (dataclasses.replace)
+            specs = [json.loads(m) if isinstance(m, str) and m.startswith("{") else m
+                     for m in self.metrics]
         fns = [point_function(s) for s in specs]
         names = [f.name for f in fns]
         if len(set(names)) != len(names):
