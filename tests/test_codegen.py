@@ -70,10 +70,9 @@ def test_key_changes_with_what_the_expressions_depend_on(cache, tmp_path, monkey
     assert base[1] != cache_key("test", "k2", (__name__,))[1]
     assert base[1] != cache_key("other", "k1", (__name__,))[1]
     # a closure with another g0: another key
-    a, b = LunClosure(), LunClosure(radial=CarnahanStarling())
-    wall = ChuteModel().wall
-    ka = cache_key("closure", repr((a, wall)), (a, wall))
-    kb = cache_key("closure", repr((b, wall)), (b, wall))
+    a, b = ChuteModel().closures, ChuteModel(radial=CarnahanStarling()).closures
+    ka = cache_key("closure", repr(a), a)
+    kb = cache_key("closure", repr(b), b)
     assert ka[1] != kb[1]
     assert "chuteflow.closures.radial" in json.loads(ka[0])["sources"]
     assert "chuteflow.closures.walls" in json.loads(ka[0])["sources"]
@@ -145,10 +144,10 @@ def test_model_code_is_bitwise_identical_to_lambdify(cache):
         m = ChuteModel()
         rng = np.random.default_rng(7)
         nu, T = rng.uniform(0.001, 0.55, 50), rng.uniform(0.1, 5.0, 50)
-        spec, _ = model_module._derive(m.closure, m.wall)
+        spec, _ = model_module._derive(*m.closures)
         args, exprs = spec["partials"]
         direct = sp.lambdify(args, exprs, modules="numpy", cse=True)
-        partials = model_module._compiled(m.closure, m.wall)[0]
+        partials = model_module._compiled(*m.closures)[0]
         p = (m.restitution, m.nu_max, m.roughness, m.wall_loss)
         assert _bits(partials(nu, T, *p)) == _bits(direct(nu, T, *p))
         eqs = compiled_equations()

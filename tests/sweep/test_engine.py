@@ -37,7 +37,7 @@ def test_values_equal_direct_solves(tmp_path):
     assert (ds["status"].values == STATUS["ok"]).all()
     for i, th in enumerate(cfg.theta):
         for j, nu in enumerate(cfg.nu0):
-            f = solve_steady(th, nu, cfg.model(), min_thickness=0.0)
+            f = solve_steady(th, nu, cfg.model, min_thickness=0.0)
             for name in ("h", "nu_mean", "rho_bar", "Q", "u_floor", "T_floor"):
                 assert ds[name].values[i, j] == pytest.approx(getattr(f, name), rel=1e-7)
             assert ds["monotonic"].values[i, j] == int(f.monotonic)

@@ -1,12 +1,22 @@
-"""The typer application shared by the command modules, and its error handling."""
+"""The typer application shared by the command modules, its error handling, and the model
+options: one option per :class:`~chuteflow.closures.ChuteModel` field, generated from the
+fields (defaults, help, and the registered closure names as choices), added to a command by
+:func:`with_model_options`. Generating them imports :mod:`chuteflow.closures` (and so sympy,
+~0.3 s) at start-up; nothing is derived or compiled until a command runs."""
 from __future__ import annotations
 
+import dataclasses
+import enum
+import functools
+import inspect
 import os
+from collections.abc import Callable
 from typing import Any
 
 import typer
 from typer.core import TyperGroup
 
+from chuteflow.closures import CLOSURES, PARAMETERS, ChuteModel
 from chuteflow.errors import ChuteflowError
 
 #: Exit code of a user error (bad parameter, no steady flow, no convergence).
@@ -64,17 +74,76 @@ def _root(
     """chuteflow: steady chute flows, linear stability, stability diagrams."""
 
 
-#: CLI defaults and help of the model parameters (the same as ChuteModel's defaults, which
-#: tests/cli/test_cli.py checks; kept here so ``chuteflow --help`` need not import sympy).
+def _closure_choices(name: str) -> type[enum.Enum]:
+    """A str Enum of the names registered for the closure field ``name`` (typer's choices)."""
+    names = CLOSURES[name].names()
+    return enum.Enum(name.title() + "Choice", {n: n for n in names}, type=str)  # type: ignore[return-value]
+
+
+_FIELDS = {f.name: f for f in dataclasses.fields(ChuteModel)}
+
+#: CLI defaults and help of the numeric model parameters, taken from ChuteModel's fields
+#: (tests/cli/test_cli.py checks them against ChuteModel()).
 MODEL_OPTIONS: dict[str, tuple[float, str]] = {
-    "roughness": (0.05, "Floor roughness φ (eq:bc1, etastar)."),
-    "wall_loss": (0.39, "Floor energy loss Φ (eq:bc2, gammastar)."),
-    "restitution": (0.7, "Particle restitution coefficient e_p."),
-    "nu_max": (0.6, "Maximum packing ν_m of g0(ν)."),
-}
+    name: (float(_FIELDS[name].default), _FIELDS[name].metadata["help"])  # type: ignore[arg-type]
+    for name in PARAMETERS}
+#: CLI defaults (registered names), help and choices of the closure fields of ChuteModel.
+CLOSURE_OPTIONS: dict[str, tuple[str, str, type[enum.Enum]]] = {
+    name: (str(reg.spec(_FIELDS[name].default)), _FIELDS[name].metadata["help"],
+           _closure_choices(name)) for name, reg in CLOSURES.items()}
 
 
 def model_option(name: str):
-    """The typer option ``--<name>`` of a model parameter, with its default and help."""
-    default, text = MODEL_OPTIONS[name]
-    return typer.Option(default, "--" + name.replace("_", "-"), help=text)
+    """The typer option ``--<name>`` of the ChuteModel field ``name``, with default and help
+    (closure fields: the registered names as choices)."""
+    flag = "--" + name.replace("_", "-")
+    if name in CLOSURE_OPTIONS:
+        choice, text, _ = CLOSURE_OPTIONS[name]
+        return typer.Option(choice, flag, help=text)
+    value, text = MODEL_OPTIONS[name]
+    return typer.Option(value, flag, help=text)
+
+
+def model_from_options(**values: Any) -> ChuteModel:
+    """The ChuteModel of parsed model options (``roughness=…, radial=…``; enum choices are
+    taken by value). Raises ParameterError (a one-line CLI error) for bad values."""
+    return ChuteModel(**{k: (v.value if isinstance(v, enum.Enum) else v)
+                         for k, v in values.items()})
+
+
+#: Default of the ``model`` parameter of a command decorated with :func:`with_model_options`
+#: (the decorator puts the model options in its place; the command receives a ChuteModel).
+MODEL_OPTIONS_HERE: Any = None
+
+
+def with_model_options(command: Callable[..., Any]) -> Callable[..., Any]:
+    """Decorator of a command function with a parameter ``model``: the command gets one option
+    per ChuteModel field instead (``--roughness --wall-loss --restitution --nu-max --radial
+    --wall --transport``, in place of ``model``), and is called with the ChuteModel built
+    from them by :func:`model_from_options`. Put it below ``@app.command(...)``.
+    """
+    sig = inspect.signature(command, eval_str=True)
+    params = list(sig.parameters.values())
+    names = [p.name for p in params]
+    if "model" not in names:
+        raise TypeError(f"{command.__name__}: with_model_options needs a parameter 'model'")
+    i = names.index("model")
+    kind = inspect.Parameter.POSITIONAL_OR_KEYWORD
+    options = [inspect.Parameter(name, kind, default=model_option(name),
+                                 annotation=(CLOSURE_OPTIONS[name][2] if name in CLOSURE_OPTIONS
+                                             else float))
+               for name in ChuteModel.__dataclass_fields__]
+    clash = set(names) & {p.name for p in options}
+    if clash:
+        raise TypeError(f"{command.__name__}: parameters {sorted(clash)} clash with the model "
+                        "options")
+    new = params[:i] + options + params[i + 1:]
+
+    @functools.wraps(command)
+    def wrapper(**kwargs: Any) -> Any:
+        values = {p.name: kwargs.pop(p.name) for p in options}
+        return command(**kwargs, model=model_from_options(**values))
+
+    wrapper.__signature__ = sig.replace(parameters=new)  # type: ignore[attr-defined]
+    wrapper.__annotations__ = {p.name: p.annotation for p in new}
+    return wrapper

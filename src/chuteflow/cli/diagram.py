@@ -2,11 +2,13 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import typer
 
-from ._app import app, model_option
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
 
 
 def _default_out(roughness: float) -> Path:
@@ -14,17 +16,15 @@ def _default_out(roughness: float) -> Path:
 
 
 @app.command("diagram")
+@with_model_options
 def diagram(
-    roughness: float = model_option("roughness"),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
     grid: str = typer.Option("60x60", "--grid", help="Grid size N_THETAxN_NU0."),
     theta_range: Optional[tuple[float, float]] = typer.Option(
         None, "--theta-range", metavar="LOW HIGH",
         help="Inclination range in degrees (default: where the paper's flows exist)."),
     nu0_range: Optional[tuple[float, float]] = typer.Option(
         None, "--nu0-range", metavar="LOW HIGH", help="Floor density ν0(0) range."),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
     metrics: Optional[str] = typer.Option(
         None, "--metrics", help="Comma-separated point functions (default: steady,"
         "kinematic,longwave,growth)."),
@@ -50,14 +50,14 @@ def diagram(
     from chuteflow.sweep import Sweep, SweepConfig, parse_grid, parts_dir
 
     shape = parse_grid(grid)
-    kw = dict(shape=shape, theta_range=theta_range, nu0_range=nu0_range, wall_loss=wall_loss,
-              restitution=restitution, nu_max=nu_max, chunk=chunk)
+    kw: dict[str, Any] = {"shape": shape, "theta_range": theta_range,
+                          "nu0_range": nu0_range, "model": model, "chunk": chunk}
     if not with_markers:
         kw["markers"] = ()
     if metrics:
         kw["metrics"] = tuple(m.strip() for m in metrics.split(",") if m.strip())
-    cfg = SweepConfig.grid(roughness, **kw)
-    out = out or _default_out(roughness)
+    cfg = SweepConfig.grid(**kw)
+    out = out or _default_out(model.roughness)
     sweep = Sweep(cfg, out, fresh=fresh)
     console = Console(stderr=True)
     try:

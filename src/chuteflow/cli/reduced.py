@@ -6,19 +6,14 @@ from pathlib import Path
 
 import typer
 
-from ._app import app, model_option
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
 
 #: Per-point keys of ``chuteflow reduced --json`` (``points``: the family's knots, exact).
 POINT_KEYS = ("nu0", "rho0", "F", "Tbar", "a", "U", "dU", "dP", "mu_bar", "q0", "dq0",
               "criterion_margin", "unstable", "short_wave_unstable", "alpha2",
               "phase_velocity", "k_c", "L_c")
-
-
-def _model(roughness, wall_loss, restitution, nu_max):
-    from chuteflow.closures import ChuteModel
-
-    return ChuteModel(restitution=restitution, nu_max=nu_max, roughness=roughness,
-                      wall_loss=wall_loss)
 
 
 def _num(v):
@@ -38,12 +33,10 @@ def _point(c, nu0=None):
 
 
 @app.command("reduced")
+@with_model_options
 def reduced(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
     nu0: float | None = typer.Option(None, "--nu0",
                                      help="Also give the linear theory at this floor density."),
     tol: float = typer.Option(1e-4, "--tol", help="Interpolation tolerance of F, T̄, a."),
@@ -60,7 +53,6 @@ def reduced(
 
     from chuteflow.reduced import reduced_model
 
-    model = _model(roughness, wall_loss, restitution, nu_max)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max)
@@ -73,8 +65,7 @@ def reduced(
 
         save(plot_functions(rm), plot)
     if as_json:
-        out = {"theta": rm.theta, **{k: v for k, v in model.as_dict().items()
-                                     if isinstance(v, (int, float, str))},
+        out = {"theta": rm.theta, **model.to_dict(),
                "rho_range": list(rm.rho_range), "nu0_range": [float(rm.nu0[0]),
                                                               float(rm.nu0[-1])],
                "accuracy": {k: float(v) for k, v in rm.accuracy.items()},
@@ -89,7 +80,7 @@ def reduced(
     from rich.table import Table
 
     con = Console()
-    table = Table(title=f"1D model (§5.1.2) at θ = {theta:g}°, φ = {roughness:g}",
+    table = Table(title=f"1D model (§5.1.2) at θ = {theta:g}°, {model.describe()}",
                   caption=f"{len(points)} steady flows (knots), ρ̄ ∈ [{rm.rho_range[0]:.4g}, "
                           f"{rm.rho_range[1]:.4g}]; interpolation error ≤ "
                           f"{max(rm.accuracy[k] for k in ('F', 'Tbar', 'a')):.1e} (F, T̄, a), "
@@ -122,6 +113,7 @@ def reduced(
 
 
 @app.command("simulate")
+@with_model_options
 def simulate(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
     nu0: float = typer.Option(..., "--nu0", help="Floor density ν0(0) of the uniform state."),
@@ -129,10 +121,7 @@ def simulate(
     time: float | None = typer.Option(None, "--time",
                                       help="Final time (default: until saturation, decay "
                                            "or leaving the steady family)."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
     cells: int | None = typer.Option(None, "--cells", help="Grid cells (default: automatic)."),
     mode: int | None = typer.Option(None, "--mode",
                                     help="Start from this discrete eigenmode instead of noise."),
@@ -163,7 +152,6 @@ def simulate(
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")
     con = Console(stderr=True)
-    model = _model(roughness, wall_loss, restitution, nu_max)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         with con.status("building the 1D model from the steady family…"):
@@ -198,6 +186,7 @@ def simulate(
                          "status", "mass_drift", "max_growth_rate", "k_c", "L_c", "steps",
                          "wall_time_s")}
     summary["amplitude_end"] = float(ds["amplitude"].values[-1])
+    summary.update({k: v for k, v in model.to_dict().items() if k not in summary})
     if a.get("left_family"):
         summary["left_family"] = a["left_family"]
     if as_json:

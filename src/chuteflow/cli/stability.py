@@ -19,14 +19,18 @@ from typing import Optional
 
 import typer
 
-from ._app import app, model_option
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
 
 #: Keys of ``eig --json`` (and of ``mode --json``), besides the nested ``steady`` summary.
-EIG_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "nu_top", "k",
+EIG_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "radial", "wall",
+            "transport", "nu_top", "k",
             "alpha_re", "alpha_im", "drift", "tail", "convergence", "physical", "n", "n_check",
             "wave_speed", "unstable", "method")
 #: Keys of ``longwave --json``.
-LONGWAVE_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "nu_top",
+LONGWAVE_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "radial",
+                 "wall", "transport", "nu_top",
                  "alpha1_re", "alpha1_im", "alpha2_re", "alpha2_im", "dQ_drho",
                  "convergence_alpha1", "convergence_alpha2", "n", "k_check",
                  "alpha2_from_eigenvalue_re", "alpha2_from_eigenvalue_im",
@@ -41,9 +45,7 @@ def _opt_nu0():
     return typer.Option(..., "--nu0", help="Floor packing fraction ν0(0).")
 
 
-_MODEL_HELP = {"roughness": "Floor roughness φ.", "wall_loss": "Floor energy loss Φ.",
-               "restitution": "Restitution e_p.", "nu_max": "Maximum packing ν_m.",
-               "nu_top": "Density where the domain ends (paper: 1e-9)."}
+_NU_TOP_HELP = "Density where the domain ends (paper: 1e-9)."
 
 
 def _plain(value):
@@ -71,16 +73,13 @@ def _console():
     return Console(stderr=True)
 
 
-def _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top):
+def _steady(console, theta, nu0, model, nu_top):
     import warnings
 
     from chuteflow._threads import limit_blas_threads
-    from chuteflow.closures import ChuteModel
     from chuteflow.steady import solve_steady
 
     limit_blas_threads(1)
-    model = ChuteModel(restitution=restitution, nu_max=nu_max, roughness=roughness,
-                       wall_loss=wall_loss)
     with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
@@ -88,16 +87,12 @@ def _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_t
 
 
 def _params(flow) -> dict:
-    m = flow.model
-    return {"theta": flow.theta, "nu0": flow.nu0, "roughness": m.roughness,
-            "wall_loss": m.wall_loss, "restitution": m.restitution, "nu_max": m.nu_max,
+    return {"theta": flow.theta, "nu0": flow.nu0, **flow.model.to_dict(),
             "nu_top": flow.nu_top}
 
 
 def _caption(flow) -> str:
-    m = flow.model
-    return (f"φ = {m.roughness:g}, Φ = {m.wall_loss:g}, e_p = {m.restitution:g}, "
-            f"ν_m = {m.nu_max:g}, ν0(y_max) = {flow.nu_top:g}; steady h = {flow.h:.5g}, "
+    return (f"{flow.model.describe()}, ν0(y_max) = {flow.nu_top:g}; steady h = {flow.h:.5g}, "
             f"y_max = {flow.y_max:.5g}")
 
 
@@ -152,15 +147,13 @@ _METHOD_HELP = ("branch: follow the α(0) = 0 branch from k = 0 (fast); qz: dens
 
 
 @app.command("eig")
+@with_model_options
 def eig(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
     k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ) of exp(αt + ikx)."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
-    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
                                     "adaptive, from 80 up until drift and tail < 1e-7)."),
     n_max: int = typer.Option(256, "--n-max", help="Largest N of the adaptive choice."),
@@ -169,7 +162,7 @@ def eig(
 ) -> None:
     """Least-stable eigenvalue α at one wavenumber, with its convergence estimate."""
     console = _console()
-    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    flow = _steady(console, theta, nu0, model, nu_top)
     from chuteflow.stability import RejectionPolicy
 
     mode = _least_stable(console, flow, k, n, method, RejectionPolicy(n_max=n_max))
@@ -184,16 +177,14 @@ def eig(
 
 
 @app.command("dispersion")
+@with_model_options
 def dispersion_cmd(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
     k_max: float = typer.Option(0.02, "--k-max", help="Largest wavenumber (1/σ)."),
     num: int = typer.Option(50, "--num", help="Number of wavenumbers on [0, k_max]."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
-    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
     strict: bool = typer.Option(True, "--strict/--no-strict", help="Fail when a point does not "
                                 "pass the drift and tail tests by N = n_max (default), or keep "
@@ -213,7 +204,7 @@ def dispersion_cmd(
     if num < 2:
         raise ParameterError(f"num = {num}: need at least 2 wavenumbers")
     console = _console()
-    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    flow = _steady(console, theta, nu0, model, nu_top)
     ks = np.linspace(0.0, k_max, num)
     policy = RejectionPolicy(n_max=n_max)
     with console.status(f"dispersion relation at {num} wavenumbers on [0, {k_max:g}]"):
@@ -294,14 +285,12 @@ def _kc_line(k_c, found, s, k_max):
 
 
 @app.command("longwave")
+@with_model_options
 def longwave_cmd(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
-    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n: int = typer.Option(200, "--n", help="Starting Chebyshev resolution N."),
     rtol: float = typer.Option(0.01, "--rtol", help="Accepted relative change of α2 between "
                                "resolutions (0.2 is enough for its sign)."),
@@ -318,7 +307,7 @@ def longwave_cmd(
     if not 0 < rtol < 1:
         raise ParameterError(f"rtol = {rtol!r} is outside (0, 1): a relative change of α2")
     console = _console()
-    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    flow = _steady(console, theta, nu0, model, nu_top)
     with console.status("long-wave perturbation theory at k = 0"):
         lw = longwave(flow, n=n, rtol=rtol, n_max=n_max)
     k_c = None
@@ -355,16 +344,14 @@ def longwave_cmd(
 
 
 @app.command("mode")
+@with_model_options
 def mode_cmd(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
     k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ), > 0."),
     plot: Path = typer.Option(..., "--plot", help="Eigenfunction figure (PNG)."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
-    nu_top: float = typer.Option(1e-9, "--nu-top", help=_MODEL_HELP["nu_top"]),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n: Optional[int] = typer.Option(None, "--n", help="Chebyshev intervals N (default: "
                                     "adaptive)."),
     y_top: Optional[float] = typer.Option(None, "--y-top", help="Top of the plot (σ; default: "
@@ -389,7 +376,7 @@ def mode_cmd(
             raise ParameterError(f"magnify = {magnify!r}: need 0 <= X0 < X1 <= 1 (fractions of "
                                  "a wavelength) and 0 <= Y0 < Y1 (heights)")
     console = _console()
-    flow = _steady(console, theta, nu0, roughness, wall_loss, restitution, nu_max, nu_top)
+    flow = _steady(console, theta, nu0, model, nu_top)
     mode = _least_stable(console, flow, k, n, "branch", None)
     with console.status("eigenfunction figure"):
         path = eigenfunction_figure(mode, flow, plot, y_top=y_top, x_peak=x_peak,

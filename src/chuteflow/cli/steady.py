@@ -3,10 +3,13 @@ from __future__ import annotations
 
 import typer
 
-from ._app import app, model_option
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
 
 #: Keys of the JSON output, in order (the summary of :class:`~chuteflow.steady.SteadyFlow`).
-JSON_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
+JSON_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "radial",
+             "wall", "transport", "u_floor",
              "T_floor", "h", "nu_mean", "rho_bar", "Q", "T_mean", "monotonic", "y_peak",
              "nu_peak", "y_max", "nu_top", "n", "convergence", "residual", "iterations",
              "spectral_tail")
@@ -22,13 +25,11 @@ _ROWS = (("u_floor", "slip velocity u0(0)", ".8g"), ("T_floor", "floor temperatu
 
 
 @app.command("steady")
+@with_model_options
 def steady(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
     nu0: float = typer.Option(..., "--nu0", help="Floor packing fraction ν0(0)."),
-    roughness: float = model_option("roughness"),
-    wall_loss: float = model_option("wall_loss"),
-    restitution: float = model_option("restitution"),
-    nu_max: float = model_option("nu_max"),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top",
                                  help="Density where the domain ends (paper: 1e-9)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
@@ -37,11 +38,8 @@ def steady(
     import json
     import warnings
 
-    from chuteflow.closures import ChuteModel
     from chuteflow.steady import solve_steady
 
-    model = ChuteModel(restitution=restitution, nu_max=nu_max, roughness=roughness,
-                       wall_loss=wall_loss)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         flow = solve_steady(theta, nu0, model, nu_top=nu_top)
@@ -53,8 +51,7 @@ def steady(
     from rich.table import Table
 
     table = Table(title=f"Steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}",
-                  caption=f"φ = {roughness:g}, Φ = {wall_loss:g}, e_p = {restitution:g}, "
-                          f"ν_m = {nu_max:g}, ν0(y_max) = {nu_top:g}")
+                  caption=f"{model.describe()}, ν0(y_max) = {nu_top:g}")
     table.add_column("quantity")
     table.add_column("value", justify="right")
     for key, label, fmt in _ROWS:

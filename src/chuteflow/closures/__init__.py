@@ -1,8 +1,58 @@
-"""Closures: constitutive relations (Lun et al.), g0(ν) and floor conditions (Johnson–Jackson)."""
-from .kinetic import LunClosure, lun_functions
-from .model import FLOOR, FUNCTIONS, ORDERS, TRANSPORT, ChuteModel
-from .radial import CarnahanStarling, LunSavage, RadialDistribution
-from .walls import JohnsonJackson
+"""Closures: constitutive relations (Lun et al.), g0(ν) and floor conditions (Johnson–Jackson).
 
-__all__ = ["ChuteModel", "LunClosure", "lun_functions", "LunSavage", "CarnahanStarling",
-           "RadialDistribution", "JohnsonJackson", "TRANSPORT", "FLOOR", "FUNCTIONS", "ORDERS"]
+Each kind of closure has a registry (:class:`Registry`): :data:`RADIALS` (g0),
+:data:`WALLS` (floor conditions) and :data:`TRANSPORTS` (kinetic-theory transport closures).
+:class:`ChuteModel` carries one of each with the material and floor parameters.
+"""
+from .kinetic import (
+           TRANSPORTS,
+           LunClosure,
+           TransportClosure,
+           lun_functions,
+           register_transport,
+)
+from .model import (
+           CLOSURES,
+           FIELDS,
+           FLOOR,
+           FUNCTIONS,
+           ORDERS,
+           PARAMETERS,
+           TRANSPORT,
+           ChuteModel,
+)
+from .radial import (
+           RADIALS,
+           CarnahanStarling,
+           LunSavage,
+           RadialDistribution,
+           register_radial,
+)
+from .registry import Registry
+from .walls import WALLS, JohnsonJackson, WallCondition, register_wall
+
+__all__ = [
+           "CLOSURES",
+           "FIELDS",
+           "FLOOR",
+           "FUNCTIONS",
+           "ORDERS",
+           "PARAMETERS",
+           "RADIALS",
+           "TRANSPORT",
+           "TRANSPORTS",
+           "WALLS",
+           "CarnahanStarling",
+           "ChuteModel",
+           "JohnsonJackson",
+           "LunClosure",
+           "LunSavage",
+           "RadialDistribution",
+           "Registry",
+           "TransportClosure",
+           "WallCondition",
+           "lun_functions",
+           "register_radial",
+           "register_transport",
+           "register_wall",
+]

@@ -1,18 +1,29 @@
-"""Constitutive relations of Lun et al. (1984): Table 1 and label eq:pmuetc.
+"""Constitutive relations of Lun et al. (1984): paper §2.1, Table 1.
 
 Dimensionless (σ, ρ_p σ³, √(σ/g)) transport functions of packing fraction ν and
 granular temperature T:
 
     p = f1 T,   μ = f2 √T,   ζ = f3 √T,   κ = f4 √T,   Γ = (1 − e_p²) f5 T^{3/2}.
 
-The heat-flux term κ_h ∇ν is neglected, as in the paper (footnote to eq:pmuetc).
+The heat-flux term κ_h ∇ν is neglected, as in the paper (§2.1). A transport closure is a
+small frozen class that states f1 … f7 and the transport functions in sympy, given g0(ν)
+from the radial distribution function; register a new one with :func:`register_transport`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from .._codegen import lazy_module
-from .radial import LunSavage, RadialDistribution
+from .registry import Registry
+
+__all__ = [
+    "TRANSPORTS",
+    "LunClosure",
+    "TransportClosure",
+    "lun_functions",
+    "register_transport",
+]
 
 sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
 
@@ -36,19 +47,41 @@ def lun_functions(nu, e, nu_max, g0):
 
 
 @dataclass(frozen=True)
-class LunClosure:
-    """Lun et al. (1984) kinetic-theory closure with a pluggable g0(ν)."""
+class TransportClosure:
+    """Base class of the kinetic-theory (transport) closures.
 
-    radial: RadialDistribution = LunSavage()
-    name: str = "lun"
+    ``functions(nu, e, nu_max, g0)`` gives the functions f1 … f7 of ν (Table 1: the wall
+    conditions use them too) and ``transport(f, T, e)`` the transport functions p, μ, ζ, κ,
+    Γ from them, all as sympy expressions.
+    """
 
-    def functions(self, nu, e, nu_max):
-        """f1 … f7 (Table 1) as sympy expressions in ν."""
-        return lun_functions(nu, e, nu_max, self.radial.expr(nu, nu_max))
+    name: ClassVar[str] = "base"
 
-    def transport(self, nu, T, e, nu_max):
-        """Transport functions p, μ, ζ, κ, Γ of eq:pmuetc as sympy expressions."""
-        f = self.functions(nu, e, nu_max)
+    def functions(self, nu, e, nu_max, g0) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def transport(self, f, T, e) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+#: The transport closures, by name (the ``transport`` field of ChuteModel).
+TRANSPORTS: Registry[TransportClosure] = Registry("transport", TransportClosure)
+register_transport = TRANSPORTS.register
+
+
+@register_transport
+@dataclass(frozen=True)
+class LunClosure(TransportClosure):
+    """Lun et al. (1984) kinetic theory (paper §2.1, Table 1)."""
+
+    name: ClassVar[str] = "lun"
+
+    def functions(self, nu, e, nu_max, g0):
+        """f1 … f7 (Table 1) as sympy expressions in ν, given g0(ν)."""
+        return lun_functions(nu, e, nu_max, g0)
+
+    def transport(self, f, T, e):
+        """Transport functions p, μ, ζ, κ, Γ (paper §2.1) from f1 … f7 (sympy)."""
         sqT = sp.sqrt(T)
         return {
             "p": f["f1"] * T,

@@ -1,38 +1,56 @@
 """Radial distribution functions g0(ν) at contact.
 
-A radial distribution function is a small class that returns a sympy expression in
+A radial distribution function is a small frozen class that returns a sympy expression in
 ν and the maximum packing ``nu_max``; everything numeric (values, derivatives) is
-derived from that one expression.
+derived from that one expression. Register a new one with :func:`register_radial`.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 from .._codegen import lazy_module
 
 sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
+
+from .registry import Registry
+
+__all__ = [
+    "RADIALS",
+    "CarnahanStarling",
+    "LunSavage",
+    "RadialDistribution",
+    "register_radial",
+]
 
 
 @dataclass(frozen=True)
 class RadialDistribution:
     """Base class: ``expr(nu, nu_max)`` gives g0 as a sympy expression."""
 
-    name: str = "base"
+    name: ClassVar[str] = "base"
 
     def expr(self, nu: sp.Expr, nu_max: sp.Expr) -> sp.Expr:  # pragma: no cover - abstract
         raise NotImplementedError
 
 
+#: The radial distribution functions, by name (the ``radial`` field of ChuteModel).
+RADIALS: Registry[RadialDistribution] = Registry("radial", RadialDistribution)
+register_radial = RADIALS.register
+
+
+@register_radial
 @dataclass(frozen=True)
 class LunSavage(RadialDistribution):
     """Lun & Savage (1986): g0(ν) = (1 − ν/ν_m)^(−2.5 ν_m) (paper §2.1)."""
 
-    name: str = "lun_savage"
+    name: ClassVar[str] = "lun_savage"
 
     def expr(self, nu, nu_max):
         return (1 - nu / nu_max) ** (-sp.Rational(5, 2) * nu_max)
 
 
+@register_radial
 @dataclass(frozen=True)
 class CarnahanStarling(RadialDistribution):
     """Carnahan–Starling: g0(ν) = (2 − ν) / (2 (1 − ν)³); ``nu_max`` unused.
@@ -40,10 +58,7 @@ class CarnahanStarling(RadialDistribution):
     Offered as an alternative closure (beyond the paper); it does not diverge at ν_m.
     """
 
-    name: str = "carnahan_starling"
+    name: ClassVar[str] = "carnahan_starling"
 
     def expr(self, nu, nu_max):
         return (2 - nu) / (2 * (1 - nu) ** 3)
-
-
-RADIAL_FUNCTIONS = {cls.name: cls for cls in (LunSavage(), CarnahanStarling())}

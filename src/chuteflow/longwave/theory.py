@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from ..closures import ChuteModel
 from ..errors import ConvergenceError
 from ..stability.modes import nearest_eigenpair, stability_operator
 from ..stability.policy import RejectionPolicy
@@ -51,6 +52,10 @@ class LongWave:
         Chebyshev intervals of the finer resolution.
     convergence_alpha1, convergence_alpha2 : float
         Relative change of α1 and α2 between n and 4n/5.
+    k_check, alpha_check : float, complex
+        A small wavenumber and the eigenvalue there (see :attr:`alpha2_from_eigenvalue`).
+    model : ChuteModel or None
+        Parameters and closures of the steady flow the coefficients were computed for.
     """
 
     theta: float
@@ -63,6 +68,7 @@ class LongWave:
     convergence_alpha2: float
     k_check: float = float("nan")
     alpha_check: complex = complex("nan")
+    model: ChuteModel | None = None
 
     @property
     def alpha2_from_eigenvalue(self) -> complex:
@@ -89,7 +95,8 @@ class LongWave:
                 "k_check": self.k_check,
                 "alpha2_from_eigenvalue_re": self.alpha2_from_eigenvalue.real,
                 "alpha2_from_eigenvalue_im": self.alpha2_from_eigenvalue.imag,
-                "long_wave_unstable": bool(self.unstable)}
+                "long_wave_unstable": bool(self.unstable),
+                **(self.model.to_dict() if self.model is not None else {})}
 
 
 def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
@@ -201,4 +208,4 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
     if k_check:
         check, _ = nearest_eigenpair(op.pencil(k_check), a1 * k_check + a2 * k_check**2)
     return LongWave(flow.theta, flow.nu0, a1, a2, float(tangent["dQ_drho"]), n, float(c1),
-                    float(c2), float(k_check or float("nan")), check)
+                    float(c2), float(k_check or float("nan")), check, model=flow.model)

@@ -15,7 +15,8 @@ import numpy as np
 from ..continuation import StepRules, Trial, continue_to, march
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import solve_steady
-from ..sweep import PointFunction, SweepConfig, Variable, register_point_function, run_sweep
+from ..sweep import (PointFunction, SweepConfig, Variable, register_point_function,
+                     resolve_model, run_sweep)
 from .model import local_coefficients
 
 __all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement",
@@ -65,27 +66,30 @@ class Reduced1D(PointFunction):
                 "r1d_dP": c.dP, "r1d_a": c.a, "r1d_Tbar": c.Tbar}
 
 
-def reduced_diagram_config(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=None,
-                           nu0_range=None, grid=None, full: bool = False,
-                           **kw) -> SweepConfig:
+def reduced_diagram_config(roughness: float | None = None, *, shape=QUICK_SHAPE,
+                           theta_range=None, nu0_range=None, grid=None, full: bool = False,
+                           model=None, **kw) -> SweepConfig:
     """Sweep configuration of a 1D diagram (``full=True``: with the full model's long-wave
     stability too, for a point-by-point comparison on the same grid).
 
     ``grid = (theta values, nu0 values)`` gives the grid explicitly; otherwise ``shape``
     points over the ranges, which default to those of the full-model diagrams
-    (:func:`chuteflow.sweep.default_ranges`). Other keywords go to :class:`SweepConfig`.
+    (:func:`chuteflow.sweep.default_ranges`). ``model`` (a
+    :class:`~chuteflow.closures.ChuteModel`, default the paper's) with ``roughness`` replacing
+    its own is the model of the sweep. Other keywords go to :class:`SweepConfig`.
     """
     metrics = ["steady", "kinematic", "longwave"] if full else ["steady"]
     metrics.append(Reduced1D())
     kw.setdefault("markers", ())
     if grid is not None:
         th, nu = (tuple(float(v) for v in np.asarray(g, dtype=float).ravel()) for g in grid)
-        return SweepConfig(theta=th, nu0=nu, roughness=roughness, metrics=tuple(metrics), **kw)
+        return SweepConfig(theta=th, nu0=nu, model=resolve_model(model, roughness=roughness),
+                           metrics=tuple(metrics), **kw)
     return SweepConfig.grid(roughness, shape=tuple(shape), theta_range=theta_range,
-                            nu0_range=nu0_range, metrics=tuple(metrics), **kw)
+                            nu0_range=nu0_range, model=model, metrics=tuple(metrics), **kw)
 
 
-def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=None,
+def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_range=None,
                     nu0_range=None, grid=None, engine: str = "sweep", out=None,
                     workers: int | None = 1, progress=None, full: bool = False, model=None,
                     fresh: bool = False):
@@ -93,8 +97,8 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
 
     Parameters
     ----------
-    roughness : float
-        Floor roughness φ.
+    roughness : float, optional
+        Floor roughness φ (default: that of ``model``, 0.05 for the paper's model).
     shape : (int, int)
         Grid (n_theta, n_nu0).
     theta_range, nu0_range : (float, float), optional
@@ -117,8 +121,9 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     full : bool
         Sweep engine only: also compute the full model's long-wave criterion.
     model : ChuteModel, optional
-        Closure parameters other than the roughness (paper defaults); its ``roughness``
-        must equal ``roughness``.
+        Parameters and closures (g0, wall condition, transport closure) of the computation
+        (default: the paper's); if ``roughness`` is given too it must equal
+        ``model.roughness``.
     fresh : bool
         Sweep engine: discard saved results of another configuration at ``out``.
 
@@ -137,7 +142,10 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     if full and engine != "sweep":
         raise ParameterError("full = True needs engine = 'sweep' (the full model's stability "
                              "is a sweep metric)")
-    model = model or ChuteModel(roughness=roughness)
+    if model is None:
+        model = ChuteModel() if roughness is None else ChuteModel(roughness=roughness)
+    if roughness is None:
+        roughness = model.roughness
     if not math.isclose(model.roughness, roughness):
         raise ParameterError(f"model.roughness = {model.roughness:g} differs from roughness = "
                              f"{roughness:g}")
@@ -164,9 +172,7 @@ def reduced_diagram(roughness: float = 0.05, *, shape=QUICK_SHAPE, theta_range=N
     if engine == "sweep":
         from ..sweep import classify
 
-        cfg = reduced_diagram_config(roughness, grid=(thetas, nus), full=full,
-                                     wall_loss=model.wall_loss,
-                                     restitution=model.restitution, nu_max=model.nu_max)
+        cfg = reduced_diagram_config(grid=(thetas, nus), full=full, model=model)
         ds = run_sweep(cfg, out, workers=workers, progress=progress or False, fresh=fresh)
         return classify(ds) if full else ds
     flows = _walk_grid(thetas, nus, model, progress)
@@ -303,8 +309,8 @@ def _dataset(thetas, nus, flows, model):
                      "the first failure of the continuation along ν0)",
         "flag_values": np.array([0, 1], dtype=np.int8),
         "flag_meanings": "ok no_steady_flow"})
-    attrs = {k: v for k, v in model.as_dict().items() if isinstance(v, (int, float, str))}
-    attrs.update(title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
+    attrs = dict(model.attrs())
+    attrs.update(model_key=model.key(), title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
                  engine="walk", chuteflow_version=__version__)
     return xr.Dataset(data, coords={
         "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),

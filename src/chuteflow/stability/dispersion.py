@@ -395,8 +395,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
              "dQ_drho": float(steady_tangent(flow)["dQ_drho"]), "alpha1_re": tr.alpha1.real,
              "alpha1_im": tr.alpha1.imag, "drift_tol": policy.drift_tol,
              "tail_tol": policy.tail_tol}
-    attrs.update({name: getattr(flow.model, name)
-                  for name in ("roughness", "wall_loss", "restitution", "nu_max")})
+    attrs.update(flow.model.attrs())
     u = "1/sqrt(sigma/g)"
     ds = xr.Dataset(
         {"alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),

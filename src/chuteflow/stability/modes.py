@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..closures import ChuteModel
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import ChebyshevGrid, coefficients
 from ..steady import SteadyFlow
@@ -153,6 +154,8 @@ class Mode:
         Largest of the highest ten Chebyshev coefficients over the fields (normalised).
     physical : bool
         drift < ``drift_tol`` and tail < ``tail_tol``.
+    model : ChuteModel or None
+        Parameters and closures of the base flow the mode was computed with.
     """
 
     alpha: complex
@@ -169,6 +172,7 @@ class Mode:
     physical: bool
     drift_tol: float = DRIFT_TOL
     tail_tol: float = TAIL_TOL
+    model: ChuteModel | None = None
 
     @property
     def growth_rate(self) -> float:
@@ -185,7 +189,8 @@ class Mode:
         return {"k": self.k, "kz": self.kz, "alpha_re": float(self.alpha.real),
                 "alpha_im": float(self.alpha.imag), "drift": float(self.drift),
                 "tail": float(self.tail), "n": int(self.n), "n_check": int(self.n_check),
-                "physical": bool(self.physical), "theta": self.theta, "nu0": self.nu0}
+                "physical": bool(self.physical), "theta": self.theta, "nu0": self.nu0,
+                **(self.model.to_dict() if self.model is not None else {})}
 
     def to_xarray(self):
         """Eigenfunctions as an :class:`xarray.Dataset` over y (complex), scalars as attrs."""
@@ -198,6 +203,8 @@ class Mode:
                                                     "units": "sigma"})})
         ds.attrs.update({k: (str(v) if isinstance(v, bool) else v)
                          for k, v in self.summary().items()})
+        if self.model is not None:
+            ds.attrs.update(self.model.attrs())
         return ds
 
 
@@ -223,7 +230,7 @@ def _make_mode(pencil: Pencil, alpha, v, drift, n_check,
                 fields={f: v[s].copy() for f, s in pencil.slices().items()},
                 drift=float(drift), tail=t, n_check=int(n_check),
                 physical=policy.accepts(drift, t),
-                drift_tol=policy.drift_tol, tail_tol=policy.tail_tol)
+                drift_tol=policy.drift_tol, tail_tol=policy.tail_tol, model=flow.model)
 
 
 @functools.lru_cache(maxsize=32)

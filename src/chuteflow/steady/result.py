@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 from scipy.optimize import brentq
@@ -11,16 +11,20 @@ from ..closures import ChuteModel
 from ..spectral import ChebyshevGrid, coefficients, tail
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class SteadyFlow:
     """A steady flow uniform along the slope, ν0(y), u0(y), T0(y) on Chebyshev nodes.
+
+    Two flows are equal when all their fields are (arrays element by element, NaN equal to
+    NaN); the hash uses the fields that identify the flow, (θ, ν0(0), model, ν_top, N), so
+    flows can be keys of dicts and caches.
 
     Attributes
     ----------
     theta, nu0 : float
         Inclination (degrees) and floor packing fraction ν0(0) that label the flow.
     model : ChuteModel
-        Closure parameters (restitution, nu_max, roughness, wall_loss).
+        Parameters and closures the flow was computed with.
     y, nu, u, T : ndarray
         Chebyshev–Lobatto nodes on [0, y_max] (ascending) and the profiles there.
     y_max : float
@@ -75,6 +79,23 @@ class SteadyFlow:
     convergence: float = float("nan")
     spectral_tail: float = float("nan")
 
+    def __eq__(self, other):
+        if other is self:
+            return True
+        if type(other) is not type(self):
+            return NotImplemented
+        for f in fields(self):
+            a, b = getattr(self, f.name), getattr(other, f.name)
+            if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+                if not np.array_equal(a, b, equal_nan=True):
+                    return False
+            elif not (a == b or (_isnan(a) and _isnan(b))):
+                return False
+        return True
+
+    def __hash__(self) -> int:
+        return hash((self.theta, self.nu0, self.model, self.nu_top, self.n))
+
     @property
     def nu(self) -> np.ndarray:
         return np.exp(self.log_nu)
@@ -101,8 +122,7 @@ class SteadyFlow:
     def summary(self) -> dict:
         """Scalar quantities as a JSON-ready dict (keys used by the CLI)."""
         d = {"theta": self.theta, "nu0": self.nu0}
-        d.update({k: getattr(self.model, k) for k in ("roughness", "wall_loss", "restitution",
-                                                      "nu_max")})
+        d.update(self.model.to_dict())
         for k in ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "T_mean", "monotonic",
                   "y_peak", "nu_peak", "y_max", "nu_top", "n", "residual", "iterations",
                   "convergence", "spectral_tail"):
@@ -122,7 +142,12 @@ class SteadyFlow:
                                         "units": "sigma"})})
         ds.attrs.update({k: (str(v) if isinstance(v, bool) else v)
                          for k, v in self.summary().items()})
+        ds.attrs.update(self.model.attrs())
         return ds
+
+
+def _isnan(v) -> bool:
+    return isinstance(v, (float, np.floating)) and math.isnan(v)
 
 
 def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteModel):

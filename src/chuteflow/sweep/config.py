@@ -1,23 +1,38 @@
-"""What a sweep computes: the (θ, ν0(0)) grid, closures, resolution, point functions, tasks.
+"""What a sweep computes: the (θ, ν0(0)) grid, the model, resolution, point functions, tasks.
 
-:class:`SweepConfig` is frozen and hashable; :meth:`SweepConfig.digest` (SHA-256 of its
-canonical JSON, with the chuteflow version and every point function's version) names the
-results, so saved partial results are reused only by the very same configuration.
+:class:`SweepConfig` is frozen and hashable; it holds a :class:`~chuteflow.closures.ChuteModel`
+(parameters and every closure choice), the one source of the model for the whole sweep.
+:meth:`SweepConfig.digest` (SHA-256 of its canonical JSON, with the model's
+:meth:`~chuteflow.closures.ChuteModel.to_dict`, the chuteflow version and every point
+function's version) names the results, so saved partial results are reused only by the very
+same configuration.
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from ..closures import FIELDS as MODEL_FIELDS
+from ..closures import ChuteModel
 from ..errors import ParameterError
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_ranges",
-           "default_markers", "parse_grid"]
+__all__ = [
+    "DEFAULT_MARKERS",
+    "DEFAULT_RANGES",
+    "SweepConfig",
+    "Task",
+    "default_markers",
+    "default_ranges",
+    "parse_grid",
+    "resolve_model",
+]
 
 #: (θ range in degrees, ν0(0) range) covering the paper's stability diagrams, where steady
 #: flows exist (found by scanning with chuteflow.steady; beyond them no steady flow exists
@@ -98,7 +113,23 @@ class Task:
         return self.j1 - self.j0
 
 
-@dataclass(frozen=True)
+def resolve_model(model: ChuteModel | None = None, **fields: Any) -> ChuteModel:
+    """``model`` (default: the paper's :class:`~chuteflow.closures.ChuteModel`) with the
+    given model fields (``roughness=``, ``radial=`` …) replacing its own."""
+    unknown = sorted(set(fields) - set(MODEL_FIELDS))
+    if unknown:
+        raise ParameterError(f"unknown parameters {unknown}: the model's are {list(MODEL_FIELDS)}")
+    if model is None:
+        model = ChuteModel()
+    elif isinstance(model, Mapping):
+        model = ChuteModel.from_dict(model)
+    elif not isinstance(model, ChuteModel):
+        raise ParameterError(f"model: expected a ChuteModel, got {type(model).__name__}")
+    given = {k: v for k, v in fields.items() if v is not None}
+    return dataclasses.replace(model, **given) if given else model
+
+
+@dataclass(frozen=True, init=False)
 class SweepConfig:
     """A sweep over the (θ, ν0(0)) grid.
 
@@ -108,8 +139,9 @@ class SweepConfig:
         Inclinations θ in degrees (strictly increasing).
     nu0 : sequence of float
         Floor packing fractions ν0(0) (strictly increasing).
-    roughness, wall_loss, restitution, nu_max : float
-        Closure parameters φ, Φ, e_p, ν_m (:class:`~chuteflow.closures.ChuteModel`).
+    model : ChuteModel, optional
+        Parameters and closures (default: the paper's, ``ChuteModel()``). A dict of
+        :meth:`~chuteflow.closures.ChuteModel.to_dict` is accepted too.
     metrics : sequence
         Point functions by name, ``{"name", "options"}`` dict or instance; default: the
         steady quantities, kinematic-wave speeds and the stability metrics
@@ -125,21 +157,35 @@ class SweepConfig:
     markers : sequence of (name, theta, nu0)
         Extra points computed with the same point functions and stored on a ``marker``
         dimension (the paper's P1–P5, Q1–Q3; see :data:`DEFAULT_MARKERS`).
+    **model_fields
+        Convenience: fields of :class:`~chuteflow.closures.ChuteModel` (``roughness``,
+        ``wall_loss``, ``restitution``, ``nu_max``, ``radial``, ``wall``, ``transport``)
+        replacing those of ``model``. The resulting :attr:`model` is what the sweep uses,
+        hashes and stores; ``config.roughness`` etc. read it.
     """
 
     theta: tuple[float, ...]
     nu0: tuple[float, ...]
-    roughness: float = 0.05
-    wall_loss: float = 0.39
-    restitution: float = 0.7
-    nu_max: float = 0.6
-    metrics: tuple = field(default=None)
-    nu_top: float = 1e-9
-    steady_rtol: float = 1e-8
-    n_max: int = 384
-    min_thickness: float = 0.0
-    chunk: int | None = None
-    markers: tuple = ()
+    model: ChuteModel
+    metrics: tuple
+    nu_top: float
+    steady_rtol: float
+    n_max: int
+    min_thickness: float
+    chunk: int | None
+    markers: tuple
+
+    def __init__(self, theta, nu0, model: ChuteModel | None = None, *, metrics=None,
+                 nu_top: float = 1e-9, steady_rtol: float = 1e-8, n_max: int = 384,
+                 min_thickness: float = 0.0, chunk: int | None = None, markers=(),
+                 **model_fields):
+        values = {"theta": theta, "nu0": nu0, "model": resolve_model(model, **model_fields),
+                  "metrics": metrics, "nu_top": nu_top, "steady_rtol": steady_rtol,
+                  "n_max": n_max, "min_thickness": min_thickness, "chunk": chunk,
+                  "markers": markers}
+        for name, value in values.items():
+            object.__setattr__(self, name, value)
+        self.__post_init__()
 
     def __post_init__(self):
         for name in ("theta", "nu0"):
@@ -155,8 +201,9 @@ class SweepConfig:
         if not (0.0 < self.theta[0] and self.theta[-1] < 90.0):
             raise ParameterError(f"theta: values must lie in (0, 90) degrees, got "
                                  f"[{self.theta[0]:g}, {self.theta[-1]:g}]")
-        if not (0.0 < self.nu0[0] and self.nu0[-1] < self.nu_max):
-            raise ParameterError(f"nu0: values must lie in (0, nu_max = {self.nu_max:g}) "
+        nu_max = self.model.nu_max
+        if not (0.0 < self.nu0[0] and self.nu0[-1] < nu_max):
+            raise ParameterError(f"nu0: values must lie in (0, nu_max = {nu_max:g}) "
                                  f"(floor packing fraction), got [{self.nu0[0]:g}, "
                                  f"{self.nu0[-1]:g}]")
         if self.chunk is not None:
@@ -170,7 +217,7 @@ class SweepConfig:
                 name, th, nu = str(name), float(th), float(nu)
             except (TypeError, ValueError):
                 raise ParameterError(f"markers: {mk!r} is not (name, theta, nu0)") from None
-            if not (0 < th < 90 and 0 < nu < self.nu_max):
+            if not (0 < th < 90 and 0 < nu < nu_max):
                 raise ParameterError(f"markers: {name} = ({th:g}°, {nu:g}) is outside theta in "
                                      f"(0, 90) degrees, nu0 in (0, nu_max)")
             marks.append((name, th, nu))
@@ -178,16 +225,16 @@ class SweepConfig:
             raise ParameterError("markers: names must be unique")
         object.__setattr__(self, "markers", tuple(marks))
         object.__setattr__(self, "n_max", int(self.n_max))
-        for name in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top",
-                     "steady_rtol", "min_thickness"):
+        for name in ("nu_top", "steady_rtol", "min_thickness"):
             object.__setattr__(self, name, float(getattr(self, name)))
-        self.model()  # validates the closure parameters
         from .points import point_function
         if self.metrics is None:
             from .metrics import default_metrics
             specs = default_metrics()
         else:
-            specs = self.metrics
+            # the canonical form stored by a configuration is JSON text (dataclasses.replace)
+            specs = [json.loads(m) if isinstance(m, str) and m.startswith("{") else m
+                     for m in self.metrics]
         fns = [point_function(s) for s in specs]
         names = [f.name for f in fns]
         if len(set(names)) != len(names):
@@ -207,10 +254,18 @@ class SweepConfig:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def grid(cls, roughness: float = 0.05, *, shape: tuple[int, int] = (60, 60),
+    def grid(cls, roughness: float | None = None, *, shape: tuple[int, int] = (60, 60),
              theta_range: tuple[float, float] | None = None,
-             nu0_range: tuple[float, float] | None = None, **kw) -> SweepConfig:
-        """Uniform grid of ``shape = (n_theta, n_nu0)`` over the given (or default) ranges."""
+             nu0_range: tuple[float, float] | None = None, model: ChuteModel | None = None,
+             **kw) -> SweepConfig:
+        """Uniform grid of ``shape = (n_theta, n_nu0)`` over the given (or default) ranges.
+
+        The model is ``model`` with ``roughness`` (and any other model field in ``kw``)
+        replacing its own; the default ranges and markers are those of its roughness.
+        """
+        model_kw = {k: kw.pop(k) for k in list(kw) if k in MODEL_FIELDS}
+        model = resolve_model(model, roughness=roughness, **model_kw)
+        roughness = model.roughness
         dt, dn = default_ranges(roughness)
         tr = tuple(theta_range) if theta_range is not None else dt
         nr = tuple(nu0_range) if nu0_range is not None else dn
@@ -226,8 +281,8 @@ class SweepConfig:
         nu = np.linspace(float(nr[0]), float(nr[1]), nn)
         kw.setdefault("markers", default_markers(roughness))
         # round to 12 digits so that the same command line always gives the same hash
-        return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)),
-                   roughness=roughness, **kw)
+        return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)), model=model,
+                   **kw)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -238,11 +293,6 @@ class SweepConfig:
     def size(self) -> int:
         return len(self.theta) * len(self.nu0)
 
-    def model(self):
-        from ..closures import ChuteModel
-        return ChuteModel(restitution=self.restitution, nu_max=self.nu_max,
-                          roughness=self.roughness, wall_loss=self.wall_loss)
-
     def point_functions(self) -> list:
         from .points import point_function
         return [point_function(json.loads(s)) for s in self.metrics]
@@ -252,7 +302,7 @@ class SweepConfig:
 
     def tasks(self) -> list[Task]:
         """Tasks in a fixed order: θ rows, each cut into chunks of ``chunk`` points."""
-        out = []
+        out: list[Task] = []
         nn = len(self.nu0)
         nchunks = math.ceil(nn / (self.chunk or nn))
         # equal-sized chunks (sizes differ by at most one)
@@ -273,8 +323,7 @@ class SweepConfig:
         """Canonical JSON-ready form (what is hashed, and stored in the Dataset attrs)."""
         from .. import __version__
         return {"theta": list(self.theta), "nu0": list(self.nu0),
-                "roughness": self.roughness, "wall_loss": self.wall_loss,
-                "restitution": self.restitution, "nu_max": self.nu_max,
+                "model": self.model.to_dict(),
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
                 "steady_rtol": self.steady_rtol, "n_max": self.n_max,
                 "min_thickness": self.min_thickness, "chunk": self.chunk, "markers": [list(m) for m in self.markers],
@@ -287,8 +336,35 @@ class SweepConfig:
 
     @classmethod
     def from_dict(cls, d: dict) -> SweepConfig:
+        """The configuration of :meth:`to_dict` (also the flat model keys of older files)."""
         d = dict(d)
         d.pop("chuteflow_version", None)
-        return cls(**{**d, "theta": tuple(d["theta"]), "nu0": tuple(d["nu0"]),
+        model = d.pop("model", None)
+        flat = {k: d.pop(k) for k in list(d) if k in MODEL_FIELDS}
+        model = ChuteModel.from_dict({**flat, **(model or {})})
+        return cls(**{**d, "model": model, "theta": tuple(d["theta"]), "nu0": tuple(d["nu0"]),
                       "metrics": tuple(d["metrics"]),
                       "markers": tuple(tuple(m) for m in d.get("markers", ()))})
+
+    @classmethod
+    def from_dataset(cls, ds) -> SweepConfig:
+        """The configuration a sweep Dataset (or its NetCDF file, loaded) was computed with."""
+        try:
+            text = ds.attrs["config_json"]
+        except KeyError:
+            raise ParameterError("dataset: no config_json attribute (not a chuteflow "
+                                 "sweep)") from None
+        return cls.from_dict(json.loads(text))
+
+
+def _model_property(name: str) -> property:
+    def get(self):
+        return getattr(self.model, name)
+
+    get.__doc__ = f"``model.{name}`` (read-only)."
+    return property(get)
+
+
+for _name in MODEL_FIELDS:
+    setattr(SweepConfig, _name, _model_property(_name))
+del _name

@@ -65,7 +65,7 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     cfg = SweepConfig.from_dict(json.loads(ds.attrs["config_json"]))
     specs = {json.loads(s)["name"]: json.loads(s) for s in cfg.metrics}
     fns = [point_function(specs[name]) for name in ("steady", "kinematic", "longwave")]
-    model = cfg.model()
+    model = cfg.model
     kw = dict(nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max,
               min_thickness=cfg.min_thickness)
     st = ds["status"].values

@@ -153,7 +153,7 @@ class Sweep:
 
         npts_done = sum(t.size for t in tasks if t.key in done)
         with _Progress(progress, total=cfg.npoints, completed=npts_done,
-                       label=f"sweep φ={cfg.roughness:g}") as bar:
+                       label=f"sweep φ={cfg.model.roughness:g}") as bar:
             if todo:
                 if client is not None or scheduler is not None:
                     self._run_dask(todo, finished, client, scheduler)
@@ -353,15 +353,16 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
         ds["marker_message"] = ("marker", mmessage.astype(str), dict(ds["message"].attrs))
     d = config.to_dict()
     ds.attrs.update({
-        "title": f"chuteflow stability sweep, roughness φ = {config.roughness:g}",
+        "title": f"chuteflow stability sweep, roughness φ = {config.model.roughness:g}",
         "source": "chuteflow (Mitarai & Nakanishi, figures phase005 / phase010)",
         "chuteflow_version": __version__,
         "config_digest": config.digest(),
         "config_json": json.dumps(d, sort_keys=True),
         "metrics": " ".join(json.loads(s)["name"] for s in config.metrics),
     })
-    for k in ("roughness", "wall_loss", "restitution", "nu_max", "nu_top", "steady_rtol",
-              "n_max", "min_thickness"):
+    ds.attrs.update(config.model.attrs())  # parameters and closure names (ChuteModel.to_dict)
+    ds.attrs["model_key"] = config.model.key()
+    for k in ("nu_top", "steady_rtol", "n_max", "min_thickness"):
         ds.attrs[k] = d[k]
     ds.attrs["chunk"] = config.chunk or len(config.nu0)
     from .classify import classify
@@ -378,7 +379,12 @@ def write_dataset(ds, path) -> Path:
 
 
 def load_sweep(path):
-    """Load a sweep Dataset written by :func:`run_sweep` (fully into memory)."""
+    """Load a sweep Dataset written by :func:`run_sweep` (fully into memory).
+
+    ``SweepConfig.from_dataset(ds)`` gives its configuration back and
+    ``SweepConfig.from_dataset(ds).model`` the :class:`~chuteflow.closures.ChuteModel`
+    (with its closures) it was computed with.
+    """
     import xarray as xr
     path = Path(path)
     if not path.exists():

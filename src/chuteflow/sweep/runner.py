@@ -61,7 +61,7 @@ def warm_up(config=None) -> None:
     """Compile the symbolic equations and closures once (forked workers inherit them)."""
     from ..equations import compiled_equations
     compiled_equations()
-    model = config.model() if config is not None else None
+    model = config.model if config is not None else None
     if model is not None:
         model.evaluate(np.array([0.1]), np.array([1.0]))
         model.f(np.array([0.1]))
@@ -134,7 +134,7 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     status = np.zeros(m, dtype=np.int8)
     messages = [""] * m
     pt_seconds = np.zeros(m)
-    model = config.model()
+    model = config.model
     marker = task.i < 0
     msec = {"steady": 0.0}
     kw = dict(nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max,

@@ -42,7 +42,9 @@ class PartStore:
     out : path
         The sweep's final NetCDF file; parts go to ``<out>.parts/``.
     config : SweepConfig
-        The configuration; its digest must match the folder's.
+        The configuration; its digest must match the folder's (the manifest also records
+        the model's :meth:`~chuteflow.closures.ChuteModel.key`, to say when the model is
+        what differs).
     fresh : bool
         Delete parts of a different configuration instead of refusing.
     """
@@ -54,9 +56,11 @@ class PartStore:
         self.digest = config.digest()
         manifest = self.dir / "config.json"
         if self.dir.exists():
-            old = None
+            old, old_model = None, None
             try:
-                old = json.loads(manifest.read_text())["digest"]
+                saved = json.loads(manifest.read_text())
+                old = saved["digest"]
+                old_model = saved.get("model_key")
             except (OSError, ValueError, KeyError):
                 old = None
             if old != self.digest:
@@ -64,13 +68,18 @@ class PartStore:
                 if fresh or (old is None and not leftovers):
                     shutil.rmtree(self.dir)
                 else:
+                    why = ""
+                    if old_model is not None and old_model != config.model.key():
+                        why = " with another model (parameters or closures)"
                     raise ConfigMismatchError(
                         f"out: {self.dir} holds partial results of a different sweep "
-                        f"configuration (digest {str(old)[:12]}, this one {self.digest[:12]}); "
-                        "use another output file, or fresh=True (--fresh) to discard them")
+                        f"configuration{why} (digest {str(old)[:12]}, this one "
+                        f"{self.digest[:12]}); use another output file, or fresh=True "
+                        "(--fresh) to discard them")
         if not self.dir.exists():
             self.dir.mkdir(parents=True)
-            text = json.dumps({"digest": self.digest, "config": config.to_dict()}, indent=1)
+            text = json.dumps({"digest": self.digest, "model_key": config.model.key(),
+                               "config": config.to_dict()}, indent=1)
             atomic_write(manifest, lambda fh: fh.write(text.encode()))
 
     def path(self, key: str) -> Path:
