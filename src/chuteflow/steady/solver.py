@@ -78,6 +78,10 @@ def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
     With T constant, ν(y) depends on y/T only, every floor term scales as T^{3/2} and every
     bulk integral as T^{5/2}; the energy balance η* u_f² − Γ* = ∫(Γ − μ u'²) dy then fixes T
     in closed form.
+
+    This approximate model (u' = tan θ p/μ, u_f = tan θ p/η*, hydrostatic isothermal ν) is
+    only a starting point for Newton, which then solves the equations derived in
+    :mod:`chuteflow.equations`; the converged flow does not depend on it.
     """
     th = math.radians(theta_deg)
     s, c = math.sin(th), math.cos(th)
