@@ -156,7 +156,7 @@ def test_model_code_is_bitwise_identical_to_lambdify(cache):
         for name, ts in terms:
             fun = sp.lambdify(espec[name][0], espec[name][1], modules="numpy", cse=True)
             assert _bits(eqs[name]._fun(*vals)) == _bits(fun(*vals)), name
-            assert tuple((t.field, t.a, t.b, t.c, t.d, t.index) for t in eqs[name].terms) == ts
+            assert tuple((t.field, t.a, t.b, t.c, t.d, t.index, t.k) for t in eqs[name].terms) == ts
     finally:
         model_module._compiled.cache_clear()
         compiled_equations.cache_clear()

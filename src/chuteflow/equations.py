@@ -18,6 +18,16 @@ From this one statement sympy derives
   α^a (i k_x)^b (i k_z)^d d^c/dy^c. The same coefficients at an arbitrary y-dependent state
   are the exact Jacobian used by the steady Newton solver.
 
+Two further statements sit next to the governing equations and go through the same
+derivation (:func:`compiled_equations` compiles all three sets):
+
+* :func:`first_integrals` — the x-momentum balance of a flow uniform along the slope,
+  integrated from the top with the stress vanishing there (§3, eq. (3.7)): built from the
+  stress tensor Σ and the gravity vector of the governing equations, not retyped;
+* :func:`far_field_conditions` — the top (y → ∞) conditions on a normal-mode perturbation
+  (§4.1, eq. (4.5) and the density decay condition stated after it), with
+  |k| = √(k_x² + k_z²) the symbol :data:`K_ABS`, so the three-dimensional case is covered.
+
 Residual sign convention: every equation is written as ``N(X) − B ∂_t X = 0`` so that the
 coefficient of α is −B with B = diag(1, ν, ν, ν, 3ν/2) positive.
 """
@@ -39,6 +49,14 @@ AXES = ("t", "x", "y", "z")
 BASE = ("nu", "nu_y", "nu_yy", "u", "u_y", "u_yy", "T", "T_y", "T_yy")
 BULK = ("mass", "xmom", "ymom", "zmom", "energy")
 FLOOR = ("floor_v", "floor_x", "floor_z", "floor_energy")
+#: First integrals of the uniform steady state (:func:`first_integrals`).
+INTEGRATED = ("xmom_integrated",)
+#: Far-field (top) condition of each field's perturbation (:func:`far_field_conditions`).
+TOP_OF = {"nu": "top_nu", "u": "top_u", "v": "top_v", "w": "top_w", "T": "top_T"}
+#: The wavenumber magnitude |k| = √(k_x² + k_z²) of a normal mode exp(αt + i k_x x + i k_z z).
+#: It is not a polynomial in the jets (∂_x ↦ ik_x, ∂_z ↦ ik_z), so it is a symbol of its own;
+#: a compiled term records its power in :attr:`Term.k`. ``K_ABS`` is created on first use
+#: (module ``__getattr__``), so that importing this module does not import sympy.
 
 #: sympy, imported on first use: a process whose generated code is cached never needs it.
 sp = _codegen.lazy_module("sympy")
@@ -47,6 +65,17 @@ sp = _codegen.lazy_module("sympy")
 def _gravity_symbols():
     """Symbols sin θ and cos θ of the gravity vector (sympy caches equal symbols)."""
     return sp.symbols("sin_theta cos_theta", real=True)
+
+
+def _k_abs():
+    """The symbol |k| = √(k_x² + k_z²) (:data:`K_ABS`)."""
+    return sp.Symbol("k_abs", nonnegative=True)
+
+
+def __getattr__(name: str):
+    if name == "K_ABS":
+        return _k_abs()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def jet(field: str, t: int = 0, x: int = 0, y: int = 0, z: int = 0) -> sp.Symbol:
@@ -66,6 +95,19 @@ def _is_jet(sym) -> bool:
     return len(parts) == 2 and parts[0] in FIELDS and len(parts[1]) == 4 and parts[1].isdigit()
 
 
+def base_value(name: str) -> sp.Symbol:
+    """Symbol for a base-state quantity (a key of :data:`BASE`) that is *not* linearised.
+
+    :func:`compiled_equations` maps the jets ν, ν_y, …, T_yy of a state uniform along the
+    slope to these symbols; a condition may also use one directly, as a coefficient that
+    belongs to the base flow (the density decay rate cos θ/T0 of
+    :func:`far_field_conditions`).
+    """
+    if name not in BASE:
+        raise ValueError(f"{name!r} is not a base-state quantity; choose one of {BASE}")
+    return sp.Symbol(f"base_{name}", real=True)
+
+
 def D(expr: sp.Expr, axis: str) -> sp.Expr:
     """Total derivative of a jet-space expression along ``axis`` (chain rule over jets)."""
     k = AXES.index(axis)
@@ -79,13 +121,21 @@ def D(expr: sp.Expr, axis: str) -> sp.Expr:
     return out
 
 
-@functools.lru_cache(maxsize=None)
-def governing_equations() -> dict[str, sp.Expr]:
-    """Residuals of eq:rho, eq:u (x, y, z), eq:temp and the floor conditions, in jet space.
+@dataclass(frozen=True)
+class _Continuum:
+    """Constitutive statement shared by every equation below (eq:pmuetc)."""
 
-    Dimensionless (σ, ρ_p σ³, √(σ/g)); gravity g = (sin θ, −cos θ, 0); Σ = (p − ζ∇·u)I − 2μS,
-    q = −κ∇T (eq:pmuetc). Floor normal n = e_y.
-    """
+    F: dict  # p, mu, zeta, kappa, Gamma, eta_star, Gamma_star as functions of (ν, T)
+    vel: tuple  # (u, v, w) jets
+    grad: tuple  # grad[i][j] = ∂_j u_i
+    Sigma: tuple  # stress tensor Σ_ij
+    q: tuple  # heat flux
+    g: tuple  # gravity (sin θ, −cos θ, 0)
+
+
+@functools.lru_cache(maxsize=None)
+def _continuum() -> _Continuum:
+    """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq:pmuetc) and gravity, in jet space."""
     nu, T = jet("nu"), jet("T")
     vel = [jet("u"), jet("v"), jet("w")]
     F = {name: sp.Function(name)(nu, T) for name in FUNCTIONS}
@@ -99,6 +149,21 @@ def governing_equations() -> dict[str, sp.Expr]:
     q = [-F["kappa"] * D(T, a) for a in sp_axes]
     sin_theta, cos_theta = _gravity_symbols()
     g = (sin_theta, -cos_theta, sp.S.Zero)
+    return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)),
+                      tuple(q), g)
+
+
+@functools.lru_cache(maxsize=None)
+def governing_equations() -> dict[str, sp.Expr]:
+    """Residuals of eq:rho, eq:u (x, y, z), eq:temp and the floor conditions, in jet space.
+
+    Dimensionless (σ, ρ_p σ³, √(σ/g)); gravity g = (sin θ, −cos θ, 0); Σ = (p − ζ∇·u)I − 2μS,
+    q = −κ∇T (eq:pmuetc). Floor normal n = e_y.
+    """
+    c = _continuum()
+    nu, T = jet("nu"), jet("T")
+    F, vel, grad, Sigma, q, g = c.F, c.vel, c.grad, c.Sigma, c.q, c.g
+    sp_axes = ("x", "y", "z")
 
     def material(fld):  # ∂_t f + u·∇f
         return D(fld, "t") + sum(vel[j] * D(fld, sp_axes[j]) for j in range(3))
@@ -118,11 +183,57 @@ def governing_equations() -> dict[str, sp.Expr]:
     return {k: sp.expand(v) for k, v in eqs.items()}
 
 
+@functools.lru_cache(maxsize=None)
+def first_integrals() -> dict[str, sp.Expr]:
+    """The x-momentum balance of a uniform steady flow, integrated from the top (§3).
+
+    For a state uniform along the slope (v = w = 0, fields of y only) the x- and y-momentum
+    residuals of :func:`governing_equations` are ν g_x − dΣ_yx/dy and ν g_y − dΣ_yy/dy.
+    Integrated from y to ∞ with the stress vanishing there (eq. (2.15)), both give the
+    weight W(y) = ∫_y^∞ ν dy' of the layer above y: Σ_yx = −g_x W and Σ_yy = −g_y W.
+    Eliminating W gives eq. (3.7), Σ_xy = −tan θ Σ_yy, stated here as the residual
+
+        xmom_integrated = −(Σ_yx − (g_x/g_y) Σ_yy)  (= μ u0' − tan θ p at the steady state),
+
+    whose y-derivative is xmom − (g_x/g_y) ymom at a uniform state (checked in the tests).
+    Unlike the x-momentum balance it keeps the weight of the layer above any finite
+    y_max, and it is first order in u. It holds only at states uniform along the slope; its
+    coefficients (∂R/∂J) are the exact Jacobian of the steady solver's x-momentum rows.
+    """
+    c = _continuum()
+    gx, gy = c.g[0], c.g[1]
+    return {"xmom_integrated": sp.expand(-(c.Sigma[1][0] - gx / gy * c.Sigma[1][1]))}
+
+
+@functools.lru_cache(maxsize=None)
+def far_field_conditions() -> dict[str, sp.Expr]:
+    """Top (y → ∞) conditions on a normal-mode perturbation (§4.1), keyed by :data:`TOP_OF`.
+
+    Far above the dense layer, where ν0 is negligible, the velocity and temperature
+    perturbations decay like exp(−|k| y) (eq. (4.5), with |k| = √(k_x² + k_z²) :data:`K_ABS`
+    for an oblique wavevector), and the density perturbation follows the base density,
+    ν̂ ∝ ν0 ∝ exp(−y cos θ/T0) (the isothermal atmosphere; §4.1, second extra condition):
+
+        f_y + |k| f = 0   (f = u, v, w, T),        ν_y + (cos θ/T0) ν = 0.
+
+    These are linear in the perturbation, so the coefficients ∂R/∂J that
+    :func:`compiled_equations` derives are the top rows of the stability operator; T0 in
+    the density condition is the base state's (:func:`base_value`), not linearised. At
+    |k| = 0 and at the base state the velocity and temperature conditions are the steady
+    top conditions u0' = 0 and T0' = 0 (eq. (3.13)), which is how the steady solver uses
+    them (the compiled residual is evaluated with |k| = 0).
+    """
+    out = {TOP_OF["nu"]: D(jet("nu"), "y") + _gravity_symbols()[1] / base_value("T") * jet("nu")}
+    for f in ("u", "v", "w", "T"):
+        out[TOP_OF[f]] = D(jet(f), "y") + _k_abs() * jet(f)
+    return {k: sp.expand(v) for k, v in out.items()}
+
+
 def _base_substitution():
     """Map jets to the y-dependent base state: v = w = 0, no t, x, z dependence."""
     nu, u, T = jet("nu"), jet("u"), jet("T")
     sub = {}
-    base_syms = {b: sp.Symbol(f"base_{b}", real=True) for b in BASE}
+    base_syms = {b: base_value(b) for b in BASE}
     for f in ("nu", "u", "T"):
         for c, suffix in enumerate(("", "_y", "_yy")):
             sub[jet(f, y=c)] = base_syms[f + suffix]
@@ -148,7 +259,11 @@ def _partial_symbols():
 
 @dataclass(frozen=True)
 class Term:
-    """One term of the linear operator: coefficient × α^a (i k_x)^b (i k_z)^d d^c/dy^c."""
+    """One term of the linear operator: coefficient × α^a (i k_x)^b (i k_z)^d |k|^k d^c/dy^c.
+
+    ``k`` is the power of |k| = √(k_x² + k_z²) (:data:`K_ABS`); only the far-field
+    conditions have terms with k > 0.
+    """
 
     field: str
     a: int
@@ -156,6 +271,7 @@ class Term:
     c: int
     d: int
     index: int  # position of the coefficient in the equation's compiled output
+    k: int = 0
 
 
 @dataclass(frozen=True)
@@ -184,9 +300,12 @@ def _args(base, partials, s, c):
 def compiled_equations() -> dict[str, CompiledEquation]:
     """Every equation's residual and coefficients as numeric functions (once per process).
 
-    Derived from :func:`governing_equations` by :func:`_derive_compiled`; the generated code
-    is cached on disk (:func:`chuteflow._codegen.cached_lambdify`, keyed by this module's and
-    the closure model's source), so a fresh process loads it instead of deriving again.
+    Covers :func:`governing_equations`, :func:`first_integrals` and
+    :func:`far_field_conditions`. A coefficient that depends on |k| (:data:`K_ABS`) is split
+    into one term per power of |k| (:attr:`Term.k`); the residual is evaluated at |k| = 0.
+    Derived by :func:`_derive_compiled`; the generated code is cached on disk
+    (:func:`chuteflow._codegen.cached_lambdify`, keyed by this module's and the closure
+    model's source), so a fresh process loads it instead of deriving again.
     """
     code = _codegen.cached_lambdify("equations", "compiled_equations", _derive_compiled,
                                     sources=(__name__, "chuteflow.closures.model"))
@@ -200,7 +319,7 @@ def _derive_compiled():
     Returns ``({equation: (args, [residual, coefficients ...])}, ((equation, terms), ...))``
     with each term as the fields of :class:`Term`.
     """
-    eqs = governing_equations()
+    eqs = {**governing_equations(), **first_integrals(), **far_field_conditions()}
     sub, base_syms = _base_substitution()
     psyms, repl = _partial_symbols()
     zero_jets = {}
@@ -217,23 +336,32 @@ def _derive_compiled():
     spec, data = {}, []
     for name, R in eqs.items():
         jets = sorted((s for s in R.free_symbols if _is_jet(s)), key=lambda s: s.name)
-        exprs = [R]
+        exprs = [R.subs(_k_abs(), 0) if _k_abs() in R.free_symbols else R]
         terms = []
         for s in jets:
             f, (a, b, c, d) = _parse(s)
             coef = sp.diff(R, s)
-            exprs.append(coef)
-            terms.append(Term(f, a, b, c, d, len(terms)))
+            for e, part in _powers_of_k(coef):
+                exprs.append(part)
+                terms.append(Term(f, a, b, c, d, len(terms), e))
         at_base = []
         for e in exprs:
             e = repl(sp.sympify(e)).xreplace(zero_jets).xreplace(sub)
             at_base.append(e)
         keep = [i for i, e in enumerate(at_base[1:]) if e != 0]
-        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j) for j, t in
+        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j, t.k) for j, t in
                       enumerate(terms[i] for i in keep))
         spec[name] = (args, [at_base[0]] + [at_base[1 + i] for i in keep])
-        data.append((name, tuple((t.field, t.a, t.b, t.c, t.d, t.index) for t in terms)))
+        data.append((name, tuple((t.field, t.a, t.b, t.c, t.d, t.index, t.k) for t in terms)))
     return spec, tuple(data)
+
+
+def _powers_of_k(coef: sp.Expr) -> list[tuple[int, sp.Expr]]:
+    """[(e, c_e)] with coef = Σ c_e |k|^e; a coefficient free of |k| is left untouched."""
+    if _k_abs() not in coef.free_symbols:
+        return [(0, coef)]
+    poly = sp.Poly(sp.expand(coef), _k_abs())
+    return sorted((int(e), c) for (e,), c in poly.terms())
 
 
 def base_state(nu, u, T, D1, D2) -> dict[str, np.ndarray]:

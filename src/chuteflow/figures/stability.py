@@ -291,6 +291,9 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
 
     (the advection term is imaginary): growth comes from grains converging (−ν0 ∇·û > 0) where
     the density perturbation is positive, plus the vertical advection of the base density.
+    The terms are those of the derived mass balance
+    (:func:`chuteflow.stability.equation_terms`): the ones acting on a velocity derivative
+    make up −ν0 ∇·û, the ones acting on the velocity itself −ν0' v̂.
 
     Returns
     -------
@@ -307,16 +310,22 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
         ``velocity_density``: ∫Re(û ν̂*) dy / ∫|û||ν̂| dy (> 0: the dense parts move faster);
         ``y_peak``: height of largest |ν̂|.
     """
-    from ..stability.operator import base_on_grid
+    from ..stability.operator import equation_terms
 
     g = _mode_grid(mode, flow)
     f, j = _aligned(mode, 0.0)
-    nu, u, v, T = f["nu"], f["u"], f["v"], f["T"]
-    base = base_on_grid(flow, g.y)
-    div = 1j * mode.k * u + g.D @ v
+    nu, u, T = f["nu"], f["u"], f["T"]
+    compression = np.zeros(len(nu), complex)  # −ν0 ∇·û
+    vertical = np.zeros(len(nu), complex)  # −ν0' v̂ (advection of the base density)
+    for t, term in equation_terms(flow, "mass", f, mode.k, mode.kz, mode.alpha):
+        if t.field in ("u", "v", "w"):
+            if t.b or t.c or t.d:
+                compression += term
+            else:
+                vertical += term
     norm = float(g.integrate(np.abs(nu) ** 2))
-    comp = float(g.integrate((np.conj(nu) * (-base["nu"] * div)).real)) / norm
-    vert = float(g.integrate((np.conj(nu) * (-base["nu_y"] * v)).real)) / norm
+    comp = float(g.integrate((np.conj(nu) * compression).real)) / norm
+    vert = float(g.integrate((np.conj(nu) * vertical).real)) / norm
     growth = float(mode.alpha.real)
     scale = abs(comp) + abs(vert)
     tnu = float(g.integrate((T * np.conj(nu)).real)) / float(g.integrate(np.abs(T) * np.abs(nu)))

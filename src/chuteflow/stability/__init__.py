@@ -14,6 +14,8 @@ Operator
     (ik_x)^b (ik_z)^d in 3D. Rows: see :mod:`.operator`. ``operator(flow, k, n=None)`` is
     the one-call form. ``stability_operator(flow, n, cache=None)`` returns a cached
     operator (:class:`OperatorCache`: per flow object, never shared between two flows).
+    ``equation_terms(flow, name, fields, kx, kz, alpha)`` → each term of one linearised
+    equation applied to a mode (e.g. the mass balance of an eigenfunction).
     Unknowns are the physical (ν̂, û, v̂, T̂); the solvers work on an internally equilibrated
     copy (``pencil.equilibrated()``, unknown ν̂/ν0; ``pencil.unscale`` maps back).
 
@@ -54,7 +56,7 @@ round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) −
 drift test but fails the tail test, and shift-invert estimates near it carry round-off of
 ~1e-12 absolute.
 """
-from .operator import Pencil, StabilityOperator, base_on_grid, operator
+from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms, operator
 from .eigen import ShiftInvert, qz
 from .policy import DEFAULT_POLICY, RejectionPolicy
 from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_stable, mode_near,
@@ -62,7 +64,8 @@ from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_sta
 from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
 
-__all__ = ["Pencil", "StabilityOperator", "base_on_grid", "operator", "ShiftInvert", "qz",
+__all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "operator",
+           "ShiftInvert", "qz",
            "Mode", "check_n", "choose_n", "least_stable", "mode_near", "nearest_eigenpair",
            "spectrum",
            "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",

@@ -8,8 +8,8 @@ residuals are N(X) − B∂_tX) or to the piece A_{b,d} of
 
     A(k_x, k_z) = Σ_{b,d} (ik_x)^b (ik_z)^d A_{b,d} + |k| K,
 
-where K holds the top decay conditions. Rows, for N + 1 Chebyshev–Lobatto nodes per field on
-[0, y_max]:
+where K holds the |k| terms of the top decay conditions. Rows, for N + 1 Chebyshev–Lobatto
+nodes per field on [0, y_max]:
 
 ========  =================  ===========================  =================================
 block     interior nodes     floor (y = 0)                top (y = y_max)
@@ -25,7 +25,9 @@ Momentum rows are divided by μ0(y) and energy rows by κ0(y), so that every row
 from the floor to the dilute top; B is then diagonal with entries 1 (mass), ν0/μ0
 (momentum) and 3ν0/(2κ0) (energy) on interior rows and 0 on boundary rows, whose
 eigenvalues are infinite. The α term of the y-momentum row at the floor multiplies v̂(0),
-which the impermeability row sets to zero, so dropping it changes nothing.
+which the impermeability row sets to zero, so dropping it changes nothing. The top rows are
+the far-field conditions of :func:`chuteflow.equations.far_field_conditions`, compiled like
+the bulk equations; a term with |k| (k = √(k_x² + k_z²)) goes to K.
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..equations import compiled_equations
+from ..equations import TOP_OF, Term, compiled_equations
 from ..errors import ParameterError
 from ..spectral import ChebyshevGrid
 from ..steady import SteadyFlow
@@ -67,6 +69,52 @@ def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
             "u_yy": g.interpolate(d["u_yy"], y),
             "T": g.interpolate(flow.T, y), "T_y": g.interpolate(d["T_y"], y),
             "T_yy": g.interpolate(d["T_yy"], y)}
+
+
+def equation_terms(flow: SteadyFlow, name: str, fields: dict[str, np.ndarray], kx: float,
+                   kz: float = 0.0, alpha: complex = 0.0) -> list[tuple[Term, np.ndarray]]:
+    """Each term of one linearised equation, applied to a normal-mode perturbation.
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        The base state.
+    name : str
+        An equation of :func:`chuteflow.equations.compiled_equations` ("mass", "xmom", …).
+    fields : dict
+        Field name → complex nodal values f̂ on the N + 1 Chebyshev nodes of [0, y_max]
+        (N = len − 1), e.g. :attr:`Mode.fields <chuteflow.stability.Mode>`. Terms acting on
+        a field that is absent (ŵ of a 2D mode) are left out.
+    kx, kz : float
+        Wavevector of the mode exp(αt + i k_x x + i k_z z).
+    alpha : complex
+        Its eigenvalue α (used by the terms with ∂_t).
+
+    Returns
+    -------
+    list of (Term, ndarray)
+        coefficient × α^a (ik_x)^b (ik_z)^d |k|^k d^c f̂/dy^c at every node, for every term
+        of the equation; their sum is the equation's linearised residual, which vanishes at
+        the interior nodes for an eigenmode of a bulk equation.
+    """
+    first = next(iter(fields.values()))
+    g = ChebyshevGrid(len(first) - 1, 0.0, flow.y_max)
+    base = base_on_grid(flow, g.y)
+    part = flow.model.evaluate(base["nu"], base["T"])
+    th = math.radians(flow.theta)
+    ce = compiled_equations()[name]
+    _, coefs = ce.evaluate(base, part, math.sin(th), math.cos(th))
+    dmat = (None, g.D, g.D2)
+    k = math.hypot(kx, kz)
+    out = []
+    for t, cf in zip(ce.terms, coefs):
+        if t.field not in fields:
+            continue
+        f = np.asarray(fields[t.field])
+        df = f if t.c == 0 else dmat[t.c] @ f
+        fac = alpha**t.a * (1j * kx) ** t.b * (1j * kz) ** t.d * k**t.k
+        out.append((t, np.broadcast_to(cf, g.y.shape) * fac * df))
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -237,10 +285,15 @@ class StabilityOperator:
                     continue
                 blk = (cf[nodes] * scale)[:, None] * dmat[t.c][nodes]
                 if t.a:
-                    if (t.a, t.b, t.c, t.d) != (1, 0, 0, 0):
+                    if (t.a, t.b, t.c, t.d, t.k) != (1, 0, 0, 0, 0):
                         raise NotImplementedError(f"α enters {name} as {t}: not a pencil")
                     if keep_alpha:
                         B[rows, col[t.field]] -= blk
+                    continue
+                if t.k:
+                    if (t.k, t.b, t.d) != (1, 0, 0):
+                        raise NotImplementedError(f"|k| enters {name} as {t}: not linear")
+                    K[rows, col[t.field]] += blk
                     continue
                 pieces.setdefault((t.b, t.d), np.zeros((M, M)))[rows, col[t.field]] += blk
 
@@ -253,12 +306,8 @@ class StabilityOperator:
             name = FLOOR_OF[f]
             add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
             scale_all[r0] = floor_scale[name]
-            top = r0 + m - 1
-            pieces[(0, 0)][top, col[f]] = g.D[-1]
-            if f == "nu":  # ν̂ ∝ ν0 in the isothermal dilute top: ν̂' = −(cos θ/T0) ν̂
-                pieces[(0, 0)][top, top] += cos / base["T"][-1]
-            else:
-                K[top, top] = 1.0
+            # far field: ν̂' = −(cos θ/T0) ν̂ (ν̂ ∝ ν0), f̂' = −|k| f̂ for û, v̂, ŵ, T̂
+            add(TOP_OF[f], slice(m - 1, m), 1.0, slice(r0 + m - 1, r0 + m), False)
         self.pieces, self.K, self.B = pieces, K, B
         self.row_scale, self.base = scale_all, base
         # Equilibration used by the solvers (an exact diagonal similarity, not part of the

@@ -4,9 +4,12 @@ For given θ and floor density ν0(0) the unknowns are ln ν0, u0, T0 at the Che
 [0, y_max] and the height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
 equations are the uniform-state residuals of :mod:`chuteflow.equations`: y-momentum and
 energy (eq:steady2, eq:steady3) at the inner nodes, x-momentum in its integrated form
-eq:steady4 (μ u0' = tanθ p, the weight of the tail above y_max included), the floor
-conditions eq:bc1 and eq:bc2 (equivalent to eq:T0b, eq:dT0b), T0' = 0 on top (eq:bcinf) and
-ν0(0) given. The Jacobian is exact, so Newton converges quadratically.
+eq:steady4 (μ u0' = tanθ p, the weight of the tail above y_max included;
+:func:`chuteflow.equations.first_integrals`), the floor conditions eq:bc1 and eq:bc2
+(equivalent to eq:T0b, eq:dT0b), T0' = 0 on top (eq:bcinf: the far-field condition of
+:func:`chuteflow.equations.far_field_conditions` at k = 0) and ν0(0) given. Every row and
+its exact Jacobian come from the compiled equations, so this module states no physics of
+its own; Newton converges quadratically.
 
 Unlike the paper's shooting on u0(0), no growing mode is integrated, so there is nothing to
 tune by hand. The cold start is an isothermal estimate of the layer (closed form in T),
@@ -21,11 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
-from ..equations import compiled_equations
+from ..equations import TOP_OF, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 
-_STEADY_EQS = ("xmom", "ymom", "energy", "floor_x", "floor_energy")
 _FIELDS = ("nu", "u", "T")
 
 
@@ -76,6 +78,10 @@ def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
     With T constant, ν(y) depends on y/T only, every floor term scales as T^{3/2} and every
     bulk integral as T^{5/2}; the energy balance η* u_f² − Γ* = ∫(Γ − μ u'²) dy then fixes T
     in closed form.
+
+    This approximate model (u' = tan θ p/μ, u_f = tan θ p/η*, hydrostatic isothermal ν) is
+    only a starting point for Newton, which then solves the equations derived in
+    :mod:`chuteflow.equations`; the converged flow does not depend on it.
     """
     th = math.radians(theta_deg)
     s, c = math.sin(th), math.cos(th)
@@ -119,9 +125,25 @@ class _Newton:
         self._layout = (("ymom", slice(1, m), slice(1, m), "nu"),
                         ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
                         ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
-                        ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"))
-        if not integrated:
-            self._layout += (("xmom", slice(m + 1, m + n), slice(1, n), "u"),)
+                        ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
+                        # T0' = 0 on top (eq:bcinf)
+                        (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"))
+        if integrated:
+            # x-momentum in its once-integrated form, eq:steady4: Σxy = −tanθ Σyy, i.e.
+            # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from
+            # y to ∞ with the stresses vanishing at infinity (eq:inftycond) gives it exactly,
+            # so the weight of the dilute tail above y_max is kept: the result does not
+            # depend on where the domain ends (a stress-free top at y_max instead would make
+            # an O(ν_top) error, 1e-7 relative at ν_top = 1e-9). Being first order in u0 it
+            # also avoids the D2 round-off (∝ n⁴) of (μ u0')' that otherwise sets the
+            # residual floor.
+            self._layout += (("xmom_integrated", slice(m + 1, 2 * m), slice(1, m), "u"),)
+        else:
+            # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
+            # the cold start, where its residual does not favour the collapsed layer (the
+            # integrated form's does: every term vanishes with T0)
+            self._layout += (("xmom", slice(m + 1, m + n), slice(1, n), "u"),
+                             (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"))
 
     def evaluate(self, st: _State, jac=True):
         n, m, L = self.n, self.n + 1, st.L
@@ -145,7 +167,8 @@ class _Newton:
         # rows are scaled pointwise (ν-rows by 1/ν, T-rows by 1/κ; x-momentum by the constant
         # 1/ν0(0): (μu0')' carries absolute round-off that 1/ν would amplify at the dilute
         # top). The scale's own derivative is kept so that J is the exact Jacobian.
-        scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)]}
+        scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)],
+                  "one": np.ones(m)}
         for name, rows, sl, kind in self._layout:
             ce = self.eqs[name]
             res, coefs = ce.evaluate(base, part, self.sin, self.cos)
@@ -158,7 +181,8 @@ class _Newton:
             dL = np.zeros(len(res))
             idx = np.arange(m)[sl]
             for t, cf in zip(ce.terms, coefs):
-                if t.a or t.b or t.d or t.field == "v" or t.field == "w":
+                # a uniform steady state: no t, x, z dependence, v = w = 0, |k| = 0
+                if t.a or t.b or t.d or t.k or t.field == "v" or t.field == "w":
                     continue
                 cf = np.broadcast_to(cf, (m,))[sl]
                 k = _FIELDS.index(t.field)
@@ -180,40 +204,11 @@ class _Newton:
                 Jr[r_idx, idx] -= res * scale**2 * kap[(1, 0)][sl] * nu[sl]
                 Jr[r_idx, 2 * m + idx] -= res * scale**2 * kap[(0, 1)][sl]
             J[rows] = Jr
-        # x-momentum in its once-integrated form, eq:steady4: Σxy = −tanθ Σyy, i.e.
-        # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from y to
-        # ∞ with the stresses vanishing at infinity (eq:inftycond) gives it exactly, so the
-        # weight of the dilute tail above y_max is kept: the result does not depend on where
-        # the domain ends (a stress-free top at y_max instead would make an O(ν_top) error,
-        # 1e-7 relative at ν_top = 1e-9). Being first order in u0 it also avoids the D2
-        # round-off (∝ n⁴) of (μ u0')' that otherwise sets the residual floor.
-        tan, sc = self.sin / self.cos, 1.0 / self.nu0
-        mu, p = part["mu"], part["p"]
-        if not self.integrated:
-            # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
-            # the cold start, where its residual does not favour the collapsed layer (the
-            # integrated form's does: every term vanishes with T0)
-            R[m + n] = u1[n]
-            if jac:
-                J[m + n, m:2 * m] = D1[n]
-                J[m + n, -1] = -R[m + n] / L
-        else:
-            R[m + 1:m + m] = sc * (mu[(0, 0)][1:] * u1[1:] - tan * p[(0, 0)][1:])
-            if jac:
-                Jr = J[m + 1:m + m]
-                i = np.arange(n)
-                Jr[:, m:2 * m] = sc * mu[(0, 0)][1:, None] * D1[1:]
-                Jr[i, 1 + i] = sc * nu[1:] * (mu[(1, 0)][1:] * u1[1:] - tan * p[(1, 0)][1:])
-                Jr[i, 2 * m + 1 + i] = sc * (mu[(0, 1)][1:] * u1[1:] - tan * p[(0, 1)][1:])
-                Jr[:, -1] = -sc * mu[(0, 0)][1:] * u1[1:] / L
-        # ν(0) = ν0; T' = 0 on top; free boundary ln ν(y_max) = ln ν_top
+        # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
         R[0] = st.s[0] - self.ln0
-        R[2 * m + n] = T1[n]
         R[-1] = st.s[n] - self.lntop
         if jac:
             J[0, 0] = 1.0
-            J[2 * m + n, 2 * m:3 * m] = D1[n]
-            J[2 * m + n, -1] = -R[2 * m + n] / L
             J[-1, n] = 1.0
         return R, J
 
