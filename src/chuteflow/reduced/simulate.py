@@ -26,42 +26,52 @@ from __future__ import annotations
 import math
 import time as _time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.integrate import BDF, Radau
 
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from . import equations as eq
 from .model import LocalCoefficients, ReducedModel
 
 __all__ = ["WaveSolver", "simulate", "growth_rate_fit", "wave_diagnostics"]
 
 
-@dataclass
-class _Kernels:
-    a: np.ndarray
-    da: np.ndarray
-    P: np.ndarray
-    dP: np.ndarray
-    mu: np.ndarray
-    dmu: np.ndarray
-
-
-def _kernels(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
-    """a, a' at faces; P, P', μ̄, μ̄' at centres; NaN outside the family (no raise)."""
+def _closures(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
+    """Closure values of the scheme: T̄, μ̄ (and slopes) at centres, a (and a') at faces; NaN
+    outside the family (no raise)."""
     sT, sa = rm._splines["Tbar"], rm._splines["a"]
-    lnT = sT(rho_c)
-    T = np.exp(lnT)
+    T = np.exp(sT(rho_c))
     a = np.exp(sa(rho_f))
-    c = rm.mu_prefactor
-    P = rho_c * T
-    mu = c * T * np.sqrt(T)
-    if not deriv:
-        return a, P, mu
-    dT = T * sT(rho_c, 1)
-    da = a * sa(rho_f, 1)
-    return _Kernels(a=a, da=da, P=P, dP=T + rho_c * dT, mu=mu, dmu=1.5 * c * np.sqrt(T) * dT)
+    dT = T * sT(rho_c, 1) if deriv else 0.0
+    mu, dmu = eq.viscosity(T, dT, rm.theta, rm.f2_0)
+    centres = eq.ClosureValues(Tbar=T, dTbar=dT, mu_bar=mu, dmu_bar=dmu)
+    faces = eq.ClosureValues(a=a, da=a * sa(rho_f, 1) if deriv else None)
+    return centres, faces
+
+
+def _assemble(ops, diag, flux, source, u, rho_f, c: float) -> list:
+    """Jacobian blocks [[∂ρ̇/∂ρ, ∂ρ̇/∂m], [∂ṁ/∂ρ, ∂ṁ/∂m]] of the staggered scheme.
+
+    Chain rule over the stencil: Π_i = f_m(ρ_i, ū_i, (δu)_i) with ū = A_fc u, δu = D_fc u,
+    u = m/ρ_f, ρ_f = A_cf ρ; S at faces; ``flux`` and ``source`` are the pointwise partials
+    of the statement (:mod:`.equations`), ``ops`` = (A_cf, D_cf, A_fc, D_fc). With sparse
+    matrices (``diag`` = sparse diagonal) this is the exact Jacobian; with the operators'
+    Fourier symbols on a set of modes (diagonal over the modes) it is the discrete symbol.
+    A frame moving at speed ``c`` adds the fluxes −cρ and −c m (face mean at centres).
+    """
+    A_cf, D_cf, A_fc, D_fc = ops
+    dudr = diag(-u / rho_f) @ A_cf  # ∂u_f/∂ρ of both cells
+    dudm = diag(1.0 / rho_f)
+    G = diag(flux.u) @ A_fc + diag(flux.ux) @ D_fc  # ∂Π/∂u_f
+    dPi_r = diag(flux.rho) + G @ dudr
+    dPi_m = G @ dudm
+    dS_r = diag(source.rho) @ A_cf + diag(source.u) @ dudr
+    dS_m = diag(source.u) @ dudm
+    return [[(D_fc @ A_cf) * c, -D_fc],
+            [-D_cf @ dPi_r + dS_r, -D_cf @ dPi_m + dS_m + (D_cf @ A_fc) * c]]
 
 
 class WaveSolver:
@@ -103,11 +113,9 @@ class WaveSolver:
                                   shape=(N, N))
         self.D_fc = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[im, i])),
                                   shape=(N, N))
-        self.c = float(frame_speed)
         # frame moving down the slope at speed c: ∂t|ξ = ∂t|x + c ∂x, in flux form
         # (fluxes m − cρ and ρu² − c m), so mass stays conserved to round-off
-        self.C_rho = (self.D_fc @ self.A_cf).tocsr() * self.c
-        self.C_m = (self.D_cf @ self.A_fc).tocsr() * self.c
+        self.c = float(frame_speed)
         self.n_rhs = 0
         self.n_jac = 0
         self.out_of_range: tuple[float, float] | None = None
@@ -145,11 +153,11 @@ class WaveSolver:
             bad = rho.min() if rho.min() < lo else rho.max()
             self.out_of_range = (float(t), float(bad))
             return np.full_like(y, np.nan)
-        a, P, mu = _kernels(self.rm, rho, rf, deriv=False)
+        centres, faces = _closures(self.rm, rho, rf, deriv=False)
         u = m / rf
         uc = 0.5 * (u + np.roll(u, 1))
         du = (u - np.roll(u, 1)) * h
-        Pi = rho * uc * uc + P - mu * du
+        Pi = eq.momentum_flux(rho, uc, du, centres)
         out = np.empty_like(y)
         if self.c:
             Pi -= self.c * 0.5 * (m + np.roll(m, 1))
@@ -157,7 +165,7 @@ class WaveSolver:
         else:
             flux = m
         out[:N] = -(flux - np.roll(flux, 1)) * h
-        out[N:] = -(np.roll(Pi, -1) - Pi) * h + rf * self.sin - a * u
+        out[N:] = -(np.roll(Pi, -1) - Pi) * h + eq.source(rf, u, self.sin, faces)
         return out
 
     def jacobian(self, t, y) -> sp.csc_matrix:
@@ -167,21 +175,14 @@ class WaveSolver:
         # the Jacobian only steers Newton: outside the family use the nearest defined state
         rho, m = np.clip(y[:N], *self.rm.rho_range), y[N:]
         rf = 0.5 * (rho + np.roll(rho, -1))
-        k = _kernels(self.rm, rho, rf, deriv=True)
+        centres, faces = _closures(self.rm, rho, rf, deriv=True)
         u = m / rf
         uc = 0.5 * (u + np.roll(u, 1))
         du = (u - np.roll(u, 1)) / self.dx
-        dudr = sp.diags(-u / rf) @ self.A_cf  # ∂u_f/∂ρ of both cells: −u/(2ρ_f) each
-        dudm = sp.diags(1.0 / rf)
-        G = sp.diags(2.0 * rho * uc) @ self.A_fc - sp.diags(k.mu) @ self.D_fc  # ∂Π/∂u_f
-        dPi_r = sp.diags(uc * uc + k.dP - k.dmu * du) + G @ dudr
-        dPi_m = G @ dudm
-        dS_r = sp.diags(self.sin - k.da * u) @ self.A_cf - sp.diags(k.a) @ dudr
-        dS_m = -sp.diags(k.a) @ dudm
-        J = sp.bmat([[self.C_rho, -self.D_fc],
-                     [-self.D_cf @ dPi_r + dS_r, -self.D_cf @ dPi_m + dS_m + self.C_m]],
-                    format="csc")
-        return J
+        blocks = _assemble((self.A_cf, self.D_cf, self.A_fc, self.D_fc), sp.diags,
+                           eq.flux_partials(rho, uc, du, centres),
+                           eq.source_partials(rf, u, self.sin, faces), u, rf, self.c)
+        return sp.bmat(blocks, format="csc")
 
     # -- linear theory of the discrete system ---------------------------------------------
     def mode_vectors(self, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -222,24 +223,29 @@ class WaveSolver:
         """Closed form of :meth:`mode_matrix` for modes ``n`` (array): shape ``n.shape + (2, 2)``.
 
         With C = cos(k dx/2) (face ↔ centre averages) and K = 2 sin(k dx/2)/dx (staggered
-        differences): the continuum matrix in (ρ̂, m̂) with k → K and the averaged terms × C.
+        differences): the exact Jacobian's assembly with every averaging operator replaced by
+        C and every difference by iK, i.e. the continuum matrix in (ρ̂, m̂) with k → K and the
+        averaged terms × C.
         K → k and C → 1 as dx → 0, so the discrete growth rates differ from the 2×2
         dispersion relation by O((k dx)²). A moving frame adds i c sin(k dx)/dx to both
         diagonal entries: it shifts the frequencies and leaves the growth rates unchanged.
         """
         c = self.rm.coefficients(rho0)
         n = np.asarray(n, dtype=float)
-        k = 2 * np.pi * n / self.L
+        k = 2 * np.pi * n.ravel() / self.L
         C = np.cos(0.5 * k * self.dx)
-        K = 2.0 * np.sin(0.5 * k * self.dx) / self.dx
-        U, r, mu = c.U, c.rho0, c.mu_bar
-        G = 2.0 * r * U * C - 1j * K * mu  # ∂Π/∂u_f
+        iK = 2j * np.sin(0.5 * k * self.dx) / self.dx
+
+        def diag(v):
+            return sp.diags(np.broadcast_to(np.asarray(v, dtype=complex), k.shape).copy())
+
+        A, D = diag(C), diag(iK)
+        blocks = _assemble((A, D, A, D), diag, eq.flux_partials(c.rho0, c.U, 0.0, c),
+                           eq.source_partials(c.rho0, c.U, self.sin, c), c.U, c.rho0, self.c)
         M = np.empty(n.shape + (2, 2), dtype=complex)
-        M[..., 0, 0] = 1j * self.c * np.sin(k * self.dx) / self.dx
-        M[..., 0, 1] = -1j * K
-        M[..., 1, 0] = (-1j * K * (U * U + c.dP) + 1j * K * G * U * C / r
-                        + (self.sin - c.da * U) * C + c.a * U * C / r)
-        M[..., 1, 1] = -1j * K * G / r - c.a / r + 1j * self.c * np.sin(k * self.dx) / self.dx
+        for i in (0, 1):
+            for j in (0, 1):
+                M[..., i, j] = blocks[i][j].diagonal().reshape(n.shape)
         return M
 
     def discrete_dispersion(self, rho0: float, n, **kw) -> np.ndarray:
