@@ -502,6 +502,8 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
     """Continuation in ln ν0 from ``start`` towards ``bound``; halve the step on failure."""
     knots, cur = [], start
     reason = f"requested bound nu0 = {bound:g}"
+    if direction * (math.log(cur.flow.nu0) - math.log(bound)) >= -1e-12:
+        return knots, reason  # the start is the bound: no duplicate knot
     while True:
         ln_next = math.log(cur.flow.nu0) + direction * step
         if direction * (ln_next - math.log(bound)) >= 0:
@@ -509,8 +511,10 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
         else:
             last = False
         try:
-            # no cold retry: near an end of the family continuation is the better guess
-            k = _knot(theta, math.exp(ln_next), model, cur.flow, nu_top, cold_retry=False)
+            # no cold retry: near an end of the family continuation is the better guess;
+            # the bound itself exactly (not exp(log(bound))), so that it is a knot
+            nu_next = bound if last else math.exp(ln_next)
+            k = _knot(theta, nu_next, model, cur.flow, nu_top, cold_retry=False)
         except (NoSteadyFlowError, ConvergenceError) as exc:
             if step / 2 < min_step:
                 reason = f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} ({exc})"
