@@ -76,6 +76,13 @@ def _assemble(ops, diag, flux, source, u, rho_f, c: float) -> list:
             [-D_cf @ dPi_r + dS_r, -D_cf @ dPi_m + dS_m + (D_cf @ A_fc) * c]]
 
 
+class _ModeDiagonal(np.ndarray):
+    """Diagonal operator over a set of Fourier modes (its diagonal): ``@`` multiplies."""
+
+    def __matmul__(self, other):
+        return np.multiply(self, other)
+
+
 class WaveSolver:
     """Semi-discrete 1D model on a periodic domain: right-hand side, Jacobian, linear modes.
 
@@ -239,7 +246,7 @@ class WaveSolver:
         iK = 2j * np.sin(0.5 * k * self.dx) / self.dx
 
         def diag(v):
-            return sp.diags(np.broadcast_to(np.asarray(v, dtype=complex), k.shape).copy())
+            return np.broadcast_to(np.asarray(v, dtype=complex), k.shape).view(_ModeDiagonal)
 
         A, D = diag(C), diag(iK)
         blocks = _assemble((A, D, A, D), diag, eq.flux_partials(c.rho0, c.U, 0.0, c),
@@ -247,7 +254,7 @@ class WaveSolver:
         M = np.empty(n.shape + (2, 2), dtype=complex)
         for i in (0, 1):
             for j in (0, 1):
-                M[..., i, j] = blocks[i][j].diagonal().reshape(n.shape)
+                M[..., i, j] = np.asarray(blocks[i][j]).reshape(n.shape)
         return M
 
     def discrete_dispersion(self, rho0: float, n, **kw) -> np.ndarray:
