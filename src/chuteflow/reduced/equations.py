@@ -36,13 +36,14 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import sympy as sp
 
 __all__ = ["ClosureValues", "MASS_FLUX", "MOMENTUM_FLUX", "SOURCE", "VISCOSITY",
-           "momentum_flux", "source", "flux_partials", "source_partials", "uniform_state", "viscosity",
+           "momentum_flux", "source", "flux_partials", "source_partials", "uniform_state",
+           "viscosity",
            "linear_matrix", "dispersion_coefficients"]
 
 # -- the statement ------------------------------------------------------------------------
@@ -69,12 +70,12 @@ class ClosureValues(NamedTuple):
     """Values and ρ̄-slopes of the closures T̄, a, μ̄ at the points where the model is evaluated
     (scalars or arrays; ``None`` for what an expression does not need)."""
 
-    Tbar: object = None
-    dTbar: object = None
-    a: object = None
-    da: object = None
-    mu_bar: object = None
-    dmu_bar: object = None
+    Tbar: Any = None
+    dTbar: Any = None
+    a: Any = None
+    da: Any = None
+    mu_bar: Any = None
+    dmu_bar: Any = None
 
 
 def _numeric(expr):
@@ -149,16 +150,16 @@ def source(rho, u, sin_theta: float, closure) -> np.ndarray:
 class FluxPartials(NamedTuple):
     """∂f_m/∂ρ̄ (closure slopes included), ∂f_m/∂ū and ∂f_m/∂(∂xū)."""
 
-    rho: object
-    u: object
-    ux: object
+    rho: Any
+    u: Any
+    ux: Any
 
 
 class SourcePartials(NamedTuple):
     """∂S/∂ρ̄ (closure slope included) and ∂S/∂ū."""
 
-    rho: object
-    u: object
+    rho: Any
+    u: Any
 
 
 def flux_partials(rho, u, ux, closure) -> FluxPartials:
@@ -175,12 +176,12 @@ def source_partials(rho, u, sin_theta: float, closure) -> SourcePartials:
 class UniformState(NamedTuple):
     """The uniform flow at ρ̄ and the ρ̄-derivatives along the family (primes: d/dρ̄)."""
 
-    U: object
-    dU: object
-    P: object
-    dP: object
-    q0: object
-    dq0: object
+    U: Any
+    dU: Any
+    P: Any
+    dP: Any
+    q0: Any
+    dq0: Any
 
 
 def uniform_state(rho, sin_theta: float, closure) -> UniformState:
@@ -209,4 +210,4 @@ def dispersion_coefficients(k, rho0: float, U0: float, sin_theta: float, closure
     """(b, c) of λ² + bλ + c = 0, λ = α + ikU0, for the eigenvalues α of :func:`linear_matrix`."""
     k = np.asarray(k, dtype=float)
     b, c = _call("quadratic", rho0, U0, 0.0, sin_theta, closure, k, U0)
-    return np.broadcast_to(b, k.shape) + 0.0 * k, np.asarray(c + 0j * k)
+    return np.asarray(b + 0.0 * k), np.asarray(c + 0j * k)

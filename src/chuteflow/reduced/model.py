@@ -324,10 +324,10 @@ class ReducedModel:
     rho: np.ndarray = field(repr=False)
     nu0: np.ndarray = field(repr=False)
     coefficients_at_knots: tuple = field(repr=False)
-    flux: np.ndarray = field(default=None, repr=False)
-    h: np.ndarray = field(default=None, repr=False)
-    nu_mean: np.ndarray = field(default=None, repr=False)
-    monotonic: np.ndarray = field(default=None, repr=False)
+    flux: np.ndarray | None = field(default=None, repr=False)
+    h: np.ndarray | None = field(default=None, repr=False)
+    nu_mean: np.ndarray | None = field(default=None, repr=False)
+    monotonic: np.ndarray | None = field(default=None, repr=False)
     accuracy: dict = field(default_factory=dict)
     ends: tuple = ("", "")
     _splines: dict = field(default_factory=dict, repr=False, compare=False)
@@ -500,7 +500,8 @@ def _knot(theta, nu0, model, guess, nu_top, cold_retry=True) -> _Knot:
 
 def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
     """Continuation in ln ν0 from ``start`` towards ``bound``; halve the step on failure."""
-    knots, cur = [], start
+    knots: list[_Knot] = []
+    cur = start
     reason = f"requested bound nu0 = {bound:g}"
     if direction * (math.log(cur.flow.nu0) - math.log(bound)) >= -1e-12:
         return knots, reason  # the start is the bound: no duplicate knot
@@ -600,7 +601,8 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
     checked: dict[tuple[float, float], dict] = {}
     while True:
         rm = _assemble(theta, model, knots, {}, (why_lo, why_hi))
-        worst, insert = {}, []
+        worst: dict[str, float] = {}
+        insert: list = []
         for i in range(len(knots) - 1):
             k0, k1 = knots[i], knots[i + 1]
             key = (k0.flow.nu0, k1.flow.nu0)

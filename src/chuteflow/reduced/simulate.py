@@ -349,7 +349,7 @@ class Step:
     def __init__(self, ode, t_prev: float, y_u: np.ndarray, number: int):
         self._ode, self._y_u = ode, y_u
         self.t_prev, self.t, self.number = float(t_prev), float(ode.t), number
-        self._dense = None
+        self._dense: Callable[[float], np.ndarray] | None = None
 
     @property
     def y(self) -> np.ndarray:
@@ -358,9 +358,10 @@ class Step:
 
     def state(self, t: float) -> np.ndarray:
         """State at time ``t`` in [t_prev, t] (the integrator's dense output)."""
-        if self._dense is None:
-            self._dense = self._ode.dense_output()
-        return self._y_u + self._dense(t)
+        dense = self._dense
+        if dense is None:
+            dense = self._dense = self._ode.dense_output()
+        return self._y_u + dense(t)
 
 
 @dataclass
@@ -593,13 +594,13 @@ class WaveSimulation:
         lo, hi = reduced.rho_range
         if nu0 is not None:
             rho0 = reduced.rho_at_nu0(float(nu0))
-            if not lo < rho0 < hi:
+            if not lo < rho0 < hi:  # rho_at_nu0 returns a knot's ρ̄ exactly
                 raise ParameterError(
                     f"nu0 = {nu0:g} is an end of the steady family at theta = "
                     f"{reduced.theta:g} deg (floor densities [{reduced.nu0[0]:.4g}, "
                     f"{reduced.nu0[-1]:.4g}]): a wave about it would leave the range where "
                     "the 1D model is defined at once; choose nu0 inside")
-        rho0 = float(rho0)
+        rho0 = float(rho0)  # type: ignore[arg-type]  # one of rho0, nu0 is set
         if not lo < rho0 < hi:
             raise ParameterError(f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of "
                                  f"the steady family at theta = {reduced.theta:g} deg")
@@ -690,7 +691,7 @@ class WaveSimulation:
             The time integrator failed or needed more than ``max_steps`` steps.
         """
         auto = t_end is None
-        if auto:
+        if t_end is None:
             t_end = self.default_t_end()
         elif not (math.isfinite(t_end) and t_end > 0):
             raise ParameterError(f"time = {t_end!r} must be a positive number")
@@ -744,6 +745,7 @@ class WaveSimulation:
     def _left_message(self, t: float) -> str:
         rm = self.reduced
         lo, hi = rm.rho_range
+        assert self.solver.out_of_range is not None
         _, rb = self.solver.out_of_range
         return (f"the density wave left the steady family at t ≈ {t:.4g}: rho_bar reached "
                 f"{rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D model are "
