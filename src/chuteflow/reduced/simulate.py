@@ -20,6 +20,18 @@ Radau's steps are limited by accuracy only. Because the exact Jacobian has the s
 telescoping structure as the right-hand side (its mass rows sum to zero), every simplified-
 Newton update conserves mass to round-off too — unlike a finite-difference Jacobian, whose
 column sums vanish only to ~1e-9.
+
+The fluxes Π, the source and their partial derivatives come from the one statement of the
+model in :mod:`chuteflow.reduced.equations`; :func:`_assemble` applies the chain rule over
+the stencil, and the same assembly on the operators' Fourier symbols gives the closed-form
+symbol of the linearised scheme (:meth:`WaveSolver.symbol`).
+
+Structure: :class:`WaveSolver` is the semi-discrete system (right-hand side, Jacobian,
+linear modes); :class:`WaveSimulation` checks the input, fixes the grid and the frame and
+steps the integrator; trackers watch the steps and may stop the run (in the style of
+py-pde's ``solve(..., tracker=[...])``): :class:`SnapshotTracker`, :class:`SaturationStop`,
+:class:`ProgressTracker`, :class:`LeaveFamilyStop`, or a subclass of :class:`Tracker`.
+:func:`simulate` is the convenience wrapper returning an xarray Dataset.
 """
 from __future__ import annotations
 
