@@ -14,12 +14,13 @@
   waves on a periodic slope.
 """
 from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
-from .simulate import (LeaveFamilyStop, ProgressTracker, SaturationStop, SnapshotTracker, Tracker,
-                       WaveSimulation, WaveSolver, default_cells, growth_rate_fit, simulate)
+from .simulate import (InitialState, LeaveFamilyStop, ProgressTracker, RunInfo, SaturationStop,
+                       SnapshotTracker, Step, Tracker, WaveSimulation, WaveSolver, default_cells,
+                       growth_rate_fit, simulate)
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
 
 __all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
-           "WaveSolver", "WaveSimulation", "Tracker", "SnapshotTracker", "SaturationStop",
-           "ProgressTracker", "LeaveFamilyStop", "default_cells", "growth_rate_fit", "simulate",
-           "Reduced1D",
-           "agreement", "reduced_diagram", "reduced_diagram_config"]
+           "WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",
+           "SnapshotTracker", "SaturationStop", "ProgressTracker", "LeaveFamilyStop",
+           "default_cells", "growth_rate_fit", "simulate", "Reduced1D", "agreement",
+           "reduced_diagram", "reduced_diagram_config"]
