@@ -95,3 +95,9 @@ def test_reduced_at_the_lowest_floor_density_of_the_family_answers():
     assert d["nu0_range"][0] == 0.05
     st = d["state"]
     assert st["nu0"] == 0.05 and st["rho0"] == d["points"][0]["rho0"]
+    # a wave about the end of the family has nowhere to go: one line naming nu0 and the range
+    res = runner.invoke(app, ["simulate", "--theta", "14", "--nu0", "0.05", "--length", "300",
+                              "--nu0-min", "0.05", "--nu0-max", "0.1"])
+    assert res.exit_code == 2
+    assert "nu0 = 0.05" in res.output and "[0.05, 0.1]" in res.output
+    assert "Traceback" not in res.output and "f(a) and f(b)" not in res.output
