@@ -186,3 +186,28 @@ def test_statement_is_the_balance_law_of_section_5_1_2():
     assert sympy.simplify(eq.MASS_FLUX - rho * u) == 0
     assert sympy.simplify(eq.MOMENTUM_FLUX - (rho * u**2 + rho * T - mu * ux)) == 0
     assert sympy.simplify(eq.SOURCE - a * (rho * s / a - u)) == 0
+
+
+def test_long_wave_coefficients_of_the_paper_follow_from_the_statement():
+    # disp-oned of §5.1.2: α = −i (ρ0U)' k + (ρ0/a)[(ρ0U')² − (ρ0T̄)'] k² + O(k³), the printed
+    # result that LocalCoefficients.alpha1/alpha2 use, from the small root of the derived
+    # quadratic λ² + bλ + c = 0 (α = λ − ikU0) expanded in k
+    import sympy
+
+    d = eq.derivation()
+    b, c = d["quadratic"]
+    k = eq.K
+    l1, l2 = sympy.symbols("l1 l2")
+    root = l1 * k + l2 * k**2
+    res = sympy.expand(sympy.series((root**2 + b * root + c), k, 0, 3).removeO())
+    sol = sympy.solve([res.coeff(k, 1), res.coeff(k, 2)], [l1, l2], dict=True)[0]
+    alpha1, alpha2 = -sympy.I * eq.U0 + sol[l1], sol[l2]
+    U, dU = d["uniform"][0], d["uniform"][1]
+    a = sympy.Function("a")(eq.RHO)
+    T = sympy.Function("Tbar")(eq.RHO)
+    dP = sympy.diff(eq.RHO * T, eq.RHO)
+    paper1 = -sympy.I * sympy.diff(eq.RHO * U, eq.RHO)
+    paper2 = eq.RHO / a * ((eq.RHO * dU) ** 2 - dP)
+    at = {eq.U0: U}
+    assert sympy.simplify(alpha1.subs(at) - paper1) == 0
+    assert sympy.simplify(alpha2.subs(at) - paper2) == 0

@@ -41,7 +41,7 @@ from typing import Any, NamedTuple
 import numpy as np
 import sympy as sp
 
-__all__ = ["ClosureValues", "MASS_FLUX", "MOMENTUM_FLUX", "SOURCE", "VISCOSITY",
+__all__ = ["ClosureValues", "derivation", "MASS_FLUX", "MOMENTUM_FLUX", "SOURCE", "VISCOSITY",
            "momentum_flux", "source", "flux_partials", "source_partials", "uniform_state",
            "viscosity",
            "linear_matrix", "dispersion_coefficients"]
@@ -94,39 +94,57 @@ def _lambdify(exprs, extra=()):
     return sp.lambdify(extra + _ARGS, [_numeric(e) for e in exprs], modules="numpy", cse=True)
 
 
+#: Symbol of the uniform velocity U0 in :func:`derivation` (``matrix``, ``quadratic``).
+U0 = sp.Symbol("U_0", real=True)
+
+
 @functools.cache
-def _derived():
-    """Derive (once per process) and lambdify everything the module exports."""
+def derivation() -> dict:
+    """Everything derived from the statement, as sympy expressions (closures undefined).
+
+    Keys: ``flux``, ``source`` ([f_m], [S]); ``flux_partials``, ``source_partials``;
+    ``uniform`` ([U, U', P, P', q0, q0']); ``matrix`` (the four entries of M(k), row by row,
+    in :data:`K` and :data:`U0`); ``quadratic`` ([b, c]).
+    """
     fm, s = MOMENTUM_FLUX, SOURCE
     out = {}
-    out["flux"] = _lambdify([fm])
-    out["source"] = _lambdify([s])
-    out["flux_partials"] = _lambdify([sp.diff(fm, RHO), sp.diff(fm, U), sp.diff(fm, UX)])
-    out["source_partials"] = _lambdify([sp.diff(s, RHO), sp.diff(s, U)])
+    out["flux"] = [fm]
+    out["source"] = [s]
+    out["flux_partials"] = [sp.diff(fm, RHO), sp.diff(fm, U), sp.diff(fm, UX)]
+    out["source_partials"] = [sp.diff(s, RHO), sp.diff(s, U)]
     # uniform state: S(ρ̄, U) = 0, ∂x = 0
     (u0,) = sp.solve(sp.Eq(s, 0), U)
     pressure = fm.subs({U: 0, UX: 0})
     q0 = MASS_FLUX.subs(U, u0)
-    out["uniform"] = _lambdify([u0, sp.diff(u0, RHO), pressure, sp.diff(pressure, RHO),
-                                q0, sp.diff(q0, RHO)])
+    out["uniform"] = [u0, sp.diff(u0, RHO), pressure, sp.diff(pressure, RHO), q0,
+                      sp.diff(q0, RHO)]
     # linearisation about (ρ0, U0, ∂x ū = 0) for exp(αt + ikx) in (ρ̂, û)
-    u_0, rh, uh = sp.symbols("U_0 rho_hat u_hat")
+    rh, uh = sp.symbols("rho_hat u_hat")
 
     def lin(f):
         d = sp.diff(f, RHO) * rh + sp.diff(f, U) * uh + sp.diff(f, UX) * sp.I * K * uh
-        return d.subs({U: u_0, UX: 0})
+        return d.subs({U: U0, UX: 0})
 
     rho_t = -sp.I * K * lin(MASS_FLUX)
     m_t = -sp.I * K * lin(fm) + lin(s)
-    u_t = sp.expand((m_t - u_0 * rho_t) / RHO)  # m = ρ̄ū: ∂t m = ρ0 ∂t û + U0 ∂t ρ̂
+    u_t = sp.expand((m_t - U0 * rho_t) / RHO)  # m = ρ̄ū: ∂t m = ρ0 ∂t û + U0 ∂t ρ̂
     rho_t = sp.expand(rho_t)
     M = sp.Matrix([[rho_t.coeff(rh), rho_t.coeff(uh)], [u_t.coeff(rh), u_t.coeff(uh)]])
-    out["matrix"] = _lambdify(list(M), extra=(K, u_0))
+    out["matrix"] = list(M)
     # characteristic polynomial in λ = α + ikU0: λ² + bλ + c
-    shifted = M + sp.I * K * u_0 * sp.eye(2)
-    b = sp.simplify(-shifted.trace())
-    c = sp.expand(shifted.det())
-    out["quadratic"] = _lambdify([b, c], extra=(K, u_0))
+    shifted = M + sp.I * K * U0 * sp.eye(2)
+    out["quadratic"] = [sp.simplify(-shifted.trace()), sp.expand(shifted.det())]
+    return out
+
+
+@functools.cache
+def _derived():
+    """Lambdify (once per process) everything :func:`derivation` gives."""
+    d = derivation()
+    out = {name: _lambdify(d[name]) for name in ("flux", "source", "flux_partials",
+                                                 "source_partials", "uniform")}
+    for name in ("matrix", "quadratic"):
+        out[name] = _lambdify(d[name], extra=(K, U0))
     out["viscosity"] = sp.lambdify((_TB, COS_THETA, F2_0), [VISCOSITY, sp.diff(VISCOSITY, _TB)],
                                    modules="numpy")
     return out
