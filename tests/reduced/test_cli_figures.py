@@ -82,3 +82,22 @@ def test_phase_diagram_figure_with_full_model(tmp_path):
     assert a["compared"] == 20 and a["only_1d_unstable"] == 5
     png = save(plot_phase_diagrams([red], [full], agreement=[a]), tmp_path / "pd.png")
     assert png.stat().st_size > 10_000
+
+
+def test_reduced_at_the_lowest_floor_density_of_the_family_answers():
+    # paper point P4 (θ = 14°, ν0(0) = 0.05) is the lowest flow of the 14° family (below it
+    # h < 1): the state there is a knot and was answered by scipy's raw "f(a) and f(b) must
+    # have different signs". A family starting at 0.05 reproduces it cheaply.
+    res = runner.invoke(app, ["reduced", "--theta", "14", "--nu0", "0.05", "--json",
+                              "--nu0-min", "0.05", "--nu0-max", "0.1"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert d["nu0_range"][0] == 0.05
+    st = d["state"]
+    assert st["nu0"] == 0.05 and st["rho0"] == d["points"][0]["rho0"]
+    # a wave about the end of the family has nowhere to go: one line naming nu0 and the range
+    res = runner.invoke(app, ["simulate", "--theta", "14", "--nu0", "0.05", "--length", "300",
+                              "--nu0-min", "0.05", "--nu0-max", "0.1"])
+    assert res.exit_code == 2
+    assert "nu0 = 0.05" in res.output and "[0.05, 0.1]" in res.output
+    assert "Traceback" not in res.output and "f(a) and f(b)" not in res.output

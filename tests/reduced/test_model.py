@@ -203,3 +203,14 @@ def test_table_and_summary(rm16):
     assert ds.attrs["theta"] == 16.0
     s = rm16.summary()
     assert s["knots"] == len(rm16.rho) and s["rho_range"][0] == rm16.rho_range[0]
+
+
+def test_rho_at_nu0_is_exact_at_every_knot(rm16):
+    # the ends of the family are knots; F(ρ̄_k) − ν0_k is round-off there (issue: P4 printed
+    # scipy's "f(a) and f(b) must have different signs" at the family's lowest knot)
+    for r, nu in zip(rm16.rho, rm16.nu0):
+        assert rm16.rho_at_nu0(float(nu)) == r
+        # one ulp beside a knot: still answers, within round-off of the knot
+        for x in (np.nextafter(nu, 0.0), np.nextafter(nu, 1.0)):
+            if rm16.nu0[0] <= x <= rm16.nu0[-1]:
+                assert rm16.rho_at_nu0(float(x)) == pytest.approx(r, rel=1e-12)

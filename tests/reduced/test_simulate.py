@@ -206,3 +206,99 @@ def test_bad_input(rm16, kw, match):
         simulate(rm16, L, **kw)
     with pytest.raises(ParameterError, match="length"):
         WaveSolver(rm16, -1.0, 64)
+
+
+# -- the stepper and its trackers -----------------------------------------------------------
+def test_stepper_with_trackers_is_what_simulate_returns(rm16, state16):
+    from chuteflow.reduced import ProgressTracker, SnapshotTracker, WaveSimulation
+
+    kw = dict(rho0=state16.rho0, n_cells=128, mode=1, amplitude=1e-3)
+    ref = simulate(rm16, L, t_end=30.0, n_out=31, **kw)
+    sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=128)
+    snaps, seen = SnapshotTracker(count=31), []
+    info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 30.0,
+                   trackers=[snaps, ProgressTracker(lambda t, te: seen.append((t, te)))])
+    ds = sim.dataset(snaps, info)
+    assert info.status == "completed" and info.t == 30.0 and not info.auto_time
+    assert np.array_equal(ds["rho"].values, ref["rho"].values)
+    assert ds.attrs["frame_speed"] == ref.attrs["frame_speed"]
+    assert set(ds.attrs) == set(ref.attrs) and set(ds.data_vars) == set(ref.data_vars)
+    # progress after every step, in increasing time, against the requested end
+    ts = [t for t, _ in seen]
+    assert len(seen) == info.steps and ts == sorted(ts) and ts[-1] == 30.0
+    assert {te for _, te in seen} == {30.0}
+
+
+def test_snapshot_interval_and_a_custom_stop_condition(rm16, state16):
+    from chuteflow.reduced import SnapshotTracker, Tracker, WaveSimulation
+
+    class GrownTenfold(Tracker):
+        """Stop once the wave amplitude is ten times its start (a user-written tracker)."""
+
+        def initialize(self, sim, initial, t_end):
+            self.a0 = initial.amplitude
+
+        def handle(self, sim, step):
+            a = np.abs(step.y[:sim.solver.N] - sim.rho0).max()
+            return "grown" if a > 10 * self.a0 else None
+
+    sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=128, frame="lab")
+    assert sim.frame_speed == 0.0
+    snaps = SnapshotTracker(interval=5.0)
+    info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 1000.0,
+                   trackers=[snaps, GrownTenfold()])
+    # mode 1 grows at Re α ≈ 0.036: ten-fold after ln 10 / 0.036 ≈ 64
+    rate = float(sim.growth_discrete[0].real)
+    assert info.status == "grown" and abs(info.t - math.log(10) / rate) < 0.1 * info.t
+    assert np.allclose(np.diff(snaps.times), 5.0) and snaps.times[-1] <= info.t
+    ds = sim.dataset(snaps, info)
+    assert ds.attrs["status"] == "grown" and ds.attrs["mass_drift"] < 1e-14
+
+
+def test_saturation_stop_and_leave_family_stop(rm16, state16):
+    from chuteflow.reduced import (LeaveFamilyStop, SaturationStop, SnapshotTracker,
+                                   WaveSimulation)
+
+    # a stable state: SaturationStop ends the run as "decayed" before the default t_end
+    sim = WaveSimulation(rm16, 20.0, nu0=0.09, n_cells=128)
+    assert sim.max_growth_rate < 0
+    stop = SaturationStop(count=40)
+    info = sim.run(sim.perturbed(amplitude=1e-3), trackers=[stop])
+    assert info.auto_time and info.status == "decayed" and info.t < info.t_end
+    assert stop.amplitudes[-1] < math.exp(-10) * stop.amplitudes[0] * 1.01
+    # a large wave leaves the family: raise without LeaveFamilyStop, stop with it
+    sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=256)
+    init = sim.perturbed(mode=1, amplitude=0.2)
+    with pytest.raises(NoSteadyFlowError, match="left the steady family"):
+        sim.run(init, 2000.0)
+    snaps = SnapshotTracker(count=50)
+    info = sim.run(init, 2000.0, trackers=[snaps, LeaveFamilyStop()])
+    assert info.status == "left_family" and "left the steady family" in info.left_family
+    assert snaps.times[-1] == info.t and np.array_equal(snaps.states[-1], info.y)
+
+
+@pytest.mark.parametrize("cls, kw, match", [
+    ("SnapshotTracker", {"count": 1}, "n_out"),
+    ("SnapshotTracker", {}, "exactly one"),
+    ("SnapshotTracker", {"interval": -1.0}, "interval"),
+    ("SaturationStop", {"tol": 2.0, "count": 5}, "saturation_tol"),
+])
+def test_bad_tracker_input(cls, kw, match):
+    import chuteflow.reduced as reduced
+
+    with pytest.raises(ParameterError, match=match):
+        getattr(reduced, cls)(**kw)
+
+
+def test_bad_stepper_input(rm16, state16):
+    from chuteflow.reduced import WaveSimulation
+
+    with pytest.raises(ParameterError, match="end of the steady family"):
+        WaveSimulation(rm16, L, nu0=float(rm16.nu0[0]))
+    with pytest.raises(ParameterError, match="length"):
+        WaveSimulation(rm16, 0.0, rho0=state16.rho0)
+    sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=64)
+    with pytest.raises(ParameterError, match="time"):
+        sim.run(sim.perturbed(), -3.0)
+    with pytest.raises(ParameterError, match="mode"):
+        sim.perturbed(mode=40)

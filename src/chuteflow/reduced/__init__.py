@@ -6,12 +6,21 @@
   state: 2×2 dispersion relation, condition (errata-corrected), criterion, disp-oned, k_c.
 - :func:`reduced_diagram`, :func:`agreement`: 1D stability diagrams (fig phaseoned) and their
   agreement with the full model's.
-- :func:`simulate`, :class:`WaveSolver`: nonlinear waves on a periodic slope.
+- :mod:`.equations`: the depth-averaged equations stated once; the uniform state, the
+  linearisation, the finite-volume fluxes and their partials are derived from there.
+- :class:`WaveSimulation` (time stepper with trackers: :class:`SnapshotTracker`,
+  :class:`SaturationStop`, :class:`ProgressTracker`, :class:`LeaveFamilyStop`),
+  :class:`WaveSolver` (the discrete system) and the wrapper :func:`simulate`: nonlinear
+  waves on a periodic slope.
 """
 from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
-from .simulate import WaveSolver, default_cells, growth_rate_fit, simulate
+from .simulate import (InitialState, LeaveFamilyStop, ProgressTracker, RunInfo, SaturationStop,
+                       SnapshotTracker, Step, Tracker, WaveSimulation, WaveSolver, default_cells,
+                       growth_rate_fit, simulate)
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
 
 __all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
-           "WaveSolver", "default_cells", "growth_rate_fit", "simulate", "Reduced1D",
-           "agreement", "reduced_diagram", "reduced_diagram_config"]
+           "WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",
+           "SnapshotTracker", "SaturationStop", "ProgressTracker", "LeaveFamilyStop",
+           "default_cells", "growth_rate_fit", "simulate", "Reduced1D", "agreement",
+           "reduced_diagram", "reduced_diagram_config"]

@@ -27,19 +27,27 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
+from scipy.optimize import brentq
 
 from ..closures import ChuteModel
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import SteadyFlow, solve_steady, steady_tangent
+from . import equations as eq
 
 __all__ = ["LocalCoefficients", "local_coefficients", "ReducedModel", "reduced_model",
            "mu_bar_prefactor"]
 
 
+def _f2_0(model: ChuteModel) -> float:
+    return float(model.f(0.0)["f2"][0])
+
+
 def mu_bar_prefactor(theta: float, model: ChuteModel) -> float:
-    """(4/3) f2(0) / cos θ, so that μ̄ = prefactor · T̄^{3/2} (§5.1.2, approximation iii)."""
-    f20 = float(model.f(0.0)["f2"][0])
-    return 4.0 / 3.0 * f20 / math.cos(math.radians(theta))
+    """(4/3) f2(0) / cos θ, so that μ̄ = prefactor · T̄^{3/2} (§5.1.2, approximation iii).
+
+    The value of the viscosity closure :data:`chuteflow.reduced.equations.VISCOSITY` at T̄ = 1.
+    """
+    return float(eq.viscosity(1.0, 0.0, theta, _f2_0(model))[0])
 
 
 @dataclass(frozen=True)
@@ -76,41 +84,44 @@ class LocalCoefficients:
     mu_bar: float
     dmu_bar: float
 
-    # -- derived functions -------------------------------------------------------------
+    # -- the uniform state, derived from the statement (:mod:`.equations`) ----------------
     @property
     def sin_theta(self) -> float:
         return math.sin(math.radians(self.theta))
 
+    @functools.cached_property
+    def _uniform(self) -> eq.UniformState:
+        return eq.uniform_state(self.rho0, self.sin_theta, self)
+
     @property
     def U(self) -> float:
-        """U(ρ0) = ρ0 sin θ / a (oneaandu): the uniform flow velocity."""
-        return self.rho0 * self.sin_theta / self.a
+        """U(ρ0) = ρ0 sin θ / a (oneaandu): the uniform flow velocity, S(ρ0, U) = 0."""
+        return float(self._uniform.U)
 
     @property
     def dU(self) -> float:
         """U'(ρ0) = sin θ / a − ρ0 sin θ a'/a²."""
-        s = self.sin_theta
-        return s / self.a - self.rho0 * s * self.da / self.a**2
+        return float(self._uniform.dU)
 
     @property
     def P(self) -> float:
         """Depth-integrated dilute pressure ρ0 T̄(ρ0)."""
-        return self.rho0 * self.Tbar
+        return float(self._uniform.P)
 
     @property
     def dP(self) -> float:
         """(ρ0 T̄)' = T̄ + ρ0 T̄'. Negative means the pressure term amplifies density bumps."""
-        return self.Tbar + self.rho0 * self.dTbar
+        return float(self._uniform.dP)
 
     @property
     def q0(self) -> float:
         """Flux of the uniform state q0 = ρ0 U(ρ0)."""
-        return self.rho0 * self.U
+        return float(self._uniform.q0)
 
     @property
     def dq0(self) -> float:
         """dq0/dρ0 = U + ρ0 U'."""
-        return self.U + self.rho0 * self.dU
+        return float(self._uniform.dq0)
 
     # -- long waves (criterion, disp-oned) ---------------------------------------------
     @property
@@ -151,26 +162,20 @@ class LocalCoefficients:
     def matrix(self, k) -> np.ndarray:
         """Linearised 1D model about (ρ0, U(ρ0)) for exp(αt + ikx): α (ρ̂, û) = M(k) (ρ̂, û).
 
-        Returns an array of shape ``k.shape + (2, 2)``.
+        Derived from the statement of the model (:func:`.equations.linear_matrix`). Returns an
+        array of shape ``k.shape + (2, 2)``.
         """
-        k = np.asarray(k, dtype=float)
-        ik = 1j * k
-        M = np.empty(k.shape + (2, 2), dtype=complex)
-        M[..., 0, 0] = -ik * self.U
-        M[..., 0, 1] = -ik * self.rho0
-        M[..., 1, 0] = (self.a * self.dU - ik * self.dP) / self.rho0
-        M[..., 1, 1] = -ik * self.U - (self.a + self.mu_bar * k**2) / self.rho0
-        return M
+        return eq.linear_matrix(k, self.rho0, self.U, self.sin_theta, self)
 
     def dispersion(self, k) -> np.ndarray:
         """Both growth rates α(k) of the linearised model, least stable first.
 
         Closed form of the eigenvalues of :meth:`matrix`: α = −ikU + λ with
-        λ² + bλ + c = 0, b = (a + μ̄k²)/ρ0, c = ik a U' + k² (ρ0T̄)'. Shape ``k.shape + (2,)``.
+        λ² + bλ + c = 0, b = (a + μ̄k²)/ρ0, c = ik a U' + k² (ρ0T̄)'
+        (:func:`.equations.dispersion_coefficients`). Shape ``k.shape + (2,)``.
         """
         k = np.asarray(k, dtype=float)
-        b = (self.a + self.mu_bar * k**2) / self.rho0
-        c = 1j * k * self.a * self.dU + k**2 * self.dP
+        b, c = eq.dispersion_coefficients(k, self.rho0, self.U, self.sin_theta, self)
         disc = np.sqrt(b * b - 4.0 * c + 0j)
         # the root −b/2 + disc/2 suffers cancellation for small k: use c = λ1 λ2
         lam2 = -0.5 * (b + disc)
@@ -269,10 +274,9 @@ def local_coefficients(flow: SteadyFlow, tangent: dict | None = None) -> LocalCo
     a = float(eta[(0, 0)])
     dF = 1.0 / drho
     da = float(eta[(1, 0)]) * dF + float(eta[(0, 1)]) * dT
-    pref = mu_bar_prefactor(flow.theta, model)
+    mu, dmu = eq.viscosity(T, dT, flow.theta, _f2_0(model))
     return LocalCoefficients(theta=flow.theta, rho0=flow.rho_bar, F=beta, dF=dF, Tbar=T,
-                             dTbar=dT, a=a, da=da, mu_bar=pref * T**1.5,
-                             dmu_bar=1.5 * pref * math.sqrt(T) * dT)
+                             dTbar=dT, a=a, da=da, mu_bar=float(mu), dmu_bar=float(dmu))
 
 
 # ---------------------------------------------------------------------------------------
@@ -320,10 +324,10 @@ class ReducedModel:
     rho: np.ndarray = field(repr=False)
     nu0: np.ndarray = field(repr=False)
     coefficients_at_knots: tuple = field(repr=False)
-    flux: np.ndarray = field(default=None, repr=False)
-    h: np.ndarray = field(default=None, repr=False)
-    nu_mean: np.ndarray = field(default=None, repr=False)
-    monotonic: np.ndarray = field(default=None, repr=False)
+    flux: np.ndarray | None = field(default=None, repr=False)
+    h: np.ndarray | None = field(default=None, repr=False)
+    nu_mean: np.ndarray | None = field(default=None, repr=False)
+    monotonic: np.ndarray | None = field(default=None, repr=False)
     accuracy: dict = field(default_factory=dict)
     ends: tuple = ("", "")
     _splines: dict = field(default_factory=dict, repr=False, compare=False)
@@ -374,57 +378,72 @@ class ReducedModel:
         """Floor drag a(ρ̄) = η*(F(ρ̄), T̄(ρ̄)) (label oneaandu), or a derivative."""
         return self._eval("a", rho, nu)
 
+    @functools.cached_property
+    def f2_0(self) -> float:
+        """f2(0) of the closure (Table 1), the constant of the viscosity closure μ̄."""
+        return _f2_0(self.model)
+
+    @property
+    def sin_theta(self) -> float:
+        return math.sin(math.radians(self.theta))
+
+    def closure(self, rho) -> eq.ClosureValues:
+        """T̄, a, μ̄ and their ρ̄-slopes at ``rho`` (values for :mod:`.equations`)."""
+        T, dT = self.Tbar(rho), self.Tbar(rho, 1)
+        mu, dmu = eq.viscosity(T, dT, self.theta, self.f2_0)
+        return eq.ClosureValues(Tbar=T, dTbar=dT, a=self.a(rho), da=self.a(rho, 1), mu_bar=mu,
+                                dmu_bar=dmu)
+
+    def _uniform(self, rho, nu, name):
+        if nu not in (0, 1):
+            raise ValueError("nu: derivative order 0 or 1")
+        rho = np.asarray(rho, dtype=float)
+        st = eq.uniform_state(rho, self.sin_theta, self.closure(rho))
+        return getattr(st, ("d" if nu else "") + name)
+
     def U(self, rho, nu: int = 0):
         """U(ρ̄) = ρ̄ sin θ / a(ρ̄) (oneaandu), or its first derivative."""
-        rho = np.asarray(rho, dtype=float)
-        s = math.sin(math.radians(self.theta))
-        a = self.a(rho)
-        if nu == 0:
-            return rho * s / a
-        if nu == 1:
-            return s / a - rho * s * self.a(rho, 1) / a**2
-        raise ValueError("nu: derivative order 0 or 1")
+        return self._uniform(rho, nu, "U")
 
     def P(self, rho, nu: int = 0):
         """Depth-integrated pressure ρ̄ T̄(ρ̄), or its first derivative."""
-        rho = np.asarray(rho, dtype=float)
-        if nu == 0:
-            return rho * self.Tbar(rho)
-        if nu == 1:
-            return self.Tbar(rho) + rho * self.Tbar(rho, 1)
-        raise ValueError("nu: derivative order 0 or 1")
+        return self._uniform(rho, nu, "P")
 
     def mu_bar(self, rho, nu: int = 0):
         """μ̄(ρ̄) = (4/3) f2(0) H(T̄) √T̄, H = T̄/cos θ, or its first derivative."""
-        c = self.mu_prefactor
-        T = self.Tbar(rho)
-        if nu == 0:
-            return c * T**1.5
-        if nu == 1:
-            return 1.5 * c * np.sqrt(T) * self.Tbar(rho, 1)
-        raise ValueError("nu: derivative order 0 or 1")
+        if nu not in (0, 1):
+            raise ValueError("nu: derivative order 0 or 1")
+        c = self.closure(rho)
+        return c.dmu_bar if nu else c.mu_bar
 
     def coefficients(self, rho0: float) -> LocalCoefficients:
         """:class:`LocalCoefficients` at ρ0 from the interpolants."""
         r = float(self._check(rho0))
-        T, dT = float(self.Tbar(r)), float(self.Tbar(r, 1))
-        c = self.mu_prefactor
+        c = self.closure(r)
         return LocalCoefficients(theta=self.theta, rho0=r, F=float(self.F(r)),
-                                 dF=float(self.F(r, 1)), Tbar=T, dTbar=dT, a=float(self.a(r)),
-                                 da=float(self.a(r, 1)), mu_bar=c * T**1.5,
-                                 dmu_bar=1.5 * c * math.sqrt(T) * dT)
+                                 dF=float(self.F(r, 1)), Tbar=float(c.Tbar),
+                                 dTbar=float(c.dTbar), a=float(c.a), da=float(c.da),
+                                 mu_bar=float(c.mu_bar), dmu_bar=float(c.dmu_bar))
 
     def rho_at_nu0(self, nu0: float) -> float:
-        """ρ̄0 of the steady flow with floor density ``nu0`` (inverse of F)."""
-        from scipy.optimize import brentq
+        """ρ̄0 of the steady flow with floor density ``nu0`` (inverse of F).
 
+        Exact at the knots (solved flows); between knots the root of F(ρ̄) = ν0 on the
+        bracketing interval.
+        """
         lo, hi = self.nu0[0], self.nu0[-1]
         if not lo <= nu0 <= hi:
             raise ParameterError(f"nu0 = {nu0:g} is outside [{lo:.4g}, {hi:.4g}], the floor "
                                  f"densities of the steady family at theta = {self.theta:g} deg")
+        hit = np.flatnonzero(self.nu0 == nu0)
+        if hit.size:  # a knot, e.g. an end of the family: F(ρ̄) − ν0 is round-off there
+            return float(self.rho[hit[0]])
         i = int(np.clip(np.searchsorted(self.nu0, nu0), 1, len(self.nu0) - 1))
-        return float(brentq(lambda r: float(self.F(r)) - nu0, self.rho[i - 1], self.rho[i],
-                            xtol=1e-15, rtol=1e-14))
+        ra, rb = float(self.rho[i - 1]), float(self.rho[i])
+        fa, fb = float(self.F(ra)) - nu0, float(self.F(rb)) - nu0
+        if fa * fb > 0:  # within round-off of a knot (exp ∘ log of the interpolant)
+            return ra if abs(fa) <= abs(fb) else rb
+        return float(brentq(lambda r: float(self.F(r)) - nu0, ra, rb, xtol=1e-15, rtol=1e-14))
 
     def table(self, n: int = 200):
         """The functions on ``n`` points of the ρ̄ range and the criterion there, as xarray."""
@@ -481,8 +500,11 @@ def _knot(theta, nu0, model, guess, nu_top, cold_retry=True) -> _Knot:
 
 def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
     """Continuation in ln ν0 from ``start`` towards ``bound``; halve the step on failure."""
-    knots, cur = [], start
+    knots: list[_Knot] = []
+    cur = start
     reason = f"requested bound nu0 = {bound:g}"
+    if direction * (math.log(cur.flow.nu0) - math.log(bound)) >= -1e-12:
+        return knots, reason  # the start is the bound: no duplicate knot
     while True:
         ln_next = math.log(cur.flow.nu0) + direction * step
         if direction * (ln_next - math.log(bound)) >= 0:
@@ -490,8 +512,10 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
         else:
             last = False
         try:
-            # no cold retry: near an end of the family continuation is the better guess
-            k = _knot(theta, math.exp(ln_next), model, cur.flow, nu_top, cold_retry=False)
+            # no cold retry: near an end of the family continuation is the better guess;
+            # the bound itself exactly (not exp(log(bound))), so that it is a knot
+            nu_next = bound if last else math.exp(ln_next)
+            k = _knot(theta, nu_next, model, cur.flow, nu_top, cold_retry=False)
         except (NoSteadyFlowError, ConvergenceError) as exc:
             if step / 2 < min_step:
                 reason = f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} ({exc})"
@@ -577,7 +601,8 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
     checked: dict[tuple[float, float], dict] = {}
     while True:
         rm = _assemble(theta, model, knots, {}, (why_lo, why_hi))
-        worst, insert = {}, []
+        worst: dict[str, float] = {}
+        insert: list = []
         for i in range(len(knots) - 1):
             k0, k1 = knots[i], knots[i + 1]
             key = (k0.flow.nu0, k1.flow.nu0)

@@ -20,48 +20,79 @@ Radau's steps are limited by accuracy only. Because the exact Jacobian has the s
 telescoping structure as the right-hand side (its mass rows sum to zero), every simplified-
 Newton update conserves mass to round-off too — unlike a finite-difference Jacobian, whose
 column sums vanish only to ~1e-9.
+
+The fluxes Π, the source and their partial derivatives come from the one statement of the
+model in :mod:`chuteflow.reduced.equations`; :func:`_assemble` applies the chain rule over
+the stencil, and the same assembly on the operators' Fourier symbols gives the closed-form
+symbol of the linearised scheme (:meth:`WaveSolver.symbol`).
+
+Structure: :class:`WaveSolver` is the semi-discrete system (right-hand side, Jacobian,
+linear modes); :class:`WaveSimulation` checks the input, fixes the grid and the frame and
+steps the integrator; trackers watch the steps and may stop the run (in the style of
+py-pde's ``solve(..., tracker=[...])``): :class:`SnapshotTracker`, :class:`SaturationStop`,
+:class:`ProgressTracker`, :class:`LeaveFamilyStop`, or a subclass of :class:`Tracker`.
+:func:`simulate` is the convenience wrapper returning an xarray Dataset.
 """
 from __future__ import annotations
 
 import math
 import time as _time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
 from scipy.integrate import BDF, Radau
 
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from . import equations as eq
 from .model import LocalCoefficients, ReducedModel
 
-__all__ = ["WaveSolver", "simulate", "growth_rate_fit", "wave_diagnostics"]
+__all__ = ["WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",
+           "SnapshotTracker", "SaturationStop", "ProgressTracker", "LeaveFamilyStop",
+           "simulate", "default_cells", "growth_rate_fit", "wave_diagnostics"]
 
 
-@dataclass
-class _Kernels:
-    a: np.ndarray
-    da: np.ndarray
-    P: np.ndarray
-    dP: np.ndarray
-    mu: np.ndarray
-    dmu: np.ndarray
-
-
-def _kernels(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
-    """a, a' at faces; P, P', μ̄, μ̄' at centres; NaN outside the family (no raise)."""
+def _closures(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
+    """Closure values of the scheme: T̄, μ̄ (and slopes) at centres, a (and a') at faces; NaN
+    outside the family (no raise)."""
     sT, sa = rm._splines["Tbar"], rm._splines["a"]
-    lnT = sT(rho_c)
-    T = np.exp(lnT)
+    T = np.exp(sT(rho_c))
     a = np.exp(sa(rho_f))
-    c = rm.mu_prefactor
-    P = rho_c * T
-    mu = c * T * np.sqrt(T)
-    if not deriv:
-        return a, P, mu
-    dT = T * sT(rho_c, 1)
-    da = a * sa(rho_f, 1)
-    return _Kernels(a=a, da=da, P=P, dP=T + rho_c * dT, mu=mu, dmu=1.5 * c * np.sqrt(T) * dT)
+    dT = T * sT(rho_c, 1) if deriv else 0.0
+    mu, dmu = eq.viscosity(T, dT, rm.theta, rm.f2_0)
+    centres = eq.ClosureValues(Tbar=T, dTbar=dT, mu_bar=mu, dmu_bar=dmu)
+    faces = eq.ClosureValues(a=a, da=a * sa(rho_f, 1) if deriv else None)
+    return centres, faces
+
+
+def _assemble(ops, diag, flux, source, u, rho_f, c: float) -> list:
+    """Jacobian blocks [[∂ρ̇/∂ρ, ∂ρ̇/∂m], [∂ṁ/∂ρ, ∂ṁ/∂m]] of the staggered scheme.
+
+    Chain rule over the stencil: Π_i = f_m(ρ_i, ū_i, (δu)_i) with ū = A_fc u, δu = D_fc u,
+    u = m/ρ_f, ρ_f = A_cf ρ; S at faces; ``flux`` and ``source`` are the pointwise partials
+    of the statement (:mod:`.equations`), ``ops`` = (A_cf, D_cf, A_fc, D_fc). With sparse
+    matrices (``diag`` = sparse diagonal) this is the exact Jacobian; with the operators'
+    Fourier symbols on a set of modes (diagonal over the modes) it is the discrete symbol.
+    A frame moving at speed ``c`` adds the fluxes −cρ and −c m (face mean at centres).
+    """
+    A_cf, D_cf, A_fc, D_fc = ops
+    dudr = diag(-u / rho_f) @ A_cf  # ∂u_f/∂ρ of both cells
+    dudm = diag(1.0 / rho_f)
+    G = diag(flux.u) @ A_fc + diag(flux.ux) @ D_fc  # ∂Π/∂u_f
+    dPi_r = diag(flux.rho) + G @ dudr
+    dPi_m = G @ dudm
+    dS_r = diag(source.rho) @ A_cf + diag(source.u) @ dudr
+    dS_m = diag(source.u) @ dudm
+    return [[(D_fc @ A_cf) * c, -D_fc],
+            [-D_cf @ dPi_r + dS_r, -D_cf @ dPi_m + dS_m + (D_cf @ A_fc) * c]]
+
+
+class _ModeDiagonal(np.ndarray):
+    """Diagonal operator over a set of Fourier modes (its diagonal): ``@`` multiplies."""
+
+    def __matmul__(self, other):
+        return np.multiply(self, other)
 
 
 class WaveSolver:
@@ -103,11 +134,9 @@ class WaveSolver:
                                   shape=(N, N))
         self.D_fc = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[im, i])),
                                   shape=(N, N))
-        self.c = float(frame_speed)
         # frame moving down the slope at speed c: ∂t|ξ = ∂t|x + c ∂x, in flux form
         # (fluxes m − cρ and ρu² − c m), so mass stays conserved to round-off
-        self.C_rho = (self.D_fc @ self.A_cf).tocsr() * self.c
-        self.C_m = (self.D_cf @ self.A_fc).tocsr() * self.c
+        self.c = float(frame_speed)
         self.n_rhs = 0
         self.n_jac = 0
         self.out_of_range: tuple[float, float] | None = None
@@ -145,11 +174,11 @@ class WaveSolver:
             bad = rho.min() if rho.min() < lo else rho.max()
             self.out_of_range = (float(t), float(bad))
             return np.full_like(y, np.nan)
-        a, P, mu = _kernels(self.rm, rho, rf, deriv=False)
+        centres, faces = _closures(self.rm, rho, rf, deriv=False)
         u = m / rf
         uc = 0.5 * (u + np.roll(u, 1))
         du = (u - np.roll(u, 1)) * h
-        Pi = rho * uc * uc + P - mu * du
+        Pi = eq.momentum_flux(rho, uc, du, centres)
         out = np.empty_like(y)
         if self.c:
             Pi -= self.c * 0.5 * (m + np.roll(m, 1))
@@ -157,7 +186,7 @@ class WaveSolver:
         else:
             flux = m
         out[:N] = -(flux - np.roll(flux, 1)) * h
-        out[N:] = -(np.roll(Pi, -1) - Pi) * h + rf * self.sin - a * u
+        out[N:] = -(np.roll(Pi, -1) - Pi) * h + eq.source(rf, u, self.sin, faces)
         return out
 
     def jacobian(self, t, y) -> sp.csc_matrix:
@@ -167,21 +196,14 @@ class WaveSolver:
         # the Jacobian only steers Newton: outside the family use the nearest defined state
         rho, m = np.clip(y[:N], *self.rm.rho_range), y[N:]
         rf = 0.5 * (rho + np.roll(rho, -1))
-        k = _kernels(self.rm, rho, rf, deriv=True)
+        centres, faces = _closures(self.rm, rho, rf, deriv=True)
         u = m / rf
         uc = 0.5 * (u + np.roll(u, 1))
         du = (u - np.roll(u, 1)) / self.dx
-        dudr = sp.diags(-u / rf) @ self.A_cf  # ∂u_f/∂ρ of both cells: −u/(2ρ_f) each
-        dudm = sp.diags(1.0 / rf)
-        G = sp.diags(2.0 * rho * uc) @ self.A_fc - sp.diags(k.mu) @ self.D_fc  # ∂Π/∂u_f
-        dPi_r = sp.diags(uc * uc + k.dP - k.dmu * du) + G @ dudr
-        dPi_m = G @ dudm
-        dS_r = sp.diags(self.sin - k.da * u) @ self.A_cf - sp.diags(k.a) @ dudr
-        dS_m = -sp.diags(k.a) @ dudm
-        J = sp.bmat([[self.C_rho, -self.D_fc],
-                     [-self.D_cf @ dPi_r + dS_r, -self.D_cf @ dPi_m + dS_m + self.C_m]],
-                    format="csc")
-        return J
+        blocks = _assemble((self.A_cf, self.D_cf, self.A_fc, self.D_fc), sp.diags,
+                           eq.flux_partials(rho, uc, du, centres),
+                           eq.source_partials(rf, u, self.sin, faces), u, rf, self.c)
+        return sp.bmat(blocks, format="csc")
 
     # -- linear theory of the discrete system ---------------------------------------------
     def mode_vectors(self, n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -222,24 +244,29 @@ class WaveSolver:
         """Closed form of :meth:`mode_matrix` for modes ``n`` (array): shape ``n.shape + (2, 2)``.
 
         With C = cos(k dx/2) (face ↔ centre averages) and K = 2 sin(k dx/2)/dx (staggered
-        differences): the continuum matrix in (ρ̂, m̂) with k → K and the averaged terms × C.
+        differences): the exact Jacobian's assembly with every averaging operator replaced by
+        C and every difference by iK, i.e. the continuum matrix in (ρ̂, m̂) with k → K and the
+        averaged terms × C.
         K → k and C → 1 as dx → 0, so the discrete growth rates differ from the 2×2
         dispersion relation by O((k dx)²). A moving frame adds i c sin(k dx)/dx to both
         diagonal entries: it shifts the frequencies and leaves the growth rates unchanged.
         """
         c = self.rm.coefficients(rho0)
         n = np.asarray(n, dtype=float)
-        k = 2 * np.pi * n / self.L
+        k = 2 * np.pi * n.ravel() / self.L
         C = np.cos(0.5 * k * self.dx)
-        K = 2.0 * np.sin(0.5 * k * self.dx) / self.dx
-        U, r, mu = c.U, c.rho0, c.mu_bar
-        G = 2.0 * r * U * C - 1j * K * mu  # ∂Π/∂u_f
+        iK = 2j * np.sin(0.5 * k * self.dx) / self.dx
+
+        def diag(v):
+            return np.broadcast_to(np.asarray(v, dtype=complex), k.shape).view(_ModeDiagonal)
+
+        A, D = diag(C), diag(iK)
+        blocks = _assemble((A, D, A, D), diag, eq.flux_partials(c.rho0, c.U, 0.0, c),
+                           eq.source_partials(c.rho0, c.U, self.sin, c), c.U, c.rho0, self.c)
         M = np.empty(n.shape + (2, 2), dtype=complex)
-        M[..., 0, 0] = 1j * self.c * np.sin(k * self.dx) / self.dx
-        M[..., 0, 1] = -1j * K
-        M[..., 1, 0] = (-1j * K * (U * U + c.dP) + 1j * K * G * U * C / r
-                        + (self.sin - c.da * U) * C + c.a * U * C / r)
-        M[..., 1, 1] = -1j * K * G / r - c.a / r + 1j * self.c * np.sin(k * self.dx) / self.dx
+        for i in (0, 1):
+            for j in (0, 1):
+                M[..., i, j] = np.asarray(blocks[i][j]).reshape(n.shape)
         return M
 
     def discrete_dispersion(self, rho0: float, n, **kw) -> np.ndarray:
@@ -304,13 +331,241 @@ def default_cells(reduced: ReducedModel, rho0: float, length: float, *, tol: flo
         n *= 2
 
 
-def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
-             nu0: float | None = None, n_cells: int | None = None, t_end: float | None = None,
-             mode: int | None = None, amplitude: float = 1e-3, seed: int = 0,
-             rtol: float = 1e-6, n_out: int = 200, saturation_tol: float = 0.02,
-             progress: Callable[[float, float], None] | None = None, max_steps: int = 200000,
-             method: str = "Radau", on_exit: str = "raise", frame="wave"):
-    """Integrate the 1D model in time from a perturbed uniform state; returns an xarray Dataset.
+# ---------------------------------------------------------------------------------------
+# The time stepper and its trackers
+# ---------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class InitialState:
+    """A perturbed uniform state to start a run from.
+
+    Attributes
+    ----------
+    y : ndarray
+        (ρ_i, m_{i+½}) on the grid.
+    amplitude : float
+        Size of the density perturbation (σ): it sets the integrator's absolute tolerance
+        and the reference of the stop conditions.
+    description : str
+        One line for the output's ``initial_condition``.
+    """
+
+    y: np.ndarray = field(repr=False)
+    amplitude: float
+    description: str
+
+
+class Step:
+    """One accepted step (t_prev, t] of the integrator, as trackers see it."""
+
+    def __init__(self, ode, t_prev: float, y_u: np.ndarray, number: int):
+        self._ode, self._y_u = ode, y_u
+        self.t_prev, self.t, self.number = float(t_prev), float(ode.t), number
+        self._dense: Callable[[float], np.ndarray] | None = None
+
+    @property
+    def y(self) -> np.ndarray:
+        """State at the end of the step."""
+        return self._y_u + self._ode.y
+
+    def state(self, t: float) -> np.ndarray:
+        """State at time ``t`` in [t_prev, t] (the integrator's dense output)."""
+        dense = self._dense
+        if dense is None:
+            dense = self._dense = self._ode.dense_output()
+        return self._y_u + dense(t)
+
+
+@dataclass
+class RunInfo:
+    """How a run ended.
+
+    Attributes
+    ----------
+    status : str
+        "completed" (reached t_end), "left_family" (stopped by :class:`LeaveFamilyStop`) or
+        the status a stop condition returned ("saturated", "decayed").
+    t, y : float, ndarray
+        Time and state of the last accepted step.
+    t_end : float
+        The requested final time.
+    auto_time : bool
+        Whether t_end was chosen by :meth:`WaveSimulation.default_t_end`.
+    initial : InitialState
+        The initial state.
+    steps : int
+        Integrator steps (including a failed last one).
+    wall_time_s : float
+        Wall-clock time of the integration.
+    left_family : str
+        Why the density left the steady family ("" when it did not).
+    """
+
+    status: str
+    t: float
+    y: np.ndarray = field(repr=False)
+    t_end: float
+    auto_time: bool
+    initial: InitialState = field(repr=False)
+    steps: int
+    wall_time_s: float
+    left_family: str = ""
+
+
+class Tracker:
+    """Base class of what watches a run (in the style of py-pde's trackers).
+
+    :meth:`WaveSimulation.run` calls :meth:`initialize` before the first step, :meth:`handle`
+    after every accepted step (a returned string stops the run with that status, after every
+    tracker has seen the step), :meth:`left_family` when the density leaves the steady
+    family (return True to stop the run there instead of raising) and :meth:`finalize` at
+    the end.
+    """
+
+    def initialize(self, sim: WaveSimulation, initial: InitialState, t_end: float) -> None:
+        """Called once before the first step."""
+
+    def handle(self, sim: WaveSimulation, step: Step) -> str | None:
+        """Called after each accepted step; return a status to stop the run."""
+        return None
+
+    def left_family(self, sim: WaveSimulation, message: str) -> bool:
+        """Called when the density left the family; True stops the run instead of raising."""
+        return False
+
+    def finalize(self, sim: WaveSimulation, info: RunInfo) -> None:
+        """Called once at the end of the run."""
+
+
+class _Sampler(Tracker):
+    """A tracker acting at fixed times: ``count`` uniform times on [0, t_end] (both ends
+    included) or every ``interval`` (and at t_end)."""
+
+    def __init__(self, count: int | None = None, interval: float | None = None):
+        if (count is None) == (interval is None):
+            raise ParameterError("give exactly one of count and interval")
+        if count is not None and (int(count) != count or count < 2):
+            raise ParameterError(f"n_out = {count!r} must be at least 2")
+        if interval is not None and not (math.isfinite(interval) and interval > 0):
+            raise ParameterError(f"interval = {interval!r} must be a positive time")
+        self.count, self.interval = count, interval
+
+    def initialize(self, sim, initial, t_end):
+        if self.count is not None:
+            self.sample_times = np.linspace(0.0, t_end, int(self.count))
+        else:
+            self.sample_times = np.unique(np.r_[np.arange(0.0, t_end, self.interval), t_end])
+        self._next = 1
+        self.sample(sim, 0.0, initial.y)
+
+    def handle(self, sim, step):
+        ts, took = self.sample_times, False
+        while self._next < len(ts) and ts[self._next] <= step.t * (1 + 1e-14):
+            t = float(ts[self._next])
+            self.sample(sim, t, step.state(t))
+            self._next += 1
+            took = True
+        return self.check(sim) if took else None
+
+    def sample(self, sim, t: float, y: np.ndarray) -> None:
+        """Record the state ``y`` at time ``t``."""
+
+    def check(self, sim) -> str | None:
+        """After the samples of a step: a status to stop the run, or None."""
+        return None
+
+
+class SnapshotTracker(_Sampler):
+    """Store the state at ``count`` uniform times (or every ``interval``).
+
+    A run stopped by :class:`LeaveFamilyStop` also stores its last accepted state, at its own
+    time. ``times`` and ``states`` hold the snapshots.
+    """
+
+    def initialize(self, sim, initial, t_end):
+        self.times, self.states = [], []
+        super().initialize(sim, initial, t_end)
+
+    def sample(self, sim, t, y):
+        self.times.append(t)
+        self.states.append(np.array(y, copy=True))
+
+    def finalize(self, sim, info):
+        if info.status == "left_family":
+            self.sample(sim, info.t, info.y)
+
+
+class SaturationStop(_Sampler):
+    """Stop when the wave amplitude max|ρ̄ − ρ0| has settled.
+
+    The amplitude is sampled like the snapshots (``count`` or ``interval``). From the
+    ``min_samples``-th sample on, an unstable state (largest discrete growth rate σ > 0)
+    stops with status "saturated" once the amplitude exceeds 10× its start and changed by
+    less than ``tol`` relative over the last tenth of the samples; a stable one stops with
+    "decayed" once it fell below e⁻¹⁰ of its start.
+    """
+
+    def __init__(self, tol: float = 0.02, count: int | None = None,
+                 interval: float | None = None, min_samples: int = 10):
+        super().__init__(count, interval)
+        if not 0.0 < tol < 1.0:
+            raise ParameterError(f"saturation_tol = {tol!r} must be in (0, 1)")
+        self.tol, self.min_samples = float(tol), int(min_samples)
+
+    def initialize(self, sim, initial, t_end):
+        self.amplitudes, self._a0 = [], initial.amplitude
+        super().initialize(sim, initial, t_end)
+
+    def sample(self, sim, t, y):
+        self.amplitudes.append(wave_diagnostics(sim.solver, sim.rho0, y, 1)[0])
+
+    def check(self, sim):
+        if len(self.amplitudes) >= self.min_samples and _saturated(
+                np.array(self.amplitudes), self._a0, self.tol, sim.max_growth_rate):
+            return "saturated" if sim.max_growth_rate > 0 else "decayed"
+        return None
+
+
+class ProgressTracker(Tracker):
+    """Call ``callback(t, t_end)`` after every step."""
+
+    def __init__(self, callback: Callable[[float, float], None]):
+        self.callback = callback
+
+    def initialize(self, sim, initial, t_end):
+        self._t_end = float(t_end)
+
+    def handle(self, sim, step):
+        self.callback(step.t, self._t_end)
+        return None
+
+
+class LeaveFamilyStop(Tracker):
+    """Stop (status "left_family", data kept) instead of raising when the density leaves the
+    range of the steady family, where the 1D model is undefined."""
+
+    def left_family(self, sim, message):
+        return True
+
+
+def _saturated(amps: np.ndarray, a0: float, tol: float, sigma: float) -> bool:
+    """Amplitude settled: grew (or decayed) well past its start and changed by less than
+    ``tol`` relative over the last tenth of the snapshots."""
+    n = len(amps)
+    w = max(n // 10, 3)
+    recent = amps[-w:]
+    if sigma > 0 and amps[-1] < 10 * a0:
+        return False
+    if sigma <= 0:
+        return amps[-1] < a0 * math.exp(-10.0)
+    return float(np.ptp(recent)) < tol * float(recent.max())
+
+
+class WaveSimulation:
+    """Time stepper of the 1D model on a periodic slope, from a uniform state ρ0.
+
+    All input is checked here, once. The linear theory of the domain's modes (2×2 dispersion
+    relation and the discrete operator) is computed on construction; it fixes the frame.
 
     Parameters
     ----------
@@ -322,38 +577,283 @@ def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
         The uniform state: one-dimensional density ρ0, or the floor density ν0(0) of the
         steady flow it comes from (exactly one of them).
     n_cells : int, optional
-        Grid cells; default :func:`default_cells` (discrete growth rates within 5 % of the
-        dispersion relation).
+        Grid cells; default :func:`default_cells`.
+    frame : {"wave", "lab"} or float
+        Reference frame of the computation and of the output: ``"wave"`` moves down the
+        slope with the phase velocity of the fastest-growing discrete mode (the waves evolve
+        slowly there and the implicit integrator takes ~10× longer steps); the output
+        coordinate is then ξ = x − c t. Growth rates do not depend on it.
+    rtol : float
+        Relative tolerance of the time integrator (atol = rtol · 1e-3 · scale).
+    method : {"Radau", "BDF"}
+        Implicit integrator (scipy); BDF is slow here (see the module notes).
+    max_steps : int
+        Give up (ConvergenceError) after this many time steps.
+
+    Examples
+    --------
+    >>> sim = WaveSimulation(rm, 40.0, nu0=0.12)                     # doctest: +SKIP
+    >>> snaps = SnapshotTracker(count=100)                           # doctest: +SKIP
+    >>> info = sim.run(sim.perturbed(mode=1), 60.0, trackers=[snaps])  # doctest: +SKIP
+    >>> ds = sim.dataset(snaps, info)                                # doctest: +SKIP
+    """
+
+    def __init__(self, reduced: ReducedModel, length: float, *, rho0: float | None = None,
+                 nu0: float | None = None, n_cells: int | None = None, frame="wave",
+                 rtol: float = 1e-6, method: str = "Radau", max_steps: int = 200000):
+        if (rho0 is None) == (nu0 is None):
+            raise ParameterError("give exactly one of rho0 (1D density) and nu0 (floor density)")
+        lo, hi = reduced.rho_range
+        if nu0 is not None:
+            rho0 = reduced.rho_at_nu0(float(nu0))
+            if not lo < rho0 < hi:  # rho_at_nu0 returns a knot's ρ̄ exactly
+                raise ParameterError(
+                    f"nu0 = {nu0:g} is an end of the steady family at theta = "
+                    f"{reduced.theta:g} deg (floor densities [{reduced.nu0[0]:.4g}, "
+                    f"{reduced.nu0[-1]:.4g}]): a wave about it would leave the range where "
+                    "the 1D model is defined at once; choose nu0 inside")
+        rho0 = float(rho0)  # type: ignore[arg-type]  # one of rho0, nu0 is set
+        if not lo < rho0 < hi:
+            raise ParameterError(f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of "
+                                 f"the steady family at theta = {reduced.theta:g} deg")
+        if not (math.isfinite(length) and length > 0):
+            raise ParameterError(f"length = {length!r} must be a positive number of diameters")
+        if n_cells is not None and (int(n_cells) != n_cells or n_cells < 8):
+            raise ParameterError(f"n_cells = {n_cells!r} must be an integer >= 8")
+        if not 1e-12 < rtol < 1e-1:
+            raise ParameterError(f"rtol = {rtol!r} must be in (1e-12, 0.1)")
+        if method not in ("Radau", "BDF"):
+            raise ParameterError(f"method = {method!r}: choose 'Radau' or 'BDF'")
+        if frame not in ("wave", "lab"):
+            try:
+                frame = float(frame)
+            except (TypeError, ValueError):
+                raise ParameterError(f"frame = {frame!r}: 'wave', 'lab' or a speed") from None
+        if int(max_steps) != max_steps or max_steps < 1:
+            raise ParameterError(f"max_steps = {max_steps!r} must be a positive integer")
+        self.reduced, self.rho0 = reduced, rho0
+        self.rtol, self.method, self.max_steps = float(rtol), method, int(max_steps)
+        self.coef: LocalCoefficients = reduced.coefficients(rho0)
+        n_cells = default_cells(reduced, rho0, length) if n_cells is None else int(n_cells)
+        lab = WaveSolver(reduced, length, n_cells)
+        # linear theory of the domain's modes (analytic 2×2 and the discrete operator, lab)
+        self.modes = np.arange(1, lab.N // 2)
+        self.k = 2 * np.pi * self.modes / lab.L
+        self.growth_analytic = self.coef.dispersion(self.k)[:, 0]
+        self.growth_discrete = lab.discrete_dispersion(rho0, self.modes)[:, 0]
+        self.max_growth_rate = float(self.growth_discrete.real.max())
+        if frame == "wave":
+            best = int(np.argmax(self.growth_discrete.real))
+            c = float(-self.growth_discrete[best].imag / self.k[best])
+        else:
+            c = 0.0 if frame == "lab" else float(frame)
+        self.frame_speed = c
+        self.solver = WaveSolver(reduced, length, n_cells, frame_speed=c) if c else lab
+
+    # -- initial states and the time span ---------------------------------------------------
+    def perturbed(self, mode: int | None = None, amplitude: float = 1e-3,
+                  seed: int = 0) -> InitialState:
+        """The uniform state plus a perturbation of relative size ``amplitude``.
+
+        ``mode`` given: the least-stable discrete eigenmode ``mode`` (k = 2π mode/L) with
+        cosine amplitude ``amplitude`` ρ0; otherwise seeded random noise in every resolved
+        density mode (zero mean, max|δρ̄| = ``amplitude`` ρ0) at uniform velocity.
+        """
+        if not 0.0 < amplitude < 0.5:
+            raise ParameterError(f"amplitude = {amplitude!r} must be in (0, 0.5) (relative to "
+                                 "rho0)")
+        s, rho0, N = self.solver, self.rho0, self.solver.N
+        if mode is None:
+            rng = np.random.default_rng(seed)
+            noise = rng.standard_normal(N)
+            noise -= noise.mean()
+            noise *= amplitude * rho0 / np.abs(noise).max()
+            y0 = s.uniform(rho0)
+            y0[:N] += noise
+            y0[N:] = y0[:N] * self.coef.U  # uniform velocity
+            init = f"random noise (seed {seed}), max |δρ|/ρ0 = {amplitude:g}"
+        else:
+            y0 = s.eigenmode(rho0, int(mode), amplitude * rho0)
+            init = (f"discrete eigenmode {mode} (k = {2 * math.pi * mode / s.L:.5g}), "
+                    f"amplitude {amplitude:g} ρ0")
+        return InitialState(y=y0, amplitude=amplitude * rho0, description=init)
+
+    def default_t_end(self) -> float:
+        """40 e-foldings of the fastest discrete mode (10 for a stable state), at most 1e6."""
+        sigma = self.max_growth_rate
+        rate = abs(sigma) if sigma != 0 else 1e-6
+        return min((40.0 if sigma > 0 else 10.0) / max(rate, 1e-6), 1e6)
+
+    # -- the stepper --------------------------------------------------------------------------
+    def run(self, initial: InitialState, t_end: float | None = None,
+            trackers=()) -> RunInfo:
+        """Integrate from ``initial`` to ``t_end`` (default :meth:`default_t_end`).
+
+        Trackers (:class:`SnapshotTracker`, :class:`SaturationStop`, :class:`ProgressTracker`,
+        :class:`LeaveFamilyStop`, …) watch every accepted step and may stop the run.
+
+        Raises
+        ------
+        ParameterError
+            Bad ``t_end``.
+        NoSteadyFlowError
+            The density left the range of the steady family and no tracker stops the run
+            there.
+        ConvergenceError
+            The time integrator failed or needed more than ``max_steps`` steps.
+        """
+        auto = t_end is None
+        if t_end is None:
+            t_end = self.default_t_end()
+        elif not (math.isfinite(t_end) and t_end > 0):
+            raise ParameterError(f"time = {t_end!r} must be a positive number")
+        t_end = float(t_end)
+        trackers = list(trackers)
+        solver, rho0, N = self.solver, self.rho0, self.solver.N
+        # integrate the deviation z = y − y_u from the uniform state (an exact equilibrium of
+        # the discrete system), so that the error control is relative to the wave, not to ρ0:
+        # with tolerances relative to y a wave of amplitude 1e-5 ρ0 is erased by large steps
+        y_u = solver.uniform(rho0)
+        # atol floor 1e-12 ρ0: the right-hand side carries round-off ~1e-16 Π/dx that no step
+        # size can resolve
+        rtol = self.rtol
+        scale = max(rtol * initial.amplitude, 1e-12 * rho0) / rtol * np.concatenate(
+            [np.ones(N), np.full(N, abs(self.coef.U) + 1.0)])
+        ode = {"Radau": Radau, "BDF": BDF}[self.method](
+            lambda t, z: solver.rhs(t, y_u + z), 0.0, initial.y - y_u, t_end, rtol=rtol,
+            atol=rtol * scale, jac=lambda t, z: solver.jacobian(t, y_u + z))
+        for tr in trackers:
+            tr.initialize(self, initial, t_end)
+        t0 = _time.perf_counter()
+        steps, status, left = 0, "completed", ""
+        while ode.status == "running":
+            t_prev = ode.t
+            msg = ode.step()
+            steps += 1
+            if ode.status == "failed":
+                if solver.out_of_range is None:
+                    raise ConvergenceError(f"time integration failed at t = {ode.t:.6g}: {msg}")
+                left = self._left_message(ode.t)
+                if not any([tr.left_family(self, left) for tr in trackers]):
+                    raise NoSteadyFlowError(left)
+                status = "left_family"
+                break
+            if steps > self.max_steps:
+                raise ConvergenceError(f"time integration needed more than {self.max_steps} "
+                                       f"steps (reached t = {ode.t:.6g} of {t_end:.6g})")
+            solver.out_of_range = None
+            step = Step(ode, t_prev, y_u, steps)
+            stops = [r for r in [tr.handle(self, step) for tr in trackers] if r]
+            if stops:
+                status = stops[0]
+                break
+        info = RunInfo(status=status, t=float(ode.t), y=y_u + ode.y, t_end=t_end,
+                       auto_time=auto, initial=initial, steps=steps,
+                       wall_time_s=_time.perf_counter() - t0, left_family=left)
+        for tr in trackers:
+            tr.finalize(self, info)
+        return info
+
+    def _left_message(self, t: float) -> str:
+        rm = self.reduced
+        lo, hi = rm.rho_range
+        assert self.solver.out_of_range is not None
+        _, rb = self.solver.out_of_range
+        return (f"the density wave left the steady family at t ≈ {t:.4g}: rho_bar reached "
+                f"{rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D model are "
+                f"defined (theta = {rm.theta:g} deg; family ends: {rm.ends[0]} / "
+                f"{rm.ends[1]})")
+
+    # -- output ---------------------------------------------------------------------------------
+    def dataset(self, snapshots: SnapshotTracker, info: RunInfo):
+        """The run as an xarray Dataset (see :func:`simulate` for its content)."""
+        import xarray as xr
+
+        solver, rho0, coef, rm = self.solver, self.rho0, self.coef, self.reduced
+        N = solver.N
+        n_modes = len(self.modes)
+        lo, hi = rm.rho_range
+        t_used = np.array(snapshots.times)
+        Y = np.array(snapshots.states)
+        rho = Y[:, :N]
+        u_f = Y[:, N:] / (0.5 * (rho + np.roll(rho, -1, axis=1)))
+        u_c = 0.5 * (u_f + np.roll(u_f, 1, axis=1))
+        mass = rho.sum(axis=1) * solver.dx
+        c = np.fft.rfft(rho - rho0, axis=1) * (2.0 / N)
+        amp = np.abs(rho - rho0).max(axis=1)
+        M0 = mass[0]
+        drift = float(np.abs(mass - M0).max() / M0)
+        analytic = self.growth_analytic
+        ds = xr.Dataset(
+            {"rho": (("t", "x"), rho, {"long_name": "one-dimensional density ρ̄",
+                                       "units": "sigma"}),
+             "u": (("t", "x"), u_c, {"long_name": "mean velocity ū", "units": "sqrt(g sigma)"}),
+             "mass": ("t", mass, {"long_name": "∫ ρ̄ dx", "units": "sigma^2"}),
+             "amplitude": ("t", amp, {"long_name": "max |ρ̄ − ρ0|", "units": "sigma"}),
+             "mode_amplitude": (("t", "mode"), np.abs(c[:, 1:n_modes + 1]),
+                                {"long_name": "|ρ̂_n| (cosine amplitude of mode n)",
+                                 "units": "sigma"}),
+             "growth_analytic": ("mode", analytic.real,
+                                 {"long_name": "Re α(k_n), 2×2 dispersion relation (1D model)"}),
+             "frequency_analytic": ("mode", analytic.imag, {"long_name": "Im α(k_n)"}),
+             },
+            coords={"t": ("t", t_used, {"long_name": "time", "units": "sqrt(sigma/g)"}),
+                    "x": ("x", solver.x, {"long_name": "position down the slope in the frame "
+                                                       "moving at frame_speed, ξ = x − c t",
+                                          "units": "sigma"}),
+                    "mode": ("mode", self.modes),
+                    "k": ("mode", self.k, {"long_name": "wavenumber 2πn/L"})})
+        ds["growth_discrete"] = ("mode", self.growth_discrete.real,
+                                 {"long_name": "Re α of the linearised discrete system"})
+        ds.attrs.update({
+            "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
+            "theta": rm.theta, "roughness": rm.model.roughness,
+            "wall_loss": rm.model.wall_loss, "restitution": rm.model.restitution,
+            "nu_max": rm.model.nu_max, "rho0": rho0, "nu0": coef.F, "U0": coef.U,
+            "length": solver.L, "n_cells": N, "dx": solver.dx, "rtol": self.rtol,
+            "method": self.method, "initial_condition": info.initial.description,
+            "frame_speed": self.frame_speed, "t_end": float(t_used[-1]),
+            "auto_time": str(info.auto_time),
+            "status": info.status, "left_family": info.left_family, "mass_drift": drift,
+            "steps": info.steps, "rhs_evaluations": solver.n_rhs,
+            "jacobian_evaluations": solver.n_jac, "wall_time_s": info.wall_time_s,
+            "k_c": coef.k_c, "L_c": coef.L_c, "criterion_margin": coef.criterion_margin,
+            "short_wave_unstable": str(coef.short_wave_unstable),
+            "max_growth_rate": self.max_growth_rate, "rho_range_family": [lo, hi],
+        })
+        return ds
+
+
+def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
+             nu0: float | None = None, n_cells: int | None = None, t_end: float | None = None,
+             mode: int | None = None, amplitude: float = 1e-3, seed: int = 0,
+             rtol: float = 1e-6, n_out: int = 200, saturation_tol: float = 0.02,
+             progress: Callable[[float, float], None] | None = None, max_steps: int = 200000,
+             method: str = "Radau", on_exit: str = "raise", frame="wave"):
+    """Integrate the 1D model in time from a perturbed uniform state; returns an xarray Dataset.
+
+    A convenience wrapper of :class:`WaveSimulation` with a :class:`SnapshotTracker` of
+    ``n_out`` snapshots, a :class:`SaturationStop` when ``t_end`` is not given, a
+    :class:`ProgressTracker` for ``progress`` and a :class:`LeaveFamilyStop` for
+    ``on_exit="stop"``.
+
+    Parameters
+    ----------
+    reduced, length, rho0, nu0, n_cells, rtol, max_steps, method, frame
+        See :class:`WaveSimulation`.
     t_end : float, optional
         Final time (units √(σ/g)). Default: run until the wave amplitude saturates (changes
         by less than ``saturation_tol`` relative over the last 10 % of the run) or, for a
         stable state, until the perturbation has decayed by e⁻¹⁰; capped at 40 e-foldings
         of the fastest discrete mode.
-    mode : int, optional
-        Perturb with the least-stable discrete eigenmode ``mode`` (k = 2π mode/L). Default:
-        small random noise in every resolved density mode (zero mean, seeded).
-    amplitude : float
-        Initial density perturbation relative to ρ0 (max norm for noise, cosine amplitude
-        for a mode).
-    seed : int
-        Seed of the noise.
-    rtol : float
-        Relative tolerance of the time integrator (atol = rtol · 1e-3 · scale).
+    mode, amplitude, seed
+        The initial perturbation, see :meth:`WaveSimulation.perturbed`.
     n_out : int
         Snapshots stored (uniform in time).
     saturation_tol : float
         Relative amplitude change that counts as saturated.
     progress : callable, optional
         ``progress(t, t_end)`` after each time step.
-    max_steps : int
-        Give up (ConvergenceError) after this many time steps.
-    method : {"Radau", "BDF"}
-        Implicit integrator (scipy); BDF is slow here (see the module notes).
-    frame : {"wave", "lab"} or float
-        Reference frame of the computation and of the output: ``"wave"`` (default) moves
-        down the slope with the phase velocity of the fastest-growing mode, where the waves
-        evolve slowly and the implicit integrator takes ~10× longer steps than in the lab
-        frame; the output coordinate is then ξ = x − c t. Growth rates do not depend on it.
     on_exit : {"raise", "stop"}
         What to do when the density leaves the steady family's range (the model is undefined
         there): raise :class:`NoSteadyFlowError`, or stop and return the run so far with
@@ -378,184 +878,22 @@ def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
     ConvergenceError
         The time integrator failed.
     """
-    import xarray as xr
-
-    if (rho0 is None) == (nu0 is None):
-        raise ParameterError("give exactly one of rho0 (1D density) and nu0 (floor density)")
-    if nu0 is not None:
-        rho0 = reduced.rho_at_nu0(float(nu0))
-    rho0 = float(rho0)
-    lo, hi = reduced.rho_range
-    if not lo < rho0 < hi:
-        raise ParameterError(f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of the "
-                             f"steady family at theta = {reduced.theta:g} deg")
-    if not 0.0 < amplitude < 0.5:
-        raise ParameterError(f"amplitude = {amplitude!r} must be in (0, 0.5) (relative to rho0)")
-    if not 1e-12 < rtol < 1e-1:
-        raise ParameterError(f"rtol = {rtol!r} must be in (1e-12, 0.1)")
-    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"time = {t_end!r} must be a positive number")
     if on_exit not in ("raise", "stop"):
         raise ParameterError(f"on_exit = {on_exit!r}: choose 'raise' or 'stop'")
-    if method not in ("Radau", "BDF"):
-        raise ParameterError(f"method = {method!r}: choose 'Radau' or 'BDF'")
-    if n_out < 2:
-        raise ParameterError(f"n_out = {n_out!r} must be at least 2")
-    coef = reduced.coefficients(rho0)
-    n_cells = default_cells(reduced, rho0, length) if n_cells is None else n_cells
-    lab = WaveSolver(reduced, length, n_cells)
-    N = lab.N
-    n_modes = N // 2 - 1
-    # linear theory of the domain's modes (analytic 2×2 and the discrete operator, lab frame)
-    ns = np.arange(1, n_modes + 1)
-    ks = 2 * np.pi * ns / lab.L
-    analytic = coef.dispersion(ks)[:, 0]
-    discrete = lab.discrete_dispersion(rho0, ns)[:, 0]
-    sigma = float(discrete.real.max())
-    if frame == "wave":
-        best = int(np.argmax(discrete.real))
-        c_frame = float(-discrete[best].imag / ks[best])
-    elif frame == "lab":
-        c_frame = 0.0
-    else:
-        try:
-            c_frame = float(frame)
-        except (TypeError, ValueError):
-            raise ParameterError(f"frame = {frame!r}: 'wave', 'lab' or a speed") from None
-    solver = WaveSolver(reduced, length, n_cells, frame_speed=c_frame) if c_frame else lab
-    # initial condition
-    if mode is None:
-        rng = np.random.default_rng(seed)
-        noise = rng.standard_normal(N)
-        noise -= noise.mean()
-        noise *= amplitude * rho0 / np.abs(noise).max()
-        y0 = solver.uniform(rho0)
-        y0[:N] += noise
-        y0[N:] = y0[:N] * coef.U  # uniform velocity
-        init = f"random noise (seed {seed}), max |δρ|/ρ0 = {amplitude:g}"
-        a0 = amplitude * rho0
-    else:
-        y0 = solver.eigenmode(rho0, int(mode), amplitude * rho0)
-        init = f"discrete eigenmode {mode} (k = {2 * math.pi * mode / solver.L:.5g}), " \
-               f"amplitude {amplitude:g} ρ0"
-        a0 = amplitude * rho0
-    # time span
-    auto = t_end is None
-    if auto:
-        rate = abs(sigma) if sigma != 0 else 1e-6
-        t_end = (40.0 if sigma > 0 else 10.0) / max(rate, 1e-6)
-        t_end = min(t_end, 1e6)
-    t_out = np.linspace(0.0, t_end, n_out)
-    # integrate the deviation z = y − y_u from the uniform state (an exact equilibrium of the
-    # discrete system), so that the error control is relative to the wave, not to ρ0: with
-    # tolerances relative to y a wave of amplitude 1e-5 ρ0 is erased by large steps
-    y_u = solver.uniform(rho0)
-    # atol floor 1e-12 ρ0: the right-hand side carries round-off ~1e-16 Π/dx that no step
-    # size can resolve
-    scale = max(rtol * a0, 1e-12 * rho0) / rtol * np.concatenate(
-        [np.ones(N), np.full(N, abs(coef.U) + 1.0)])
-    ode = {"Radau": Radau, "BDF": BDF}[method](
-        lambda t, z: solver.rhs(t, y_u + z), 0.0, y0 - y_u, t_end, rtol=rtol,
-        atol=rtol * scale, jac=lambda t, z: solver.jacobian(t, y_u + z))
-    snaps, times = [y0.copy()], [0.0]
-    j = 1
-    t0 = _time.perf_counter()
-    steps = 0
-    status = "completed"
-    left = None
-    amps = [wave_diagnostics(solver, rho0, y0, 1)[0]]
-    while j < n_out and ode.status == "running":
-        msg = ode.step()
-        steps += 1
-        if ode.status == "failed":
-            if solver.out_of_range is None:
-                raise ConvergenceError(f"time integration failed at t = {ode.t:.6g}: {msg}")
-            tb, rb = solver.out_of_range
-            left = (f"the density wave left the steady family at t ≈ {ode.t:.4g}: rho_bar "
-                    f"reached {rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D "
-                    f"model are defined (theta = {reduced.theta:g} deg; family ends: "
-                    f"{reduced.ends[0]} / {reduced.ends[1]})")
-            if on_exit == "raise":
-                raise NoSteadyFlowError(left)
-            status = "left_family"
-            snaps.append(y_u + ode.y)  # last accepted state, at its own time
-            times.append(float(ode.t))
-            break
-        if steps > max_steps:
-            raise ConvergenceError(f"time integration needed more than {max_steps} steps "
-                                   f"(reached t = {ode.t:.6g} of {t_end:.6g})")
-        solver.out_of_range = None
-        if ode.t >= t_out[j] or ode.status == "finished":
-            dense = ode.dense_output()
-            while j < n_out and t_out[j] <= ode.t * (1 + 1e-14):
-                snaps.append(y_u + dense(t_out[j]))
-                times.append(float(t_out[j]))
-                amps.append(wave_diagnostics(solver, rho0, snaps[-1], 1)[0])
-                j += 1
-            if auto and j >= 10 and _saturated(np.array(amps), a0, saturation_tol, sigma):
-                status = "saturated" if sigma > 0 else "decayed"
-                break
-        if progress is not None:
-            progress(float(ode.t), float(t_end))
-    wall = _time.perf_counter() - t0
-    t_used = np.array(times)
-    Y = np.array(snaps)
-    rho = Y[:, :N]
-    u_f = Y[:, N:] / (0.5 * (rho + np.roll(rho, -1, axis=1)))
-    u_c = 0.5 * (u_f + np.roll(u_f, 1, axis=1))
-    mass = rho.sum(axis=1) * solver.dx
-    c = np.fft.rfft(rho - rho0, axis=1) * (2.0 / N)
-    amp = np.abs(rho - rho0).max(axis=1)
-    M0 = mass[0]
-    drift = float(np.abs(mass - M0).max() / M0)
-    ds = xr.Dataset(
-        {"rho": (("t", "x"), rho, {"long_name": "one-dimensional density ρ̄", "units": "sigma"}),
-         "u": (("t", "x"), u_c, {"long_name": "mean velocity ū", "units": "sqrt(g sigma)"}),
-         "mass": ("t", mass, {"long_name": "∫ ρ̄ dx", "units": "sigma^2"}),
-         "amplitude": ("t", amp, {"long_name": "max |ρ̄ − ρ0|", "units": "sigma"}),
-         "mode_amplitude": (("t", "mode"), np.abs(c[:, 1:n_modes + 1]),
-                            {"long_name": "|ρ̂_n| (cosine amplitude of mode n)",
-                             "units": "sigma"}),
-         "growth_analytic": ("mode", analytic.real,
-                             {"long_name": "Re α(k_n), 2×2 dispersion relation (1D model)"}),
-         "frequency_analytic": ("mode", analytic.imag, {"long_name": "Im α(k_n)"}),
-         },
-        coords={"t": ("t", t_used, {"long_name": "time", "units": "sqrt(sigma/g)"}),
-                "x": ("x", solver.x, {"long_name": "position down the slope in the frame "
-                                                   "moving at frame_speed, ξ = x − c t",
-                                      "units": "sigma"}),
-                "mode": ("mode", ns), "k": ("mode", ks, {"long_name": "wavenumber 2πn/L"})})
-    ds["growth_discrete"] = ("mode", discrete.real,
-                             {"long_name": "Re α of the linearised discrete system"})
-    ds.attrs.update({
-        "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
-        "theta": reduced.theta, "roughness": reduced.model.roughness,
-        "wall_loss": reduced.model.wall_loss, "restitution": reduced.model.restitution,
-        "nu_max": reduced.model.nu_max, "rho0": rho0, "nu0": coef.F, "U0": coef.U,
-        "length": solver.L, "n_cells": N, "dx": solver.dx, "rtol": rtol, "method": method,
-        "initial_condition": init, "frame_speed": c_frame, "t_end": float(t_used[-1]),
-        "auto_time": str(auto),
-        "status": status, "left_family": left or "", "mass_drift": drift, "steps": steps,
-        "rhs_evaluations": solver.n_rhs, "jacobian_evaluations": solver.n_jac,
-        "wall_time_s": wall, "k_c": coef.k_c, "L_c": coef.L_c,
-        "criterion_margin": coef.criterion_margin,
-        "short_wave_unstable": str(coef.short_wave_unstable),
-        "max_growth_rate": sigma, "rho_range_family": [lo, hi],
-    })
-    return ds
-
-
-def _saturated(amps: np.ndarray, a0: float, tol: float, sigma: float) -> bool:
-    """Amplitude settled: grew (or decayed) well past its start and changed by less than
-    ``tol`` relative over the last tenth of the snapshots."""
-    n = len(amps)
-    w = max(n // 10, 3)
-    recent = amps[-w:]
-    if sigma > 0 and amps[-1] < 10 * a0:
-        return False
-    if sigma <= 0:
-        return amps[-1] < a0 * math.exp(-10.0)
-    return float(np.ptp(recent)) < tol * float(recent.max())
+    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
+        raise ParameterError(f"time = {t_end!r} must be a positive number")
+    snapshots = SnapshotTracker(count=n_out)
+    trackers: list[Tracker] = [snapshots]
+    if t_end is None:
+        trackers.append(SaturationStop(saturation_tol, count=n_out))
+    if progress is not None:
+        trackers.append(ProgressTracker(progress))
+    if on_exit == "stop":
+        trackers.append(LeaveFamilyStop())
+    sim = WaveSimulation(reduced, length, rho0=rho0, nu0=nu0, n_cells=n_cells, frame=frame,
+                         rtol=rtol, method=method, max_steps=max_steps)
+    info = sim.run(sim.perturbed(mode, amplitude, seed), t_end, trackers)
+    return sim.dataset(snapshots, info)
 
 
 def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 10.0
