@@ -468,8 +468,7 @@ class ReducedModel:
         ds = xr.Dataset({k: ("rho", v, {"long_name": n_}) for k, (v, n_) in data.items()},
                         coords={"rho": ("rho", r, {"long_name": "one-dimensional density ρ̄",
                                                    "units": "sigma"})})
-        ds.attrs.update(theta=self.theta, **{k: v for k, v in self.model.as_dict().items()
-                                             if isinstance(v, (int, float, str))},
+        ds.attrs.update(theta=self.theta, **self.model.attrs(),
                         **{f"accuracy_{k}": float(v) for k, v in self.accuracy.items()})
         return ds
 

@@ -807,9 +807,7 @@ class WaveSimulation:
                                  {"long_name": "Re α of the linearised discrete system"})
         ds.attrs.update({
             "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
-            "theta": rm.theta, "roughness": rm.model.roughness,
-            "wall_loss": rm.model.wall_loss, "restitution": rm.model.restitution,
-            "nu_max": rm.model.nu_max, "rho0": rho0, "nu0": coef.F, "U0": coef.U,
+            "theta": rm.theta, **rm.model.attrs(), "rho0": rho0, "nu0": coef.F, "U0": coef.U,
             "length": solver.L, "n_cells": N, "dx": solver.dx, "rtol": self.rtol,
             "method": self.method, "initial_condition": info.initial.description,
             "frame_speed": self.frame_speed, "t_end": float(t_used[-1]),

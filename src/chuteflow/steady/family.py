@@ -284,8 +284,8 @@ def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
 
 
 def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
-    from .. import __version__
-    attrs = {k: v for k, v in model.as_dict().items()}
+    from .._version import __version__
+    attrs = dict(model.attrs())
     attrs.update(nu_top=opts.nu_top, rtol=opts.rtol, min_thickness=opts.min_thickness,
                  chuteflow_version=__version__, source="Mitarai & Nakanishi §3.2")
     return {k: (str(v) if isinstance(v, bool) else v) for k, v in attrs.items()}
