@@ -431,3 +431,14 @@ def choose_n(flow: SteadyFlow, k: float, *, kz: float = 0.0,
     (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
     return least_stable(flow, k, kz=kz, policy=policy, drift_tol=drift_tol,
                         tail_tol=tail_tol, n_max=n_max).n
+
+
+def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
+    """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
+
+    ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence
+    estimate of the least-stable mode).
+    """
+    if n is None:
+        n = choose_n(flow, k)
+    return StabilityOperator(flow, n, three_d=bool(kz)).pencil(k, kz)

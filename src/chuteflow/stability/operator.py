@@ -399,15 +399,3 @@ def _check_k(k, name, signed=False) -> float:
         raise ParameterError(f"{name} = {k!r} is outside [0, inf): the wavenumber of the "
                              "perturbation exp(ikx) is taken non-negative (α(−k) = conj α(k))")
     return k
-
-
-def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
-    """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
-
-    ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence
-    estimate of the least-stable mode).
-    """
-    if n is None:
-        from .modes import choose_n
-        n = choose_n(flow, k)
-    return StabilityOperator(flow, n, three_d=bool(kz)).pencil(k, kz)

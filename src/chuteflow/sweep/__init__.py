@@ -15,6 +15,7 @@ from .points import (Point, PointFunction, Variable, point_function, register_po
 from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 from .classify import classify
+from . import metrics  # noqa: F401  (registers the built-in stability metrics)
 
 __all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_markers", "markers", "default_ranges", "parse_grid", "resolve_model", "Sweep",
            "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",

@@ -21,6 +21,8 @@ and of its hash, so a sweep with other options never reuses old results.
 """
 from __future__ import annotations
 
+import importlib
+
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -189,8 +191,8 @@ def register_point_function(cls: type[PointFunction]) -> type[PointFunction]:
 
 
 def registered_point_functions() -> dict[str, type[PointFunction]]:
-    """Name → class of every registered point function."""
-    _load_builtin()
+    """Name → class of every registered point function (the built-in stability metrics of
+    :mod:`chuteflow.sweep.metrics` register when :mod:`chuteflow.sweep` is imported)."""
     return dict(_REGISTRY)
 
 
@@ -198,7 +200,6 @@ def point_function(spec) -> PointFunction:
     """A point function from a name, a ``{"name", "options"}`` dict, or an instance."""
     if isinstance(spec, PointFunction):
         return spec
-    _load_builtin()
     if isinstance(spec, str):
         name, options = spec, {}
     elif isinstance(spec, Mapping):
@@ -206,7 +207,6 @@ def point_function(spec) -> PointFunction:
         if name not in _REGISTRY and spec.get("module"):
             # a point function defined above this layer (e.g. chuteflow.reduced) registers
             # on import: a fresh worker (spawn, Dask) learns of it from the spec's module
-            import importlib
             importlib.import_module(str(spec["module"]))
     else:
         raise ParameterError(f"metrics: cannot make a point function from {spec!r}")
@@ -217,10 +217,6 @@ def point_function(spec) -> PointFunction:
                              f"{sorted(_REGISTRY)}") from None
     return cls(**options)
 
-
-def _load_builtin():
-    # the stability metrics (import the stability layer lazily, inside compute)
-    from . import metrics  # noqa: F401
 
 
 # --------------------------------------------------------------------------- built-ins
