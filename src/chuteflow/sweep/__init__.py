@@ -7,8 +7,7 @@
   computations (steady quantities, kinematic-wave speeds, long-wave coefficients, k_c, growth).
 - :func:`classify`: unstable points, regimes A, B, C, and the finite-k cross-check.
 """
-from .config import (DEFAULT_MARKERS, DEFAULT_RANGES, SweepConfig, Task, default_markers,
-                     default_ranges, parse_grid)
+from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid
 from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep, write_dataset
 from .points import (Point, PointFunction, Variable, point_function, register_point_function,
                      registered_point_functions)
@@ -16,7 +15,7 @@ from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 from .classify import classify
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_markers", "markers", "default_ranges", "parse_grid", "Sweep",
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "markers", "default_ranges", "parse_grid", "Sweep",
            "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
            "PointFunction", "Variable", "point_function", "register_point_function",
            "registered_point_functions", "STATUS", "TaskResult", "run_task",
