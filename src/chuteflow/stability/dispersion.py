@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
@@ -343,7 +344,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
              "alpha1_im": tr.alpha1.imag, "drift_tol": drift_tol, "tail_tol": tail_tol}
     attrs.update({name: getattr(flow.model, name)
                   for name in ("roughness", "wall_loss", "restitution", "nu_max")})
-    u = "1/sqrt(sigma/g)"
+    u = RATE_UNITS
     ds = xr.Dataset(
         {"alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),
          "alpha_im": ("k", out["alpha_im"], {"long_name": "Im alpha", "units": u}),
@@ -352,7 +353,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None, n_max: int = N_MAX,
                                                   "coefficients", "units": "1"}),
          "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
          "physical": ("k", phys, {"long_name": "passes drift and tail tests"})},
-        coords={"k": ("k", ks, {"long_name": "wavenumber", "units": "1/sigma"})},
+        coords={"k": ("k", ks, {"long_name": "wavenumber", "units": WAVENUMBER_UNITS})},
         attrs=attrs)
     return ds
 
