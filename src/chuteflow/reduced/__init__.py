@@ -11,6 +11,7 @@
 from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
 from .simulate import WaveSolver, default_cells, growth_rate_fit, simulate
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
+from . import accessor as _accessor  # noqa: F401 - adds ds.chute.agreement
 
 __all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
            "WaveSolver", "default_cells", "growth_rate_fit", "simulate", "Reduced1D",
