@@ -89,8 +89,9 @@ class Relabeler:
         before, after = text[:m.start()], text[m.end():]
         if not self._cited(text, m, labels):
             return m.group(0)
-        if before.endswith('"') and after.startswith('"') and len(labels) == 1 and not pre:
-            return m.group(0)
+        if (before.endswith('"') and after.startswith('"') and len(labels) == 1 and not pre
+                and not before.endswith('source="')):
+            return m.group(0)  # a whole string: a key or file name
         kinds = {self.table[lab][0] for lab in labels}
         in_parens = before.endswith("(") and after.startswith(")") and not pre
         body = self.tok.sub(lambda t: self._number(t.group(0), in_parens, len(kinds) > 1),

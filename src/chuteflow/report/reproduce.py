@@ -19,7 +19,7 @@ from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColum
                            TextColumn, TimeElapsedColumn)
 from rich.table import Table
 
-from ..papers import DEFAULT_PAPERS
+from ..papers import DEFAULT_PAPERS, PAPERS
 from .registry import StageContext, load_stages, select_stages
 from .report import Checkpoint, Report
 
@@ -148,7 +148,8 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
         "BLAS threads": 1,
     }
     params.update(parameters or {})
-    report = Report(parameters=params)
+    report = Report(title="chuteflow: reproduction of " + "; ".join(
+        PAPERS.get(p, p) for p in papers), parameters=params)
     for module, exc in import_errors.items():
         paper, _, name = module.partition(".")
         report.add_checkpoint(Checkpoint(

@@ -187,7 +187,7 @@ def _magnification(ctx, R):
                                f"N = {lw.n}) dashed; (b) Im α with the slope −dQ0/dρ̄0 = "
                                f"{-lw.dQ_drho:.6g} dashed; (c) Re α/k² against k: the k² "
                                "regime ends near k ~ 1e-5 (docs/errata.md, numerical notes).",
-                         id="dispmag", source="figure 8, fig:dispmag")
+                         id="dispmag", source="figure 8")
 
 
 def _sampled_max(ds):
