@@ -14,6 +14,7 @@ import pytest
 import xarray as xr
 
 from chuteflow.errors import ParameterError
+from chuteflow.papers.mitarai2004 import markers as paper_markers
 from chuteflow.steady import solve_steady
 from chuteflow.sweep import (STATUS, ConfigMismatchError, PartStore, Sweep, SweepConfig,
                              load_sweep, parse_grid, parts_dir, point_function, run_sweep)
@@ -256,7 +257,8 @@ def test_config_validation():
 
 
 def test_tasks_cover_grid_once_and_hash_is_stable():
-    cfg = SweepConfig.grid(0.05, shape=(3, 7), chunk=3)
+    # the paper's points are passed explicitly (SweepConfig.grid adds none by default)
+    cfg = SweepConfig.grid(0.05, shape=(3, 7), chunk=3, markers=paper_markers(0.05))
     cover = np.zeros(cfg.shape, int)
     for t in cfg.tasks():
         if t.i >= 0:
@@ -264,8 +266,10 @@ def test_tasks_cover_grid_once_and_hash_is_stable():
     assert (cover == 1).all()
     assert max(t.size for t in cfg.tasks() if t.i >= 0) <= 3
     assert [t for t in cfg.tasks() if t.i < 0][0].size == 5  # P1–P5 for φ = 0.05
-    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=3).digest() == cfg.digest()
-    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4).digest() != cfg.digest()
+    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=3,
+                            markers=paper_markers(0.05)).digest() == cfg.digest()
+    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4,
+                            markers=paper_markers(0.05)).digest() != cfg.digest()
 
 
 def test_steady_family_statuses_map_to_point_status(monkeypatch):

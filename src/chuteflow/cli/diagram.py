@@ -47,13 +47,13 @@ def diagram(
     """Compute the stability diagram over a (θ, ν0(0)) grid; resumes automatically."""
     from rich.console import Console
 
+    from chuteflow.papers.mitarai2004 import markers as paper_markers
     from chuteflow.sweep import Sweep, SweepConfig, parse_grid, parts_dir
 
     shape = parse_grid(grid)
     kw: dict[str, Any] = {"shape": shape, "theta_range": theta_range,
                           "nu0_range": nu0_range, "model": model, "chunk": chunk}
-    if not with_markers:
-        kw["markers"] = ()
+    kw["markers"] = paper_markers(model.roughness) if with_markers else ()
     if metrics:
         kw["metrics"] = tuple(m.strip() for m in metrics.split(",") if m.strip())
     cfg = SweepConfig.grid(**kw)

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import typer
 
+from ..papers import DEFAULT_PAPERS, PAPERS
 from ._app import app
 
 
@@ -17,18 +18,23 @@ def reproduce(
     stage: list[str] | None = typer.Option(None, "--stage", "-s",
                                            metavar="NAME", help="Run only this stage (repeatable)."),
     list_stages: bool = typer.Option(False, "--list", help="List the stages and exit."),
+    paper: list[str] | None = typer.Option(
+        None, "--paper", "-p", metavar="NAME",
+        help="Reproduce this paper (repeatable; default: mitarai2004). Papers: "
+             + ", ".join(PAPERS) + "."),
 ) -> None:
-    """Reproduce the paper's results; exit code 1 if any checkpoint fails."""
+    """Reproduce the papers' results; exit code 1 if any checkpoint fails."""
     from chuteflow.report import load_stages, registered_stages, run_reproduce
 
+    papers = tuple(paper) if paper else DEFAULT_PAPERS
     if list_stages:
-        load_stages()
-        stages = registered_stages()
+        load_stages(papers)
+        stages = registered_stages(papers)
         for s in stages:
-            typer.echo(f"{s.name}\t{s.title}")
+            typer.echo(f"{s.name}\t{s.paper or '-'}\t{s.title}")
         if not stages:
             typer.echo("(no stages registered)")
         return
-    report = run_reproduce(out, quick=quick, stages=stage or None)
+    report = run_reproduce(out, quick=quick, stages=stage or None, papers=papers)
     if not report.ok:
         raise typer.Exit(1)

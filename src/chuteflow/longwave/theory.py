@@ -29,6 +29,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..closures import ChuteModel
+from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
 from ..stability.modes import nearest_eigenpair, stability_operator
 from ..stability.policy import RejectionPolicy
@@ -78,8 +79,9 @@ class LongWave:
 
     @property
     def phase_velocity(self) -> float:
-        """Long-wave phase velocity Im α/k → Im α1 (negative: the wave runs down the slope)."""
-        return float(self.alpha1.imag)
+        """Long-wave phase velocity c = −Im α1 = dQ0/dρ̄0, positive down the slope (the
+        convention of :mod:`chuteflow.conventions`)."""
+        return long_wave_phase_velocity(self.alpha1)
 
     @property
     def unstable(self) -> bool:

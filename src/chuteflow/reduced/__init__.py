@@ -18,6 +18,7 @@ from .simulate import (InitialState, LeaveFamilyStop, ProgressTracker, RunInfo, 
                        SnapshotTracker, Step, Tracker, WaveSimulation, WaveSolver, default_cells,
                        growth_rate_fit, simulate)
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
+from . import accessor as _accessor  # noqa: F401 - adds ds.chute.agreement
 
 __all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
            "WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",

@@ -51,8 +51,8 @@ class Reduced1D(PointFunction):
                  "grow, 0: stable)", source="condition (ERRATA 4)"),
         Variable("r1d_U", "sqrt(g sigma)", "U(ρ0) = ρ0 sinθ / a(ρ0)", source="oneaandu"),
         Variable("r1d_dU", "sqrt(g sigma)/sigma", "U'(ρ0)", source="oneaandu"),
-        Variable("r1d_dq0", "sqrt(g sigma)", "dq0/dρ0 = (ρ0 U)' (long-wave phase velocity "
-                 "is its negative)", source="disp-oned"),
+        Variable("r1d_dq0", "sqrt(g sigma)", "dq0/dρ0 = (ρ0 U)' (the long-wave phase velocity, "
+                 "positive down the slope)", source="disp-oned"),
         Variable("r1d_dP", "g sigma", "(ρ0 T̄)'"),
         Variable("r1d_a", "sqrt(g/sigma)", "floor drag a(ρ0) = η*(F, T̄)", source="oneaandu"),
         Variable("r1d_Tbar", "g sigma", "mean temperature T̄(ρ0)"),

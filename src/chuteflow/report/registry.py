@@ -1,8 +1,9 @@
 """Registry of reproduction stages and the context a stage receives.
 
 A stage is a function ``stage(ctx) -> None`` registered with :func:`register_stage`;
-stages run in increasing ``order`` (ties by name). A stage module lives in
-:mod:`chuteflow.report.stages` and is listed in that package's ``STAGE_MODULES``::
+stages run in increasing ``order`` (ties by name). Stages belong to a paper package
+(:mod:`chuteflow.papers`): a module ``chuteflow.papers.NAME.stages.*`` registers its
+stages when imported, and :func:`load_stages` imports the papers asked for::
 
     from chuteflow.report import Checkpoint, StageContext, register_stage
 
@@ -10,7 +11,7 @@ stages run in increasing ``order`` (ties by name). A stage module lives in
     def steady(ctx: StageContext) -> None:
         ctx.progress("shooting for θ = 16°")
         ...
-        ctx.report.add_figure(ctx.path("profiles.png"), "Steady profiles", source="figure 2")
+        ctx.report.add_figure(ctx.path("profiles.png"), "Steady profiles", source="figure 3")
         ctx.report.check("steady.h16", source="§3.2", statement="...", computed="...",
                          passed=True)
 """
@@ -20,11 +21,11 @@ import re
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from importlib import import_module
 from pathlib import Path
 from typing import Any, Protocol
 
 from ..errors import ParameterError
+from .papers import DEFAULT_PAPERS, import_errors
 from .report import Report
 
 __all__ = ["Stage", "StageContext", "ProgressCallback", "register_stage", "registered_stages",
@@ -103,6 +104,9 @@ class Stage:
     order: float
     func: StageFunc
     title: str
+    #: The paper package the stage belongs to (``None``: a stage registered elsewhere,
+    #: e.g. in a test, which runs with any paper).
+    paper: str | None = None
 
     def __call__(self, ctx: StageContext) -> None:
         self.func(ctx)
@@ -112,8 +116,16 @@ _REGISTRY: dict[str, Stage] = {}
 _NAME = re.compile(r"^[A-Za-z][A-Za-z0-9_-]*$")
 
 
-def register_stage(name: str, order: float, *, title: str | None = None
-                   ) -> Callable[[StageFunc], StageFunc]:
+def _paper_of(module: str) -> str | None:
+    """``NAME`` for a module ``chuteflow.papers.NAME[...]``, else ``None``."""
+    parts = module.split(".")
+    if len(parts) >= 3 and parts[:2] == ["chuteflow", "papers"]:
+        return parts[2]
+    return None
+
+
+def register_stage(name: str, order: float, *, title: str | None = None,
+                   paper: str | None = None) -> Callable[[StageFunc], StageFunc]:
     """Decorator registering ``func(ctx) -> None`` as stage ``name``.
 
     Parameters
@@ -126,6 +138,9 @@ def register_stage(name: str, order: float, *, title: str | None = None
         ``ctx.shared`` must come after it.
     title : str, optional
         Section heading in the report (default: first line of the docstring, else name).
+    paper : str, optional
+        The paper package the stage belongs to (default: taken from the module,
+        ``chuteflow.papers.NAME...``).
 
     Returns the function unchanged. Registering another function under a taken name
     raises ``ValueError``.
@@ -142,20 +157,36 @@ def register_stage(name: str, order: float, *, title: str | None = None
                 (func.__module__, func.__qualname__):
             raise ValueError(f"stage {name!r} is already registered by "
                              f"{old.func.__module__}.{old.func.__qualname__}")
-        _REGISTRY[name] = Stage(name, float(order), func, heading)
+        owner = paper if paper is not None else _paper_of(func.__module__)
+        _REGISTRY[name] = Stage(name, float(order), func, heading, owner)
         return func
 
     return decorator
 
 
-def load_stages() -> None:
-    """Import :mod:`chuteflow.report.stages`, which registers every stage module."""
-    import_module("chuteflow.report.stages")
+def load_stages(papers: Sequence[str] | None = None) -> dict[str, BaseException]:
+    """Import the stages of the given papers (default: ``chuteflow.papers.DEFAULT_PAPERS``).
+
+    Returns the stage modules that failed to import, as ``"paper.module"`` → exception
+    (the other stages are registered all the same). An unknown paper raises
+    :class:`~chuteflow.errors.ParameterError`.
+    """
+    errors: dict[str, BaseException] = {}
+    for paper in (DEFAULT_PAPERS if papers is None else papers):
+        for module, exc in import_errors(paper).items():
+            errors[f"{paper}.{module}"] = exc
+    return errors
 
 
-def registered_stages() -> list[Stage]:
-    """All registered stages in run order (by ``order``, then name)."""
-    return sorted(_REGISTRY.values(), key=lambda s: (s.order, s.name))
+def registered_stages(papers: Sequence[str] | None = None) -> list[Stage]:
+    """Registered stages in run order (by ``order``, then name).
+
+    With ``papers``, only the stages of those papers (and stages that belong to none).
+    """
+    stages = sorted(_REGISTRY.values(), key=lambda s: (s.order, s.name))
+    if papers is None:
+        return stages
+    return [s for s in stages if s.paper is None or s.paper in papers]
 
 
 def get_stage(name: str) -> Stage:
@@ -167,10 +198,12 @@ def get_stage(name: str) -> Stage:
         raise ParameterError(f"stage: unknown stage {name!r} (available: {avail})") from None
 
 
-def select_stages(names: Sequence[str] | None) -> list[Stage]:
-    """Stages to run: all for ``None``; else the named ones, deduplicated, in run order."""
+def select_stages(names: Sequence[str] | None,
+                  papers: Sequence[str] | None = None) -> list[Stage]:
+    """Stages to run: all (of ``papers``, if given) for ``None``; else the named ones,
+    deduplicated, in run order."""
     if names is None:
-        return registered_stages()
+        return registered_stages(papers)
     chosen = {get_stage(n).name for n in names}
     return [s for s in registered_stages() if s.name in chosen]
 
@@ -179,8 +212,8 @@ def select_stages(names: Sequence[str] | None) -> list[Stage]:
 def isolated_registry() -> Iterator[dict[str, Stage]]:
     """Run with an empty registry (for tests); the real one is restored on exit.
 
-    The real stage modules are imported first, so that their registration does not
-    land in the temporary registry.
+    The default papers' stage modules are imported first, so that their registration
+    does not land in the temporary registry.
     """
     load_stages()
     saved = dict(_REGISTRY)

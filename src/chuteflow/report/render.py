@@ -4,6 +4,7 @@ from __future__ import annotations
 import base64
 import html
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -99,11 +100,7 @@ def render_markdown(report: Report, base: Path) -> str:
 
 def _resolved(sec: Section) -> Section:
     """Copy of ``sec`` with absolute figure paths (so relpath works from any base)."""
-    from dataclasses import replace
-
-    from .report import Figure
-
-    figs = [Figure(f.path.resolve(), f.caption, f.id, f.source) for f in sec.figures]
+    figs = [replace(f, path=f.path.resolve()) for f in sec.figures]
     return replace(sec, figures=figs)
 
 

@@ -1,6 +1,6 @@
 """Checkpoints, figures and the :class:`Report` that collects them by stage.
 
-A *checkpoint* pairs one statement of the paper (with its section or equation label)
+A *checkpoint* pairs one statement of the paper (with its section, equation or figure number)
 with what chuteflow computed for it and whether the two agree. A *stage* is one part of
 the reproduction (steady flows, dispersion relations, stability diagrams, …); the report
 keeps one :class:`Section` per stage and writes ``report.md``, a self-contained
@@ -18,11 +18,12 @@ from dataclasses import asdict, dataclass, field
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
+from .render import render_html, render_markdown
 
 __all__ = ["Checkpoint", "Figure", "Section", "Report", "DEFAULT_TITLE", "GENERAL"]
 
-DEFAULT_TITLE = ("chuteflow: reproduction of Mitarai & Nakanishi, linear stability of "
-                 "rapid granular flow down a slope")
+#: Title of a report that is not given one (``run_reproduce`` names the papers it runs).
+DEFAULT_TITLE = "chuteflow: reproduction report"
 #: Section that receives checkpoints and figures added outside any stage.
 GENERAL = "general"
 
@@ -38,7 +39,7 @@ class Checkpoint:
     id : str
         Short identifier, unique within a report (e.g. ``"steady.h_theta16"``).
     source : str
-        Where the paper says it: section and/or label (e.g. ``"§3.2, fig:steady"``).
+        Where the paper says it: section, equation or figure as printed (e.g. ``"§3.2, figure 3"``).
     statement : str
         The paper's words (or a faithful paraphrase), e.g. ``"h ≈ 23 at θ = 16°"``.
     computed : str
@@ -96,7 +97,7 @@ class Checkpoint:
 class Figure:
     """A figure file (PNG preferred) with its caption.
 
-    ``source`` names the paper figure it reproduces (e.g. ``"figure 3, fig:disp"``).
+    ``source`` names the paper figure it reproduces (e.g. ``"figure 7"``).
     """
 
     path: Path
@@ -259,14 +260,10 @@ class Report:
 
     def to_markdown(self, base: str | Path = ".") -> str:
         """Markdown text; figure links are relative to ``base`` (the output folder)."""
-        from .render import render_markdown
-
         return render_markdown(self, Path(base))
 
     def to_html(self) -> str:
         """Self-contained HTML (figures embedded as data URIs)."""
-        from .render import render_html
-
         return render_html(self)
 
     def write(self, out: str | Path, *, wall_time: float | None = None) -> dict[str, Path]:

@@ -19,6 +19,7 @@ from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColum
                            TextColumn, TimeElapsedColumn)
 from rich.table import Table
 
+from .papers import DEFAULT_PAPERS, PAPERS
 from .registry import StageContext, load_stages, select_stages
 from .report import Checkpoint, Report
 
@@ -97,7 +98,8 @@ def _model_defaults() -> dict[str, Any]:
 def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
                   stages: Sequence[str] | None = None, *, console: Console | None = None,
                   show_progress: bool | None = None,
-                  parameters: dict[str, Any] | None = None) -> Report:
+                  parameters: dict[str, Any] | None = None,
+                  papers: Sequence[str] | None = None) -> Report:
     """Run the reproduction stages and write ``report.md`` / ``report.html`` in ``out``.
 
     Parameters
@@ -116,6 +118,9 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
         Live progress bars; default when ``console`` is a terminal.
     parameters : dict, optional
         Extra header parameters.
+    papers : sequence of str, optional
+        Paper packages (:mod:`chuteflow.papers`) whose stages run; default
+        ``chuteflow.papers.DEFAULT_PAPERS``.
 
     Returns
     -------
@@ -127,10 +132,9 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
 
     t_start = time.perf_counter()
     console = console or Console()
-    load_stages()
-    from .stages import IMPORT_ERRORS
-
-    selected = select_stages(stages)  # validates names before anything runs
+    papers = tuple(DEFAULT_PAPERS if papers is None else papers)
+    import_errors = load_stages(papers)
+    selected = select_stages(stages, papers)  # validates names before anything runs
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     os.environ.setdefault("MPLBACKEND", "Agg")
@@ -139,14 +143,17 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
     params: dict[str, Any] = {
         "mode": "quick" if quick else "full",
         "stages": [s.name for s in selected] if stages is not None else "all",
+        "papers": list(papers),
         "model defaults": _model_defaults(),
         "BLAS threads": 1,
     }
     params.update(parameters or {})
-    report = Report(parameters=params)
-    for module, exc in IMPORT_ERRORS.items():
+    report = Report(title="chuteflow: reproduction of " + "; ".join(
+        PAPERS.get(p, p) for p in papers), parameters=params)
+    for module, exc in import_errors.items():
+        paper, _, name = module.partition(".")
         report.add_checkpoint(Checkpoint(
-            id=f"import.{module}", source=f"chuteflow.report.stages.{module}",
+            id=f"import.{name}", source=f"chuteflow.papers.{paper}.stages.{name}",
             statement="The stage module imports.", computed=f"{type(exc).__name__}: {exc}",
             passed=False, detail="".join(traceback.format_exception(exc))), stage="import")
     report.write(out, wall_time=time.perf_counter() - t_start)

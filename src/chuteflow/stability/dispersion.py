@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..continuation import StepRules, Trial, continue_to
+from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
@@ -396,7 +397,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
              "alpha1_im": tr.alpha1.imag, "drift_tol": policy.drift_tol,
              "tail_tol": policy.tail_tol}
     attrs.update(flow.model.attrs())
-    u = "1/sqrt(sigma/g)"
+    u = RATE_UNITS
     ds = xr.Dataset(
         {"alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),
          "alpha_im": ("k", out["alpha_im"], {"long_name": "Im alpha", "units": u}),
@@ -405,7 +406,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
                                                   "coefficients", "units": "1"}),
          "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
          "physical": ("k", phys, {"long_name": "passes drift and tail tests"})},
-        coords={"k": ("k", ks, {"long_name": "wavenumber", "units": "1/sigma"})},
+        coords={"k": ("k", ks, {"long_name": "wavenumber", "units": WAVENUMBER_UNITS})},
         attrs=attrs)
     return ds
 

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..closures import ChuteModel
+from ..conventions import phase_velocity
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import ChebyshevGrid, coefficients
 from ..steady import SteadyFlow
@@ -181,8 +182,9 @@ class Mode:
 
     @property
     def wave_speed(self) -> float:
-        """−Im α / k: speed of the wave down the slope (→ dQ0/dρ̄0 as k → 0, Appendix B)."""
-        return float(-self.alpha.imag / self.k) if self.k else math.nan
+        """Phase velocity c = −Im α / k, positive down the slope (→ dQ0/dρ̄0 as k → 0,
+        appendix B); the convention of :mod:`chuteflow.conventions`."""
+        return phase_velocity(self.alpha, self.k)
 
     def summary(self) -> dict:
         """JSON-ready scalars (keys used by the CLI)."""

@@ -6,9 +6,10 @@
 - :class:`PointFunction`, :class:`Variable`, :func:`register_point_function`: per-point
   computations (steady quantities, kinematic-wave speeds, long-wave coefficients, k_c, growth).
 - :func:`classify`: unstable points, regimes A, B, C, and the finite-k cross-check.
+- ``ds.chute`` (:class:`ChuteAccessor`): the same operations as Dataset methods, and
+  ``ds.chute.model``, the model a Dataset was computed with.
 """
-from .config import (DEFAULT_MARKERS, DEFAULT_RANGES, SweepConfig, Task, default_markers,
-                     default_ranges, parse_grid, resolve_model)
+from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid, resolve_model
 from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep, write_dataset
 from .points import (Point, PointFunction, Variable, point_function, register_point_function,
                      registered_point_functions)
@@ -16,9 +17,10 @@ from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 from .classify import classify
 from . import metrics  # noqa: F401  (registers the built-in stability metrics)
+from .accessor import ChuteAccessor
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "DEFAULT_MARKERS", "default_markers", "markers", "default_ranges", "parse_grid", "resolve_model", "Sweep",
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "markers", "default_ranges", "parse_grid", "resolve_model", "Sweep",
            "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
            "PointFunction", "Variable", "point_function", "register_point_function",
            "registered_point_functions", "STATUS", "TaskResult", "run_task",
-           "ConfigMismatchError", "PartStore", "parts_dir", "classify"]
+           "ConfigMismatchError", "PartStore", "parts_dir", "classify", "ChuteAccessor"]

@@ -73,7 +73,7 @@ def classify(ds):
             "long_name": "unstable regime (§4.2): A small h & small ν̄, denser faster; B lighter "
                          "faster; C large h & large ν̄, denser faster",
             "flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8),
-            "flag_meanings": "unknown stable A B C", "source": "§4.2, fig phase005"})
+            "flag_meanings": "unknown stable A B C", "source": "§4.2, figure 6"})
         if "marker" in ds.dims:
             ds["marker_regime"] = ("marker", _marker_regimes(ds, reg), dict(ds["regime"].attrs))
     return ds

@@ -24,11 +24,9 @@ from ..closures import ChuteModel
 from ..errors import ParameterError
 
 __all__ = [
-    "DEFAULT_MARKERS",
     "DEFAULT_RANGES",
     "SweepConfig",
     "Task",
-    "default_markers",
     "default_ranges",
     "parse_grid",
     "resolve_model",
@@ -41,22 +39,6 @@ DEFAULT_RANGES: dict[float, tuple[tuple[float, float], tuple[float, float]]] = {
     0.05: ((12.0, 18.0), (0.01, 0.25)),
     0.10: ((16.5, 22.5), (0.01, 0.30)),
 }
-
-
-#: Points marked in the paper's diagrams (name, θ in degrees, ν0(0)): figs phase005, phase010.
-DEFAULT_MARKERS: dict[float, tuple[tuple[str, float, float], ...]] = {
-    0.05: (("P1", 16.0, 0.05), ("P2", 16.0, 0.08), ("P3", 16.0, 0.10), ("P4", 14.0, 0.05),
-           ("P5", 17.0, 0.10)),
-    0.10: (("Q1", 20.0, 0.10), ("Q2", 20.0, 0.15), ("Q3", 20.0, 0.17)),
-}
-
-
-def default_markers(roughness: float) -> tuple[tuple[str, float, float], ...]:
-    """The paper's marked points for this roughness (none for other values)."""
-    for key, val in DEFAULT_MARKERS.items():
-        if math.isclose(float(roughness), key, rel_tol=1e-9):
-            return val
-    return ()
 
 
 def default_ranges(roughness: float) -> tuple[tuple[float, float], tuple[float, float]]:
@@ -156,7 +138,7 @@ class SweepConfig:
         number of workers.
     markers : sequence of (name, theta, nu0)
         Extra points computed with the same point functions and stored on a ``marker``
-        dimension (the paper's P1–P5, Q1–Q3; see :data:`DEFAULT_MARKERS`).
+        dimension (e.g. the paper's P1–P5, Q1–Q3: ``chuteflow.papers.mitarai2004.markers``).
     **model_fields
         Convenience: fields of :class:`~chuteflow.closures.ChuteModel` (``roughness``,
         ``wall_loss``, ``restitution``, ``nu_max``, ``radial``, ``wall``, ``transport``)
@@ -279,7 +261,6 @@ class SweepConfig:
             raise ParameterError("a range with low == high allows one grid point only")
         th = np.linspace(float(tr[0]), float(tr[1]), nt)
         nu = np.linspace(float(nr[0]), float(nr[1]), nn)
-        kw.setdefault("markers", default_markers(roughness))
         # round to 12 digits so that the same command line always gives the same hash
         return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)), model=model,
                    **kw)

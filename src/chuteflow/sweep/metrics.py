@@ -17,12 +17,13 @@ import math
 
 import numpy as np
 
+from ..conventions import RATE_UNITS
 from ..errors import ParameterError
 from .points import PointFunction, Variable, register_point_function
 
 __all__ = ["LongWaveMetric", "GrowthMetric", "default_metrics"]
 
-_RATE = "sqrt(g/sigma)"
+_RATE = RATE_UNITS
 
 
 @register_point_function
@@ -46,7 +47,8 @@ class LongWaveMetric(PointFunction):
     defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_n": 128, "refine_rtol": 0.1,
                 "refine_n_max": 480}
     variables = (
-        Variable("alpha1_im", "sqrt(g sigma)", "Im α1 (= −dQ0/dρ̄0, long-wave phase velocity)",
+        Variable("alpha1_im", "sqrt(g sigma)", "Im α1 = −dQ0/dρ̄0 (the long-wave phase velocity, "
+                 "positive down the slope, is −Im α1)",
                  source="App. B, eq:vp0"),
         Variable("alpha2_re", "sigma^(3/2) g^(1/2)", "Re α2, long-wave growth coefficient "
                  "(> 0: long-wave unstable)", source="§4.2, §5.1.1"),

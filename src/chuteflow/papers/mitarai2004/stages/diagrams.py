@@ -1,37 +1,37 @@
-"""Stage ``diagrams``: the stability diagrams for φ = 0.05 and φ = 0.10 (§4.2, figs phase005,
-phase010), computed with the sweep engine and checked against the paper's statements."""
+"""Stage ``diagrams``: the stability diagrams for φ = 0.05 and φ = 0.10 (§4.2, figures 6,
+12), computed with the sweep engine and checked against the paper's statements."""
 from __future__ import annotations
 
-from ..registry import StageContext, register_stage
+from ....report.registry import StageContext, register_stage
+from ..points import DIAGRAM_RANGES, DIAGRAM_SHAPE, figure, markers
 
-#: (n_theta, n_nu0) per roughness. Quick: coarse (the regimes are a few grid points each);
-#: full: the benchmark's 60 × 60.
-QUICK_SHAPE = {0.05: (11, 12), 0.10: (11, 12)}
-FULL_SHAPE = {0.05: (60, 60), 0.10: (60, 60)}
 #: Rows whose least dense flow is followed beyond the grid (every row in full mode).
 QUICK_ROW_STEP = 2
 
 
 def stage_config(roughness: float, quick: bool):
     """The sweep configuration of one diagram of this stage."""
-    from ...sweep import SweepConfig
+    from ....sweep import SweepConfig
 
-    shape = (QUICK_SHAPE if quick else FULL_SHAPE)[roughness]
+    shape = DIAGRAM_SHAPE[quick][roughness]
+    theta_range, nu0_range = DIAGRAM_RANGES[roughness]
     metrics = ["steady", "kinematic", "longwave",
                {"name": "growth", "options": {"stride": 3 if quick else 8}}]
-    return SweepConfig.grid(roughness, shape=shape, metrics=tuple(metrics))
+    return SweepConfig.grid(roughness, shape=shape, theta_range=theta_range,
+                            nu0_range=nu0_range, metrics=tuple(metrics),
+                            markers=markers(roughness))
 
 
 @register_stage("diagrams", order=40,
-                title="Stability diagrams (§4.2, figures phase005 and phase010)")
+                title="Stability diagrams (§4.2, figures 6 and 12)")
 def diagrams(ctx: StageContext) -> None:
     """Stability diagrams in the (h, ν̄) plane for φ = 0.05 and 0.10."""
     import numpy as np
 
-    from ...figures.diagram import save_diagram
-    from ...sweep import STATUS, Sweep
-    from ...sweep.checks import paper_checks
-    from ...sweep.edges import row_ends
+    from ....figures.diagram import save_diagram
+    from ....sweep import STATUS, Sweep
+    from ..checks import paper_checks
+    from ..edges import row_ends
 
     for phi, fig in ((0.05, "phase005"), (0.10, "phase010")):
         cfg = stage_config(phi, ctx.quick)
@@ -44,7 +44,7 @@ def diagrams(ctx: StageContext) -> None:
                  f"(θ, ν0(0)) grid, θ ∈ [{cfg.theta[0]:g}, {cfg.theta[-1]:g}]°, ν0(0) ∈ "
                  f"[{cfg.nu0[0]:g}, {cfg.nu0[-1]:g}]: unstable (Re α2 > 0) grey, regimes A, B, "
                  "C, non-monotonic boundary dashed, θ contours thin, h < 1 hatched; right: "
-                 "the classification on the grid", source=f"fig {fig}")
+                 "the classification on the grid", source=figure(fig))
         ctx.progress(f"φ = {phi:g}: least dense flow of each θ contour")
         rows = range(0, cfg.shape[0], QUICK_ROW_STEP if ctx.quick else 1)
         ends = row_ends(ds, rows=rows)

@@ -1,10 +1,11 @@
-"""Stage ``steady``: steady flows of §3.2 (figs steadyphase005/010, steady, steady01) and the
+"""Stage ``steady``: steady flows of §3.2 (figures 2–5) and the
 paper's statements about them, each checked and reported with the value computed."""
 from __future__ import annotations
 
 import math
 
-from ..registry import StageContext, register_stage
+from ....report.registry import StageContext, register_stage
+from ..points import figure
 
 #: (θ grid, ν0 grid) of the maps. Quick: 1° × 14 floor densities; full: 0.25° × 40. The
 #: ends of the existence range are then refined by continuation beyond the map.
@@ -38,8 +39,7 @@ def _existence(ds, physical: bool):
     return float(th[rows[0]]), float(th[rows[-1]])
 
 
-@register_stage("steady", order=10, title="Steady flows (§3, figures steadyphase005/010, "
-                                            "steady, steady01)")
+@register_stage("steady", order=10, title="Steady flows (§3, figures 2–5)")
 def steady(ctx: StageContext) -> None:
     """Steady flows uniform along the slope: existence, profiles, Q0(ρ̄0), (h, ν̄) maps."""
     import warnings
@@ -53,12 +53,12 @@ def steady(ctx: StageContext) -> None:
 def _run(ctx: StageContext) -> None:
     import numpy as np
 
-    from ..._threads import limit_blas_threads
-    from ...closures import ChuteModel
-    from ...figures.steady import profiles_figure, steady_phase_figure
-    from ...steady import flux_minimum, solve_steady, steady_map
-    from ...steady.maps import existence_limit
-    from ...steady.family import separatrix
+    from ...._threads import limit_blas_threads
+    from ....closures import ChuteModel
+    from ....figures.steady import profiles_figure, steady_phase_figure
+    from ....steady import flux_minimum, solve_steady, steady_map
+    from ....steady.maps import existence_limit
+    from ....steady.family import separatrix
 
     limit_blas_threads(1)
     q = ctx.quick
@@ -77,7 +77,7 @@ def _run(ctx: StageContext) -> None:
         for th in (th_mono, th_min):
             r = flux_minimum(th, model, nu0_values=fam_nu)
             if r is None:
-                from ...steady import steady_family
+                from ....steady import steady_family
                 fam = steady_family(th, fam_nu, model)
             else:
                 fam = r.pop("family")
@@ -90,7 +90,7 @@ def _run(ctx: StageContext) -> None:
                             f"{th_grid[-1]:g}° in steps of {th_grid[1] - th_grid[0]:g}°) in the "
                             f"(h, ν̄) plane, non-monotonic density profiles grey; (b) Q0 vs ρ̄0 "
                             f"at θ = {th_mono:g}° (solid) and {th_min:g}° (dashed), minimum "
-                            f"marked. φ = {phi:g}.", source=f"fig {fig}")
+                            f"marked. φ = {phi:g}.", source=figure(fig))
 
         # existence range: the map's extreme rows, refined by following the branch in θ
         ctx.progress(f"φ = {phi:g}: ends of the existence range")
@@ -161,14 +161,14 @@ def _run(ctx: StageContext) -> None:
         rep.add_figure(png, f"Steady profiles at θ = {th_p:g}°, φ = {phi:g} for ν0(0) = "
                             + ", ".join(f"{v:g}" for v in nus_p)
                             + ": (a) density, (b) velocity, (c) temperature.",
-                       source=f"fig {figp}")
+                       source=figure(figp))
         if phi == 0.05:
             got = {f.nu0: f for f in flows if f is not None}
             low = [got.get(v) for v in (0.04, 0.05, 0.08, 0.10)]
             high = got.get(0.15)
             passed = all(f is not None and f.monotonic for f in low) and \
                 high is not None and not high.monotonic
-            rep.check("steady.monotonic_theta16", source="§3.2, fig steady(a)",
+            rep.check("steady.monotonic_theta16", source="§3.2, figure 3(a)",
                       statement="θ = 16°: ν0 decays monotonically for ν0(0) ≤ 0.10; for "
                                 "ν0(0) = 0.15 the density maximum is above the floor",
                       computed="; ".join(
@@ -193,7 +193,7 @@ def _run(ctx: StageContext) -> None:
                     "h within 30 % of 7 (read off the paper's figure)")
     except Exception as exc:  # noqa: BLE001
         ok, computed = False, f"separatrix not found: {exc}"
-    rep.check("steady.separatrix_phi0.05", source="§3.2, fig steadyphase005(a)",
+    rep.check("steady.separatrix_phi0.05", source="§3.2, figure 2(a)",
               statement="The (h, ν̄) contours separate near h ≈ 7 around θ ≈ 15°: θ ≤ 14° "
                         "reach h → 0 as ν̄ decreases, θ ≥ 15° diverge",
               computed=computed, passed=ok)
@@ -210,7 +210,7 @@ def _run(ctx: StageContext) -> None:
             d = max(abs(getattr(a, k) - getattr(b, k)) / abs(getattr(b, k)) for k in keys)
             worst = max(worst, d)
             lines.append(f"φ = {phi:g}, θ = {th:g}°, ν0(0) = {nu0:g}, {label}: {d:.1e}")
-    rep.check("steady.convergence", source="issue 2 (convergence requirement)",
+    rep.check("steady.convergence", source="§3.1 (numerical method): chuteflow's accuracy requirement",
               statement="The steady quantities are stable to ≥ 8 significant digits when the "
                         "tolerances are tightened",
               computed=f"largest relative change of u0(0), T0(0), h, ν̄, ρ̄0, Q0, y_max: "

@@ -1,4 +1,4 @@
-"""Reproduction stages, one module per part of the paper.
+"""Reproduction stages of Mitarai & Nakanishi (2004), one module per part of the paper.
 
 Each module registers its stage(s) with :func:`chuteflow.report.register_stage` when
 imported. To add a stage, write ``stages/NAME.py`` and add ``"NAME"`` to

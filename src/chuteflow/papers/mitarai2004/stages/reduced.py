@@ -1,4 +1,4 @@
-"""Stage ``reduced``: the 1D model of §5.1.2 (fig phaseoned) and its nonlinear density waves
+"""Stage ``reduced``: the 1D model of §5.1.2 (figure 15) and its nonlinear density waves
 (§5.2): diagrams beside the full model's, growth rates, mass conservation, L_c vs the MD."""
 from __future__ import annotations
 
@@ -6,9 +6,9 @@ import math
 import warnings
 from pathlib import Path
 
-import numpy as np
 
-from ..registry import StageContext, register_stage
+from ....report.registry import StageContext, register_stage
+from ..points import REDUCED_SHAPE
 
 #: Reference state of the wave pictures: unstable with a finite k_c (L_c ≈ 14 σ).
 WAVE_THETA, WAVE_NU0 = 16.0, 0.12
@@ -23,14 +23,14 @@ def _full_diagram(ctx: StageContext, phi: float):
         return shared[phi]
     path = Path(ctx.out) / "diagrams" / f"diagram_phi{phi:g}.nc"
     if path.exists():
-        from ...sweep import load_sweep
+        from ....sweep import load_sweep
 
         return load_sweep(path)
     return None
 
 
 @register_stage("reduced", order=50,
-                title="Reduced 1D model and density waves (§5.1.2, fig phaseoned; §5.2)")
+                title="Reduced 1D model and density waves (§5.1.2, figure 15; §5.2)")
 def reduced(ctx: StageContext) -> None:
     """The 1D model: stability diagrams, linear theory checks and nonlinear waves."""
     with warnings.catch_warnings():
@@ -40,11 +40,10 @@ def reduced(ctx: StageContext) -> None:
 
 
 def _diagrams(ctx: StageContext) -> None:
-    from ...figures.reduced import plot_phase_diagrams, save
-    from ...reduced import agreement, reduced_diagram
-    from ...reduced.diagram import FULL_SHAPE, QUICK_SHAPE
+    from ....figures.reduced import plot_phase_diagrams, save
+    from ....reduced import agreement, reduced_diagram
 
-    shape = QUICK_SHAPE if ctx.quick else FULL_SHAPE
+    shape = REDUCED_SHAPE[ctx.quick]
     reds, fulls, agrs = [], [], []
     for phi in (0.05, 0.10):
         full = _full_diagram(ctx, phi)
@@ -78,7 +77,7 @@ def _diagrams(ctx: StageContext) -> None:
               "original model'"
         if agr is None:
             ctx.report.check(
-                f"reduced.agreement_phi{phi:g}", source="§5.1.2, fig phaseoned vs phase005/010",
+                f"reduced.agreement_phi{phi:g}", source="§5.1.2, figure 15 vs figures 6/12",
                 statement=src, passed=None,
                 computed="not compared: no full-model diagram of stage 'diagrams' in this run "
                          "(run it first: chuteflow reproduce --stage diagrams --stage reduced)")
@@ -88,7 +87,7 @@ def _diagrams(ctx: StageContext) -> None:
             recall = agr["both_unstable"] / n_full if n_full else math.nan
             n_stable = agr["both_stable"] + agr["only_1d_unstable"]
             ctx.report.check(
-                f"reduced.agreement_phi{phi:g}", source="§5.1.2, fig phaseoned vs phase005/010",
+                f"reduced.agreement_phi{phi:g}", source="§5.1.2, figure 15 vs figures 6/12",
                 statement=src + " (taken as: the 1D criterion finds ≥ 90 % of the full model's "
                                 "unstable grid points)",
                 computed=f"{100 * frac:.0f} % of {agr['compared']} common grid points "
@@ -107,7 +106,7 @@ def _diagrams(ctx: StageContext) -> None:
              "0.10 (right): unstable by the criterion (ρ̄U')² > (ρ̄T̄)' grey, unstable at every "
              "wavelength ((ρ̄T̄)' < 0) dark grey, non-monotonic boundary dashed; second row "
              "(when stage 'diagrams' ran): the full model, Re α₂ > 0; red ×: classified "
-             "differently.", source="fig phaseoned")
+             "differently.", source="figure 15")
 
 
 def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
@@ -122,7 +121,7 @@ def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
     bound = abs(coarse - ana) / 3.3  # second-order convergence of the discrete rate
     ok = abs(rate - disc) <= 1e-6 and abs(rate - ana) <= bound + 1e-6
     ctx.report.check(
-        "reduced.growth_rate", source="§5.1.2, labels condition / disp-oned",
+        "reduced.growth_rate", source="§5.1.2, eqs (5.12) / (5.14)",
         statement="Small perturbations grow at the linear rate Re α(k) of the 1D model.",
         computed=f"θ = {rm.theta:g}°, ν0(0) = {coef.F:.3g}, mode k = {k:.4g} on L = {L:g}, "
                  f"N = {N}: measured {rate:.6g}, discrete linear {disc:.6g}, 2×2 relation "
@@ -132,9 +131,9 @@ def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
 
 
 def _waves(ctx: StageContext) -> None:
-    from ...closures import ChuteModel
-    from ...figures.reduced import plot_functions, plot_spacetime, save
-    from ...reduced import WaveSolver, growth_rate_fit, reduced_model, simulate
+    from ....closures import ChuteModel
+    from ....figures.reduced import plot_functions, plot_spacetime, save
+    from ....reduced import WaveSolver, growth_rate_fit, reduced_model, simulate
 
     ctx.progress(f"1D model at θ = {WAVE_THETA:g}°")
     rm = reduced_model(WAVE_THETA, ChuteModel(), nu0_min=0.04 if ctx.quick else 5e-3)
@@ -142,7 +141,7 @@ def _waves(ctx: StageContext) -> None:
     ctx.report.add_figure(
         png, f"The 1D model at θ = {WAVE_THETA:g}°, φ = 0.05: F, T̄, a, U, the flux q0 = ρ̄U "
              "beside the full model's Q0 (they differ: §5.1.2 footnote) and the criterion.",
-        source="labels onedv, oneaandu, criterion")
+        source="eqs (5.10), (5.11), (5.13)")
     acc = rm.accuracy
     ctx.report.check(
         "reduced.interpolation", source="§5.1.2 (F, T̄ from the steady family)",
@@ -169,7 +168,7 @@ def _waves(ctx: StageContext) -> None:
              f"status: {ds.attrs['status']}.", source="§5.2")
     drift = max(float(ds.attrs["mass_drift"]), float(mode_run.attrs["mass_drift"]))
     ctx.report.check(
-        "reduced.mass", source="label conti-one",
+        "reduced.mass", source="eq. (5.6)",
         statement="The 1D continuity equation conserves the mass ∫ρ̄ dx.",
         computed=f"max relative mass change {drift:.1e} over both runs (round-off: ≤ 1e-13)",
         passed=drift <= 1e-13)
@@ -197,7 +196,7 @@ def _waves(ctx: StageContext) -> None:
     st = simulate(rm14, 100.0, rho0=c14.rho0, n_cells=256, amplitude=1e-3, n_out=60)
     a14 = st["amplitude"].values
     ctx.report.check(
-        "reduced.stable_decays", source="label criterion",
+        "reduced.stable_decays", source="eq. (5.13)",
         statement="Where (ρ0U')² < (ρ0T̄)' perturbations decay.",
         computed=f"θ = 14°, ν0(0) = 0.1 (criterion {c14.criterion_margin:+.3g}): max|ρ̄ − ρ0| "
                  f"{a14[0]:.2g} → {a14[-1]:.2g} at t = {float(st['t'][-1]):.4g} "
@@ -218,7 +217,7 @@ def _lc_check(ctx: StageContext, rm, coef, simulate) -> None:
         out[f] = (L, a[-1] / a[0], float(ds["growth_discrete"].values[0]))
     ok = out[0.8][1] < 1e-2 and out[1.25][1] > 1e2
     ctx.report.check(
-        "reduced.L_c_simulation", source="label condition (ERRATA 4), §5.2",
+        "reduced.L_c_simulation", source="eq. (5.12) (docs/errata.md, item 4), §5.2",
         statement="Waves grow only on slopes longer than the critical length L_c = 2π/k_c.",
         computed=f"θ = {rm.theta:g}°, ν0(0) = {coef.F:.3g}, L_c = {coef.L_c:.4g}σ: at L = "
                  f"{out[0.8][0]:.3g}σ (0.8 L_c) the amplitude changes ×{out[0.8][1]:.2g} by "

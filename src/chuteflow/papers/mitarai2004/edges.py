@@ -10,12 +10,15 @@ least dense flow reached with the sweep's own point functions.
 """
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
 
-from ..errors import ChuteflowError
-from .points import Point, point_function
+from ...errors import ChuteflowError
+from ...steady import solve_steady, steady_family
+from ...sweep.config import SweepConfig
+from ...sweep.points import Point, point_function
 
 __all__ = ["row_ends"]
 
@@ -57,11 +60,6 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
         sign cross-check), ``how`` ("grid", "bisection", "below grid", or "grid, no flow found
         below": the contour could not be followed below the grid), and ``error`` if none.
     """
-    import json
-
-    from ..steady import solve_steady, steady_family
-    from .config import SweepConfig
-
     cfg = SweepConfig.from_dict(json.loads(ds.attrs["config_json"]))
     specs = {json.loads(s)["name"]: json.loads(s) for s in cfg.metrics}
     fns = [point_function(specs[name]) for name in ("steady", "kinematic", "longwave")]

@@ -1,26 +1,25 @@
-"""Stage ``stability``: linear stability of the steady flows (§4.2, figs disp, dispmag,
-disp-AC, disp01, eigens, eigenu, eigenu01) and the paper's statements about it, each checked
+"""Stage ``stability``: linear stability of the steady flows (§4.2, figures 7–11,
+13, 14) and the paper's statements about it, each checked
 against the computed dispersion relations, long-wave coefficients and eigenfunctions.
 
-Points of the paper (θ in degrees, ν0(0), φ): P1 (16, 0.05, 0.05), P2 (16, 0.08, 0.05),
-P3 (16, 0.10, 0.05), P4 (14, 0.05, 0.05), P5 (17, 0.10, 0.05); Q1, Q2, Q3 (20, 0.10 / 0.15 /
-0.17, 0.10). Quick mode samples each dispersion relation at ~15 wavenumbers, full mode at ~50
+The paper's points P1–P5, Q1–Q3 are those of :mod:`chuteflow.papers.mitarai2004.points`.
+Quick mode samples each dispersion relation at ~15 wavenumbers, full mode at ~50
 and cross-checks every point by dense QZ.
 """
 from __future__ import annotations
 
 import math
 
-from ..registry import StageContext, register_stage
+from ....report.registry import StageContext, register_stage
+from ..points import PAPER_UNSTABLE
+from ..points import POINTS as PAPER_POINTS
 
-#: name → (θ, ν0(0), φ, k_max of its dispersion figure). k_max covers the unstable band and
-#: the decay beyond it (k_c: P1 0.0071, P4 0.0019, P5 0.0065, Q3 0.0045).
-POINTS = {"P1": (16.0, 0.05, 0.05, 0.02), "P2": (16.0, 0.08, 0.05, 0.03),
-          "P3": (16.0, 0.10, 0.05, 0.03), "P4": (14.0, 0.05, 0.05, 0.004),
-          "P5": (17.0, 0.10, 0.05, 0.015), "Q1": (20.0, 0.10, 0.10, 0.02),
-          "Q2": (20.0, 0.15, 0.10, 0.01), "Q3": (20.0, 0.17, 0.10, 0.01)}
-#: The paper's verdicts (§4.2): unstable (True) or stable for all k (False); Q1, Q2 not stated.
-PAPER_UNSTABLE = {"P1": True, "P2": False, "P3": False, "P4": True, "P5": True, "Q3": True}
+#: k_max of each point's dispersion figure: it covers the unstable band and the decay beyond
+#: it (k_c: P1 0.0071, P4 0.0019, P5 0.0065, Q3 0.0045).
+K_MAX = {"P1": 0.02, "P2": 0.03, "P3": 0.03, "P4": 0.004, "P5": 0.015, "Q1": 0.02,
+         "Q2": 0.01, "Q3": 0.01}
+#: name → (θ, ν0(0), φ, k_max of its dispersion figure), from :data:`.points.POINTS`.
+POINTS = {name: (p.theta, p.nu0, p.roughness, K_MAX[name]) for name, p in PAPER_POINTS.items()}
 #: Figures: label → (points, paper figure number, caption head).
 DISP_FIGURES = {"disp": (("P1", "P2", "P3"), 7, "φ = 0.05, θ = 16°: P1, P2, P3"),
                 "disp-AC": (("P4", "P5"), 9, "φ = 0.05: P4 (regime A), P5 (regime C)"),
@@ -53,8 +52,8 @@ def _k_grid(k_max: float, quick: bool):
                                      np.geomspace(1e-4, 0.1 * k_max, n_geo)]))
 
 
-@register_stage("stability", order=20, title="Linear stability (§4.2, figures disp, dispmag, "
-                                               "disp-AC, disp01, eigens, eigenu, eigenu01)")
+@register_stage("stability", order=20, title="Linear stability (§4.2, figures 7–11, 13 "
+                                               "and 14)")
 def stability(ctx: StageContext) -> None:
     """Dispersion relations, long-wave coefficients and eigenfunctions at P1–P5, Q1–Q3."""
     import warnings
@@ -78,11 +77,11 @@ def _fmt_alpha(a: complex) -> str:
 def _run(ctx: StageContext) -> None:
     import numpy as np
 
-    from ..._threads import limit_blas_threads
-    from ...closures import ChuteModel
-    from ...longwave import longwave
-    from ...stability import crossings, dispersion
-    from ...steady import solve_steady
+    from ...._threads import limit_blas_threads
+    from ....closures import ChuteModel
+    from ....longwave import longwave
+    from ....stability import crossings, dispersion
+    from ....steady import solve_steady
 
     limit_blas_threads(1)
     q, rep = ctx.quick, ctx.report
@@ -140,7 +139,7 @@ def _run(ctx: StageContext) -> None:
 
 
 def _dispersion_figures(ctx, R):
-    from ...figures.stability import dispersion_figure
+    from ....figures.stability import dispersion_figure
 
     for label, (names, num, head) in DISP_FIGURES.items():
         panels = [(n, R.disp[n]) for n in names if n in R.disp]
@@ -155,15 +154,15 @@ def _dispersion_figures(ctx, R):
                                    "Every point passes the paper's tests (eigenvalue change "
                                    "< 1e-7 between resolutions, Chebyshev tail < 1e-7) unless "
                                    "drawn as a red cross.",
-                              id=label, source=f"figure {num}, fig:{label}")
+                              id=label, source=f"figure {num}")
 
 
 def _magnification(ctx, R):
-    """Figure 8 (dispmag): P1 near k = 0 with α2 k² and the slope −dQ0/dρ̄0."""
+    """Figure 8: P1 near k = 0 with α2 k² and the slope −dQ0/dρ̄0."""
     import numpy as np
 
-    from ...figures.stability import magnification_figure
-    from ...stability import dispersion
+    from ....figures.stability import magnification_figure
+    from ....stability import dispersion
 
     if "P1" not in R.lw:
         return
@@ -173,7 +172,7 @@ def _magnification(ctx, R):
     try:
         ds = dispersion(R.flows["P1"], ks, strict=False)
     except Exception as exc:  # noqa: BLE001
-        ctx.report.check("stability.dispmag_computed", source="fig dispmag",
+        ctx.report.check("stability.dispmag_computed", source="figure 8",
                          statement="The dispersion relation of P1 near k = 0 can be computed.",
                          computed=f"{type(exc).__name__}: {exc}", passed=False)
         return
@@ -187,8 +186,8 @@ def _magnification(ctx, R):
                                f"the long-wave Re α2 k² (α2 = {_fmt_alpha(lw.alpha2)}, "
                                f"N = {lw.n}) dashed; (b) Im α with the slope −dQ0/dρ̄0 = "
                                f"{-lw.dQ_drho:.6g} dashed; (c) Re α/k² against k: the k² "
-                               "regime ends near k ~ 1e-5 (ERRATA, numerical notes).",
-                         id="dispmag", source="figure 8, fig:dispmag")
+                               "regime ends near k ~ 1e-5 (docs/errata.md, numerical notes).",
+                         id="dispmag", source="figure 8")
 
 
 def _sampled_max(ds):
@@ -212,7 +211,7 @@ def _stability_verdicts(ctx, R):
         kc = ds.attrs.get("k_c")
         k, re = ds.k.values, ds.alpha_re.values
         if kc is None:
-            rep.check("stability.P1_kc", source="§4.2, fig disp(a)",
+            rep.check("stability.P1_kc", source="§4.2, figure 7(a)",
                       statement="P1 is unstable for 0 < k ≤ k_c with k_c ≈ 0.007",
                       computed=f"no unstable band 0 < k < k_c found (crossings "
                                f"{R.kc.get('P1')})", passed=False)
@@ -222,7 +221,7 @@ def _stability_verdicts(ctx, R):
             shape = bool(np.all(re[band] > 0) and np.all(re[above] < 0))
             lam = 2 * math.pi / kc
             ok_k = abs(kc - KC_PAPER) <= KC_TOL
-            rep.check("stability.P1_kc", source="§4.2, fig disp(a)",
+            rep.check("stability.P1_kc", source="§4.2, figure 7(a)",
                       statement="P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05) is unstable for "
                                 "0 < k ≤ k_c with k_c ≈ 0.007",
                       computed=f"k_c = {kc:.6g} (Brent on the tracked branch; paper 0.007, "
@@ -233,7 +232,7 @@ def _stability_verdicts(ctx, R):
                                f"{'yes' if shape else 'no'}",
                       passed=ok_k and shape,
                       detail="Moving the top from ν0 = 1e-7 to 1e-13 shifts k_c by ~0.8 % "
-                             "(ERRATA); the paper's value has one significant digit.")
+                             "(docs/errata.md); the paper's value has one significant digit.")
             rel = KC_TOL / KC_PAPER
             rep.add_checkpoint(_compare("stability.P1_lambda_c", "§4.2",
                                         "critical wavelength λ_c = 2π/k_c ≈ 900 diameters",
@@ -248,7 +247,7 @@ def _stability_verdicts(ctx, R):
         re_small = float(small.alpha_re.values[0]) if small is not None else math.nan
         ok = mx < 0 and re_small < 0 and (lw is None or lw.alpha2.real < 0)
         th, nu0, phi, k_max = POINTS[name]
-        rep.check(f"stability.{name}_stable", source="§4.2, fig disp(b, c)",
+        rep.check(f"stability.{name}_stable", source="§4.2, figure 7(b, c)",
                   statement=f"{name} (θ = {th:g}°, ν0(0) = {nu0:g}) is stable for all k",
                   computed=(f"largest sampled Re α = {mx:.4e} (k = {kmx:.3g}) over "
                             f"{int((R.disp[name].k > 0).sum())} k in (0, {k_max:g}]; Re α = "
@@ -273,13 +272,13 @@ def _stability_verdicts(ctx, R):
                 + (f"unstable band 0 < k < k_c = {kc:.5g} (λ_c = {2 * math.pi / kc:.4g})"
                    if kc else f"crossings of Re α = 0: {list(R.kc.get(name, ()))}"))
         if name in PAPER_UNSTABLE:
-            src = "§4.2, fig disp-AC" if name.startswith("P") else "§4.2, fig disp01(c)"
+            src = "§4.2, figure 9" if name.startswith("P") else "§4.2, figure 13(c)"
             rep.check(f"stability.{name}_unstable", source=src,
                       statement=f"{name} (θ = {th:g}°, ν0(0) = {nu0:g}, φ = {phi:g}) is "
                                 "unstable against long-wavelength perturbations",
                       computed=text, passed=bool(unstable and kc))
         else:
-            rep.check(f"stability.{name}_verdict", source="§4.2, fig disp01",
+            rep.check(f"stability.{name}_verdict", source="§4.2, figure 13",
                       statement=f"{name} (θ = {th:g}°, ν0(0) = {nu0:g}, φ = {phi:g}): "
                                 "dispersion relation shown near the boundary of regime C "
                                 "(stability not stated in the text)",
@@ -299,7 +298,7 @@ def _stability_verdicts(ctx, R):
 
 
 def _compare(id, source, statement, value, expected, rtol, name):
-    from ..report import Checkpoint
+    from ....report.report import Checkpoint
 
     return Checkpoint.compare(id, source=source, statement=statement, value=value,
                               expected=expected, rtol=rtol, name=name)
@@ -316,7 +315,7 @@ def _small_k(ctx, R):
         k, re, im = ds.k.values, ds.alpha_re.values, ds.alpha_im.values
         p = math.log(re[1] / re[0]) / math.log(k[1] / k[0]) if re[0] * re[1] > 0 else math.nan
         lw = R.lw.get(name)
-        if name in ("P1", "P4", "P5"):  # the paper's statement (figs dispmag, disp-AC)
+        if name in ("P1", "P4", "P5"):  # the paper's statement (figures 8, 9)
             ok = abs(p - 2) <= EXPONENT_TOL
             ok_all &= ok
         lines.append(f"{name}: d ln Re α/d ln k = {p:.4f} at k = {k[0]:.2g}–{k[1]:.2g}, "
@@ -330,7 +329,7 @@ def _small_k(ctx, R):
             phase_lines.append(f"{name}: {c:.8g} vs −dQ0/dρ̄0 = {-lw.dQ_drho:.8g} "
                                f"(rel. {err:.1e})")
     if lines:
-        rep.check("stability.k2", source="§4.2, figs dispmag, disp-AC",
+        rep.check("stability.k2", source="§4.2, figures 8, 9",
                   statement="Re α grows quadratically in k for small k (P1, P4, P5)",
                   computed="; ".join(lines) + f". Pass: |exponent − 2| ≤ {EXPONENT_TOL:g} at "
                            "P1, P4, P5 (others reported)",
@@ -339,12 +338,12 @@ def _small_k(ctx, R):
                          "where the eigenvalues' drift is < 1e-11. Re α/k² there is the "
                          "eigenvalues' view of α2; the perturbative α2 is in the note below.")
     if phase_lines:
-        rep.check("stability.phase_velocity", source="§4.2, fig dispmag(b); App. B, eq:vp0",
-                  statement="Im α / k → −dQ0/dρ̄0 as k → 0 (slope of Im α in fig dispmag)",
+        rep.check("stability.phase_velocity", source="§4.2, figure 8(b); App. B, eq. (B 2)",
+                  statement="Im α / k → −dQ0/dρ̄0 as k → 0 (slope of Im α in figure 8)",
                   computed="Im α/k extrapolated to k = 0 (quadratic through k = 1e-6 … 3.4e-6): "
                            + "; ".join(phase_lines) + f". Tolerance {PHASE_RTOL:g} relative",
                   passed=phase_ok,
-                  detail="dQ0/dρ̄0 from the exact tangent of the steady family (eq:dqdh). The "
+                  detail="dQ0/dρ̄0 from the exact tangent of the steady family (eq. B 6). The "
                          "identity holds for the continuous problem; ending the layer at "
                          "ν0 = 1e-9 moves the limit by ~1e-5 relative (P1).")
 
@@ -384,7 +383,7 @@ def _longwave_signs(ctx, R):
                      "k = 0) against the eigenvalues at k = 1e-6: " + "; ".join(table) + ". "
                      "Where the two α2 differ by more than the convergence estimate, the "
                      "perturbative value is sensitive to the near-neutral continuum of the "
-                     "dilute top (ERRATA, numerical notes); only the signs are checked.")
+                     "dilute top (docs/errata.md, numerical notes); only the signs are checked.")
 
 
 def _convergence(ctx, R):
@@ -392,7 +391,7 @@ def _convergence(ctx, R):
     point, an independent solve at a fixed finer N, and the whole spectrum by dense QZ."""
     import numpy as np
 
-    from ...stability import least_stable, spectrum
+    from ....stability import least_stable, spectrum
 
     rep = ctx.report
     if R.disp:
@@ -460,8 +459,8 @@ def _convergence(ctx, R):
 
 
 def _eigenfunctions(ctx, R):
-    from ...figures.stability import eigenfunction_diagnostics, eigenfunction_figure
-    from ...stability import least_stable
+    from ....figures.stability import eigenfunction_diagnostics, eigenfunction_figure
+    from ....stability import least_stable
 
     rep = ctx.report
     diag = {}
@@ -480,14 +479,14 @@ def _eigenfunctions(ctx, R):
                             f"λ = {2 * math.pi / K_EIGEN:.0f}: (a) Re[ν̂ e^{{ikx}}] (brighter = "
                             "positive, dashed: zero) with the velocity perturbation as arrows "
                             "(û/λ, v̂), whose convergence is the true ∇·u1 < 0; (b) Re[T̂ e^{ikx}]"
-                            " (dotted: ν1 = 0)" + (f"; (c) (a) magnified near the floor"
+                            " (dotted: ν1 = 0)" + ("; (c) (a) magnified near the floor"
                                                    if mag else "")
                             + ". Scaled so that max|ν̂| = 1; y up to where ν0 is a tenth of "
-                              "its peak.", id=label, source=f"figure {num}, fig:{label}")
+                              "its peak.", id=label, source=f"figure {num}")
     # T̂ < 0 where ν̂ > 0 (P1, P3)
     for name in ("P1", "P3"):
         d = diag[name]
-        rep.check(f"stability.{name}_temperature", source="§4.2, figs eigenu(b), eigens(b)",
+        rep.check(f"stability.{name}_temperature", source="§4.2, figures 11(b), 10(b)",
                   statement=f"{name}: the temperature perturbation is negative where the "
                             "density perturbation is positive",
                   computed=f"|T̂||ν̂|-weighted mean cos(arg T̂ − arg ν̂) = "
@@ -497,10 +496,10 @@ def _eigenfunctions(ctx, R):
                   passed=d["temperature_density"] < 0 and d["temperature_at_peak"] < 0)
     # grains flow into the positive (P1, Q3) / negative (P3) density region
     for name, sign, fig in (("P1", 1, "eigenu(a)"), ("P3", -1, "eigens(a)"),
-                            ("Q3", 1, "eigenu01(a, c)")):
+                            ("Q3", 1, "figure 14(a, c)")):
         d = diag[name]
         where = "positive" if sign > 0 else "negative"
-        rep.check(f"stability.{name}_inflow", source=f"§4.2, fig {fig}",
+        rep.check(f"stability.{name}_inflow", source=f"§4.2, {fig}",
                   statement=f"{name}: the grains flow into the region of {where} density "
                             "perturbation" + (" (the perturbation decays)" if sign < 0 else
                                               " (the perturbation grows)"),
@@ -509,7 +508,7 @@ def _eigenfunctions(ctx, R):
                            f"region); with the vertical advection {d['vertical_advection']:.3e} "
                            f"it adds up to Re α = {d['growth_rate']:.4e}",
                   passed=sign * d["compression"] > 0,
-                  detail="From the linearised mass balance (eq:leqnu) times ν̂*, integrated: "
+                  detail="From the linearised mass balance (eq. A 1) times ν̂*, integrated: "
                          "Re α ∫|ν̂|² = ∫Re[ν̂*(−ν0∇·û)] + ∫Re[ν̂*(−ν0'v̂)]; the first term is "
                          "the ν0-weighted convergence of the velocity perturbation onto the "
                          "density perturbation.")
@@ -519,14 +518,14 @@ def _eigenfunctions(ctx, R):
         c = diag[name]["floor_velocity_density"]
         ok &= sign * c > 0
         parts.append(f"{name}: cos(arg û(0) − arg ν̂(0)) = {c:.3f}")
-    rep.check("stability.floor_velocity", source="§4.2, figs eigens, eigenu, eigenu01",
+    rep.check("stability.floor_velocity", source="§4.2, figures 10, 11, 14",
               statement="At the floor the velocity perturbation is negative where the density "
                         "perturbation is positive at P1, P3, and positive at Q3 (grains move "
                         "faster where they are denser)",
               computed="; ".join(parts), passed=ok)
     _regimes_a_c(ctx, R, diag)
     worst = max(d["identity_residual"] for d in diag.values())
-    rep.check("stability.eigen_mass_balance", source="App. A, eq:leqnu",
+    rep.check("stability.eigen_mass_balance", source="App. A, eq. (A 1)",
               statement="The eigenfunctions satisfy the linearised mass balance: "
                         "Re α ∫|ν̂|² = ∫Re[ν̂*(−ν0∇·û)] + ∫Re[ν̂*(−ν0'v̂)]",
               computed=f"largest relative residual {worst:.1e} over P1, P3, Q3 (tolerance "
@@ -539,8 +538,8 @@ def _regimes_a_c(ctx, R, diag):
     """§4.2 on P4 (regime A) and P5 (regime C), whose eigenfunctions the paper describes but
     does not show: the dense parts move faster (unlike P1, regime B), and the grains flow into
     the region of positive density perturbation as at P1."""
-    from ...figures.stability import eigenfunction_diagnostics
-    from ...stability import least_stable
+    from ....figures.stability import eigenfunction_diagnostics
+    from ....stability import least_stable
 
     rep = ctx.report
     d, ks = {}, {}

@@ -10,14 +10,14 @@ import math
 
 import numpy as np
 
-from .classify import REGIMES, regime_summary
+from ...sweep.classify import REGIMES, regime_summary
+from .points import PAPER_UNSTABLE
 
 __all__ = ["paper_checks", "check_regimes_placed", "check_low_density_unstable",
            "check_C_monotonicity", "check_markers", "check_finite_k"]
 
-#: Paper's stability of the marked points (§4.2: P1 in B, P4 in A, P5 in C are unstable,
-#: P2 and P3 stable; Q3 unstable).
-MARKER_EXPECT = {"P1": True, "P2": False, "P3": False, "P4": True, "P5": True, "Q3": True}
+#: Paper's stability of the marked points (:data:`~.points.PAPER_UNSTABLE`).
+MARKER_EXPECT = PAPER_UNSTABLE
 
 
 def _phi(ds):
@@ -37,7 +37,7 @@ def check_regimes_placed(ds) -> dict:
         A, B, C = s["A"], s["B"], s["C"]
         ok = (A["h_median"] < B["h_median"] and A["h_median"] < C["h_median"]
               and C["nu_mean_max"] > A["nu_mean_max"] and C["nu_mean_max"] > B["nu_mean_max"])
-    return {"id": f"diagrams.phi{_phi(ds):g}.regimes", "source": "§4.2, fig phase005/phase010",
+    return {"id": f"diagrams.phi{_phi(ds):g}.regimes", "source": "§4.2, figures 6/12",
             "statement": "three unstable regimes: A (small h, small ν̄), B (large h, small ν̄), "
                          "C (large h, large ν̄)",
             "computed": txt + " — tested: median h of A below those of B and C, largest ν̄ "
@@ -48,9 +48,9 @@ def check_regimes_placed(ds) -> dict:
 def check_low_density_unstable(ds, ends=None) -> dict:
     """Along each θ row, the least dense flow is unstable in regime A or B.
 
-    ``ends`` (from :func:`chuteflow.sweep.edges.row_ends`) follows each contour beyond the
+    ``ends`` (from :func:`chuteflow.papers.mitarai2004.edges.row_ends`) follows each contour beyond the
     grid to its least dense flow; without it the least dense grid flow of each row is used.
-    Rows whose least dense flow has h < 1 are reported but not judged (paper, fig phase005:
+    Rows whose least dense flow has h < 1 are reported but not judged (paper, figure 6:
     "the region of h < 1 ... was not examined"), nor rows where the two estimates of the
     sign of Re α2 disagree (``longwave_consistent``: the sign is not determined there), nor
     rows stable down to the grid's lowest ν0 whose contour could not be followed further
@@ -149,7 +149,7 @@ def check_markers(ds) -> list[dict]:
         if "marker_growth_max" in ds and np.isfinite(ds["marker_growth_max"].values[m]):
             extra = (f", max Re α on the k grid {ds['marker_growth_max'].values[m]:.3g} at "
                      f"k = {ds['marker_k_growth_max'].values[m]:.3g}")
-        out.append({"id": f"diagrams.{name}", "source": "§4.2, figs disp, disp-AC, disp01",
+        out.append({"id": f"diagrams.{name}", "source": "§4.2, figures 7, 9, 13",
                     "statement": f"{name} (θ = {th:g}°, ν0(0) = {nu:g}) is "
                                  f"{'unstable' if want else 'stable'}",
                     "computed": (f"Re α2 = {a2:.4g} → {'unstable' if u == 1 else 'stable'}"
@@ -203,7 +203,7 @@ def check_finite_k(ds) -> dict | None:
         txt += (f"; {failed} sampled points where the branch could not be tracked (listed in "
                 "the file's message)")
     return {"id": f"diagrams.phi{_phi(ds):g}.finite_k",
-            "source": "§4.2 (all unstable modes are long-wave), ERRATA numerical notes",
+            "source": "§4.2 (all unstable modes are long-wave), docs/errata.md, numerical notes",
             "statement": "no finite-k instability missed by the sign of Re α2 (dispersion "
                          "relation of the α(0) = 0 branch sampled on a k grid at a subset of "
                          "grid points and at the marked points)",
@@ -212,7 +212,7 @@ def check_finite_k(ds) -> dict | None:
 
 def paper_checks(ds, ends=None) -> list[dict]:
     """All checks that apply to this Dataset (needs the stability metrics); ``ends`` from
-    :func:`chuteflow.sweep.edges.row_ends` refines the low-density check."""
+    :func:`chuteflow.papers.mitarai2004.edges.row_ends` refines the low-density check."""
     if "regime" not in ds:
         return []
     out = [check_regimes_placed(ds), check_low_density_unstable(ds, ends)]
