@@ -56,10 +56,10 @@ def _ref_sign(theta, nu0, u, mat, rtol):
 
 
 def reference_verdict(theta, nu0, phi):
-    """(exists, u0(0)) from the reference ODEs: scan u0(0) = 1000, 1000/1.5, … 0.01, take
-    the first hot → cold change, bisect it to 1e-9 relative; a solution exists when a
-    trial there reaches the top (a bracket none of whose trials reach it is a separatrix,
-    e.g. a band packing to ν_m, not a solution)."""
+    """(exists, u0(0)) from the reference ODEs: scan u0(0) = 1000, 1000/1.5, … 0.01; at
+    each hot → cold change (from above) bisect to 1e-9 relative; the first change where a
+    trial reaches the top is the solution (a change none of whose trials reach it is a
+    separatrix, e.g. a band packing to ν_m, not a solution: the scan goes on)."""
     mat = ref.Material(phi=phi)
     prev = None
     with warnings.catch_warnings(), np.errstate(all="ignore"):
@@ -68,17 +68,16 @@ def reference_verdict(theta, nu0, phi):
             sign, _ = _ref_sign(theta, nu0, u, mat, 1e-6)
             if prev is not None and prev[1] > 0 > sign:
                 lo, hi = u, prev[0]
-                break
+                reached = False
+                while hi / lo > 1 + 1e-9:
+                    mid = math.sqrt(lo * hi)
+                    s, top = _ref_sign(theta, nu0, mid, mat, 1e-8)
+                    reached = reached or (top and hi / lo < 1 + 1e-6)
+                    lo, hi = (mid, hi) if s < 0 else (lo, mid)
+                if reached:
+                    return True, math.sqrt(lo * hi)
             prev = (u, sign)
-        else:
-            return False, math.nan
-        reached = False
-        while hi / lo > 1 + 1e-9:
-            mid = math.sqrt(lo * hi)
-            sign, top = _ref_sign(theta, nu0, mid, mat, 1e-8)
-            reached = reached or (top and hi / lo < 1 + 1e-6)
-            lo, hi = (lo, mid) if sign < 0 else (mid, hi)
-        return reached, math.sqrt(lo * hi)
+    return False, math.nan
 
 
 def _points(n, seed=20260909):

@@ -87,19 +87,20 @@ class SteadyODE:
                 "T": T, "T_y": T_y, "T_yy": 0.0}
 
     def rhs(self, y, z):
-        """d/dy of (ln ν0, u0, T0, T0')."""
-        s, u, T, T_y = z
-        nu = math.exp(s)
+        """d/dy of (ln ν0, u0, T0, T0'). Outside the closures' domain (trial stages of the
+        integrator) the result is inf/nan, which makes the integrator shorten its step."""
+        s, u, T, T_y = (np.float64(v) for v in z)
+        nu = np.exp(s)
         part = self.model.evaluate(nu, T)
         base = self._base(nu, u, T, T_y, part)
         # y-momentum (eq:steady2) is affine in ν0': R = R(ν0' = 0) + c ν0'
         r, c = self._ymom.evaluate(base, part, self.sin, self.cos)
-        nu_y = -float(r) / float(c[self._i_nu_y])
+        nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
         base["nu_y"] = nu_y
         # energy (eq:steady3, ERRATA 1) is affine in T0''
         r, c = self._energy.evaluate(base, part, self.sin, self.cos)
-        T_yy = -float(r) / float(c[self._i_T_yy])
-        return [nu_y / nu, float(base["u_y"]), T_y, T_yy]
+        T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
+        return [float(nu_y / nu), float(base["u_y"]), float(T_y), float(T_yy)]
 
     def floor_velocity(self, nu0: float, T0: float) -> float:
         """u0(0) from eq:bc1 (floor_x is linear in u0) given ν0(0) and T0(0)."""
@@ -328,17 +329,60 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
                                 kind=kind, reason=reason, shots=count[0],
                                 seconds=time.perf_counter() - t_start, **kw)
 
+    def refine(cold, hot):
+        """Brent on the signed miss in ln u0(0) at ``fine_rtol``; trials that do not reach
+        nu_top count as ±1. Every trial keeps its dense output: the closest one to the root
+        that reached the top is returned (None: a separatrix, see below)."""
+        lo, hi = math.log(cold.u_floor), math.log(hot.u_floor)
+        ends = {lo: cold, hi: hot}
+
+        def miss(x):
+            count[0] += 1
+            shot = shoot(ode, nu0, math.exp(x), nu_top=nu_top, rtol=fine_rtol, dense=True)
+            ends[x] = shot
+            if len(ends) > 14 and not any(sh.kind == "top" for sh in ends.values()):
+                raise _Separatrix
+            return shot.miss
+
+        try:
+            x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)
+        except (ValueError, RuntimeError, _Separatrix):
+            x = 0.5 * (lo + hi)
+        cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
+        hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
+        reached = [v for v, sh in ends.items()
+                   if sh.kind == "top" and sh.solution.sol is not None]
+        best = ends[min(reached, key=lambda v: abs(v - x))] if reached else None
+        nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
+        return best, (cold_u, hot_u), nu_peak
+
+    # the first hot → cold change coming down from u_max that brackets a solution; a change
+    # without a trial reaching nu_top is a separatrix (a discontinuity of the miss, e.g. a
+    # band packing to nu_max that either collapses or heats up above it), and the scan goes on
     prev = None
     signs = []
-    hot = cold = None
+    final = separatrix = None
     for u in trials:
         shot = trial(u)
         signs.append(shot.sign)
         if prev is not None and prev.sign > 0 > shot.sign:
-            hot, cold = prev, shot
-            break
+            best, bracket, nu_peak = refine(shot, prev)
+            if best is not None:
+                final = best
+                break
+            separatrix = separatrix or (bracket, nu_peak)
         prev = shot
-    if hot is None:
+    if final is None and separatrix is not None:
+        bracket, nu_peak = separatrix
+        packs = nu_peak > 0.95 * model.nu_max
+        return done("too_large" if packs else "no_sign_change", (
+            f"no steady flow at {where}: the change from a heating to a cooling layer at "
+            f"u0(0) ≈ {math.sqrt(bracket[0] * bracket[1]):.6g} is a separatrix, not a "
+            f"solution — no trial there reaches nu0 = {nu_top:g}"
+            + (f" (the density piles up to {nu_peak:.3g}, close to nu_max = "
+               f"{model.nu_max:g}): the angle is too large for this floor density"
+               if packs else "")), bracket=bracket)
+    if final is None:
         rng = f"u0(0) in [{u_min:g}, {u_max:g}]"
         if all(s > 0 for s in signs):
             return done("too_small", (
@@ -354,43 +398,7 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
         return done("no_sign_change", (
             f"no steady flow at {where}: shooting finds no change from a heating to a "
             f"cooling layer as u0(0) decreases over {rng}"))
-
-    # Brent on the signed miss in ln u0(0) at a tighter tolerance; trials that do not reach
-    # nu_top count as ±1. Every trial keeps its dense output: the closest one that reached
-    # the top is the Newton start.
-    lo, hi = math.log(cold.u_floor), math.log(hot.u_floor)
-    ends = {lo: cold, hi: hot}
-
-    def miss(x):
-        count[0] += 1
-        shot = shoot(ode, nu0, math.exp(x), nu_top=nu_top, rtol=fine_rtol, dense=True)
-        ends[x] = shot
-        if len(ends) > 14 and not any(sh.kind == "top" for sh in ends.values()):
-            raise _Separatrix
-        return shot.miss
-
-    try:
-        x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)
-    except (ValueError, RuntimeError, _Separatrix):
-        x = 0.5 * (lo + hi)
-    cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
-    hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
-    kw = {"bracket": (cold_u, hot_u), "u_floor": math.sqrt(cold_u * hot_u)}
-    reached = [v for v, sh in ends.items() if sh.kind == "top" and sh.solution.sol is not None]
-    if not reached:
-        # hot → cold without a trial that reaches nu_top: a separatrix (a discontinuity of
-        # the miss, not a root), e.g. a band packing to nu_max that either collapses or
-        # heats up above it. No solution of the steady problem reaches the top there.
-        nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
-        packs = nu_peak > 0.95 * model.nu_max
-        return done("too_large" if packs else "no_sign_change", (
-            f"no steady flow at {where}: the change from a heating to a cooling layer at "
-            f"u0(0) ≈ {kw['u_floor']:.6g} is a separatrix, not a solution — no trial "
-            f"there reaches nu0 = {nu_top:g}"
-            + (f" (the density piles up to {nu_peak:.3g}, close to nu_max = "
-               f"{model.nu_max:g}): the angle is too large for this floor density"
-               if packs else "")), **kw)
-    final = ends[min(reached, key=lambda v: abs(v - x))]
+    kw = {"bracket": bracket}
     kw["u_floor"] = final.u_floor
     y_max = final.y_end
     h = _thickness(final.solution, y_max)
