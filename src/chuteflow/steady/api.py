@@ -8,8 +8,8 @@ import numpy as np
 from ..closures import ChuteModel
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
-from .result import SteadyFlow, derived_quantities, spectral_tail
 from .existence import steady_existence
+from .result import SteadyFlow, derived_quantities, spectral_tail
 from .solver import _State, _validate, solve_state
 
 _KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")

@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -142,7 +143,7 @@ class Shot:
     kind: str  # "top" (reached nu_top), "hot" (never thinned out), "cold", "packed"
     dT_top: float  # T0' where ν0 = nu_top (nan if not reached)
     y_end: float
-    solution: object = field(default=None, repr=False)
+    solution: Any = field(default=None, repr=False)
 
     @property
     def miss(self) -> float:
@@ -177,8 +178,8 @@ def shoot(ode: SteadyODE, nu0: float, u_floor: float, *, nu_top: float = 1e-9,
         return z[0] - ln_pack
 
     for ev in (top, cold, packed, hot):
-        ev.terminal = True
-    top.direction = -1.0
+        ev.terminal = True  # type: ignore[attr-defined]  # read by solve_ivp
+    top.direction = -1.0  # type: ignore[attr-defined]
     with np.errstate(all="ignore"):
         sol = solve_ivp(ode.rhs, (0.0, y_cap), [math.log(nu0), u_floor, T0, T0p],
                         method="RK45", rtol=rtol, atol=1e-12, events=(top, cold, packed, hot),
@@ -239,7 +240,7 @@ class ExistenceVerdict:
     y_max: float = math.nan
     shots: int = 0
     seconds: float = 0.0
-    solution: object = field(default=None, repr=False, compare=False)
+    solution: Any = field(default=None, repr=False, compare=False)
 
     def starting_state(self, n: int = 64) -> _State:
         """The shot profile on n + 1 Chebyshev nodes of [0, y_max], as a Newton start."""
