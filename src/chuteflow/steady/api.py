@@ -87,8 +87,9 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     if not verdict.exists:
         raise NoSteadyFlowError(verdict.reason)
     m, cold = n, first
-    while verdict.solution is not None and m <= n_max:
+    while verdict.solution is not None and m <= (n_max if verdict.physical else n):
         # sharp dense bands need more nodes than n to be represented: double until it works
+        # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
         try:
             return _solve(theta, nu0, model, nu_top, m, rtol, n_max,
                           verdict.starting_state(m), min_thickness)
