@@ -121,6 +121,18 @@ def test_flow_found_where_cold_start_failed():
     assert f.convergence < 1e-8 and not f.monotonic
 
 
+def test_flow_found_where_old_code_stalled():
+    """θ = 15.8°, ν0(0) = 0.01 (φ = 0.05): the old solve_steady(continuation=False) stalled
+    ("Newton stalled with residual 5.9e-02", 20×20 grid of the report); now the flow
+    agrees with the independent shooting solution to 1e-9 (measured ~1e-11)."""
+    f = solve_steady(15.8, 0.01, continuation=False)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        s = ref.solve_by_shooting(15.8, 0.01, ref.Material())
+    for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"):
+        assert getattr(f, k) == pytest.approx(getattr(s, k), rel=1e-9), k
+
+
 def test_verdicts_name_the_case():
     """No sign change: every trial hot (12°, ν0(0) = 0.1: angle too small) or every trial
     cold (19°, 0.05: too large); a thin solution (14°, 0.045) is a solution but h < 1."""
