@@ -58,7 +58,7 @@ def _ref_sign(theta, nu0, u, mat, rtol):
 def reference_verdict(theta, nu0, phi):
     """(exists, u0(0)) from the reference ODEs: scan u0(0) = 1000, 1000/1.5, … 0.01; at
     each hot → cold change (from above) bisect to 1e-9 relative; the first change where a
-    trial reaches the top is the solution (a change none of whose trials reach it is a
+    trial at either end reaches the top (integrated at rtol 1e-11) is the solution (a change none of whose trials reach it is a
     separatrix, e.g. a band packing to ν_m, not a solution: the scan goes on)."""
     mat = ref.Material(phi=phi)
     prev = None
@@ -68,13 +68,12 @@ def reference_verdict(theta, nu0, phi):
             sign, _ = _ref_sign(theta, nu0, u, mat, 1e-6)
             if prev is not None and prev[1] > 0 > sign:
                 lo, hi = u, prev[0]
-                reached = False
                 while hi / lo > 1 + 1e-9:
                     mid = math.sqrt(lo * hi)
-                    s, top = _ref_sign(theta, nu0, mid, mat, 1e-8)
-                    reached = reached or (top and hi / lo < 1 + 1e-6)
+                    s, _ = _ref_sign(theta, nu0, mid, mat, 1e-8)
                     lo, hi = (mid, hi) if s < 0 else (lo, mid)
-                if reached:
+                # confirmed at rtol 1e-11: near ν_m a loose trial can reach the top spuriously
+                if any(_ref_sign(theta, nu0, u, mat, 1e-11)[1] for u in (lo, hi)):
                     return True, math.sqrt(lo * hi)
             prev = (u, sign)
     return False, math.nan
