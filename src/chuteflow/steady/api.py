@@ -97,8 +97,9 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
             raise
         except (NoSteadyFlowError, ConvergenceError) as exc:
             first = ConvergenceError(
-                f"{cold} — tried: the isothermal cold start, then Newton from the shooting "
-                f"profile ({verdict.reason}) starting at n = {n} … {m}, which failed: {exc}")
+                f"steady solver did not converge although shooting finds a solution — "
+                f"{verdict.reason}; tried Newton from the isothermal cold start ({cold}) and "
+                f"from the shooting profile starting at n = {n} … {m} ({exc})")
         m *= 2
     if not verdict.physical:
         raise NoSteadyFlowError(verdict.reason)
