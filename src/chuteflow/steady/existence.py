@@ -351,8 +351,11 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
             x = 0.5 * (lo + hi)
         cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
         hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
+        # a trial that solves the top condition eq:bcinf: T0' small on the scale of the
+        # layer (T0(y_max)/y_max); one far from it is a stray trial beside a separatrix
         reached = [v for v, sh in ends.items()
-                   if sh.kind == "top" and sh.solution.sol is not None]
+                   if sh.kind == "top" and sh.solution.sol is not None
+                   and abs(sh.dT_top) * sh.y_end < 1e-3 * float(sh.solution.y[2, -1])]
         best = ends[min(reached, key=lambda v: abs(v - x))] if reached else None
         nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
         return best, (cold_u, hot_u), nu_peak
