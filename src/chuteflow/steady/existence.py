@@ -20,7 +20,10 @@ the smallness of |T0'(y_max)| alone is also met by a thin cold layer as u0(0) �
 trajectories are not followed). No such sign change over the admissible range of u0(0) is a
 verdict: every trial hot (the layer cannot be kept cold enough to thin out: at small θ the
 thin cold layer has T0'(y_max) > 0), the angle is too small; every trial cold (the layer
-collapses or packs at any floor velocity), the angle is too large.
+collapses or packs at any floor velocity), the angle is too large. A hot → cold change
+across which no trial reaches ``nu_top`` is a separatrix (a jump of the miss, not a root:
+e.g. a band that packs to ν_m and then either collapses or heats up), not a solution.
+A solution thinner than one diameter (§3.2) is reported as such.
 
 The steady ODEs are not typed again here: ν0' follows from the y-momentum residual and T0''
 from the energy residual of :func:`chuteflow.equations.compiled_equations` (both are affine
@@ -280,10 +283,17 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
     """Decide whether a steady flow exists at (``theta``, ``nu0``) by a shooting scan.
 
     Trials u0(0) = u_max, u_max/ratio, … (down to u_min) are integrated from the floor at
-    loose tolerance and classified hot/cold (module docstring); the first hot → cold change
-    brackets the physical flow, which is then located by Brent's method on the signed miss
-    T0'(y_max) (±1 for trials that do not reach ``nu_top``) and shot once more with a dense
-    output that :meth:`ExistenceVerdict.starting_state` samples for Newton.
+    loose tolerance and classified hot/cold (module docstring). Each hot → cold change,
+    coming down from u_max, is refined by Brent's method on the signed miss T0'(y_max) (±1
+    for trials that do not reach ``nu_top``) at ``fine_rtol``; the first change where a
+    trial reaches ``nu_top`` with T0'(y_max) small (|T0'| y_max < 1e-3 T0(y_max)) is the
+    physical flow, and that trial's dense output is what
+    :meth:`ExistenceVerdict.starting_state` samples for Newton. A change where no trial
+    reaches the top is a separatrix (typically a dense band packing to ν_m that either
+    collapses or heats up above it), not a solution, and the scan goes on below it.
+
+    Cost: about 18 coarse trials plus 10–30 refining ones, 1–3 s per point on one core
+    (the trials call :meth:`ChuteModel.evaluate` at every step).
 
     Parameters
     ----------
