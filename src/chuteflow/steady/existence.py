@@ -278,7 +278,7 @@ def _thickness(sol, y_max) -> float:
 
 def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, *,
                      nu_top: float = 1e-9, u_range: tuple[float, float] = U_RANGE,
-                     ratio: float = 2.0, rtol: float = 1e-4, fine_rtol: float = 1e-8,
+                     ratio: float = 2.0, rtol: float = 1e-4, fine_rtol: float = 1e-6,
                      min_thickness: float = 1.0) -> ExistenceVerdict:
     """Decide whether a steady flow exists at (``theta``, ``nu0``) by a shooting scan.
 
