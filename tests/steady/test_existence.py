@@ -58,8 +58,9 @@ def _ref_sign(theta, nu0, u, mat, rtol):
 def reference_verdict(theta, nu0, phi):
     """(exists, u0(0)) from the reference ODEs: scan u0(0) = 1000, 1000/1.5, … 0.01; at
     each hot → cold change (from above) bisect to 1e-9 relative; the first change where a
-    trial at either end reaches the top (integrated at rtol 1e-11) is the solution (a change none of whose trials reach it is a
-    separatrix, e.g. a band packing to ν_m, not a solution: the scan goes on)."""
+    trial at either end reaches the top (integrated at rtol 1e-11) is the solution (a
+    change none of whose trials reach it is a separatrix, e.g. a band packing to ν_m, not
+    a solution: the scan goes on)."""
     mat = ref.Material(phi=phi)
     prev = None
     with warnings.catch_warnings(), np.errstate(all="ignore"):
