@@ -9,6 +9,7 @@ from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
+from .existence import steady_existence
 from .result import SteadyFlow, derived_quantities, spectral_tail
 from .solver import _State, _validate, solve_state
 
@@ -48,17 +49,17 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
         Flows whose thickness h falls below this (diameters) are rejected as unphysical
         (paper §3.2: decay length below one particle diameter). Set 0 to accept them.
     continuation : bool
-        If the cold start fails, follow the branch in θ from an anchor angle (see Notes).
-        False: fail at once (faster where no flow exists, but a flow the cold start
-        cannot find is then reported as missing).
+        If the cold start and the shooting start both fail, follow the branch in θ from an
+        anchor angle (see Notes). False: fail after the shooting start.
 
     Notes
     -----
     Without ``guess`` Newton starts from an isothermal estimate of the layer. Where that
-    fails (e.g. the non-monotonic layers over a hot dilute cushion at large θ), the branch
-    is followed instead by continuation in θ at fixed ν0(0) from an angle where the cold
-    start works (15°, 13° or 12°), with adaptive steps; :class:`NoSteadyFlowError` then
-    means that this branch ends before ``theta``.
+    fails (e.g. the non-monotonic layers over a hot dilute cushion at large θ), a shooting
+    scan in u0(0) (:func:`~chuteflow.steady.existence.steady_existence`) decides whether a
+    flow exists — :class:`NoSteadyFlowError` then carries its verdict — and gives Newton a
+    starting profile. Only if Newton fails from that profile too is the branch followed by
+    continuation in θ at fixed ν0(0) from an angle where the cold start works.
 
     Raises
     ------
@@ -81,9 +82,31 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     except ThinLayerError:
         raise
     except (NoSteadyFlowError, ConvergenceError) as exc:
-        if not continuation:
-            raise
         first = exc
+    # --- existence by shooting (existence.py): a definitive verdict, or a Newton start ---
+    verdict = steady_existence(theta, nu0, model, nu_top=nu_top, min_thickness=min_thickness)
+    if not verdict.exists:
+        raise NoSteadyFlowError(verdict.reason)
+    m, cold = n, first
+    while verdict.solution is not None and m <= (n_max if verdict.physical else n):
+        # sharp dense bands need more nodes than n to be represented: double until it works
+        # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
+        try:
+            return _solve(theta, nu0, model, nu_top, m, rtol, n_max,
+                          verdict.starting_state(m), min_thickness)
+        except ThinLayerError:
+            raise
+        except (NoSteadyFlowError, ConvergenceError) as exc:
+            first = ConvergenceError(
+                f"steady solver did not converge although shooting finds a solution — "
+                f"{verdict.reason}; tried Newton from the isothermal cold start ({cold}) and "
+                f"from the shooting profile starting at n = {n} … {m} ({exc})")
+        m *= 2
+    if not verdict.physical:
+        raise NoSteadyFlowError(verdict.reason)
+    if not continuation:
+        raise first
+    # --- end of the shooting hook ---
     flow = _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first)
     if flow.h < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, flow.h, min_thickness), flow)

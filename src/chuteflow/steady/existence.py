@@ -1,0 +1,426 @@
+"""Existence of the steady flow, decided by shooting on the floor velocity u0(0) (paper §3).
+
+The paper finds the steady flow by shooting: given ν0(0) and a trial slip velocity u0(0),
+the floor conditions (eq:T0b, eq:dT0b) fix T0(0) and T0'(0), the steady equations are
+integrated upwards, and u0(0) is adjusted until T0' = 0 where ν0 reaches ``nu_top``
+(eq:bcinf). Here that integration is used as a cheap, loose-tolerance *scan* that decides
+whether a flow exists and, if so, gives the Chebyshev–Newton solver of
+:mod:`chuteflow.steady.solver` a starting profile.
+
+Each trial is classified by the direction in which it misses the top condition:
+
+* **hot** (+): ν0 reaches ``nu_top`` with T0' > 0, or the layer never thins out (T0 grows,
+  ν0 does not reach ``nu_top`` below ``y_cap``);
+* **cold** (−): ν0 reaches ``nu_top`` with T0' ≤ 0, or T0 → 0, or ν0 → ν_m (the layer
+  collapses or packs).
+
+Large u0(0) heats the layer, small u0(0) lets it cool, so the physical flow is the first
+sign change hot → cold coming down from large u0(0) (ERRATA, numerical note on shooting:
+the smallness of |T0'(y_max)| alone is also met by a thin cold layer as u0(0) → 0, whose
+trajectories are not followed). No such sign change over the admissible range of u0(0) is a
+verdict: every trial hot (the layer cannot be kept cold enough to thin out: at small θ the
+thin cold layer has T0'(y_max) > 0), the angle is too small; every trial cold (the layer
+collapses or packs at any floor velocity), the angle is too large. A hot → cold change
+across which no trial reaches ``nu_top`` is a separatrix (a jump of the miss, not a root:
+e.g. a band that packs to ν_m and then either collapses or heats up), not a solution.
+A solution thinner than one diameter (§3.2) is reported as such.
+
+The steady ODEs are not typed again here: ν0' follows from the y-momentum residual and T0''
+from the energy residual of :func:`chuteflow.equations.compiled_equations` (both are affine
+in that highest derivative, so one evaluation with it set to zero and its coefficient give
+it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq:steady4 as used by the
+Newton solver, and the floor values come from the floor_x and floor_energy residuals
+(eq:bc1, eq:bc2), all with the transport functions of :meth:`ChuteModel.evaluate`.
+"""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from ..closures import ChuteModel
+from ..equations import compiled_equations
+from ..spectral import ChebyshevGrid
+from .solver import _State, _validate
+
+#: Default admissible range of the floor slip velocity u0(0) (units of √(gσ)). At the
+#: paper's parameters the physical flows have u0(0) between ≈ 0.5 and ≈ 150.
+U_RANGE = (1e-2, 1e3)
+
+
+def _term_index(eq, field_name: str, c: int) -> int:
+    """Position of the coefficient of d^c(field)/dy^c among a compiled equation's terms."""
+    for i, t in enumerate(eq.terms):
+        if (t.field, t.a, t.b, t.c, t.d) == (field_name, 0, 0, c, 0):
+            return i
+    raise KeyError(f"{eq.name} has no term d^{c} {field_name}/dy^{c}")
+
+
+class SteadyODE:
+    """The steady equations of §3 as a first-order system in y for (ln ν0, u0, T0, T0').
+
+    Parameters
+    ----------
+    theta : float
+        Inclination θ in degrees.
+    model : ChuteModel
+        Closure parameters.
+    """
+
+    def __init__(self, theta: float, model: ChuteModel):
+        th = math.radians(theta)
+        self.sin, self.cos = math.sin(th), math.cos(th)
+        self.tan = self.sin / self.cos
+        self.model = model
+        eqs = compiled_equations()
+        self._ymom, self._energy = eqs["ymom"], eqs["energy"]
+        self._floor_x, self._floor_energy = eqs["floor_x"], eqs["floor_energy"]
+        self._i_nu_y = _term_index(self._ymom, "nu", 1)
+        self._i_T_yy = _term_index(self._energy, "T", 2)
+        self._i_floor_u = _term_index(self._floor_x, "u", 0)
+        self._i_floor_T_y = _term_index(self._floor_energy, "T", 1)
+
+    def _base(self, nu, u, T, T_y, part):
+        u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq:steady4
+        return {"nu": nu, "nu_y": 0.0, "nu_yy": 0.0, "u": u, "u_y": u_y, "u_yy": 0.0,
+                "T": T, "T_y": T_y, "T_yy": 0.0}
+
+    def rhs(self, y, z):
+        """d/dy of (ln ν0, u0, T0, T0'). Outside the closures' domain (trial stages of the
+        integrator) the result is inf/nan, which makes the integrator shorten its step."""
+        s, u, T, T_y = (np.float64(v) for v in z)
+        nu = np.exp(s)
+        part = self.model.evaluate(nu, T)
+        base = self._base(nu, u, T, T_y, part)
+        # y-momentum (eq:steady2) is affine in ν0': R = R(ν0' = 0) + c ν0'
+        r, c = self._ymom.evaluate(base, part, self.sin, self.cos)
+        nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
+        base["nu_y"] = nu_y
+        # energy (eq:steady3, ERRATA 1) is affine in T0''
+        r, c = self._energy.evaluate(base, part, self.sin, self.cos)
+        T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
+        return [float(nu_y / nu), float(base["u_y"]), float(T_y), float(T_yy)]
+
+    def floor_velocity(self, nu0: float, T0: float) -> float:
+        """u0(0) from eq:bc1 (floor_x is linear in u0) given ν0(0) and T0(0)."""
+        part = self.model.evaluate(nu0, T0)
+        base = self._base(nu0, 0.0, T0, 0.0, part)
+        r, c = self._floor_x.evaluate(base, part, self.sin, self.cos)
+        return -float(r) / float(c[self._i_floor_u])
+
+    def floor_values(self, nu0: float, u0: float) -> tuple[float, float]:
+        """T0(0) and T0'(0) from the floor conditions eq:bc1, eq:bc2 (eq:T0b, eq:dT0b).
+
+        T0(0) solves u0(0) = floor_velocity(ν0, T0) by Newton in ln T0 (one step for the
+        kinetic closures, where u0(0) ∝ √T0); T0'(0) then follows from the floor energy
+        condition, affine in T0'.
+        """
+        x, lnu = 0.0, math.log(u0)
+        for _ in range(60):
+            h = 1e-6
+            g = math.log(self.floor_velocity(nu0, math.exp(x))) - lnu
+            dg = (math.log(self.floor_velocity(nu0, math.exp(x + h))) - lnu - g) / h
+            dx = -g / dg if dg != 0 else 0.0
+            dx = max(-5.0, min(5.0, dx))
+            x += dx
+            if abs(dx) < 1e-12:
+                break
+        T0 = math.exp(x)
+        part = self.model.evaluate(nu0, T0)
+        base = self._base(nu0, u0, T0, 0.0, part)
+        r, c = self._floor_energy.evaluate(base, part, self.sin, self.cos)
+        return T0, -float(r) / float(c[self._i_floor_T_y])
+
+
+@dataclass(frozen=True)
+class Shot:
+    """One trial integration from the floor."""
+
+    u_floor: float
+    sign: int  # +1 hot, −1 cold
+    kind: str  # "top" (reached nu_top), "hot" (never thinned out), "cold", "packed"
+    dT_top: float  # T0' where ν0 = nu_top (nan if not reached)
+    y_end: float
+    solution: Any = field(default=None, repr=False)
+
+    @property
+    def miss(self) -> float:
+        """Signed miss of the top condition (T0'(y_max) if reached, else ±1)."""
+        return self.dT_top if self.kind == "top" else float(self.sign)
+
+
+def shoot(ode: SteadyODE, nu0: float, u_floor: float, *, nu_top: float = 1e-9,
+          rtol: float = 1e-6, y_cap: float = 1e5, dense: bool = False) -> Shot:
+    """Integrate the steady equations upwards from the floor at trial ``u_floor``.
+
+    Stops where ν0 = ``nu_top`` (the top), where T0 falls below 1e-4 T0(0) (cold collapse),
+    where ν0 reaches 0.999 ν_m (packing), where T0 exceeds 100 T0(0) or at ``y_cap`` (the
+    layer heats up and never thins: hot). The physical flows are hottest at the floor or
+    close to it (T0 ≤ T0(0) at the paper's points), so these thresholds only cut short
+    trials that have already chosen their direction.
+    """
+    T0, T0p = ode.floor_values(nu0, u_floor)
+    ln_top = math.log(nu_top)
+    ln_pack = math.log(0.999 * ode.model.nu_max)
+
+    def top(y, z):
+        return z[0] - ln_top
+
+    def cold(y, z):
+        return z[2] - 1e-4 * T0
+
+    def hot(y, z):
+        return z[2] - 100.0 * T0
+
+    def packed(y, z):
+        return z[0] - ln_pack
+
+    for ev in (top, cold, packed, hot):
+        ev.terminal = True  # type: ignore[attr-defined]  # read by solve_ivp
+    top.direction = -1.0  # type: ignore[attr-defined]
+    with np.errstate(all="ignore"):
+        sol = solve_ivp(ode.rhs, (0.0, y_cap), [math.log(nu0), u_floor, T0, T0p],
+                        method="RK45", rtol=rtol, atol=1e-12, events=(top, cold, packed, hot),
+                        dense_output=dense)
+    y_end = float(sol.t[-1])
+    if len(sol.t_events[0]):
+        d = float(sol.y_events[0][0][3])
+        return Shot(u_floor, 1 if d > 0 else -1, "top", d, y_end, sol)
+    if len(sol.t_events[1]):
+        return Shot(u_floor, -1, "cold", math.nan, y_end, sol)
+    if len(sol.t_events[2]):
+        return Shot(u_floor, -1, "packed", math.nan, y_end, sol)
+    if len(sol.t_events[3]) or sol.status == 0:
+        return Shot(u_floor, 1, "hot", math.nan, y_end, sol)
+    # the integrator gave up: a finite-height singularity. Cooling with T0' → −∞ is the
+    # collapse of a cold layer; otherwise the temperature blows up (hot).
+    last_T_y = float(sol.y[3, -1])
+    if last_T_y < 0:
+        return Shot(u_floor, -1, "cold", math.nan, y_end, sol)
+    return Shot(u_floor, 1, "hot", math.nan, y_end, sol)
+
+
+@dataclass(frozen=True)
+class ExistenceVerdict:
+    """Outcome of :func:`steady_existence`.
+
+    Attributes
+    ----------
+    exists : bool
+        Whether the steady equations have a solution (a hot → cold sign change in u0(0)).
+    physical : bool
+        ``exists`` and the layer is at least ``min_thickness`` thick.
+    kind : str
+        ``"flow"``, ``"thin"`` (a solution thinner than ``min_thickness``),
+        ``"too_small"`` (every trial hot), ``"too_large"`` (every trial cold) or
+        ``"no_sign_change"`` (neither: no hot → cold change from above).
+    reason : str
+        One sentence for the user, naming the parameters.
+    u_floor : float
+        u0(0) of the solution (nan when none).
+    bracket : tuple
+        (cold, hot) trial values of u0(0) enclosing it.
+    h, y_max : float
+        Thickness (ν0 at 1 % of its maximum) and top of the shot solution.
+    shots : int
+        Number of trial integrations.
+    seconds : float
+        Wall time of the scan.
+    """
+
+    exists: bool
+    physical: bool
+    kind: str
+    reason: str
+    u_floor: float = math.nan
+    bracket: tuple = (math.nan, math.nan)
+    h: float = math.nan
+    y_max: float = math.nan
+    shots: int = 0
+    seconds: float = 0.0
+    solution: Any = field(default=None, repr=False, compare=False)
+
+    def starting_state(self, n: int = 64) -> _State:
+        """The shot profile on n + 1 Chebyshev nodes of [0, y_max], as a Newton start."""
+        if self.solution is None:
+            raise ValueError("no shot profile: " + self.reason)
+        grid = ChebyshevGrid(n, 0.0, self.y_max)
+        z = self.solution.sol(grid.y)
+        return _State(n, z[0].copy(), z[1].copy(), z[2].copy(), self.y_max)
+
+
+class _Separatrix(Exception):
+    """The bracket shrinks without any trial reaching the top."""
+
+
+def _where(theta, nu0, model):
+    return (f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
+            f"wall_loss = {model.wall_loss:g}")
+
+
+def _thickness(sol, y_max) -> float:
+    """Height where ν0 falls to 1 % of its maximum above the maximum (as SteadyFlow.h)."""
+    y = np.linspace(0.0, y_max, 4001)
+    s = sol.sol(y)[0]
+    i = int(np.argmax(s))
+    target = s[i] + math.log(0.01)
+    below = np.nonzero(s[i:] <= target)[0]
+    if not len(below):
+        return y_max
+    j = i + int(below[0])
+    return float(brentq(lambda t: sol.sol(t)[0] - target, y[j - 1], y[j], xtol=1e-10))
+
+
+def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, *,
+                     nu_top: float = 1e-9, u_range: tuple[float, float] = U_RANGE,
+                     ratio: float = 2.0, rtol: float = 1e-4, fine_rtol: float = 1e-6,
+                     min_thickness: float = 1.0) -> ExistenceVerdict:
+    """Decide whether a steady flow exists at (``theta``, ``nu0``) by a shooting scan.
+
+    Trials u0(0) = u_max, u_max/ratio, … (down to u_min) are integrated from the floor at
+    loose tolerance and classified hot/cold (module docstring). Each hot → cold change,
+    coming down from u_max, is refined by Brent's method on the signed miss T0'(y_max) (±1
+    for trials that do not reach ``nu_top``) at ``fine_rtol``; the first change where a
+    trial reaches ``nu_top`` with T0'(y_max) small (|T0'| y_max < 1e-3 T0(y_max)) is the
+    physical flow, and that trial's dense output is what
+    :meth:`ExistenceVerdict.starting_state` samples for Newton. A change where no trial
+    reaches the top is a separatrix (typically a dense band packing to ν_m that either
+    collapses or heats up above it), not a solution, and the scan goes on below it.
+
+    Cost: about 18 coarse trials plus 10–30 refining ones, 1–3 s per point on one core
+    (the trials call :meth:`ChuteModel.evaluate` at every step).
+
+    Parameters
+    ----------
+    theta : float
+        Inclination θ in degrees.
+    nu0 : float
+        Floor packing fraction ν0(0).
+    model : ChuteModel, optional
+        Closure parameters (paper defaults).
+    nu_top : float
+        ν0 at the top of the domain (paper: 1e-9).
+    u_range : (float, float)
+        Admissible floor velocities (u_min, u_max) scanned.
+    ratio : float
+        Ratio of consecutive trials of the coarse scan.
+    rtol : float
+        Relative tolerance of the scan's integrations (loose: it needs signs only).
+    fine_rtol : float
+        Relative tolerance of the integrations that locate the solution in the bracket.
+    min_thickness : float
+        A solution thinner than this (diameters) is reported as ``physical = False``
+        (paper §3.2: decay length below one particle diameter).
+
+    Returns
+    -------
+    ExistenceVerdict
+    """
+    t_start = time.perf_counter()
+    model = model or ChuteModel()
+    theta, nu0 = _validate(theta, nu0, model, nu_top)
+    ode = SteadyODE(theta, model)
+    where = _where(theta, nu0, model)
+    u_min, u_max = map(float, u_range)
+    n_trials = int(math.ceil(math.log(u_max / u_min) / math.log(ratio))) + 1
+    trials = np.geomspace(u_max, u_min, n_trials)
+    count = [0]
+
+    def trial(u):
+        count[0] += 1
+        return shoot(ode, nu0, float(u), nu_top=nu_top, rtol=rtol)
+
+    def done(kind, reason, **kw):
+        return ExistenceVerdict(exists=kind in ("flow", "thin"), physical=kind == "flow",
+                                kind=kind, reason=reason, shots=count[0],
+                                seconds=time.perf_counter() - t_start, **kw)
+
+    def refine(cold, hot):
+        """Brent on the signed miss in ln u0(0) at ``fine_rtol``; trials that do not reach
+        nu_top count as ±1. Every trial keeps its dense output: the closest one to the root
+        that reached the top is returned (None: a separatrix, see below)."""
+        lo, hi = math.log(cold.u_floor), math.log(hot.u_floor)
+        ends = {lo: cold, hi: hot}
+
+        def miss(x):
+            count[0] += 1
+            shot = shoot(ode, nu0, math.exp(x), nu_top=nu_top, rtol=fine_rtol, dense=True)
+            ends[x] = shot
+            if len(ends) > 14 and not any(sh.kind == "top" for sh in ends.values()):
+                raise _Separatrix
+            return shot.miss
+
+        try:
+            x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)
+        except (ValueError, RuntimeError, _Separatrix):
+            x = 0.5 * (lo + hi)
+        cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
+        hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
+        # a trial that solves the top condition eq:bcinf: T0' small on the scale of the
+        # layer (T0(y_max)/y_max); one far from it is a stray trial beside a separatrix
+        reached = [v for v, sh in ends.items()
+                   if sh.kind == "top" and sh.solution.sol is not None
+                   and abs(sh.dT_top) * sh.y_end < 1e-3 * float(sh.solution.y[2, -1])]
+        best = ends[min(reached, key=lambda v: abs(v - x))] if reached else None
+        nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
+        return best, (cold_u, hot_u), nu_peak
+
+    # the first hot → cold change coming down from u_max that brackets a solution; a change
+    # without a trial reaching nu_top is a separatrix (a discontinuity of the miss, e.g. a
+    # band packing to nu_max that either collapses or heats up above it), and the scan goes on
+    prev = None
+    signs = []
+    final = separatrix = None
+    for u in trials:
+        shot = trial(u)
+        signs.append(shot.sign)
+        if prev is not None and prev.sign > 0 > shot.sign:
+            best, bracket, nu_peak = refine(shot, prev)
+            if best is not None:
+                final = best
+                break
+            separatrix = separatrix or (bracket, nu_peak)
+        prev = shot
+    if final is None and separatrix is not None:
+        bracket, nu_peak = separatrix
+        packs = nu_peak > 0.95 * model.nu_max
+        return done("too_large" if packs else "no_sign_change", (
+            f"no steady flow at {where}: the change from a heating to a cooling layer at "
+            f"u0(0) ≈ {math.sqrt(bracket[0] * bracket[1]):.6g} is a separatrix, not a "
+            f"solution — no trial there reaches nu0 = {nu_top:g}"
+            + (f" (the density piles up to {nu_peak:.3g}, close to nu_max = "
+               f"{model.nu_max:g}): the angle is too large for this floor density"
+               if packs else "")), bracket=bracket)
+    if final is None:
+        rng = f"u0(0) in [{u_min:g}, {u_max:g}]"
+        if all(s > 0 for s in signs):
+            return done("too_small", (
+                f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
+                f"for {rng} — every trial layer heats up (T0' > 0 where nu0 reaches "
+                f"{nu_top:g}, even the thin cold layer): the angle is too small for this "
+                "roughness and floor density"))
+        if all(s < 0 for s in signs):
+            return done("too_large", (
+                f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
+                f"for {rng} — every trial layer cools and collapses or packs to nu_max: "
+                "the angle is too large for this roughness and floor density"))
+        return done("no_sign_change", (
+            f"no steady flow at {where}: shooting finds no change from a heating to a "
+            f"cooling layer as u0(0) decreases over {rng}"))
+    kw = {"bracket": bracket}
+    kw["u_floor"] = final.u_floor
+    y_max = final.y_end
+    h = _thickness(final.solution, y_max)
+    kw.update(h=h, y_max=y_max, solution=final.solution)
+    if h < min_thickness:
+        return done("thin", (
+            f"no physical steady flow at {where}: the solution (u0(0) = {final.u_floor:.4g}) "
+            f"has thickness h = {h:.3g}, below {min_thickness:g} particle diameter — the "
+            "angle is too small for this roughness (or the floor density too low)"), **kw)
+    return done("flow", (f"steady flow at {where}: u0(0) = {final.u_floor:.6g}, "
+                         f"h = {h:.4g}"), **kw)
