@@ -3,6 +3,7 @@ from .result import SteadyFlow
 from .api import solve_steady, steady_tangent
 from .family import flux_minimum, steady_family
 from .maps import steady_map
+from .existence import ExistenceVerdict, steady_existence
 
 __all__ = ["SteadyFlow", "solve_steady", "steady_tangent", "steady_family", "steady_map",
-           "flux_minimum"]
+           "flux_minimum", "steady_existence", "ExistenceVerdict"]
