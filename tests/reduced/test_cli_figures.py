@@ -27,7 +27,7 @@ def test_reduced_json_reports_the_family_and_the_state():
     st = d["state"]
     assert st["unstable"] is True and st["short_wave_unstable"] is False
     assert st["L_c"] == pytest.approx(2 * math.pi / st["k_c"])
-    assert st["phase_velocity"] == pytest.approx(-st["dq0"])
+    assert st["phase_velocity"] == pytest.approx(st["dq0"])  # c = −Im α1
     # the paper's P1 (16°, 0.05) is on the family: every k grows there, k_c is "inf"
     p1 = min(d["points"], key=lambda p: abs(p["nu0"] - 0.05))
     if abs(p1["nu0"] - 0.05) < 0.01:

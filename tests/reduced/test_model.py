@@ -104,7 +104,7 @@ def test_long_wave_expansion_disp_oned(c):
     assert 300 < e1 / e2 < 3000  # third order: a factor 1000 per decade of k
     # phase velocity Im α / k → −dq0/dρ0, q0 = ρ0 U(ρ0): the kinematic wave (§5.1.1)
     assert c.dispersion(k2)[0].imag / k2 == pytest.approx(-c.dq0, rel=1e-6)
-    assert c.phase_velocity == -c.dq0
+    assert c.phase_velocity == c.dq0  # c = −Im α1 (chuteflow.conventions)
     assert (c.alpha2 > 0) == c.unstable
 
 

@@ -30,6 +30,7 @@ from scipy.interpolate import CubicHermiteSpline
 from scipy.optimize import brentq
 
 from ..closures import ChuteModel
+from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import SteadyFlow, solve_steady, steady_tangent
 from . import equations as eq
@@ -146,8 +147,9 @@ class LocalCoefficients:
 
     @property
     def phase_velocity(self) -> float:
-        """Long-wave phase velocity c = Im α / k → −dq0/dρ0 (disp-oned)."""
-        return -self.dq0
+        """Long-wave phase velocity c = −Im α / k → dq0/dρ0 (> 0: the wave travels down
+        the slope; the one convention of :mod:`chuteflow.conventions`)."""
+        return long_wave_phase_velocity(self.alpha1)
 
     @property
     def short_wave_unstable(self) -> bool:
