@@ -26,7 +26,7 @@ from pathlib import Path
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 POINTS = {"P1": (16.0, 0.05), "P3": (16.0, 0.10), "P5": (17.0, 0.10)}
 K_FIT = (1e-6, 2e-6, 4e-6)

@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import functools
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
@@ -133,7 +133,7 @@ class _Continuum:
     g: tuple  # gravity (sin θ, −cos θ, 0)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _continuum() -> _Continuum:
     """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq:pmuetc) and gravity, in jet space."""
     nu, T = jet("nu"), jet("T")
@@ -153,7 +153,7 @@ def _continuum() -> _Continuum:
                       tuple(q), g)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def governing_equations() -> dict[str, sp.Expr]:
     """Residuals of eq:rho, eq:u (x, y, z), eq:temp and the floor conditions, in jet space.
 
@@ -183,7 +183,7 @@ def governing_equations() -> dict[str, sp.Expr]:
     return {k: sp.expand(v) for k, v in eqs.items()}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def first_integrals() -> dict[str, sp.Expr]:
     """The x-momentum balance of a uniform steady flow, integrated from the top (§3).
 
@@ -205,7 +205,7 @@ def first_integrals() -> dict[str, sp.Expr]:
     return {"xmom_integrated": sp.expand(-(c.Sigma[1][0] - gx / gy * c.Sigma[1][1]))}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def far_field_conditions() -> dict[str, sp.Expr]:
     """Top (y → ∞) conditions on a normal-mode perturbation (§4.1), keyed by :data:`TOP_OF`.
 
@@ -296,7 +296,7 @@ def _args(base, partials, s, c):
     return args + [s, c]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def compiled_equations() -> dict[str, CompiledEquation]:
     """Every equation's residual and coefficients as numeric functions (once per process).
 

@@ -44,7 +44,7 @@ ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
 sp = lazy_module("sympy")  # only needed to derive code that is not cached yet
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _compiled(transport: TransportClosure, radial: RadialDistribution, wall: WallCondition):
     """Numeric functions of all partials of all functions, and f1 … f7 with two ν-derivatives.
 

@@ -15,8 +15,7 @@ import numpy as np
 from ..continuation import StepRules, Trial, continue_to, march
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import solve_steady
-from ..sweep import (PointFunction, SweepConfig, Variable, register_point_function,
-                     resolve_model, run_sweep)
+from ..sweep import PointFunction, SweepConfig, Variable, register_point_function, resolve_model, run_sweep
 from .model import local_coefficients
 
 __all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement",

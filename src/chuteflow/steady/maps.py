@@ -14,8 +14,7 @@ import numpy as np
 
 from ..closures import ChuteModel
 from ..errors import ParameterError
-from .family import (SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row,
-                     dataset_attrs)
+from .family import SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row, dataset_attrs
 from .solver import _validate
 
 

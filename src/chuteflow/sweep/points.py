@@ -22,7 +22,6 @@ and of its hash, so a sweep with other options never reuses old results.
 from __future__ import annotations
 
 import importlib
-
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
