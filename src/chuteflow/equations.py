@@ -231,7 +231,6 @@ def far_field_conditions() -> dict[str, sp.Expr]:
 
 def _base_substitution():
     """Map jets to the y-dependent base state: v = w = 0, no t, x, z dependence."""
-    nu, u, T = jet("nu"), jet("u"), jet("T")
     sub = {}
     base_syms = {b: base_value(b) for b in BASE}
     for f in ("nu", "u", "T"):

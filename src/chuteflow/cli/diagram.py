@@ -33,7 +33,8 @@ def diagram(
     png: Path | None = typer.Option(None, "--png", help="Diagram image (default: the "
                                        "output file with .png)."),
     scheduler: str | None = typer.Option(None, "--scheduler", metavar="ADDRESS",
-                                            help="Run on this Dask scheduler (needs the dask extra of chuteflow)."),
+                                            help="Run on this Dask scheduler (needs the dask "
+                                                 "extra of chuteflow)."),
     workers: int | None = typer.Option(None, "--workers", "-j",
                                           help="Local worker processes (default: all cores)."),
     chunk: int | None = typer.Option(None, "--chunk", help="Points per task along ν0 "

@@ -309,7 +309,8 @@ def _dataset(thetas, nus, flows, model):
         "flag_values": np.array([0, 1], dtype=np.int8),
         "flag_meanings": "ok no_steady_flow"})
     attrs = dict(model.attrs())
-    attrs.update(model_key=model.key(), title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
+    attrs.update(model_key=model.key(),
+                 title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
                  engine="walk", chuteflow_version=__version__)
     return xr.Dataset(data, coords={
         "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),

@@ -9,6 +9,7 @@ checked at two resolutions exactly as :func:`~chuteflow.steady.solve_steady` doe
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -221,20 +222,22 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     while True:
         walked = False
         for i in range(1, N):
-            if not usable(i) and usable(i - 1) and "below" not in tried[i]:
-                attempt(i, "below", lambda: _continue(pts[i - 1], theta, nus[i], model, opts))
+            below = pts[i - 1]
+            if not usable(i) and below is not None and below.usable and "below" not in tried[i]:
+                attempt(i, "below", functools.partial(_continue, below, theta, nus[i], model, opts))
                 walked = True
         for i in range(N - 2, -1, -1):
-            if not usable(i) and usable(i + 1) and "above" not in tried[i]:
-                attempt(i, "above", lambda: _continue(pts[i + 1], theta, nus[i], model, opts))
+            above = pts[i + 1]
+            if not usable(i) and above is not None and above.usable and "above" not in tried[i]:
+                attempt(i, "above", functools.partial(_continue, above, theta, nus[i], model, opts))
                 walked = True
         if walked:
             continue
-        cand = [i for i in order if not usable(i) and prev[i] is not None and prev[i].usable
-                and ttag not in tried[i]]
-        if cand:
-            i = cand[0]
-            attempt(i, ttag, lambda: _continue(prev[i], theta, nus[i], model, opts))
+        seeded = [(i, src) for i in order if not usable(i) and (src := prev[i]) is not None and src.usable
+                  and ttag not in tried[i]]
+        if seeded:
+            i, seed = seeded[0]
+            attempt(i, ttag, functools.partial(_continue, seed, theta, nus[i], model, opts))
             continue
         if not cold_starts:
             break
@@ -249,7 +252,7 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
             break
         cold += 1
-        attempt(cand[0], "cold", lambda: _cold(theta, nus[cand[0]], model, opts))
+        attempt(cand[0], "cold", functools.partial(_cold, theta, nus[cand[0]], model, opts))
     out = []
     for p, t in zip(pts, tried):
         if p is None:

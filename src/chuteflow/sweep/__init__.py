@@ -25,7 +25,8 @@ from .points import (
 from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "markers", "default_ranges", "parse_grid", "resolve_model", "Sweep",
+__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "markers", "default_ranges", "parse_grid",
+           "resolve_model", "Sweep",
            "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
            "PointFunction", "Variable", "point_function", "register_point_function",
            "registered_point_functions", "STATUS", "TaskResult", "run_task",

@@ -504,7 +504,8 @@ def _eigenfunctions(ctx, R):
                             "perturbation" + (" (the perturbation decays)" if sign < 0 else
                                               " (the perturbation grows)"),
                   computed=f"∫Re[ν̂*(−ν0 ∇·û)] dy / ∫|ν̂|² dy = {d['compression']:.4e} "
-                           f"({'> 0: into the positive' if d['compression'] > 0 else '< 0: into the negative'} "
+                           "(" + ("> 0: into the positive" if d["compression"] > 0
+                                  else "< 0: into the negative") + " "
                            f"region); with the vertical advection {d['vertical_advection']:.3e} "
                            f"it adds up to Re α = {d['growth_rate']:.4e}",
                   passed=sign * d["compression"] > 0,
