@@ -37,6 +37,7 @@ import functools
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -59,7 +60,10 @@ TOP_OF = {"nu": "top_nu", "u": "top_u", "v": "top_v", "w": "top_w", "T": "top_T"
 #: (module ``__getattr__``), so that importing this module does not import sympy.
 
 #: sympy, imported on first use: a process whose generated code is cached never needs it.
-sp = _codegen.lazy_module("sympy")
+if TYPE_CHECKING:  # the annotations name sympy's classes; at run time sympy stays lazy
+    import sympy as sp
+else:
+    sp = _codegen.lazy_module("sympy")
 
 
 def _gravity_symbols():

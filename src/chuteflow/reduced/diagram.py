@@ -77,7 +77,7 @@ def reduced_diagram_config(roughness: float | None = None, *, shape=QUICK_SHAPE,
     :class:`~chuteflow.closures.ChuteModel`, default the paper's) with ``roughness`` replacing
     its own is the model of the sweep. Other keywords go to :class:`SweepConfig`.
     """
-    metrics = ["steady", "kinematic", "longwave"] if full else ["steady"]
+    metrics: list[str | PointFunction] = ["steady", "kinematic", "longwave"] if full else ["steady"]
     metrics.append(Reduced1D())
     kw.setdefault("markers", ())
     if grid is not None:

@@ -173,7 +173,7 @@ class Sweep:
         ds = assemble(cfg, parts)
         if self.out is not None:
             write_dataset(ds, self.out)
-            if not self.keep_parts:
+            if not self.keep_parts and store is not None:  # a store exists when out is set
                 store.remove()
         st.seconds = time.perf_counter() - t0
         return ds

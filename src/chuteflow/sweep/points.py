@@ -75,7 +75,7 @@ class Variable:
         return {"float": np.float64, "flag": np.int8, "int": np.int32}[self.kind]
 
     def attrs(self) -> dict:
-        a = {"units": self.units, "long_name": self.long_name}
+        a: dict[str, Any] = {"units": self.units, "long_name": self.long_name}
         if self.source:
             a["source"] = self.source
         if self.kind == "flag":
@@ -199,6 +199,7 @@ def point_function(spec) -> PointFunction:
     """A point function from a name, a ``{"name", "options"}`` dict, or an instance."""
     if isinstance(spec, PointFunction):
         return spec
+    name: Any  # from a mapping, anything: an unknown name raises below
     if isinstance(spec, str):
         name, options = spec, {}
     elif isinstance(spec, Mapping):

@@ -11,10 +11,14 @@ import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ChuteflowError, ConvergenceError, NoSteadyFlowError
+
+if TYPE_CHECKING:
+    from ..steady import SteadyFlow
 
 __all__ = ["STATUS", "TaskResult", "run_task", "warm_up"]
 
@@ -147,7 +151,7 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
         if marker:
             # marked points are unrelated: each from the cold start
             pts = [(config.markers[j][1], config.markers[j][2]) for j in range(task.j0, task.j1)]
-            steady = []
+            steady: list[tuple[SteadyFlow | None, str, str]] = []
             for th, nu in pts:
                 try:
                     steady.append((solve_steady(th, nu, model, **kw), "ok", ""))

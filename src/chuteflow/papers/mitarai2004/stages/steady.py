@@ -3,9 +3,13 @@ paper's statements about them, each checked and reported with the value computed
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from ....report.registry import StageContext, register_stage
 from ..points import figure
+
+if TYPE_CHECKING:
+    from ....steady import SteadyFlow
 
 #: (θ grid, ν0 grid) of the maps. Quick: 1° × 14 floor densities; full: 0.25° × 40. The
 #: ends of the existence range are then refined by continuation beyond the map.
@@ -149,7 +153,7 @@ def _run(ctx: StageContext) -> None:
         # profiles
         th_p, nus_p, figp = _PROFILES[phi]
         ctx.progress(f"φ = {phi:g}: profiles at θ = {th_p:g}°")
-        flows = []
+        flows: list[SteadyFlow | None] = []
         for nu0 in nus_p:
             try:
                 flows.append(solve_steady(th_p, nu0, model))
