@@ -26,7 +26,7 @@ from pathlib import Path
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 POINTS = {"P1": (16.0, 0.05), "P3": (16.0, 0.10), "P5": (17.0, 0.10)}
 K_FIT = (1e-6, 2e-6, 4e-6)
@@ -80,9 +80,9 @@ def run(quick: bool = False) -> list[dict]:
     for name in names:
         th, nu0 = POINTS[name]
         longwave(solve_steady(th, nu0), rtol=0.2)  # warm-up: compilation, caches
-        t_steady, flow = _best(lambda: solve_steady(th, nu0), rep)
+        t_steady, flow = _best(lambda th=th, nu0=nu0: solve_steady(th, nu0), rep)
 
-        def sign():
+        def sign(th=th, nu0=nu0):
             return longwave(solve_steady(th, nu0), rtol=0.2)
 
         t_sign, lw = _best(sign, rep)
@@ -99,7 +99,7 @@ def run(quick: bool = False) -> list[dict]:
                     f"4e-6{' (1 timed × 3)' if quick else ''}, fit a2 = {a2_fit:.5g} "
                     f"({err_fit:.1e} from α2)"})
         if not quick:
-            t_full, lw1 = _best(lambda: longwave(solve_steady(th, nu0), rtol=0.01), 2)
+            t_full, lw1 = _best(lambda th=th, nu0=nu0: longwave(solve_steady(th, nu0), rtol=0.01), 2)
             t_qz1, a2_fit1 = _qz_fit(flow, lw1.n, lw1.dQ_drho, K_FIT, False)
             rows.append({
                 "name": f"longwave_1pct_{name}", "seconds": t_full,

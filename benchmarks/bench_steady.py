@@ -28,7 +28,7 @@ if __package__ in (None, ""):
     root = Path(__file__).resolve().parents[1]
     sys.path[:0] = [str(root / "src"), str(root)]
 
-import numpy as np  # noqa: E402
+import numpy as np
 
 
 def _median_time(fn, repeat, cpu=None):
@@ -46,9 +46,10 @@ def _median_time(fn, repeat, cpu=None):
 
 
 def run(quick: bool = False) -> list[dict]:
+    from tests.steady.shooting import Material, solve_by_shooting
+
     from chuteflow._threads import limit_blas_threads
     from chuteflow.steady import solve_steady, steady_map
-    from tests.steady.shooting import Material, solve_by_shooting
 
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)

@@ -42,7 +42,7 @@ def run_module(name: str, quick: bool) -> list[dict]:
     try:
         mod = importlib.import_module(f"benchmarks.bench_{name}")
         rows = list(mod.run(quick=quick))
-    except Exception as exc:  # noqa: BLE001 - reported as a row, the others still run
+    except Exception as exc:  # reported as a row, the others still run
         traceback.print_exc()
         return [{"name": f"{name}: FAILED", "seconds": math.nan, "baseline_seconds": math.nan,
                  "ratio": math.nan, "note": f"{type(exc).__name__}: {exc}"}]

@@ -15,7 +15,7 @@ import sympy as sp
 
 from chuteflow import _codegen
 from chuteflow._codegen import cache_dir, cache_key, cached_lambdify
-from chuteflow.closures import CarnahanStarling, ChuteModel, LunClosure
+from chuteflow.closures import CarnahanStarling, ChuteModel
 from chuteflow.closures import model as model_module
 from chuteflow.equations import _derive_compiled, compiled_equations
 

@@ -7,8 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from chuteflow.conventions import (PHASE_VELOCITY_CONVENTION, RATE_UNITS, long_wave_phase_velocity,
-                                   phase_velocity)
+from chuteflow.conventions import (
+    PHASE_VELOCITY_CONVENTION,
+    RATE_UNITS,
+    long_wave_phase_velocity,
+    phase_velocity,
+)
 from chuteflow.longwave import longwave
 from chuteflow.stability import least_stable
 from chuteflow.steady import solve_steady

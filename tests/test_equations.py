@@ -11,9 +11,18 @@ from __future__ import annotations
 
 import sympy as sp
 
-from chuteflow.equations import (FIELDS, K_ABS, TOP_OF, D, base_value, compiled_equations,
-                                 far_field_conditions, first_integrals, governing_equations,
-                                 jet)
+from chuteflow.equations import (
+    FIELDS,
+    K_ABS,
+    TOP_OF,
+    D,
+    base_value,
+    compiled_equations,
+    far_field_conditions,
+    first_integrals,
+    governing_equations,
+    jet,
+)
 
 
 def _uniform(expr):

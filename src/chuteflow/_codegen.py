@@ -129,7 +129,7 @@ class _LazyModule(types.ModuleType):
         return value
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _package_version(dist: str) -> str:
     mod = sys.modules.get(dist)
     if mod is not None and isinstance(getattr(mod, "__version__", None), str):

@@ -35,8 +35,9 @@ from __future__ import annotations
 
 import functools
 import itertools
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -59,7 +60,10 @@ TOP_OF = {"nu": "top_nu", "u": "top_u", "v": "top_v", "w": "top_w", "T": "top_T"
 #: (module ``__getattr__``), so that importing this module does not import sympy.
 
 #: sympy, imported on first use: a process whose generated code is cached never needs it.
-sp = _codegen.lazy_module("sympy")
+if TYPE_CHECKING:  # the annotations name sympy's classes; at run time sympy stays lazy
+    import sympy as sp
+else:
+    sp = _codegen.lazy_module("sympy")
 
 
 def _gravity_symbols():
@@ -133,7 +137,7 @@ class _Continuum:
     g: tuple  # gravity (sin θ, −cos θ, 0)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _continuum() -> _Continuum:
     """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq:pmuetc) and gravity, in jet space."""
     nu, T = jet("nu"), jet("T")
@@ -153,7 +157,7 @@ def _continuum() -> _Continuum:
                       tuple(q), g)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def governing_equations() -> dict[str, sp.Expr]:
     """Residuals of eq:rho, eq:u (x, y, z), eq:temp and the floor conditions, in jet space.
 
@@ -183,7 +187,7 @@ def governing_equations() -> dict[str, sp.Expr]:
     return {k: sp.expand(v) for k, v in eqs.items()}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def first_integrals() -> dict[str, sp.Expr]:
     """The x-momentum balance of a uniform steady flow, integrated from the top (§3).
 
@@ -205,7 +209,7 @@ def first_integrals() -> dict[str, sp.Expr]:
     return {"xmom_integrated": sp.expand(-(c.Sigma[1][0] - gx / gy * c.Sigma[1][1]))}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def far_field_conditions() -> dict[str, sp.Expr]:
     """Top (y → ∞) conditions on a normal-mode perturbation (§4.1), keyed by :data:`TOP_OF`.
 
@@ -231,7 +235,6 @@ def far_field_conditions() -> dict[str, sp.Expr]:
 
 def _base_substitution():
     """Map jets to the y-dependent base state: v = w = 0, no t, x, z dependence."""
-    nu, u, T = jet("nu"), jet("u"), jet("T")
     sub = {}
     base_syms = {b: base_value(b) for b in BASE}
     for f in ("nu", "u", "T"):
@@ -296,7 +299,7 @@ def _args(base, partials, s, c):
     return args + [s, c]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def compiled_equations() -> dict[str, CompiledEquation]:
     """Every equation's residual and coefficients as numeric functions (once per process).
 

@@ -10,9 +10,14 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from chuteflow.figures.stability import (default_height, dispersion_figure,
-                                         eigenfunction_diagnostics, eigenfunction_fields,
-                                         eigenfunction_figure, magnification_figure)
+from chuteflow.figures.stability import (
+    default_height,
+    dispersion_figure,
+    eigenfunction_diagnostics,
+    eigenfunction_fields,
+    eigenfunction_figure,
+    magnification_figure,
+)
 
 
 @pytest.fixture(scope="module")

@@ -256,8 +256,7 @@ def test_snapshot_interval_and_a_custom_stop_condition(rm16, state16):
 
 
 def test_saturation_stop_and_leave_family_stop(rm16, state16):
-    from chuteflow.reduced import (LeaveFamilyStop, SaturationStop, SnapshotTracker,
-                                   WaveSimulation)
+    from chuteflow.reduced import LeaveFamilyStop, SaturationStop, SnapshotTracker, WaveSimulation
 
     # a stable state: SaturationStop ends the run as "decayed" before the default t_end
     sim = WaveSimulation(rm16, 20.0, nu0=0.09, n_cells=128)

@@ -12,8 +12,7 @@ from chuteflow.errors import ParameterError
 from chuteflow.papers import DEFAULT_PAPERS, PAPERS, load_paper
 from chuteflow.papers.mitarai2004 import PAPER_UNSTABLE, POINTS, markers
 from chuteflow.papers.mitarai2004.points import FIGURES, figure
-from chuteflow.report import (isolated_registry, load_stages, register_stage, registered_stages,
-                              select_stages)
+from chuteflow.report import isolated_registry, load_stages, register_stage, registered_stages, select_stages
 
 SRC = Path(chuteflow.__file__).parent
 DOCS = SRC.parents[1] / "docs"

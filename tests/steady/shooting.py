@@ -16,7 +16,6 @@ cold layer with u0(0) → 0 also has). Also used as the benchmark's plain baseli
 """
 from __future__ import annotations
 
-import cmath
 import math
 from dataclasses import dataclass
 

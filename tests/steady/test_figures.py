@@ -4,8 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from chuteflow.figures.steady import (plot_flux_density, plot_h_nubar, profiles_figure,
-                                      steady_phase_figure)
+from chuteflow.figures.steady import plot_flux_density, plot_h_nubar, profiles_figure, steady_phase_figure
 from chuteflow.steady import solve_steady, steady_family, steady_map
 
 

@@ -34,7 +34,7 @@ def test_model_from_attributes():
     ds = _raw()
     assert ds.chute.config is None
     with pytest.raises(ParameterError, match="no model"):
-        ds.chute.model
+        _ = ds.chute.model
     ds.attrs.update(wall_loss=0.39, restitution=0.7, nu_max=0.6)  # roughness 0.05 is there
     assert ds.chute.model == ChuteModel(roughness=0.05)
     cfg = SweepConfig(theta=(16.0,), nu0=(0.05,), roughness=0.10, metrics=("steady",))

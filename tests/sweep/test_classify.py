@@ -6,9 +6,12 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from chuteflow.papers.mitarai2004.checks import (
+    check_C_monotonicity,
+    check_low_density_unstable,
+    check_regimes_placed,
+)
 from chuteflow.sweep import STATUS, SweepConfig, classify, run_sweep
-from chuteflow.papers.mitarai2004.checks import (check_C_monotonicity, check_low_density_unstable,
-                                    check_regimes_placed)
 from chuteflow.sweep.classify import REGIMES, regimes
 
 

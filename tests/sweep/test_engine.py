@@ -16,8 +16,18 @@ import xarray as xr
 from chuteflow.errors import ParameterError
 from chuteflow.papers.mitarai2004 import markers as paper_markers
 from chuteflow.steady import solve_steady
-from chuteflow.sweep import (STATUS, ConfigMismatchError, PartStore, Sweep, SweepConfig,
-                             load_sweep, parse_grid, parts_dir, point_function, run_sweep)
+from chuteflow.sweep import (
+    STATUS,
+    ConfigMismatchError,
+    PartStore,
+    Sweep,
+    SweepConfig,
+    load_sweep,
+    parse_grid,
+    parts_dir,
+    point_function,
+    run_sweep,
+)
 
 from ._helpers import NU0, THETA
 

@@ -11,14 +11,15 @@ import os
 import sys
 from collections.abc import Sequence
 
-from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
-
 # -- command modules: one line each ------------------------------------------------------
-from . import reproduce  # noqa: E402,F401
-from . import steady  # noqa: E402,F401
-from . import diagram  # noqa: E402,F401
-from . import stability  # noqa: E402,F401
-from . import reduced  # noqa: E402,F401
+from . import (
+    diagram,  # noqa: F401
+    reduced,  # noqa: F401
+    reproduce,  # noqa: F401
+    stability,  # noqa: F401
+    steady,  # noqa: F401
+)
+from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
 
 __all__ = ["app", "main"]
 

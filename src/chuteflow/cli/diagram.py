@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any
 
 import typer
 
@@ -20,23 +20,24 @@ def _default_out(roughness: float) -> Path:
 def diagram(
     model: ChuteModel = MODEL_OPTIONS_HERE,
     grid: str = typer.Option("60x60", "--grid", help="Grid size N_THETAxN_NU0."),
-    theta_range: Optional[tuple[float, float]] = typer.Option(
+    theta_range: tuple[float, float] | None = typer.Option(
         None, "--theta-range", metavar="LOW HIGH",
         help="Inclination range in degrees (default: where the paper's flows exist)."),
-    nu0_range: Optional[tuple[float, float]] = typer.Option(
+    nu0_range: tuple[float, float] | None = typer.Option(
         None, "--nu0-range", metavar="LOW HIGH", help="Floor density ν0(0) range."),
-    metrics: Optional[str] = typer.Option(
+    metrics: str | None = typer.Option(
         None, "--metrics", help="Comma-separated point functions (default: steady,"
         "kinematic,longwave,growth)."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o",
+    out: Path | None = typer.Option(None, "--out", "-o",
                                        help="NetCDF file (default diagram_phi<φ>.nc)."),
-    png: Optional[Path] = typer.Option(None, "--png", help="Diagram image (default: the "
+    png: Path | None = typer.Option(None, "--png", help="Diagram image (default: the "
                                        "output file with .png)."),
-    scheduler: Optional[str] = typer.Option(None, "--scheduler", metavar="ADDRESS",
-                                            help="Run on this Dask scheduler (needs the dask extra of chuteflow)."),
-    workers: Optional[int] = typer.Option(None, "--workers", "-j",
+    scheduler: str | None = typer.Option(None, "--scheduler", metavar="ADDRESS",
+                                            help="Run on this Dask scheduler (needs the dask "
+                                                 "extra of chuteflow)."),
+    workers: int | None = typer.Option(None, "--workers", "-j",
                                           help="Local worker processes (default: all cores)."),
-    chunk: Optional[int] = typer.Option(None, "--chunk", help="Points per task along ν0 "
+    chunk: int | None = typer.Option(None, "--chunk", help="Points per task along ν0 "
                                         "(continuation; default: whole θ rows)."),
     with_markers: bool = typer.Option(True, "--markers/--no-markers",
                                       help="Also compute the paper's points P1–P5 / Q1–Q3."),
@@ -107,10 +108,10 @@ def _summary(console, ds, st, out, png):
 @app.command("plot")
 def plot(
     file: Path = typer.Argument(..., help="NetCDF file written by chuteflow diagram."),
-    out: Optional[Path] = typer.Option(None, "--out", "-o",
+    out: Path | None = typer.Option(None, "--out", "-o",
                                        help="Image file (default: FILE with .png)."),
-    h_max: Optional[float] = typer.Option(None, "--h-max", help="Largest h shown."),
-    nu_max: Optional[float] = typer.Option(None, "--nu-max", help="Largest ν̄ shown."),
+    h_max: float | None = typer.Option(None, "--h-max", help="Largest h shown."),
+    nu_max: float | None = typer.Option(None, "--nu-max", help="Largest ν̄ shown."),
     grid_panel: bool = typer.Option(True, "--grid-panel/--no-grid-panel",
                                     help="Add the (θ, ν0) classification panel."),
 ) -> None:

@@ -144,10 +144,9 @@ def simulate(
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+    from chuteflow.errors import ParameterError
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
-
-    from chuteflow.errors import ParameterError
 
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")

@@ -44,7 +44,7 @@ ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
 sp = lazy_module("sympy")  # only needed to derive code that is not cached yet
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _compiled(transport: TransportClosure, radial: RadialDistribution, wall: WallCondition):
     """Numeric functions of all partials of all functions, and f1 … f7 with two ν-derivatives.
 
@@ -227,7 +227,9 @@ class ChuteModel:
         _, ffun, _, names = _compiled(*self.closures)
         nu = np.asarray(nu, dtype=float)
         flat = ffun(nu, self.restitution, self.nu_max)
-        return {k: tuple(np.broadcast_to(flat[3 * i + n], nu.shape) for n in range(3))
+        return {k: (np.broadcast_to(flat[3 * i], nu.shape),
+                    np.broadcast_to(flat[3 * i + 1], nu.shape),
+                    np.broadcast_to(flat[3 * i + 2], nu.shape))
                 for i, k in enumerate(names)}
 
     def g0(self, nu):

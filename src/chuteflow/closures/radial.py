@@ -7,13 +7,15 @@ derived from that one expression. Register a new one with :func:`register_radial
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
 from .._codegen import lazy_module
-
-sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
-
 from .registry import Registry
+
+if TYPE_CHECKING:  # the annotations name sympy's classes; at run time sympy stays lazy
+    import sympy as sp
+else:
+    sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
 
 __all__ = [
     "RADIALS",

@@ -11,10 +11,9 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 from .._codegen import lazy_module
+from .registry import Registry
 
 sp = lazy_module("sympy")  # imported on first use (cached generated code needs none)
-
-from .registry import Registry
 
 __all__ = ["WALLS", "JohnsonJackson", "WallCondition", "register_wall"]
 

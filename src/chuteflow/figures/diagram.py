@@ -19,8 +19,12 @@ where no steady flow was found or a solver did not converge.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.artist import Artist
 
 __all__ = ["grid_triangulation", "plot_diagram", "save_diagram"]
 
@@ -133,7 +137,7 @@ def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = 
     nb = ds["nu_mean"].values
     ok = (ds["status"].values == 0) & np.isfinite(h) & np.isfinite(nb)
     tri = grid_triangulation(h, nb, ok)
-    handles = []
+    handles: list[Artist] = []
     if ok.any():
         hx = float(np.nanmax(h[ok]))
         xlim = (0.0, h_max if h_max is not None else min(60.0, 1.03 * hx))

@@ -15,8 +15,7 @@ import numpy as np
 from ..continuation import StepRules, Trial, continue_to, march
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import solve_steady
-from ..sweep import (PointFunction, SweepConfig, Variable, register_point_function,
-                     resolve_model, run_sweep)
+from ..sweep import PointFunction, SweepConfig, Variable, register_point_function, resolve_model, run_sweep
 from .model import local_coefficients
 
 __all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement",
@@ -78,7 +77,7 @@ def reduced_diagram_config(roughness: float | None = None, *, shape=QUICK_SHAPE,
     :class:`~chuteflow.closures.ChuteModel`, default the paper's) with ``roughness`` replacing
     its own is the model of the sweep. Other keywords go to :class:`SweepConfig`.
     """
-    metrics = ["steady", "kinematic", "longwave"] if full else ["steady"]
+    metrics: list[str | PointFunction] = ["steady", "kinematic", "longwave"] if full else ["steady"]
     metrics.append(Reduced1D())
     kw.setdefault("markers", ())
     if grid is not None:
@@ -310,7 +309,8 @@ def _dataset(thetas, nus, flows, model):
         "flag_values": np.array([0, 1], dtype=np.int8),
         "flag_meanings": "ok no_steady_flow"})
     attrs = dict(model.attrs())
-    attrs.update(model_key=model.key(), title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
+    attrs.update(model_key=model.key(),
+                 title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
                  engine="walk", chuteflow_version=__version__)
     return xr.Dataset(data, coords={
         "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),

@@ -81,7 +81,7 @@ class ClosureValues(NamedTuple):
 def _numeric(expr):
     """Replace the undefined closures and their first derivatives by value symbols."""
     subs = {}
-    for f, (v, d) in ((_T, _CSYM[0:2]), (_A, _CSYM[2:4]), (_MU, _CSYM[4:6])):
+    for f, (_v, d) in ((_T, _CSYM[0:2]), (_A, _CSYM[2:4]), (_MU, _CSYM[4:6])):
         subs[sp.Derivative(f(RHO), RHO)] = d
     expr = sp.sympify(expr).subs(subs)
     return expr.subs({_T(RHO): _CSYM[0], _A(RHO): _CSYM[2], _MU(RHO): _CSYM[4]})

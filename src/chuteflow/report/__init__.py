@@ -5,8 +5,16 @@
 - :func:`register_stage`, :class:`StageContext` (``registry.py``): how a stage plugs in.
 - :func:`run_reproduce` (``reproduce.py``): runs the stages (``chuteflow reproduce``).
 """
-from .registry import (Stage, StageContext, get_stage, isolated_registry, load_stages,
-                       register_stage, registered_stages, select_stages)
+from .registry import (
+                       Stage,
+                       StageContext,
+                       get_stage,
+                       isolated_registry,
+                       load_stages,
+                       register_stage,
+                       registered_stages,
+                       select_stages,
+)
 from .report import Checkpoint, Figure, Report, Section
 from .reproduce import StageProgress, run_reproduce, summary_table
 

@@ -15,9 +15,10 @@ import sys
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
+
 from .render import render_html, render_markdown
 
 __all__ = ["Checkpoint", "Figure", "Section", "Report", "DEFAULT_TITLE", "GENERAL"]
@@ -149,7 +150,7 @@ class Report:
 
         self.title = title
         self.version: str = __version__
-        self.created: datetime = datetime.now(timezone.utc).replace(microsecond=0)
+        self.created: datetime = datetime.now(UTC).replace(microsecond=0)
         self.parameters: dict[str, Any] = dict(parameters or {})
         self.wall_time: float | None = None
         self.sections: dict[str, Section] = {}

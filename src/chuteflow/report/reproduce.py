@@ -15,8 +15,15 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from rich.console import Console
-from rich.progress import (BarColumn, MofNCompleteColumn, Progress, SpinnerColumn, TaskID,
-                           TextColumn, TimeElapsedColumn)
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    SpinnerColumn,
+    TaskID,
+    TextColumn,
+    TimeElapsedColumn,
+)
 from rich.table import Table
 
 from .papers import DEFAULT_PAPERS, PAPERS
@@ -91,7 +98,7 @@ def _model_defaults() -> dict[str, Any]:
         from chuteflow.closures import ChuteModel
 
         return ChuteModel().as_dict()
-    except Exception as exc:  # noqa: BLE001 - the header is informative only
+    except Exception as exc:  # the header is informative only
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
@@ -176,7 +183,7 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
                 section.status = "running"
                 try:
                     stage.func(ctx)
-                except Exception as exc:  # noqa: BLE001 - recorded, run continues
+                except Exception as exc:  # recorded, run continues
                     section.status = "failed"
                     report.add_checkpoint(Checkpoint(
                         id=f"{stage.name}.completed", source=f"chuteflow stage '{stage.name}'",

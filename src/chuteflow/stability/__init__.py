@@ -56,13 +56,33 @@ round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) −
 drift test but fails the tail test, and shift-invert estimates near it carry round-off of
 ~1e-12 absolute.
 """
-from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
+from .dispersion import (
+                    BranchTracker,
+                    NullVectors,
+                    branch_mode,
+                    critical_k,
+                    crossings,
+                    dispersion,
+                    first_order,
+                    null_vectors,
+)
 from .eigen import ShiftInvert, qz
+from .modes import (
+                    OPERATORS,
+                    Mode,
+                    OperatorCache,
+                    check_n,
+                    choose_n,
+                    least_stable,
+                    mode_near,
+                    nearest_eigenpair,
+                    operator,
+                    spectrum,
+                    stability_operator,
+                    tail,
+)
+from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
 from .policy import DEFAULT_POLICY, RejectionPolicy
-from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_stable, mode_near,
-                    nearest_eigenpair, operator, spectrum, stability_operator, tail)
-from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
-                         dispersion, first_order, null_vectors)
 
 __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "operator",
            "ShiftInvert", "qz",

@@ -141,7 +141,7 @@ class Pencil:
 
     kx: float
     kz: float
-    operator: "StabilityOperator" = field(repr=False)
+    operator: StabilityOperator = field(repr=False)
 
     @property
     def grid(self) -> ChebyshevGrid:

@@ -294,6 +294,7 @@ def _tangent_vectors(flow: SteadyFlow, theta: bool = True):
     exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
     import scipy.linalg as sla
+
     from .solver import _Newton
 
     newton = _Newton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)

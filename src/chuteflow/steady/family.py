@@ -9,6 +9,7 @@ checked at two resolutions exactly as :func:`~chuteflow.steady.solve_steady` doe
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -116,6 +117,7 @@ def _start_n(flow: SteadyFlow, opts: Options) -> int:
 def _predict(point: _Point, theta: float, nu0: float) -> _State:
     """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor)."""
     f = point.flow
+    assert f is not None, "a predictor needs a converged neighbour"
     X = _State(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
     if point.vectors is not None:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
@@ -142,6 +144,7 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
     """Solve at (θ, ν0) from the converged neighbour ``nb``; on failure retry through
     2, then 4, … (up to 2**``opts.substeps``) equal steps on the straight path from the
     neighbour (:func:`~chuteflow.continuation.continue_to`, ``retry="subdivide"``)."""
+    assert nb.flow is not None, "continuation needs a converged neighbour"
     th0, nu00 = nb.flow.theta, nb.flow.nu0
 
     def solve(cur: _Point, s: float) -> Trial:
@@ -149,6 +152,7 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
             th, nu = theta, nu0
         else:
             th, nu = th0 + (theta - th0) * s, nu00 + (nu0 - nu00) * s
+        assert cur.flow is not None  # continue_to steps only from accepted (usable) points
         q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
         if q.usable and s != 1.0:
             q = _with_tangent(q, opts)
@@ -157,7 +161,9 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
     res = continue_to(solve, nb, 0.0, 1.0, StepRules(retry="subdivide",
                                                      max_depth=opts.substeps))
     # the answer is the last attempt at the target (a failed one carries the error)
-    return _with_tangent(res.last_at(1.0).value, opts)
+    last = res.last_at(1.0)
+    assert last is not None  # continue_to always attempts the target
+    return _with_tangent(last.value, opts)
 
 
 def _cold(theta, nu0, model, opts) -> _Point:
@@ -166,7 +172,8 @@ def _cold(theta, nu0, model, opts) -> _Point:
 
 def _anchor_order(n: int) -> list[int]:
     """Cold-start candidates spread over the row: middle, quartiles, eighths, …"""
-    order, seen = [], set()
+    order: list[int] = []
+    seen: set[int] = set()
     k = 2
     while len(order) < n:
         for j in range(1, k, 2):
@@ -206,7 +213,7 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     prev = previous if previous is not None else [None] * N
     order = _anchor_order(N)
     # a θ source is identified by its angle, so that both neighbouring rows can be tried
-    ttag = ("theta", next((p.flow.theta for p in prev if p is not None and p.usable), None))
+    ttag = ("theta", next((p.flow.theta for p in prev if p is not None and p.flow is not None), None))
 
     def usable(i):
         return pts[i] is not None and pts[i].usable
@@ -221,20 +228,22 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     while True:
         walked = False
         for i in range(1, N):
-            if not usable(i) and usable(i - 1) and "below" not in tried[i]:
-                attempt(i, "below", lambda: _continue(pts[i - 1], theta, nus[i], model, opts))
+            below = pts[i - 1]
+            if not usable(i) and below is not None and below.usable and "below" not in tried[i]:
+                attempt(i, "below", functools.partial(_continue, below, theta, nus[i], model, opts))
                 walked = True
         for i in range(N - 2, -1, -1):
-            if not usable(i) and usable(i + 1) and "above" not in tried[i]:
-                attempt(i, "above", lambda: _continue(pts[i + 1], theta, nus[i], model, opts))
+            above = pts[i + 1]
+            if not usable(i) and above is not None and above.usable and "above" not in tried[i]:
+                attempt(i, "above", functools.partial(_continue, above, theta, nus[i], model, opts))
                 walked = True
         if walked:
             continue
-        cand = [i for i in order if not usable(i) and prev[i] is not None and prev[i].usable
-                and ttag not in tried[i]]
-        if cand:
-            i = cand[0]
-            attempt(i, ttag, lambda: _continue(prev[i], theta, nus[i], model, opts))
+        seeded = [(i, src) for i in order if not usable(i) and (src := prev[i]) is not None and src.usable
+                  and ttag not in tried[i]]
+        if seeded:
+            i, seed = seeded[0]
+            attempt(i, ttag, functools.partial(_continue, seed, theta, nus[i], model, opts))
             continue
         if not cold_starts:
             break
@@ -249,14 +258,14 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
             break
         cold += 1
-        attempt(cand[0], "cold", lambda: _cold(theta, nus[cand[0]], model, opts))
+        attempt(cand[0], "cold", functools.partial(_cold, theta, nus[cand[0]], model, opts))
     out = []
-    for p, t in zip(pts, tried):
-        if p is None:
-            p = _Point(_UNREACHED, None, "not reached: no converged neighbour to continue "
-                       "from and no cold start tried here")
-        p.tried = frozenset(t)
-        out.append(p)
+    for pt, t in zip(pts, tried):
+        point = pt if pt is not None else _Point(
+            _UNREACHED, None, "not reached: no converged neighbour to continue "
+            "from and no cold start tried here")
+        point.tried = frozenset(t)
+        out.append(point)
     return out
 
 
@@ -271,6 +280,7 @@ def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
         if p.status != "ok":
             continue
         f = p.flow
+        assert f is not None  # status "ok" carries a flow
         for k in ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max",
                   "y_peak", "nu_peak", "convergence"):
             out[k][i] = getattr(f, k)
@@ -399,6 +409,7 @@ def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=No
 
     root = brentq(g, float(fam.nu0[i - 1]), float(fam.nu0[i]), xtol=xtol, rtol=1e-12)
     f = (cache.get(root) or _continue(seeds[0], theta, root, model, opts)).flow
+    assert f is not None  # g(root) was evaluated, and g raises where no flow converged
     return {"nu0": root, "rho_bar": f.rho_bar, "Q": f.Q, "h": f.h, "nu_mean": f.nu_mean,
             "bracket": (float(fam.nu0[i - 1]), float(fam.nu0[i])), "family": fam}
 

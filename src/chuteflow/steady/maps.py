@@ -9,13 +9,13 @@ processes (one BLAS thread each).
 from __future__ import annotations
 
 import os
+from typing import Any
 
 import numpy as np
 
 from ..closures import ChuteModel
 from ..errors import ParameterError
-from .family import (SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row,
-                     dataset_attrs)
+from .family import SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row, dataset_attrs
 from .solver import _validate
 
 
@@ -197,7 +197,7 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
     cand = per_col[:columns] + ([extreme] if extreme not in per_col[:columns] else [])
     nu_end = nus[-1] if side == "low" else nus[0]
     sign = -1.0 if side == "low" else 1.0
-    best = None
+    best: tuple[Any, bool] | None = None
     for th, i, j in cand:
         g = flows[i][j]
         for _ in range(3):
@@ -215,6 +215,7 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
         better = best is None or sign * (g.theta - best[0].theta) > 0
         if better:
             best = (g, reached)
+    assert best is not None  # cand holds at least one column, and each sets best once
     g, reached = best
     return {"theta": float(g.theta), "nu0": float(g.nu0), "h": float(g.h),
             "map_theta": float(per_col[0][0]), "ends": not reached}

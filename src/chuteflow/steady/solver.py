@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
@@ -156,7 +157,9 @@ class _Newton:
         part = self.model.evaluate(nu, st.T)
         N = 3 * m + 1
         R = np.empty(N)
-        J = np.zeros((N, N)) if jac else None
+        J: np.ndarray | None = np.zeros((N, N)) if jac else None
+        dnu: tuple[Any, ...]  # by jet order c (c = 0 is never used: None)
+        mats: tuple[Any, ...]
         jets = {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])}
         if jac:
             # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs
@@ -175,7 +178,7 @@ class _Newton:
             res = np.broadcast_to(res, (m,))[sl]
             scale = scales[kind][sl]
             R[rows] = scale * res
-            if not jac:
+            if J is None:  # no Jacobian wanted
                 continue
             Jr = J[rows]  # view into J: rows of this equation
             dL = np.zeros(len(res))
@@ -207,7 +210,7 @@ class _Newton:
         # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
         R[0] = st.s[0] - self.ln0
         R[-1] = st.s[n] - self.lntop
-        if jac:
+        if J is not None:
             J[0, 0] = 1.0
             J[-1, n] = 1.0
         return R, J

@@ -157,7 +157,7 @@ def _marker_regimes(ds, reg):
 
 def regime_summary(ds) -> dict:
     """Per regime: number of grid points, median (h, ν̄), largest ν̄, θ range; for reports."""
-    out = {}
+    out: dict[str, dict[str, float]] = {}
     if "regime" not in ds:
         return out
     reg = ds["regime"].values

@@ -307,7 +307,8 @@ class SweepConfig:
                 "model": self.model.to_dict(),
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
                 "steady_rtol": self.steady_rtol, "n_max": self.n_max,
-                "min_thickness": self.min_thickness, "chunk": self.chunk, "markers": [list(m) for m in self.markers],
+                "min_thickness": self.min_thickness, "chunk": self.chunk,
+                "markers": [list(m) for m in self.markers],
                 "chuteflow_version": __version__}
 
     def digest(self) -> str:

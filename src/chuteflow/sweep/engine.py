@@ -173,7 +173,7 @@ class Sweep:
         ds = assemble(cfg, parts)
         if self.out is not None:
             write_dataset(ds, self.out)
-            if not self.keep_parts:
+            if not self.keep_parts and store is not None:  # a store exists when out is set
                 store.remove()
         st.seconds = time.perf_counter() - t0
         return ds
@@ -185,7 +185,7 @@ class Sweep:
         try:
             ds = load_sweep(self.out)
             old = ds.attrs.get("config_digest")
-        except Exception:  # noqa: BLE001 - unreadable: treated as foreign
+        except Exception:  # unreadable: treated as foreign
             ds, old = None, None
         if old == digest:
             return ds
@@ -273,8 +273,14 @@ class _Progress:
 
     def __enter__(self):
         if self.spec is True:
-            from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn,
-                                       TimeElapsedColumn, TimeRemainingColumn)
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
             self._rich = Progress(TextColumn("{task.description}"), BarColumn(),
                                   MofNCompleteColumn(), TextColumn("points"),
                                   TimeElapsedColumn(), TextColumn("ETA"),

@@ -108,7 +108,8 @@ class GrowthMetric(PointFunction):
     geometrically spaced in [k_min, k_max]. k_c, the first sign change of Re α from + to −,
     is refined by Brent's method on the mode nearest the linear prediction inside the bracket
     (relative tolerance 1e-6). A failure (branch lost, N = ``n_max`` not enough) leaves the
-    values missing (``dispersion_sampled`` = 1) and is noted in the point's message. Evaluated at the sampled points (every ``stride``-th point in θ
+    values missing (``dispersion_sampled`` = 1) and is noted in the point's message.
+    Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
     Re α2 > 0 (about 5 s a point: off by default for diagrams).
     """

@@ -22,7 +22,6 @@ and of its hash, so a sweep with other options never reuses old results.
 from __future__ import annotations
 
 import importlib
-
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -76,7 +75,7 @@ class Variable:
         return {"float": np.float64, "flag": np.int8, "int": np.int32}[self.kind]
 
     def attrs(self) -> dict:
-        a = {"units": self.units, "long_name": self.long_name}
+        a: dict[str, Any] = {"units": self.units, "long_name": self.long_name}
         if self.source:
             a["source"] = self.source
         if self.kind == "flag":
@@ -200,6 +199,7 @@ def point_function(spec) -> PointFunction:
     """A point function from a name, a ``{"name", "options"}`` dict, or an instance."""
     if isinstance(spec, PointFunction):
         return spec
+    name: Any  # from a mapping, anything: an unknown name raises below
     if isinstance(spec, str):
         name, options = spec, {}
     elif isinstance(spec, Mapping):

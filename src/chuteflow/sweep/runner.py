@@ -11,10 +11,14 @@ import time
 import traceback
 import warnings
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import ChuteflowError, ConvergenceError, NoSteadyFlowError
+
+if TYPE_CHECKING:
+    from ..steady import SteadyFlow
 
 __all__ = ["STATUS", "TaskResult", "run_task", "warm_up"]
 
@@ -147,7 +151,7 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
         if marker:
             # marked points are unrelated: each from the cold start
             pts = [(config.markers[j][1], config.markers[j][2]) for j in range(task.j0, task.j1)]
-            steady = []
+            steady: list[tuple[SteadyFlow | None, str, str]] = []
             for th, nu in pts:
                 try:
                     steady.append((solve_steady(th, nu, model, **kw), "ok", ""))
@@ -155,14 +159,14 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                     steady.append((None, "no_steady_flow", str(exc)))
                 except ConvergenceError as exc:
                     steady.append((None, "not_converged", f"steady: {exc}"))
-                except Exception as exc:  # noqa: BLE001
+                except Exception as exc:
                     steady.append((None, "error", f"steady: {type(exc).__name__}: {exc}"))
         else:
             th = config.theta[task.i]
             pts = [(th, config.nu0[j]) for j in range(task.j0, task.j1)]
             try:
                 steady = _steady_chunk(config, th, [p[1] for p in pts], model)
-            except Exception as exc:  # noqa: BLE001 - the whole chunk failed
+            except Exception as exc:  # the whole chunk failed
                 steady = [(None, "error", f"steady: {type(exc).__name__}: {exc}")] * len(pts)
         msec["steady"] += time.perf_counter() - t0
         # the steady solves of a chunk are shared: spread their time evenly
@@ -188,7 +192,7 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                     for name, val in coerced.items():
                         values[name][k] = val
                         point.values[name] = val
-                except Exception as exc:  # noqa: BLE001 - recorded for this point
+                except Exception as exc:  # recorded for this point
                     code = (STATUS["not_converged"] if isinstance(exc, ConvergenceError)
                             else STATUS["error"])
                     text = f"{f.name}: {exc}"

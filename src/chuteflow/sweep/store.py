@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import shutil
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -100,7 +101,7 @@ class PartStore:
         return keys
 
     def write(self, res: TaskResult) -> None:
-        arrays = {f"v_{k}": v for k, v in res.values.items()}
+        arrays: dict[str, Any] = {f"v_{k}": v for k, v in res.values.items()}
         arrays.update(status=res.status, message=res.message, digest=np.array(res.digest),
                       key=np.array(res.key), index=np.array([res.i, res.j0, res.j1]))
         atomic_write(self.path(res.key), lambda fh: np.savez(fh, **arrays))

@@ -133,7 +133,7 @@ def check_C_monotonicity(ds) -> dict:
 
 def check_markers(ds) -> list[dict]:
     """P1, P4, P5, Q3 unstable; P2, P3 stable (sign of Re α2 at the point itself)."""
-    out = []
+    out: list[dict] = []
     if "marker" not in ds.dims or "marker_unstable" not in ds:
         return out
     for m, name in enumerate(ds["marker"].values):

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import json
 import math
+from typing import Any
 
 import numpy as np
 
@@ -64,8 +65,8 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     specs = {json.loads(s)["name"]: json.loads(s) for s in cfg.metrics}
     fns = [point_function(specs[name]) for name in ("steady", "kinematic", "longwave")]
     model = cfg.model
-    kw = dict(nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max,
-              min_thickness=cfg.min_thickness)
+    kw: dict[str, Any] = dict(nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max,
+                              min_thickness=cfg.min_thickness)
     st = ds["status"].values
     nus = ds["nu0"].values
     out = []
@@ -76,7 +77,7 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
         if len(ok) == 0:
             continue
         j = int(ok[0])
-        rec = {"theta": theta}
+        rec: dict[str, Any] = {"theta": theta}
         reg = int(ds["regime"].values[i, j]) if "regime" in ds else -1
         if j == 0 and reg in (1, 2):
             # already unstable at the grid's lowest density: nothing to extend

@@ -24,5 +24,5 @@ IMPORT_ERRORS: dict[str, BaseException] = {}
 for _name in STAGE_MODULES:
     try:
         import_module(f"{__name__}.{_name}")
-    except Exception as _exc:  # noqa: BLE001 - reported by the runner
+    except Exception as _exc:  # reported by the runner
         IMPORT_ERRORS[_name] = _exc

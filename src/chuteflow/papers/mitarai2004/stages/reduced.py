@@ -6,7 +6,6 @@ import math
 import warnings
 from pathlib import Path
 
-
 from ....report.registry import StageContext, register_stage
 from ..points import REDUCED_SHAPE
 

@@ -100,7 +100,7 @@ def _run(ctx: StageContext) -> None:
             ds = dispersion(flow, _k_grid(k_max, q), strict=False)
             found = crossings(flow, k_max=k_max, num=15 if q else 40)
             R.small[name] = dispersion(flow, small_k, strict=False)
-        except Exception as exc:  # noqa: BLE001 - recorded as a failed checkpoint below
+        except Exception as exc:  # recorded as a failed checkpoint below
             R.errors[name] = f"{type(exc).__name__}: {exc}"
             continue
         R.kc[name] = found
@@ -121,7 +121,7 @@ def _run(ctx: StageContext) -> None:
         ctx.progress(f"long-wave coefficients {name}")
         try:
             R.lw[name] = longwave(R.flows[name], rtol=rtol)
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             R.errors[f"longwave {name}"] = f"{type(exc).__name__}: {exc}"
             rep.check(f"stability.{name}_longwave_computed", source="§5.1.1, App. B",
                       statement=f"The long-wave coefficients at {name} can be computed.",
@@ -171,7 +171,7 @@ def _magnification(ctx, R):
                                    np.geomspace(1e-6, 5e-3, 15 if ctx.quick else 25)]))
     try:
         ds = dispersion(R.flows["P1"], ks, strict=False)
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         ctx.report.check("stability.dispmag_computed", source="figure 8",
                          statement="The dispersion relation of P1 near k = 0 can be computed.",
                          computed=f"{type(exc).__name__}: {exc}", passed=False)
@@ -434,7 +434,7 @@ def _convergence(ctx, R):
         try:
             a = least_stable(flow, k).alpha
             b = least_stable(flow, k, n=200).alpha
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             lines.append(f"{name}, k = {k:g}: {type(exc).__name__}: {exc}")
             worst = math.inf
             continue
@@ -453,7 +453,7 @@ def _convergence(ctx, R):
         try:
             br = least_stable(flow, K_EIGEN)
             modes = spectrum(flow, K_EIGEN, n=br.n)
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             lines.append(f"{name}: {type(exc).__name__}: {exc}")
             ok = False
             continue
@@ -519,7 +519,8 @@ def _eigenfunctions(ctx, R):
                             "perturbation" + (" (the perturbation decays)" if sign < 0 else
                                               " (the perturbation grows)"),
                   computed=f"∫Re[ν̂*(−ν0 ∇·û)] dy / ∫|ν̂|² dy = {d['compression']:.4e} "
-                           f"({'> 0: into the positive' if d['compression'] > 0 else '< 0: into the negative'} "
+                           "(" + ("> 0: into the positive" if d["compression"] > 0
+                                  else "< 0: into the negative") + " "
                            f"region); with the vertical advection {d['vertical_advection']:.3e} "
                            f"it adds up to Re α = {d['growth_rate']:.4e}",
                   passed=sign * d["compression"] > 0,

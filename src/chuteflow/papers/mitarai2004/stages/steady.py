@@ -3,9 +3,13 @@ paper's statements about them, each checked and reported with the value computed
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 from ....report.registry import StageContext, register_stage
 from ..points import figure
+
+if TYPE_CHECKING:
+    from ....steady import SteadyFlow
 
 #: (θ grid, ν0 grid) of the maps. Quick: 1° × 14 floor densities; full: 0.25° × 40. The
 #: ends of the existence range are then refined by continuation beyond the map.
@@ -57,8 +61,8 @@ def _run(ctx: StageContext) -> None:
     from ....closures import ChuteModel
     from ....figures.steady import profiles_figure, steady_phase_figure
     from ....steady import flux_minimum, solve_steady, steady_map
-    from ....steady.maps import existence_limit
     from ....steady.family import separatrix
+    from ....steady.maps import existence_limit
 
     limit_blas_threads(1)
     q = ctx.quick
@@ -149,11 +153,11 @@ def _run(ctx: StageContext) -> None:
         # profiles
         th_p, nus_p, figp = _PROFILES[phi]
         ctx.progress(f"φ = {phi:g}: profiles at θ = {th_p:g}°")
-        flows = []
+        flows: list[SteadyFlow | None] = []
         for nu0 in nus_p:
             try:
                 flows.append(solve_steady(th_p, nu0, model))
-            except Exception as exc:  # noqa: BLE001 - reported, the figure shows the rest
+            except Exception as exc:  # reported, the figure shows the rest
                 rep.add_note(f"profile θ = {th_p:g}°, ν0(0) = {nu0:g}: {exc}")
                 flows.append(None)
         png = profiles_figure(flows, ctx.path(f"{figp}.png"),
@@ -191,7 +195,7 @@ def _run(ctx: StageContext) -> None:
                     f"with θ ≥ {sp['bracket'][1]:.4g}° keep growing; at the separatrix h ≈ "
                     f"{sp['h']:.3g} (ν̄ = {sp['nu_mean']:.2g}). Tolerance: θ* in [14, 15.5]°, "
                     "h within 30 % of 7 (read off the paper's figure)")
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         ok, computed = False, f"separatrix not found: {exc}"
     rep.check("steady.separatrix_phi0.05", source="§3.2, figure 2(a)",
               statement="The (h, ν̄) contours separate near h ≈ 7 around θ ≈ 15°: θ ≤ 14° "
