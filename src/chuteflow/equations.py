@@ -1,7 +1,7 @@
 """The governing equations, stated once, and their exact linearisation.
 
-The hydrodynamic equations eq:rho, eq:u, eq:temp with the constitutive relations of
-eq:pmuetc and the floor conditions eq:bc1, eq:bc2 are written here a single time, in
+The hydrodynamic equations (2.1), (2.2), (2.3) with the constitutive relations of
+eq. (2.7) and the floor conditions eqs (2.9), (2.10) are written here a single time, in
 *jet space*: every field f ∈ (ν, u, v, w, T) and each of its partial derivatives
 ∂_t^a ∂_x^b ∂_y^c ∂_z^d f is an independent symbol, and the total derivative D_x, D_y, …
 is the chain rule over those symbols. Transport functions p(ν, T), μ, ζ, κ, Γ and the floor
@@ -11,9 +11,9 @@ by :class:`chuteflow.closures.ChuteModel`, so the derivation below is closure in
 From this one statement sympy derives
 
 * the residual of each equation at a state uniform along the slope (``v = w = 0``, fields
-  depending on ``y`` only): the steady equations of §3 (eq:steady1–3);
+  depending on ``y`` only): the steady equations of §3 (eqs 3.4–3.6);
 * the coefficient of every perturbation jet, ∂R/∂J at such a state: the linear operator
-  of Appendix A (eq:leqnu … eq:leqT, eq:bc0u, eq:bc0T), for a normal mode
+  of Appendix A (eqs A 1 … A 4, A 5, A 6), for a normal mode
   exp(αt + i k_x x + i k_z z) where a jet (a, b, c, d) of a field becomes
   α^a (i k_x)^b (i k_z)^d d^c/dy^c. The same coefficients at an arbitrary y-dependent state
   are the exact Jacobian used by the steady Newton solver.
@@ -127,7 +127,7 @@ def D(expr: sp.Expr, axis: str) -> sp.Expr:
 
 @dataclass(frozen=True)
 class _Continuum:
-    """Constitutive statement shared by every equation below (eq:pmuetc)."""
+    """Constitutive statement shared by every equation below (eq. 2.7)."""
 
     F: dict  # p, mu, zeta, kappa, Gamma, eta_star, Gamma_star as functions of (ν, T)
     vel: tuple  # (u, v, w) jets
@@ -139,7 +139,7 @@ class _Continuum:
 
 @functools.cache
 def _continuum() -> _Continuum:
-    """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq:pmuetc) and gravity, in jet space."""
+    """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq. 2.7) and gravity, in jet space."""
     nu, T = jet("nu"), jet("T")
     vel = [jet("u"), jet("v"), jet("w")]
     F = {name: sp.Function(name)(nu, T) for name in FUNCTIONS}
@@ -159,10 +159,10 @@ def _continuum() -> _Continuum:
 
 @functools.cache
 def governing_equations() -> dict[str, sp.Expr]:
-    """Residuals of eq:rho, eq:u (x, y, z), eq:temp and the floor conditions, in jet space.
+    """Residuals of eqs (2.1), (2.2) (x, y, z), eq. (2.3) and the floor conditions, in jet space.
 
     Dimensionless (σ, ρ_p σ³, √(σ/g)); gravity g = (sin θ, −cos θ, 0); Σ = (p − ζ∇·u)I − 2μS,
-    q = −κ∇T (eq:pmuetc). Floor normal n = e_y.
+    q = −κ∇T (eq. 2.7). Floor normal n = e_y.
     """
     c = _continuum()
     nu, T = jet("nu"), jet("T")
@@ -179,7 +179,7 @@ def governing_equations() -> dict[str, sp.Expr]:
     eqs["energy"] = (-sum(D(q[j], sp_axes[j]) for j in range(3))
                      - sum(Sigma[i][j] * grad[j][i] for i in range(3) for j in range(3))
                      - F["Gamma"] - sp.Rational(3, 2) * nu * material(T))
-    # floor y = 0, n = e_y: impermeable; eq:bc1 (tangential momentum); eq:bc2 (energy)
+    # floor y = 0, n = e_y: impermeable; eq. (2.9) (tangential momentum); eq. (2.10) (energy)
     eqs["floor_v"] = vel[1]
     eqs["floor_x"] = -Sigma[1][0] - F["eta_star"] * vel[0]
     eqs["floor_z"] = -Sigma[1][2] - F["eta_star"] * vel[2]

@@ -104,7 +104,7 @@ def reduced(
         kmax, smax = state.most_unstable()
         con.print(
             f"at ν0(0) = {nu0:g}: ρ0 = {state.rho0:.6g}, U = {state.U:.6g}, α(k) = "
-            f"−i {state.dq0:.6g} k + {state.alpha2:.6g} k² + O(k³) (disp-oned); criterion "
+            f"−i {state.dq0:.6g} k + {state.alpha2:.6g} k² + O(k³) (eq. 5.14); criterion "
             f"{state.criterion_margin:+.4g} → {'unstable' if state.unstable else 'stable'}; "
             f"k_c = {state.k_c:.4g}, L_c = 2π/k_c = {state.L_c:.4g}; fastest growth "
             f"{smax:.4g} at k = {kmax:.4g}", highlight=False)

@@ -1,4 +1,4 @@
-"""Stability diagram in the (h, ν̄) plane from a sweep Dataset (paper figs phase005, phase010).
+"""Stability diagram in the (h, ν̄) plane from a sweep Dataset (paper figures 6, 12).
 
 Every grid point (θ, ν0(0)) with a steady flow is mapped to (h, ν̄). The grid's own connectivity
 gives a triangulation of the mapped plane (two triangles per grid cell whose corners all have a

@@ -1,4 +1,4 @@
-"""Figures of the reduced 1D model (§5.1.2, fig phaseoned) and of its nonlinear density waves.
+"""Figures of the reduced 1D model (§5.1.2, figure 15) and of its nonlinear density waves.
 
 - :func:`plot_functions`: F, T̄, a, U, the flux q0 = ρ̄U next to the full model's Q0, and the
   criterion (ρ̄U')² − (ρ̄T̄)' along a steady family.
@@ -70,7 +70,7 @@ def plot_functions(rm, n: int = 300):
     ylim = np.nanpercentile(np.r_[m, dP], [2, 98])
     pad = 0.1 * (ylim[1] - ylim[0] + 1e-12)
     ax.set_ylim(ylim[0] - pad, ylim[1] + pad)
-    ax.fill_between(r, *ax.get_ylim(), where=m > 0, color="0.85", label="unstable (criterion)")
+    ax.fill_between(r, *ax.get_ylim(), where=m > 0, color="0.85", label="unstable (eq. 5.13)")
     ax.fill_between(r, *ax.get_ylim(), where=dP < 0, color="0.6", alpha=0.5,
                     label="(ρ̄T̄)′ < 0: all k grow")
     ax.set_xlabel("ρ̄")
@@ -125,7 +125,7 @@ def _panel(ax, ds, var, title, *, short_var=None, disagree=None):
 
 
 def plot_phase_diagrams(reduced, full=None, *, agreement=None):
-    """1D diagram(s) (fig phaseoned); ``reduced`` is one Dataset or a list (one per φ).
+    """1D diagram(s) (figure 15); ``reduced`` is one Dataset or a list (one per φ).
 
     ``full``: matching full-model sweep Dataset(s) (``unstable`` from
     :func:`chuteflow.sweep.classify`), drawn in a second row; points the two classify

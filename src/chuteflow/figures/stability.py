@@ -1,11 +1,11 @@
 """Figures of the linear stability analysis (paper §4.2) and the eigenfunction diagnostics.
 
-- :func:`dispersion_figure` — figs disp, disp-AC, disp01 (7, 9, 13): Re α(k) and Im α(k) of
+- :func:`dispersion_figure` — figures 7, 9, 13: Re α(k) and Im α(k) of
   the least-stable (α(0) = 0) branch, one column per steady flow, critical k_c marked.
-- :func:`magnification_figure` — fig dispmag (8): the branch near k = 0 with the long-wave
+- :func:`magnification_figure` — figure 8: the branch near k = 0 with the long-wave
   expansion overlaid: Re α against α2 k², Im α against the slope −dQ0/dρ̄0, and Re α / k²
-  against k, which shows how narrow the k² regime is (ERRATA, numerical notes).
-- :func:`eigenfunction_figure` — figs eigens, eigenu, eigenu01 (10, 11, 14): over one
+  against k, which shows how narrow the k² regime is (docs/errata.md, numerical notes).
+- :func:`eigenfunction_figure` — figures 10, 11, 14: over one
   wavelength λ = 2π/k, grey-scale contours of Re[ν̂(y) e^{ikx}] (a) and Re[T̂(y) e^{ikx}] (b),
   the velocity perturbation (Re û e^{ikx}, Re v̂ e^{ikx}) as arrows on (a), and optionally a
   magnified part of (a) as panel (c).
@@ -68,7 +68,7 @@ def _crossing_marks(ds, k_c):
 
 def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int = 150,
                       k_max: float | None = None):
-    """Dispersion relations α(k) of the least-stable branch (figs disp, disp-AC, disp01).
+    """Dispersion relations α(k) of the least-stable branch (figures 7, 9, 13).
 
     Parameters
     ----------
@@ -146,7 +146,7 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
 def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
                          alpha2_uncertainty: float | None = None, k_mag: float | None = None,
                          label: str = "", title: str | None = None, dpi: int = 150):
-    """The least-stable branch near k = 0 with the long-wave expansion (fig dispmag).
+    """The least-stable branch near k = 0 with the long-wave expansion (figure 8).
 
     Parameters
     ----------
@@ -156,7 +156,7 @@ def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
     alpha2 : complex
         Long-wave coefficient of α = α1 k + α2 k² + … (:func:`chuteflow.longwave.longwave`).
     dQ_drho : float
-        dQ0/dρ̄0 along the steady family (eq:dqdh); Im α / k → −dQ0/dρ̄0 (Appendix B).
+        dQ0/dρ̄0 along the steady family (eq. B 6); Im α / k → −dQ0/dρ̄0 (Appendix B).
     alpha2_uncertainty : float, optional
         Relative uncertainty of Re α2 (its convergence estimate), drawn as a band in (c).
     k_mag : float, optional
@@ -284,7 +284,7 @@ def eigenfunction_fields(mode, flow, *, y_top: float | None = None, nx: int = 12
 def eigenfunction_diagnostics(mode, flow) -> dict:
     """Numbers behind the paper's statements about an eigenfunction (§4.2, figs 10, 11, 14).
 
-    With perturbations ∝ e^{αt + ikx}, the linearised mass balance (eq:leqnu),
+    With perturbations ∝ e^{αt + ikx}, the linearised mass balance (eq. A 1),
     α ν̂ + ik u0 ν̂ + ν0' v̂ + ν0 (ik û + v̂') = 0, multiplied by ν̂* and integrated over y gives
 
         Re α ∫|ν̂|² dy = ∫ Re[ν̂* (−ν0 ∇·û)] dy + ∫ Re[ν̂* (−ν0' v̂)] dy,
@@ -386,7 +386,7 @@ def _arrows(ax, F, xlim=(0.0, 1.0), ylim=None, nxq=17, nyq=12):
 def eigenfunction_figure(mode, flow, path=None, *, label: str = "", y_top: float | None = None,
                          x_peak: float = 0.0, magnify: tuple | None = None,
                          title: str | None = None, dpi: int = 150):
-    """Eigenfunction over one wavelength (figs eigens, eigenu, eigenu01).
+    """Eigenfunction over one wavelength (figures 10, 11, 14).
 
     Parameters
     ----------

@@ -1,11 +1,11 @@
 """Steady-flow figures of §3.2: the (h, ν̄) map, Q0(ρ̄0), and the profiles ν0, u0, T0.
 
-- :func:`plot_h_nubar` — figs steadyphase005(a) / steadyphase010(a): contour lines of θ in
+- :func:`plot_h_nubar` — figures 2(a) / 4(a): contour lines of θ in
   the (h, ν̄) plane (each θ row of a :func:`~chuteflow.steady.steady_map` is one line), the
   non-monotonic region shaded grey.
-- :func:`plot_flux_density` — figs steadyphase005(b) / steadyphase010(b): Q0 against ρ̄0 for
+- :func:`plot_flux_density` — figures 2(b) / 4(b): Q0 against ρ̄0 for
   families at fixed θ, with the minimum marked where there is one.
-- :func:`plot_profiles` — figs steady / steady01: ν0(y), u0(y), T0(y).
+- :func:`plot_profiles` — figures 3 / 5: ν0(y), u0(y), T0(y).
 - :func:`steady_phase_figure`, :func:`profiles_figure` — the paper's panel layouts, saved.
 """
 from __future__ import annotations
@@ -100,7 +100,7 @@ def plot_flux_density(families, ax=None, *, minima: dict | None = None):
 
 
 def plot_profiles(flows, axes=None, *, y_max: float | None = None):
-    """ν0(y), u0(y), T0(y) of steady flows, one line style per flow (figs steady, steady01).
+    """ν0(y), u0(y), T0(y) of steady flows, one line style per flow (figures 3, 5).
 
     Profiles are drawn from the spectral interpolant on a fine grid.
     """
@@ -127,7 +127,7 @@ def plot_profiles(flows, axes=None, *, y_max: float | None = None):
 
 
 def steady_phase_figure(map_ds, families, path: str | Path, *, minima=None, title=""):
-    """Two panels as figs steadyphase005/010: (a) θ contours in (h, ν̄), (b) Q0(ρ̄0)."""
+    """Two panels as figures 2/4: (a) θ contours in (h, ν̄), (b) Q0(ρ̄0)."""
     import matplotlib.pyplot as plt
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
@@ -144,7 +144,7 @@ def steady_phase_figure(map_ds, families, path: str | Path, *, minima=None, titl
 
 
 def profiles_figure(flows, path: str | Path, *, title: str = "", y_max=None):
-    """Three panels as figs steady/steady01: (a) ν0, (b) u0, (c) T0 against y."""
+    """Three panels as figures 3/5: (a) ν0, (b) u0, (c) T0 against y."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(10, 3.6))

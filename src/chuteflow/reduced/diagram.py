@@ -1,4 +1,4 @@
-"""Stability diagrams of the 1D model (figure phaseoned) and their agreement with the full model.
+"""Stability diagrams of the 1D model (figure 15) and their agreement with the full model.
 
 The 1D criterion at a grid point (θ, ν0(0)) needs only that steady flow and its family
 tangent (:func:`~chuteflow.reduced.model.local_coefficients`), so the diagram is a sweep
@@ -29,7 +29,7 @@ FULL_SHAPE = (60, 60)
 
 @register_point_function
 class Reduced1D(PointFunction):
-    """The 1D model's linear theory at one steady flow (labels criterion, disp-oned, condition).
+    """The 1D model's linear theory at one steady flow (eqs (5.13), (5.14), (5.12)).
 
     Exact: F', T̄' and a' come from the family tangent of the steady solver.
     """
@@ -39,21 +39,21 @@ class Reduced1D(PointFunction):
     requires = ("steady",)
     variables = (
         Variable("r1d_margin", "1", "(ρ0 U')² − (ρ0 T̄)' of the 1D model (> 0: unstable)",
-                 source="criterion"),
+                 source="eq. (5.13)"),
         Variable("r1d_unstable", "1", "1D model long-wave unstable, (ρ0U')² > (ρ0T̄)'",
-                 kind="flag", source="criterion"),
+                 kind="flag", source="eq. (5.13)"),
         Variable("r1d_short_wave", "1", "(ρ0T̄)' < 0: the 1D model grows at every wavelength",
                  kind="flag"),
         Variable("r1d_alpha2", "sigma^(3/2) g^(1/2)", "α2 of the 1D model",
-                 source="disp-oned"),
+                 source="eq. (5.14)"),
         Variable("r1d_k_c", "1/sigma", "critical wavenumber k_c of the 1D model (inf: all k "
-                 "grow, 0: stable)", source="condition (ERRATA 4)"),
-        Variable("r1d_U", "sqrt(g sigma)", "U(ρ0) = ρ0 sinθ / a(ρ0)", source="oneaandu"),
-        Variable("r1d_dU", "sqrt(g sigma)/sigma", "U'(ρ0)", source="oneaandu"),
+                 "grow, 0: stable)", source="eq. (5.12) (docs/errata.md, item 4)"),
+        Variable("r1d_U", "sqrt(g sigma)", "U(ρ0) = ρ0 sinθ / a(ρ0)", source="eq. (5.11)"),
+        Variable("r1d_dU", "sqrt(g sigma)/sigma", "U'(ρ0)", source="eq. (5.11)"),
         Variable("r1d_dq0", "sqrt(g sigma)", "dq0/dρ0 = (ρ0 U)' (the long-wave phase velocity, "
-                 "positive down the slope)", source="disp-oned"),
+                 "positive down the slope)", source="eq. (5.14)"),
         Variable("r1d_dP", "g sigma", "(ρ0 T̄)'"),
-        Variable("r1d_a", "sqrt(g/sigma)", "floor drag a(ρ0) = η*(F, T̄)", source="oneaandu"),
+        Variable("r1d_a", "sqrt(g/sigma)", "floor drag a(ρ0) = η*(F, T̄)", source="eq. (5.11)"),
         Variable("r1d_Tbar", "g sigma", "mean temperature T̄(ρ0)"),
     )
 
@@ -92,7 +92,7 @@ def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_
                     nu0_range=None, grid=None, engine: str = "sweep", out=None,
                     workers: int | None = 1, progress=None, full: bool = False, model=None,
                     fresh: bool = False):
-    """The 1D model's stability over a (θ, ν0(0)) grid (figure phaseoned), as a Dataset.
+    """The 1D model's stability over a (θ, ν0(0)) grid (figure 15), as a Dataset.
 
     Parameters
     ----------
@@ -310,7 +310,7 @@ def _dataset(thetas, nus, flows, model):
         "flag_meanings": "ok no_steady_flow"})
     attrs = dict(model.attrs())
     attrs.update(model_key=model.key(),
-                 title="1D model stability diagram (Mitarai & Nakanishi fig. phaseoned)",
+                 title="1D model stability diagram (Mitarai & Nakanishi figure 15)",
                  engine="walk", chuteflow_version=__version__)
     return xr.Dataset(data, coords={
         "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),
@@ -335,7 +335,7 @@ def agreement(reduced_ds, full_ds, *, full_var: str = "unstable", h_min: float =
     missing; default ``unstable``, Re α2 > 0, from :func:`chuteflow.sweep.classify`) of
     ``full_ds`` at the (θ, ν0) points the two grids share (the 1D grid may be a sub-grid).
     Only points where both are known count, and only flows with thickness h ≥ ``h_min``
-    (paper, fig phase005: "the region of h < 1 … was not examined … physically
+    (paper, figure 6: "the region of h < 1 … was not examined … physically
     unacceptable"; needs ``h`` in ``reduced_ds``; 0 compares all).
 
     Returns

@@ -1,20 +1,20 @@
-"""The reduced one-dimensional model of §5.1.2 (labels onedv, oneaandu) and its linear theory.
+"""The reduced one-dimensional model of §5.1.2 (eqs (5.10), (5.11)) and its linear theory.
 
 Integrating the equations over the depth and closing them with the steady family at fixed θ
 gives, for the one-dimensional density ρ̄(x, t) and mean velocity ū(x, t),
 
     ∂t ρ̄ + ∂x(ρ̄ ū) = 0,
-    ρ̄ (∂t ū + ū ∂x ū) = a(ρ̄) [U(ρ̄) − ū] − ∂x(ρ̄ T̄(ρ̄)) + ∂x(μ̄(ρ̄) ∂x ū),        (onedv)
+    ρ̄ (∂t ū + ū ∂x ū) = a(ρ̄) [U(ρ̄) − ū] − ∂x(ρ̄ T̄(ρ̄)) + ∂x(μ̄(ρ̄) ∂x ū),        (eq. 5.10)
 
-with a(ρ̄) = η*(F(ρ̄), T̄(ρ̄)), U(ρ̄) = ρ̄ sin θ / a(ρ̄) (oneaandu) and
+with a(ρ̄) = η*(F(ρ̄), T̄(ρ̄)), U(ρ̄) = ρ̄ sin θ / a(ρ̄) (eq. 5.11) and
 μ̄ = (4/3) f2(0) H(T̄) √T̄, H = T̄ / cos θ. F(ρ̄) is the floor density ν0(0) and T̄(ρ̄) the
 density-weighted mean temperature of the steady flow whose ρ̄0 is ρ̄.
 
 :class:`LocalCoefficients` holds these functions and their first derivatives at one uniform
 state ρ0 and gives the analytic linear theory: the exact 2×2 dispersion relation, the
-instability condition (label condition, with the correction of ERRATA item 4: the viscous
-term is μ̄ k²/ρ0), the k → 0 criterion (label criterion) and the long-wave expansion
-(label disp-oned). :func:`local_coefficients` computes them exactly at one steady flow from the
+instability condition (eq. (5.12), with the correction of docs/errata.md, item 4: the viscous
+term is μ̄ k²/ρ0), the k → 0 criterion (eq. (5.13)) and the long-wave expansion
+(eq. (5.14)). :func:`local_coefficients` computes them exactly at one steady flow from the
 family tangent; :class:`ReducedModel` holds F, T̄, a as smooth functions of ρ̄ over the whole
 family (piecewise Hermite cubics through solved flows, with exact slopes from the tangent)
 with their interpolation error measured against direct solves.
@@ -69,7 +69,7 @@ class LocalCoefficients:
     Tbar, dTbar : float
         Mean temperature T̄(ρ0) and T̄'(ρ0).
     a, da : float
-        Floor drag coefficient a = η*(F, T̄) (label oneaandu) and a'.
+        Floor drag coefficient a = η*(F, T̄) (eq. (5.11)) and a'.
     mu_bar, dmu_bar : float
         Effective viscosity μ̄ = (4/3) f2(0) T̄^{3/2}/cos θ and μ̄'.
     """
@@ -96,7 +96,7 @@ class LocalCoefficients:
 
     @property
     def U(self) -> float:
-        """U(ρ0) = ρ0 sin θ / a (oneaandu): the uniform flow velocity, S(ρ0, U) = 0."""
+        """U(ρ0) = ρ0 sin θ / a (eq. 5.11): the uniform flow velocity, S(ρ0, U) = 0."""
         return float(self._uniform.U)
 
     @property
@@ -124,10 +124,10 @@ class LocalCoefficients:
         """dq0/dρ0 = U + ρ0 U'."""
         return float(self._uniform.dq0)
 
-    # -- long waves (criterion, disp-oned) ---------------------------------------------
+    # -- long waves (eqs 5.13, 5.14) ---------------------------------------------
     @property
     def criterion_margin(self) -> float:
-        """(ρ0 U')² − (ρ0 T̄)' (label criterion): positive means long-wave unstable."""
+        """(ρ0 U')² − (ρ0 T̄)' (eq. (5.13)): positive means long-wave unstable."""
         return (self.rho0 * self.dU) ** 2 - self.dP
 
     @property
@@ -137,12 +137,12 @@ class LocalCoefficients:
 
     @property
     def alpha1(self) -> complex:
-        """α1 of α = α1 k + α2 k² + O(k³) (disp-oned): −i dq0/dρ0."""
+        """α1 of α = α1 k + α2 k² + O(k³) (eq. 5.14): −i dq0/dρ0."""
         return -1j * self.dq0
 
     @property
     def alpha2(self) -> float:
-        """α2 = (ρ0/a) [(ρ0 U')² − (ρ0 T̄)'] (disp-oned); real."""
+        """α2 = (ρ0/a) [(ρ0 U')² − (ρ0 T̄)'] (eq. 5.14); real."""
         return self.rho0 / self.a * self.criterion_margin
 
     @property
@@ -192,9 +192,9 @@ class LocalCoefficients:
         return self.dispersion(k)[..., 0].real
 
     def condition(self, k, *, errata: bool = True) -> np.ndarray:
-        """Instability condition (label condition) at wavenumbers ``k``.
+        """Instability condition (eq. (5.12)) at wavenumbers ``k``.
 
-        ``(a U')² k² > ((a + μ̄ k²)/ρ0)² (ρ0 T̄)' k²`` (ERRATA item 4: the paper prints
+        ``(a U')² k² > ((a + μ̄ k²)/ρ0)² (ρ0 T̄)' k²`` (docs/errata.md, item 4: the paper prints
         (a/ρ0 + μ̄k²)²; only its O(k⁴) part differs). ``errata=False`` evaluates the printed
         form, for comparison.
         """
@@ -207,7 +207,7 @@ class LocalCoefficients:
 
     @property
     def k_c(self) -> float:
-        """Critical wavenumber: waves with k < k_c grow (condition, errata-corrected).
+        """Critical wavenumber: waves with k < k_c grow (eq. (5.12), errata-corrected).
 
         0 when the flow is long-wave stable; ``inf`` when (ρ0T̄)' ≤ 0 and every k grows.
         """
@@ -260,7 +260,7 @@ def local_coefficients(flow: SteadyFlow, tangent: dict | None = None) -> LocalCo
 
     F' = 1/(dρ̄0/dβ) and T̄' = (dT̄0/dβ)/(dρ̄0/dβ) come from the exact family tangent
     (:func:`chuteflow.steady.steady_tangent`, β = ν0(0)); a' from the chain rule through
-    η*(ν, T) (label etastar). No finite differences between solved flows.
+    η*(ν, T) (eq. (2.13)). No finite differences between solved flows.
     """
     tangent = tangent if tangent is not None else steady_tangent(flow)
     model = flow.model
@@ -310,7 +310,7 @@ class ReducedModel:
     coefficients_at_knots : tuple of LocalCoefficients
         Exact coefficients at the knots.
     flux, h, nu_mean, monotonic : ndarray
-        The full model's Q0 (label rho0q0), thickness, mean density and monotonicity of the
+        The full model's Q0 (eq. (3.15)), thickness, mean density and monotonicity of the
         steady flows at the knots (q0 = ρ̄U(ρ̄) of the 1D model is not Q0: §5.1.2, footnote).
     accuracy : dict
         Largest relative error of F, T̄, a (``F``, ``Tbar``, ``a``) and of their ρ̄-slopes
@@ -377,7 +377,7 @@ class ReducedModel:
         return self._eval("Tbar", rho, nu)
 
     def a(self, rho, nu: int = 0):
-        """Floor drag a(ρ̄) = η*(F(ρ̄), T̄(ρ̄)) (label oneaandu), or a derivative."""
+        """Floor drag a(ρ̄) = η*(F(ρ̄), T̄(ρ̄)) (eq. (5.11)), or a derivative."""
         return self._eval("a", rho, nu)
 
     @functools.cached_property
@@ -404,7 +404,7 @@ class ReducedModel:
         return getattr(st, ("d" if nu else "") + name)
 
     def U(self, rho, nu: int = 0):
-        """U(ρ̄) = ρ̄ sin θ / a(ρ̄) (oneaandu), or its first derivative."""
+        """U(ρ̄) = ρ̄ sin θ / a(ρ̄) (eq. 5.11), or its first derivative."""
         return self._uniform(rho, nu, "U")
 
     def P(self, rho, nu: int = 0):
@@ -463,8 +463,8 @@ class ReducedModel:
             "dP": (self.P(r, 1), "(ρ̄ T̄)'"),
             "mu_bar": (self.mu_bar(r), "viscosity μ̄(ρ̄)"),
             "criterion_margin": (np.array([c.criterion_margin for c in cs]),
-                                 "(ρ̄ U')² − (ρ̄ T̄)' (criterion; > 0 unstable)"),
-            "alpha2": (np.array([c.alpha2 for c in cs]), "α2 (disp-oned)"),
+                                 "(ρ̄ U')² − (ρ̄ T̄)' (eq. (5.13); > 0 unstable)"),
+            "alpha2": (np.array([c.alpha2 for c in cs]), "α2 (eq. 5.14)"),
             "k_c": (np.array([c.k_c for c in cs]), "critical wavenumber k_c"),
         }
         ds = xr.Dataset({k: ("rho", v, {"long_name": n_}) for k, (v, n_) in data.items()},

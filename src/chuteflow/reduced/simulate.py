@@ -1,4 +1,4 @@
-"""Nonlinear density waves of the 1D model (onedv, oneaandu) on a periodic slope of length L.
+"""Nonlinear density waves of the 1D model (eqs 5.10, 5.11) on a periodic slope of length L.
 
 Discretisation: finite volumes on a staggered periodic grid of N cells, dx = L/N. The density
 ρ̄ lives at cell centres x_i = (i + ½) dx, the momentum m = ρ̄ū on the faces x_{i+½}
@@ -307,7 +307,7 @@ def wave_diagnostics(solver: WaveSolver, rho0: float, y: np.ndarray, n_modes: in
 def default_cells(reduced: ReducedModel, rho0: float, length: float, *, tol: float = 0.05,
                   n_max: int = 16384) -> int:
     """Cells for a run: the growth rates of the discrete system must match the 2×2 dispersion
-    relation (label condition's exact form) to ``tol`` × the largest growth rate.
+    relation (eq. (5.12)'s exact form) to ``tol`` × the largest growth rate.
 
     Starting from dx ≤ 2 (and ≥ 128 cells), N doubles until every mode with k < k_c (the
     16 longest modes when every k grows or none does) has |Re α_discrete − Re α| ≤ tol ·

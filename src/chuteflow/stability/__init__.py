@@ -1,6 +1,6 @@
 """Linear stability of steady chute flows (paper §4, Appendices A–B).
 
-Perturbations (ν̂, û, v̂, T̂)(y) exp(αt + ikx) (label eq:lin) of a :class:`SteadyFlow` solve
+Perturbations (ν̂, û, v̂, T̂)(y) exp(αt + ikx) (eq. (4.4)) of a :class:`SteadyFlow` solve
 the generalized eigenproblem A V = α B V, with A and B derived from the one statement of the
 equations in :mod:`chuteflow.equations` and collocated on N + 1 Chebyshev nodes of
 [0, y_max]. Re α > 0 is growth; Im α < 0 a wave running down the slope.
@@ -50,7 +50,7 @@ Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     flow's parameters as attributes). ``critical_k(flow, k_max=0.05)`` → k_c (brentq on the
     tracked branch) or None; ``crossings(...)`` → all sign changes of Re α.
 
-Numerical notes (see also ERRATA.md): bulk rows are divided by μ0 or κ0, never by ν0
+Numerical notes (see also docs/errata.md): bulk rows are divided by μ0 or κ0, never by ν0
 (which would put 1e9 into the dilute top's rows and bury the dense layer's eigenvalues in
 round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) − 1e-8) passes the
 drift test but fails the tail test, and shift-invert estimates near it carry round-off of

@@ -1,6 +1,6 @@
 """The linear stability operator on a Chebyshev grid (paper §4.1, Appendix A).
 
-Perturbations ∝ exp(αt + i k_x x + i k_z z) (label eq:lin; k_z = 0 in the paper) of a steady
+Perturbations ∝ exp(αt + i k_x x + i k_z z) (eq. (4.4); k_z = 0 in the paper) of a steady
 flow satisfy A V = α B V. Every coefficient comes from the compiled linearisation of
 :mod:`chuteflow.equations`; nothing of Appendix A is retyped here. A term (a, b, c, d) of an
 equation, coefficient × α^a (ik_x)^b (ik_z)^d d^c/dy^c, goes to B (a = 1, with a minus sign:
@@ -14,11 +14,11 @@ nodes per field on [0, y_max]:
 ========  =================  ===========================  =================================
 block     interior nodes     floor (y = 0)                top (y = y_max)
 ========  =================  ===========================  =================================
-ν̂         mass (eq:rho)      y-momentum at y = 0 (extra)  ν̂' = −(cos θ/T0) ν̂ (extra)
-û         x-momentum         eq:bc1 (eq:bc0u)             û' = −k û
-v̂         y-momentum         v̂ = 0 (impermeable, ERRATA)  v̂' = −k v̂
-ŵ (3D)    z-momentum         eq:bc1, z component          ŵ' = −k ŵ
-T̂         energy (eq:temp)   eq:bc2 (eq:bc0T)             T̂' = −k T̂
+ν̂         mass (eq. 2.1)      y-momentum at y = 0 (extra)  ν̂' = −(cos θ/T0) ν̂ (extra)
+û         x-momentum         eq. (2.9) (eq. A 5)             û' = −k û
+v̂         y-momentum         v̂ = 0 (impermeable, docs/errata.md)  v̂' = −k v̂
+ŵ (3D)    z-momentum         eq. (2.9), z component          ŵ' = −k ŵ
+T̂         energy (eq. 2.3)   eq. (2.10) (eq. A 6)             T̂' = −k T̂
 ========  =================  ===========================  =================================
 
 Momentum rows are divided by μ0(y) and energy rows by κ0(y), so that every row is O(D²)
@@ -364,7 +364,7 @@ class StabilityOperator:
         return Pencil(kx, kz, self)
 
     def series(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(A0, A1, A2) with A(k) = A0 + (ik) A1 + (ik)² A2 for k_z = 0, k ≥ 0 (eq:lin).
+        """(A0, A1, A2) with A(k) = A0 + (ik) A1 + (ik)² A2 for k_z = 0, k ≥ 0 (eq. 4.4).
 
         The top conditions' |k| = k = −i(ik) are folded into A1. This is the expansion that
         perturbation theory in k uses (Appendix B); A0 is real and, with B, gives the k = 0

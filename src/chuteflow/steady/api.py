@@ -268,7 +268,7 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     dict
         ``log_nu``, ``u``, ``T`` (nodal arrays), ``y_max`` (d/dβ at fixed ξ = y/y_max), and
         d/dβ of ``rho_bar``, ``Q``, ``T_mean``, ``h``, ``nu_mean``, ``u_floor``, ``T_floor``,
-        plus ``dQ_drho`` = dQ0/dρ̄0 (label eq:dqdh).
+        plus ``dQ_drho`` = dQ0/dρ̄0 (eq. (B 6)).
     """
     return _tangent_from(flow, _tangent_vectors(flow, theta=False)[0])
 

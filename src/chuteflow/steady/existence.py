@@ -1,9 +1,9 @@
 """Existence of the steady flow, decided by shooting on the floor velocity u0(0) (paper §3).
 
 The paper finds the steady flow by shooting: given ν0(0) and a trial slip velocity u0(0),
-the floor conditions (eq:T0b, eq:dT0b) fix T0(0) and T0'(0), the steady equations are
+the floor conditions (eqs 3.11, 3.12) fix T0(0) and T0'(0), the steady equations are
 integrated upwards, and u0(0) is adjusted until T0' = 0 where ν0 reaches ``nu_top``
-(eq:bcinf). Here that integration is used as a cheap, loose-tolerance *scan* that decides
+(eq. 3.13). Here that integration is used as a cheap, loose-tolerance *scan* that decides
 whether a flow exists and, if so, gives the Chebyshev–Newton solver of
 :mod:`chuteflow.steady.solver` a starting profile.
 
@@ -15,7 +15,7 @@ Each trial is classified by the direction in which it misses the top condition:
   collapses or packs).
 
 Large u0(0) heats the layer, small u0(0) lets it cool, so the physical flow is the first
-sign change hot → cold coming down from large u0(0) (ERRATA, numerical note on shooting:
+sign change hot → cold coming down from large u0(0) (docs/errata.md, numerical note on shooting:
 the smallness of |T0'(y_max)| alone is also met by a thin cold layer as u0(0) → 0, whose
 trajectories are not followed). No such sign change over the admissible range of u0(0) is a
 verdict: every trial hot (the layer cannot be kept cold enough to thin out: at small θ the
@@ -28,9 +28,9 @@ A solution thinner than one diameter (§3.2) is reported as such.
 The steady ODEs are not typed again here: ν0' follows from the y-momentum residual and T0''
 from the energy residual of :func:`chuteflow.equations.compiled_equations` (both are affine
 in that highest derivative, so one evaluation with it set to zero and its coefficient give
-it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq:steady4 as used by the
+it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq. (3.7) as used by the
 Newton solver, and the floor values come from the floor_x and floor_energy residuals
-(eq:bc1, eq:bc2), all with the transport functions of :meth:`ChuteModel.evaluate`.
+(eqs 2.9, 2.10), all with the transport functions of :meth:`ChuteModel.evaluate`.
 """
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ class SteadyODE:
         self._i_floor_T_y = _term_index(self._floor_energy, "T", 1)
 
     def _base(self, nu, u, T, T_y, part):
-        u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq:steady4
+        u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq. (3.7)
         return {"nu": nu, "nu_y": 0.0, "nu_yy": 0.0, "u": u, "u_y": u_y, "u_yy": 0.0,
                 "T": T, "T_y": T_y, "T_yy": 0.0}
 
@@ -97,24 +97,24 @@ class SteadyODE:
         nu = np.exp(s)
         part = self.model.evaluate(nu, T)
         base = self._base(nu, u, T, T_y, part)
-        # y-momentum (eq:steady2) is affine in ν0': R = R(ν0' = 0) + c ν0'
+        # y-momentum (eq. 3.5) is affine in ν0': R = R(ν0' = 0) + c ν0'
         r, c = self._ymom.evaluate(base, part, self.sin, self.cos)
         nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
         base["nu_y"] = nu_y
-        # energy (eq:steady3, ERRATA 1) is affine in T0''
+        # energy (eq. (3.6), docs/errata.md, item 1) is affine in T0''
         r, c = self._energy.evaluate(base, part, self.sin, self.cos)
         T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
         return [float(nu_y / nu), float(base["u_y"]), float(T_y), float(T_yy)]
 
     def floor_velocity(self, nu0: float, T0: float) -> float:
-        """u0(0) from eq:bc1 (floor_x is linear in u0) given ν0(0) and T0(0)."""
+        """u0(0) from eq. (2.9) (floor_x is linear in u0) given ν0(0) and T0(0)."""
         part = self.model.evaluate(nu0, T0)
         base = self._base(nu0, 0.0, T0, 0.0, part)
         r, c = self._floor_x.evaluate(base, part, self.sin, self.cos)
         return -float(r) / float(c[self._i_floor_u])
 
     def floor_values(self, nu0: float, u0: float) -> tuple[float, float]:
-        """T0(0) and T0'(0) from the floor conditions eq:bc1, eq:bc2 (eq:T0b, eq:dT0b).
+        """T0(0) and T0'(0) from the floor conditions eqs (2.9), (2.10) (eqs 3.11, 3.12).
 
         T0(0) solves u0(0) = floor_velocity(ν0, T0) by Newton in ln T0 (one step for the
         kinetic closures, where u0(0) ∝ √T0); T0'(0) then follows from the floor energy
@@ -361,7 +361,7 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
             x = 0.5 * (lo + hi)
         cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
         hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
-        # a trial that solves the top condition eq:bcinf: T0' small on the scale of the
+        # a trial that solves the top condition eq. (3.13): T0' small on the scale of the
         # layer (T0(y_max)/y_max); one far from it is a stray trial beside a separatrix
         reached = [v for v, sh in ends.items()
                    if sh.kind == "top" and sh.solution.sol is not None

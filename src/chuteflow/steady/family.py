@@ -28,8 +28,8 @@ SCALARS = ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_ma
 _ATTRS = {
     "h": ("thickness h (ν0 = 1 % of its maximum)", "sigma"),
     "nu_mean": ("mean density ν̄ = ρ̄0 / h", "1"),
-    "rho_bar": ("one-dimensional density ρ̄0 = ∫ν0 dy (label rho0q0)", "sigma"),
-    "Q": ("flux Q0 = ∫ν0 u0 dy (label rho0q0)", "sigma^2 sqrt(g/sigma)"),
+    "rho_bar": ("one-dimensional density ρ̄0 = ∫ν0 dy (eq. (3.15))", "sigma"),
+    "Q": ("flux Q0 = ∫ν0 u0 dy (eq. (3.15))", "sigma^2 sqrt(g/sigma)"),
     "T_mean": ("density-weighted temperature T̄0", "g sigma"),
     "u_floor": ("slip velocity u0(0)", "sqrt(g sigma)"),
     "T_floor": ("floor temperature T0(0)", "g sigma"),
@@ -37,7 +37,7 @@ _ATTRS = {
     "y_peak": ("height of the density maximum (0 if monotonic)", "sigma"),
     "nu_peak": ("maximum packing fraction", "1"),
     "convergence": ("relative change of the scalars between resolutions n and 3n/2", "1"),
-    "dQ_drho": ("dQ0/dρ̄0 along the family (exact tangent; label eq:dqdh)",
+    "dQ_drho": ("dQ0/dρ̄0 along the family (exact tangent; eq. (B 6))",
                 "sqrt(g sigma)"),
     "drho_dnu0": ("dρ̄0/dν0(0) along the family (exact tangent)", "sigma"),
     "dQ_dnu0": ("dQ0/dν0(0) along the family (exact tangent)", "sigma^2 sqrt(g/sigma)"),
@@ -330,7 +330,7 @@ def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
         As for :func:`~chuteflow.steady.solve_steady`.
     tangent : bool
         Also compute dQ0/dρ̄0, dρ̄0/dν0(0), dQ0/dν0(0) from the exact family tangent
-        (label eq:dqdh); about 2 ms per point.
+        (eq. (B 6)); about 2 ms per point.
     return_flows : bool
         Also return the list of :class:`SteadyFlow` (None where there is none).
 
@@ -368,7 +368,7 @@ def _var_attrs(k):
 
 def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=None,
                  nu_top: float = 1e-9, rtol: float = 1e-8, xtol: float = 1e-9):
-    """Minimum of Q0(ρ̄0) at fixed θ: the root of dQ0/dν0(0) along the family (eq:dqdh).
+    """Minimum of Q0(ρ̄0) at fixed θ: the root of dQ0/dν0(0) along the family (eq. B 6).
 
     A family on ``nu0_values`` (default 30 values from 0.005 to 0.3, geometric) brackets a
     sign change of dQ0/dρ̄0 from − to + (both from the exact tangent); Brent's method then
@@ -418,7 +418,7 @@ def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
                nu0_small: float = 0.006, nu0_ref: float = 0.012, xtol: float = 0.01,
                nu_top: float = 1e-9) -> dict:
     """Angle θ* separating contours of θ that collapse (h → 0) from those that diverge
-    (h → ∞) as ν̄ decreases (§3.2, fig steadyphase005(a)).
+    (h → ∞) as ν̄ decreases (§3.2, figure 2(a)).
 
     A family is *diverging* at θ when it reaches ν0(0) = ``nu0_small`` with h still growing
     as ν0(0) decreases (h(nu0_small) > h(nu0_ref)); otherwise (h falling, or the branch ending

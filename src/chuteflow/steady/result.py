@@ -36,9 +36,9 @@ class SteadyFlow:
     nu_mean : float
         Mean density ν̄ = (1/h) ∫ ν0 dy.
     rho_bar : float
-        One-dimensional density ρ̄0 = ∫ ν0 dy (label rho0q0).
+        One-dimensional density ρ̄0 = ∫ ν0 dy (eq. (3.15)).
     Q : float
-        Flux Q0 = ∫ ν0 u0 dy (label rho0q0).
+        Flux Q0 = ∫ ν0 u0 dy (eq. (3.15)).
     T_mean : float
         Density-weighted temperature T̄0 = ∫ ν0 T0 dy / ρ̄0 (§5.1.2).
     monotonic : bool

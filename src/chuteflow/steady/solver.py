@@ -3,10 +3,10 @@
 For given θ and floor density ν0(0) the unknowns are ln ν0, u0, T0 at the Chebyshev nodes of
 [0, y_max] and the height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
 equations are the uniform-state residuals of :mod:`chuteflow.equations`: y-momentum and
-energy (eq:steady2, eq:steady3) at the inner nodes, x-momentum in its integrated form
-eq:steady4 (μ u0' = tanθ p, the weight of the tail above y_max included;
-:func:`chuteflow.equations.first_integrals`), the floor conditions eq:bc1 and eq:bc2
-(equivalent to eq:T0b, eq:dT0b), T0' = 0 on top (eq:bcinf: the far-field condition of
+energy (eqs 3.5, 3.6) at the inner nodes, x-momentum in its integrated form
+eq. (3.7) (μ u0' = tanθ p, the weight of the tail above y_max included;
+:func:`chuteflow.equations.first_integrals`), the floor conditions eqs (2.9) and (2.10)
+(equivalent to eqs (3.11), (3.12)), T0' = 0 on top (eq. (3.13): the far-field condition of
 :func:`chuteflow.equations.far_field_conditions` at k = 0) and ν0(0) given. Every row and
 its exact Jacobian come from the compiled equations, so this module states no physics of
 its own; Newton converges quadratically.
@@ -127,12 +127,12 @@ class _Newton:
                         ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
                         ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
                         ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
-                        # T0' = 0 on top (eq:bcinf)
+                        # T0' = 0 on top (eq. 3.13)
                         (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"))
         if integrated:
-            # x-momentum in its once-integrated form, eq:steady4: Σxy = −tanθ Σyy, i.e.
+            # x-momentum in its once-integrated form, eq. (3.7): Σxy = −tanθ Σyy, i.e.
             # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from
-            # y to ∞ with the stresses vanishing at infinity (eq:inftycond) gives it exactly,
+            # y to ∞ with the stresses vanishing at infinity (eq. 2.15) gives it exactly,
             # so the weight of the dilute tail above y_max is kept: the result does not
             # depend on where the domain ends (a stress-free top at y_max instead would make
             # an O(ν_top) error, 1e-7 relative at ν_top = 1e-9). Being first order in u0 it

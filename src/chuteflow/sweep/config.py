@@ -34,7 +34,7 @@ __all__ = [
 
 #: (θ range in degrees, ν0(0) range) covering the paper's stability diagrams, where steady
 #: flows exist (found by scanning with chuteflow.steady; beyond them no steady flow exists
-#: or the steady solver does not converge). Figures phase005 and phase010.
+#: or the steady solver does not converge). Figures 6 and 12.
 DEFAULT_RANGES: dict[float, tuple[tuple[float, float], tuple[float, float]]] = {
     0.05: ((12.0, 18.0), (0.01, 0.25)),
     0.10: ((16.5, 22.5), (0.01, 0.30)),
@@ -130,7 +130,7 @@ class SweepConfig:
         (:func:`chuteflow.sweep.metrics.default_metrics`).
     nu_top, steady_rtol, n_max, min_thickness :
         Passed to :func:`~chuteflow.steady.solve_steady`. ``min_thickness`` defaults to 0:
-        the diagrams show h < 1 (hatched, paper fig. phase005: "not examined").
+        the diagrams show h < 1 (hatched, paper figure 6: "not examined").
     chunk : int, optional
         Points per task along ν0 (default: the whole θ row). The steady flows of a task are
         one :func:`~chuteflow.steady.steady_family` (continuation in ν0), so results depend on

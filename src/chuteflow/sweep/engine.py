@@ -360,7 +360,7 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
     d = config.to_dict()
     ds.attrs.update({
         "title": f"chuteflow stability sweep, roughness φ = {config.model.roughness:g}",
-        "source": "chuteflow (Mitarai & Nakanishi, figures phase005 / phase010)",
+        "source": "chuteflow (Mitarai & Nakanishi, figures 6 / 12)",
         "chuteflow_version": __version__,
         "config_digest": config.digest(),
         "config_json": json.dumps(d, sort_keys=True),

@@ -30,7 +30,7 @@ _RATE = RATE_UNITS
 class LongWaveMetric(PointFunction):
     """Long-wave coefficients α1, α2, adaptively resolved for the sign of Re α2.
 
-    A diagram needs the sign of Re α2 at every point, and α2 converges slowly in N (ERRATA,
+    A diagram needs the sign of Re α2 at every point, and α2 converges slowly in N (docs/errata.md,
     numerical notes; :func:`chuteflow.longwave.longwave`). First pass: ``longwave`` to the
     relative accuracy ``rtol`` (default 0.5: the two finest resolutions then agree on the
     sign) with ``n_max``. The result is accepted when its sign agrees with the independent
@@ -49,7 +49,7 @@ class LongWaveMetric(PointFunction):
     variables = (
         Variable("alpha1_im", "sqrt(g sigma)", "Im α1 = −dQ0/dρ̄0 (the long-wave phase velocity, "
                  "positive down the slope, is −Im α1)",
-                 source="App. B, eq:vp0"),
+                 source="App. B, eq. (B 2)"),
         Variable("alpha2_re", "sigma^(3/2) g^(1/2)", "Re α2, long-wave growth coefficient "
                  "(> 0: long-wave unstable)", source="§4.2, §5.1.1"),
         Variable("alpha2_im", "sigma^(3/2) g^(1/2)", "Im α2"),
@@ -122,7 +122,7 @@ class GrowthMetric(PointFunction):
                 "n_max": 160, "unstable_points": False}
     variables = (
         Variable("growth_max", _RATE, "largest Re α of the α(0) = 0 branch on the k grid",
-                 source="figs disp, disp-AC, disp01"),
+                 source="figures 7, 9, 13"),
         Variable("k_growth_max", "1/sigma", "wavenumber of the largest Re α on the k grid"),
         Variable("k_c", "1/sigma", "critical wavenumber: first sign change of Re α "
                  "(upper edge of the unstable band 0 < k < k_c)", source="§4.2"),

@@ -229,15 +229,15 @@ class SteadyQuantities(PointFunction):
     variables = (
         Variable("h", "sigma", "thickness h (ν0 at 1 % of its maximum)", source="§3.2"),
         Variable("nu_mean", "1", "mean density ν̄ = ρ̄0 / h", source="§3.2"),
-        Variable("rho_bar", "sigma", "one-dimensional density ρ̄0 = ∫ν0 dy", source="rho0q0"),
-        Variable("Q", "sigma^(3/2) g^(1/2)", "flux Q0 = ∫ν0 u0 dy", source="rho0q0"),
+        Variable("rho_bar", "sigma", "one-dimensional density ρ̄0 = ∫ν0 dy", source="eq. (3.15)"),
+        Variable("Q", "sigma^(3/2) g^(1/2)", "flux Q0 = ∫ν0 u0 dy", source="eq. (3.15)"),
         Variable("U", "sqrt(g sigma)", "mean velocity U = Q0 / ρ̄0"),
         Variable("T_mean", "g sigma", "density-weighted temperature T̄0", source="§5.1.2"),
         Variable("u_floor", "sqrt(g sigma)", "slip velocity u0(0)"),
         Variable("T_floor", "g sigma", "floor temperature T0(0)"),
         Variable("y_max", "sigma", "top of the domain, ν0(y_max) = nu_top"),
         Variable("monotonic", "1", "ν0 decreases monotonically from the floor", kind="flag",
-                 source="fig steadyphase005"),
+                 source="figure 2"),
         Variable("y_peak", "sigma", "height of the density maximum"),
         Variable("nu_peak", "1", "density maximum"),
         Variable("steady_n", "1", "Chebyshev intervals of the steady solution", kind="int"),
@@ -255,7 +255,7 @@ class SteadyQuantities(PointFunction):
 
 @register_point_function
 class Kinematic(PointFunction):
-    """Kinematic-wave quantities along the family at fixed θ (§5.1.1, eq:dqdh).
+    """Kinematic-wave quantities along the family at fixed θ (§5.1.1, eq. (B 6)).
 
     dQ0/dρ̄0 from the exact family tangent of the steady solver; dU/dρ̄0 with U = Q0/ρ̄0
     decides whether the denser flow is faster (> 0, regimes A and C) or slower (< 0,
@@ -267,7 +267,7 @@ class Kinematic(PointFunction):
     requires = ("steady",)
     variables = (
         Variable("dQ_drho", "sqrt(g sigma)", "dQ0/dρ̄0 at fixed θ (kinematic wave speed)",
-                 source="eq:dqdh"),
+                 source="eq. (B 6)"),
         Variable("dU_drho", "sqrt(g sigma)/sigma", "dU/dρ̄0 at fixed θ, U = Q0/ρ̄0",
                  source="§4.2"),
         Variable("drho_dnu0", "sigma", "dρ̄0/dν0(0) at fixed θ"),
