@@ -288,7 +288,7 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
     steady flow, not_converged → not_converged, unreached → not_converged 'not attempted'."""
     import types
 
-    import chuteflow.steady as steady
+    import chuteflow.sweep.runner as runner
 
     nus = (0.04, 0.05, 0.06, 0.07, 0.08)
     fam_status = ["unreached", "no_steady_flow", "ok", "thin", "not_converged"]
@@ -301,7 +301,7 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
         flows = [types.SimpleNamespace(h=1.5) if s == "ok" else None for s in fam_status]
         return ds, flows
 
-    monkeypatch.setattr(steady, "steady_family", fake)
+    monkeypatch.setattr(runner, "steady_family", fake)
     cfg = SweepConfig(theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},),
                       min_thickness=0.5, nu_top=1e-10)
     ds = run_sweep(cfg, workers=1)

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .diagram import grid_triangulation
+
 __all__ = ["plot_functions", "plot_phase_diagrams", "plot_spacetime", "save"]
 
 
@@ -87,7 +89,6 @@ def _panel(ax, ds, var, title, *, short_var=None, disagree=None):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-    from .diagram import grid_triangulation
 
     h, nb = ds["h"].values, ds["nu_mean"].values
     ok = (ds["status"].values == 0) & np.isfinite(h) & np.isfinite(nb)

@@ -22,6 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..spectral import ChebyshevGrid
+from ..stability.operator import equation_terms
+
 __all__ = ["dispersion_figure", "magnification_figure", "eigenfunction_figure",
            "eigenfunction_fields", "default_height", "eigenfunction_diagnostics", "point_label"]
 
@@ -210,7 +213,6 @@ def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
 
 # -- eigenfunctions -------------------------------------------------------------------------
 def _mode_grid(mode, flow):
-    from ..spectral import ChebyshevGrid
 
     g = ChebyshevGrid(mode.n, 0.0, flow.y_max)
     if len(mode.y) != len(g.y) or not np.allclose(mode.y, g.y, rtol=1e-10, atol=1e-10):
@@ -235,7 +237,6 @@ def default_height(flow, fraction: float = 0.1) -> float:
     dense layer, and the much larger velocity perturbations of the dilute top would
     otherwise dominate the arrows (the paper's statements refer to y ≈ 1–3).
     """
-    from ..spectral import ChebyshevGrid
 
     g = ChebyshevGrid(len(flow.y) - 1, 0.0, flow.y_max)
     y = np.linspace(flow.y_peak, flow.y_max, 4001)
@@ -310,7 +311,6 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
         ``velocity_density``: ∫Re(û ν̂*) dy / ∫|û||ν̂| dy (> 0: the dense parts move faster);
         ``y_peak``: height of largest |ν̂|.
     """
-    from ..stability.operator import equation_terms
 
     g = _mode_grid(mode, flow)
     f, j = _aligned(mode, 0.0)

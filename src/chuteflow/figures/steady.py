@@ -14,6 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .diagram import grid_triangulation
+
 __all__ = ["plot_h_nubar", "plot_flux_density", "plot_profiles", "steady_phase_figure",
            "profiles_figure"]
 
@@ -36,7 +38,6 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
     """
     import matplotlib.pyplot as plt
 
-    from .diagram import grid_triangulation
 
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 4))

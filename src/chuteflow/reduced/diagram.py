@@ -12,10 +12,21 @@ import math
 
 import numpy as np
 
+from .._version import __version__
+from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to, march
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import solve_steady
-from ..sweep import PointFunction, SweepConfig, Variable, register_point_function, resolve_model, run_sweep
+from ..sweep import (
+    PointFunction,
+    SweepConfig,
+    Variable,
+    classify,
+    default_ranges,
+    register_point_function,
+    resolve_model,
+    run_sweep,
+)
 from .model import local_coefficients
 
 __all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement",
@@ -133,8 +144,6 @@ def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_
         ``status`` (0 steady flow, > 0 none found or not converged), and the ``r1d_*``
         variables of :class:`Reduced1D`; with ``full`` also ``unstable`` of the full model.
     """
-    from ..closures import ChuteModel
-    from ..sweep import default_ranges
 
     if engine not in ("sweep", "walk"):
         raise ParameterError(f"engine = {engine!r}: choose 'sweep' or 'walk'")
@@ -169,7 +178,6 @@ def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_
         thetas = np.round(np.linspace(tr[0], tr[1], nt), 12)
         nus = np.round(np.linspace(nr[0], nr[1], nn), 12)
     if engine == "sweep":
-        from ..sweep import classify
 
         cfg = reduced_diagram_config(grid=(thetas, nus), full=full, model=model)
         ds = run_sweep(cfg, out, workers=workers, progress=progress or False, fresh=fresh)
@@ -270,7 +278,6 @@ def _walk_grid(thetas, nus, model, progress):
 def _dataset(thetas, nus, flows, model):
     import xarray as xr
 
-    from .. import __version__
 
     nt, nn = len(thetas), len(nus)
     fl = {v.name: np.full((nt, nn), v.missing, dtype=v.dtype) for v in Reduced1D.variables}

@@ -11,7 +11,7 @@ from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 from .existence import steady_existence
 from .result import SteadyFlow, derived_quantities, spectral_tail
-from .solver import _State, _validate, solve_state
+from .solver import _Newton, _State, _validate, solve_state
 
 _KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
 
@@ -295,7 +295,6 @@ def _tangent_vectors(flow: SteadyFlow, theta: bool = True):
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
     import scipy.linalg as sla
 
-    from .solver import _Newton
 
     newton = _Newton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
     st = _State(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._version import __version__
 from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
@@ -294,7 +295,6 @@ def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
 
 
 def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
-    from .._version import __version__
     attrs = dict(model.attrs())
     attrs.update(nu_top=opts.nu_top, rtol=opts.rtol, min_thickness=opts.min_thickness,
                  chuteflow_version=__version__, source="Mitarai & Nakanishi §3.2")

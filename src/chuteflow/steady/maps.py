@@ -13,8 +13,10 @@ from typing import Any
 
 import numpy as np
 
+from .._threads import limit_blas_threads
 from ..closures import ChuteModel
 from ..errors import ParameterError
+from .api import follow
 from .family import SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row, dataset_attrs
 from .solver import _validate
 
@@ -65,7 +67,6 @@ def _sweep_back(thetas, nus, model, opts, rows, k):
 
 
 def _sweep_worker(args):
-    from .._threads import limit_blas_threads
     limit_blas_threads(1)
     thetas, nus, model, opts, seed_row = args
     return _sweep(thetas, nus, model, opts, seed_row)
@@ -177,7 +178,6 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
         ``h`` there, ``map_theta`` (the extreme row of the map) and ``ends`` (the branch
         ended before ``margin`` degrees beyond the map).
     """
-    from .api import follow
     st = ds.status.values
     usable = (st == "ok") | (st == "thin")
     ths, nus = ds.theta.values, ds.nu0.values

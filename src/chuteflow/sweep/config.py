@@ -19,9 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from .._version import __version__
 from ..closures import FIELDS as MODEL_FIELDS
 from ..closures import ChuteModel
 from ..errors import ParameterError
+from .metrics import default_metrics
+from .points import point_function
 
 __all__ = [
     "DEFAULT_RANGES",
@@ -209,9 +212,7 @@ class SweepConfig:
         object.__setattr__(self, "n_max", int(self.n_max))
         for name in ("nu_top", "steady_rtol", "min_thickness"):
             object.__setattr__(self, name, float(getattr(self, name)))
-        from .points import point_function
         if self.metrics is None:
-            from .metrics import default_metrics
             specs = default_metrics()
         else:
             # the canonical form stored by a configuration is JSON text (dataclasses.replace)
@@ -275,7 +276,6 @@ class SweepConfig:
         return len(self.theta) * len(self.nu0)
 
     def point_functions(self) -> list:
-        from .points import point_function
         return [point_function(json.loads(s)) for s in self.metrics]
 
     def variables(self) -> list:
@@ -302,7 +302,6 @@ class SweepConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Canonical JSON-ready form (what is hashed, and stored in the Dataset attrs)."""
-        from .. import __version__
         return {"theta": list(self.theta), "nu0": list(self.nu0),
                 "model": self.model.to_dict(),
                 "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,

@@ -21,7 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
+from .._threads import limit_blas_threads
+from .._version import __version__
 from ..errors import ParameterError
+from .classify import classify
 from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
 from .store import ConfigMismatchError, PartStore, atomic_target
@@ -230,14 +233,12 @@ class Sweep:
 
 
 def _run_serial(cfg, todo, finished):
-    from .._threads import limit_blas_threads
     with limit_blas_threads(1, set_env=False):
         for t in todo:
             finished(run_task(cfg, t, limit_threads=False))
 
 
 def _init_worker():
-    from .._threads import limit_blas_threads
     limit_blas_threads(1)
     # Ctrl-C reaches the whole process group: the parent handles it, workers just stop
     import signal
@@ -309,7 +310,6 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
     """Build the Dataset (coords theta, nu0) from the task results, and classify it."""
     import xarray as xr
 
-    from .. import __version__
     nt, nn = config.shape
     variables = config.variables()
     data = {v.name: np.full((nt, nn), v.missing, dtype=v.dtype) for v in variables}
@@ -371,7 +371,6 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
     for k in ("nu_top", "steady_rtol", "n_max", "min_thickness"):
         ds.attrs[k] = d[k]
     ds.attrs["chunk"] = config.chunk or len(config.nu0)
-    from .classify import classify
     return classify(ds)
 
 

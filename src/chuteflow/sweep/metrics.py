@@ -18,7 +18,9 @@ import math
 import numpy as np
 
 from ..conventions import RATE_UNITS
-from ..errors import ParameterError
+from ..errors import ConvergenceError, ParameterError
+from ..longwave import longwave
+from ..stability import BranchTracker, RejectionPolicy, mode_near
 from .points import PointFunction, Variable, register_point_function
 
 __all__ = ["LongWaveMetric", "GrowthMetric", "default_metrics"]
@@ -79,8 +81,6 @@ class LongWaveMetric(PointFunction):
         return math.isfinite(eig) and (eig > 0) == (lw.alpha2.real > 0)
 
     def compute(self, flow, point):
-        from ..errors import ConvergenceError
-        from ..longwave import longwave
 
         o = self.options
         lw = None
@@ -154,8 +154,6 @@ class GrowthMetric(PointFunction):
         return point.i < 0 or (point.i % s == s // 2 and point.j % s == s // 2)
 
     def compute(self, flow, point):
-        from ..errors import ConvergenceError
-        from ..stability import BranchTracker, RejectionPolicy
 
         a2 = point.values.get("alpha2_re", np.nan)
         unstable = bool(np.isfinite(a2) and a2 > 0)
@@ -192,7 +190,6 @@ class GrowthMetric(PointFunction):
         modes (at the finer of their resolutions)."""
         from scipy.optimize import brentq
 
-        from ..stability import mode_near
 
         ka, kb, aa, ab = ma.k, mb.k, ma.alpha, mb.alpha
         n = max(ma.n, mb.n)

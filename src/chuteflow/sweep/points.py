@@ -29,6 +29,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..errors import ParameterError
+from ..steady import steady_tangent
 
 __all__ = ["Variable", "Point", "PointFunction", "register_point_function", "point_function",
            "registered_point_functions", "SteadyQuantities", "Kinematic"]
@@ -274,7 +275,6 @@ class Kinematic(PointFunction):
     )
 
     def compute(self, flow, point):
-        from ..steady import steady_tangent
 
         t = steady_tangent(flow)
         dq = float(t["dQ_drho"])

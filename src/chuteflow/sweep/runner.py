@@ -15,7 +15,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._threads import limit_blas_threads
+from ..equations import compiled_equations
 from ..errors import ChuteflowError, ConvergenceError, NoSteadyFlowError
+from ..steady import solve_steady, steady_family
+from .points import Point
 
 if TYPE_CHECKING:
     from ..steady import SteadyFlow
@@ -56,14 +60,12 @@ _THREADS_LIMITED = False
 def _single_thread():
     global _THREADS_LIMITED
     if not _THREADS_LIMITED:
-        from .._threads import limit_blas_threads
         limit_blas_threads(1)
         _THREADS_LIMITED = True
 
 
 def warm_up(config=None) -> None:
     """Compile the symbolic equations and closures once (forked workers inherit them)."""
-    from ..equations import compiled_equations
     compiled_equations()
     model = config.model if config is not None else None
     if model is not None:
@@ -99,7 +101,6 @@ def _steady_chunk(config, theta: float, nus, model):
 
     Returns a list over the chunk of (flow or None, status name, message).
     """
-    from ..steady import steady_family
 
     fam, flows = steady_family(theta, list(nus), model, nu_top=config.nu_top,
                                rtol=config.steady_rtol, n_max=config.n_max,
@@ -124,7 +125,6 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     from its own cold start). Errors at a point become its status and message;
     nothing here raises for a single point.
     """
-    from ..steady import solve_steady
 
     if limit_threads:
         _single_thread()
@@ -143,7 +143,6 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     msec = {"steady": 0.0}
     kw = dict(nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max,
               min_thickness=config.min_thickness)
-    from .points import Point
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         # overflow in trial Newton steps is expected and handled by the solvers
         warnings.simplefilter("ignore", RuntimeWarning)
