@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.steady.solver import _Newton, _State, isothermal_guess
+from chuteflow.steady.solver import NewtonState, SteadyNewton, isothermal_guess
 
 
 def hand_written_rows(newton, st, jac=True):
@@ -55,7 +55,7 @@ def hand_written_rows(newton, st, jac=True):
     return [(xrows, R[xrows], J[xrows]), (trows, R[trows], J[trows])]
 
 
-class _HandWrittenNewton(_Newton):
+class _HandWrittenNewton(SteadyNewton):
     """The steady Newton solver with the hand-written rows put back."""
 
     def evaluate(self, st, jac=True):
@@ -77,12 +77,12 @@ def test_derived_rows_equal_hand_written(theta, nu0, integrated):
     perturbed), the derived residual and Jacobian rows equal the hand-written ones to a few
     ulps of the row's largest entry."""
     model = ChuteModel(roughness=0.10 if theta == 20.0 else 0.05)
-    newton = _Newton(48, theta, nu0, model, 1e-9, integrated=integrated)
+    newton = SteadyNewton(48, theta, nu0, model, 1e-9, integrated=integrated)
     st0 = isothermal_guess(theta, nu0, model, 1e-9, newton.ref)
     rng = np.random.default_rng(1)
     y = newton.ref.y
     wiggle = 0.05 * np.sin(3.0 * y) * rng.uniform(0.5, 1.0)
-    st1 = _State(st0.n, st0.s + wiggle, st0.u * (1 + wiggle), st0.T * (1 - wiggle), st0.L * 1.1)
+    st1 = NewtonState(st0.n, st0.s + wiggle, st0.u * (1 + wiggle), st0.T * (1 - wiggle), st0.L * 1.1)
     for st in (st0, st1):
         R, J = newton.evaluate(st)
         for rows, r, j in hand_written_rows(newton, st):
@@ -100,7 +100,7 @@ def test_same_newton_iterates_as_hand_written(theta, nu0):
     floor of the scaled residual) and the same solution."""
     model = ChuteModel(roughness=0.10 if theta == 20.0 else 0.05)
     out = []
-    for cls in (_Newton, _HandWrittenNewton):
+    for cls in (SteadyNewton, _HandWrittenNewton):
         cold = cls(32, theta, nu0, model, 1e-9, integrated=False)
         st, it0, _, h0 = cold.solve(isothermal_guess(theta, nu0, model, 1e-9, cold.ref),
                                     tol=1e-9, maxiter=30, lam_min=2.0**-10)
@@ -122,7 +122,7 @@ def test_top_condition_is_far_field_at_k_zero():
     state is the top derivative."""
     from chuteflow.equations import TOP_OF, compiled_equations
     model = ChuteModel()
-    newton = _Newton(32, 16.0, 0.05, model, 1e-9)
+    newton = SteadyNewton(32, 16.0, 0.05, model, 1e-9)
     st = isothermal_guess(16.0, 0.05, model, 1e-9, newton.ref)
     st.T = st.T * (1 + 0.1 * newton.ref.y)
     D1 = newton.ref.D / st.L

@@ -11,12 +11,12 @@ from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 from .existence import steady_existence
 from .result import SteadyFlow, derived_quantities, spectral_tail
-from .solver import _Newton, _State, _validate, solve_state
+from .solver import NewtonState, SteadyNewton, solve_state, validate_point
 
 _KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
 
 
-def _quantities(theta, st: _State, model):
+def _quantities(theta, st: NewtonState, model):
     g = ChebyshevGrid(st.n, 0.0, st.L)
     q = derived_quantities(theta, g, st.s, st.u, st.T, model)
     q.update(u_floor=float(st.u[0]), T_floor=float(st.T[0]), y_max=st.L)
@@ -72,13 +72,13 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
         The solver failed to converge or to reach ``rtol``.
     """
     model = model or ChuteModel()
-    theta, nu0 = _validate(theta, nu0, model, nu_top)
+    theta, nu0 = validate_point(theta, nu0, model, nu_top)
     if guess is not None:
-        start = _State(guess.n, np.asarray(guess.log_nu), np.asarray(guess.u),
+        start = NewtonState(guess.n, np.asarray(guess.log_nu), np.asarray(guess.u),
                        np.asarray(guess.T), guess.y_max)
-        return _solve(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
+        return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
     try:
-        return _solve(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
+        return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
     except ThinLayerError:
         raise
     except (NoSteadyFlowError, ConvergenceError) as exc:
@@ -92,7 +92,7 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
         # sharp dense bands need more nodes than n to be represented: double until it works
         # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
         try:
-            return _solve(theta, nu0, model, nu_top, m, rtol, n_max,
+            return solve_point(theta, nu0, model, nu_top, m, rtol, n_max,
                           verdict.starting_state(m), min_thickness)
         except ThinLayerError:
             raise
@@ -127,7 +127,7 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
         if abs(th - theta) < 1e-9:
             continue
         try:
-            anchor = _solve(th, nu0, model, nu_top, n, rtol, n_max, None, 0.0)
+            anchor = solve_point(th, nu0, model, nu_top, n, rtol, n_max, None, 0.0)
             break
         except (NoSteadyFlowError, ConvergenceError):
             continue
@@ -184,15 +184,15 @@ def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = Non
 
     def solve(cur, s):
         th, nu = th0 + s * (th1 - th0), nu00 + s * (nu1 - nu00)
-        dxb, dxt = _tangent_vectors(cur, theta=True)
-        X = _State(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
+        dxb, dxt = tangent_vectors(cur, theta=True)
+        X = NewtonState(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
                    cur.y_max).pack()
-        pred = _State.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb)
+        pred = NewtonState.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb)
         if not (0.5 * cur.y_max < pred.L < 2 * cur.y_max and (pred.T > 0).all()
                 and (pred.s < np.log(model.nu_max)).all()):
-            pred = _State.unpack(cur.n, X)
+            pred = NewtonState.unpack(cur.n, X)
         try:
-            return Trial(True, _solve(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
+            return Trial(True, solve_point(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
                                       maxiter=15, lam_min=1.0 / 16))
         except (NoSteadyFlowError, ConvergenceError, ParameterError) as exc:
             return Trial(False, str(exc))
@@ -212,9 +212,9 @@ def _thin_message(theta, nu0, model, h, min_thickness):
             "density too low)")
 
 
-def _solve(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60,
+def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60,
            lam_min=1e-6):
-    """solve_steady after validation; ``start`` is a :class:`_State` (or None: cold start)."""
+    """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start)."""
     st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter,
                               lam_min=lam_min)
     _, q = _quantities(theta, st, model)
@@ -270,43 +270,43 @@ def steady_tangent(flow: SteadyFlow) -> dict:
         d/dβ of ``rho_bar``, ``Q``, ``T_mean``, ``h``, ``nu_mean``, ``u_floor``, ``T_floor``,
         plus ``dQ_drho`` = dQ0/dρ̄0 (eq. (B 6)).
     """
-    return _tangent_from(flow, _tangent_vectors(flow, theta=False)[0])
+    return tangent_from(flow, tangent_vectors(flow, theta=False)[0])
 
 
-def _tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
+def tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
     """steady_tangent's dict from the packed tangent dX/dβ."""
-    st = _State(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
+    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
                 flow.y_max)
     m = flow.n + 1
     out = {"log_nu": dX[:m], "u": dX[m:2 * m], "T": dX[2 * m:3 * m], "y_max": dX[-1]}
     X = st.pack()
     eps = 1e-6 * flow.nu0
-    qp = _quantities(flow.theta, _State.unpack(flow.n, X + eps * dX), flow.model)[1]
-    qm = _quantities(flow.theta, _State.unpack(flow.n, X - eps * dX), flow.model)[1]
+    qp = _quantities(flow.theta, NewtonState.unpack(flow.n, X + eps * dX), flow.model)[1]
+    qm = _quantities(flow.theta, NewtonState.unpack(flow.n, X - eps * dX), flow.model)[1]
     for k in ("rho_bar", "Q", "T_mean", "h", "nu_mean", "u_floor", "T_floor"):
         out["d" + k] = (qp[k] - qm[k]) / (2 * eps)
     out["dQ_drho"] = out["dQ"] / out["drho_bar"]
     return out
 
 
-def _tangent_vectors(flow: SteadyFlow, theta: bool = True):
+def tangent_vectors(flow: SteadyFlow, theta: bool = True):
     """Packed dX/dβ (β = ν0(0)) and, if ``theta``, dX/dθ (per degree), from one LU of the
     exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
     import scipy.linalg as sla
 
 
-    newton = _Newton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
-    st = _State(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
+    newton = SteadyNewton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
+    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
                 flow.y_max)
     _, J = newton.evaluate(st)
     rhs = np.zeros((J.shape[0], 2 if theta else 1))
     rhs[0, 0] = -1.0 / flow.nu0
     if theta:
         eps = 1e-3
-        Rp = _Newton(flow.n, flow.theta + eps, flow.nu0, flow.model, flow.nu_top).evaluate(
+        Rp = SteadyNewton(flow.n, flow.theta + eps, flow.nu0, flow.model, flow.nu_top).evaluate(
             st, jac=False)[0]
-        Rm = _Newton(flow.n, flow.theta - eps, flow.nu0, flow.model, flow.nu_top).evaluate(
+        Rm = SteadyNewton(flow.n, flow.theta - eps, flow.nu0, flow.model, flow.nu_top).evaluate(
             st, jac=False)[0]
         rhs[:, 1] = (Rp - Rm) / (2 * eps)
     sol = -sla.lu_solve(sla.lu_factor(J, check_finite=False), rhs, check_finite=False)

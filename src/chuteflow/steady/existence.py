@@ -46,7 +46,7 @@ from scipy.optimize import brentq
 from ..closures import ChuteModel
 from ..equations import compiled_equations
 from ..spectral import ChebyshevGrid
-from .solver import _State, _validate
+from .solver import NewtonState, validate_point
 
 #: Default admissible range of the floor slip velocity u0(0) (units of √(gσ)). At the
 #: paper's parameters the physical flows have u0(0) between ≈ 0.5 and ≈ 150.
@@ -245,13 +245,13 @@ class ExistenceVerdict:
     seconds: float = 0.0
     solution: Any = field(default=None, repr=False, compare=False)
 
-    def starting_state(self, n: int = 64) -> _State:
+    def starting_state(self, n: int = 64) -> NewtonState:
         """The shot profile on n + 1 Chebyshev nodes of [0, y_max], as a Newton start."""
         if self.solution is None:
             raise ValueError("no shot profile: " + self.reason)
         grid = ChebyshevGrid(n, 0.0, self.y_max)
         z = self.solution.sol(grid.y)
-        return _State(n, z[0].copy(), z[1].copy(), z[2].copy(), self.y_max)
+        return NewtonState(n, z[0].copy(), z[1].copy(), z[2].copy(), self.y_max)
 
 
 class _Separatrix(Exception):
@@ -323,7 +323,7 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
     """
     t_start = time.perf_counter()
     model = model or ChuteModel()
-    theta, nu0 = _validate(theta, nu0, model, nu_top)
+    theta, nu0 = validate_point(theta, nu0, model, nu_top)
     ode = SteadyODE(theta, model)
     where = _where(theta, nu0, model)
     u_min, u_max = map(float, u_range)

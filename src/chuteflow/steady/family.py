@@ -18,9 +18,9 @@ from .._version import __version__
 from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from .api import ThinLayerError, _solve, _tangent_from, _tangent_vectors
+from .api import ThinLayerError, solve_point, tangent_from, tangent_vectors
 from .result import SteadyFlow
-from .solver import _State, _validate
+from .solver import NewtonState, validate_point
 
 #: Scalar variables of a family / map dataset (float, NaN where no steady flow).
 SCALARS = ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max", "y_peak",
@@ -93,11 +93,11 @@ class _Point:
 _UNREACHED = "unreached"
 
 
-def _attempt(theta, nu0, model, opts: Options, start: _State | None, n: int,
+def _attempt(theta, nu0, model, opts: Options, start: NewtonState | None, n: int,
              cold: bool = False) -> _Point:
     kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
     try:
-        flow = _solve(theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start,
+        flow = solve_point(theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start,
                       opts.min_thickness, **kw)
         return _Point("ok", flow)
     except ThinLayerError as exc:
@@ -115,27 +115,27 @@ def _start_n(flow: SteadyFlow, opts: Options) -> int:
     return max(opts.n, int(round(flow.n * 2 / 3)))
 
 
-def _predict(point: _Point, theta: float, nu0: float) -> _State:
+def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
     """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor)."""
     f = point.flow
     assert f is not None, "a predictor needs a converged neighbour"
-    X = _State(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
+    X = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
     if point.vectors is not None:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
-        st = _State.unpack(f.n, Xp)
+        st = NewtonState.unpack(f.n, Xp)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
         if (0.5 * f.y_max < st.L < 2.0 * f.y_max and (st.T > 0).all()
                 and (st.s < np.log(f.model.nu_max)).all()):
             return st
-    return _State.unpack(f.n, X)
+    return NewtonState.unpack(f.n, X)
 
 
 def _with_tangent(point: _Point, opts: Options) -> _Point:
     if point.flow is not None and point.vectors is None:
         try:
-            point.vectors = _tangent_vectors(point.flow, theta=True)
+            point.vectors = tangent_vectors(point.flow, theta=True)
             if opts.tangent and point.status == "ok":
-                point.tangent = _tangent_from(point.flow, point.vectors[0])
+                point.tangent = tangent_from(point.flow, point.vectors[0])
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             point.vectors = None
     return point
@@ -270,7 +270,7 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
     return out
 
 
-def _row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
+def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
     N = len(points)
     out = {k: np.full(N, np.nan) for k in SCALARS}
     out["monotonic"] = np.full(N, np.nan)
@@ -301,7 +301,7 @@ def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
     return {k: (str(v) if isinstance(v, bool) else v) for k, v in attrs.items()}
 
 
-def _check_nu0(nu0_values, model) -> np.ndarray:
+def check_nu0(nu0_values, model) -> np.ndarray:
     nus = np.atleast_1d(np.asarray(nu0_values, dtype=float))
     if nus.ndim != 1 or len(nus) == 0:
         raise ParameterError("nu0_values: expected a non-empty 1-D sequence of floor densities")
@@ -309,7 +309,7 @@ def _check_nu0(nu0_values, model) -> np.ndarray:
         raise ParameterError("nu0_values must be strictly increasing (continuation walks "
                              "along them)")
     for v in nus:
-        _validate(20.0, v, model, min(1e-9, 1e-4 * nus.min()))
+        validate_point(20.0, v, model, min(1e-9, 1e-4 * nus.min()))
     return nus
 
 
@@ -345,14 +345,14 @@ def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
     """
     import xarray as xr
     model = model or ChuteModel()
-    theta = _validate(theta, 0.5 * model.nu_max, model, 1e-9)[0]
-    nus = _check_nu0(nu0_values, model)
+    theta = validate_point(theta, 0.5 * model.nu_max, model, 1e-9)[0]
+    nus = check_nu0(nu0_values, model)
     opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness,
                    tangent=tangent)
-    _validate(theta, nus[0], model, nu_top)
+    validate_point(theta, nus[0], model, nu_top)
     pts = continue_row(theta, nus, model, opts)
-    arr = _row_arrays(pts)
-    ds = xr.Dataset({k: ("nu0", v, _var_attrs(k)) for k, v in arr.items()},
+    arr = row_arrays(pts)
+    ds = xr.Dataset({k: ("nu0", v, variable_attrs(k)) for k, v in arr.items()},
                     coords={"nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)",
                                                  "units": "1"})},
                     attrs={**dataset_attrs(model, opts), "theta": theta})
@@ -361,7 +361,7 @@ def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
     return ds
 
 
-def _var_attrs(k):
+def variable_attrs(k):
     name, units = _ATTRS.get(k, (k, ""))
     return {"long_name": name, "units": units}
 

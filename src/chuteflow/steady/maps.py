@@ -17,8 +17,8 @@ from .._threads import limit_blas_threads
 from ..closures import ChuteModel
 from ..errors import ParameterError
 from .api import follow
-from .family import SCALARS, Options, _check_nu0, _row_arrays, _var_attrs, continue_row, dataset_attrs
-from .solver import _validate
+from .family import SCALARS, Options, check_nu0, continue_row, dataset_attrs, row_arrays, variable_attrs
+from .solver import validate_point
 
 
 def _sweep(thetas, nus, model, opts, seed_row=None):
@@ -114,9 +114,9 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
         raise ParameterError("theta_values: expected a strictly increasing 1-D sequence of "
                              "angles in degrees")
     for th in ths:
-        _validate(th, 0.5 * model.nu_max, model, 1e-9)
-    nus = _check_nu0(nu0_values, model)
-    _validate(ths[0], nus[0], model, nu_top)
+        validate_point(th, 0.5 * model.nu_max, model, 1e-9)
+    nus = check_nu0(nu0_values, model)
+    validate_point(ths[0], nus[0], model, nu_top)
     # fail fast: beyond the existence boundary every attempt fails, and points past a
     # failure are usually reached again from the neighbouring row: no substeps, and one
     # cold start for rows that have a neighbouring row to continue from. (Fewer Newton
@@ -146,10 +146,10 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
         rows_down = _sweep(down, nus, model, opts, first)
     rows = rows_down[::-1] + rows_up
     rows = _sweep_back(ths, nus, model, opts, rows, k)
-    arrays = [_row_arrays(r) for r in rows]
+    arrays = [row_arrays(r) for r in rows]
     data = {}
     for key in arrays[0]:
-        data[key] = (("theta", "nu0"), np.stack([a[key] for a in arrays]), _var_attrs(key))
+        data[key] = (("theta", "nu0"), np.stack([a[key] for a in arrays]), variable_attrs(key))
     ds = xr.Dataset(data, coords={
         "theta": ("theta", ths, {"long_name": "inclination θ", "units": "degree"}),
         "nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"})},

@@ -33,7 +33,7 @@ _FIELDS = ("nu", "u", "T")
 
 
 @dataclass
-class _State:
+class NewtonState:
     """Nodal unknowns: s = ln ν0 (keeps relative accuracy over nine decades), u0, T0, y_max."""
 
     n: int
@@ -55,7 +55,7 @@ class _State:
         return cls(n, X[:m].copy(), X[m:2 * m].copy(), X[2 * m:3 * m].copy(), float(X[-1]))
 
 
-def _validate(theta, nu0, model, nu_top):
+def validate_point(theta, nu0, model, nu_top):
     try:
         theta = float(theta)
         nu0 = float(nu0)
@@ -106,10 +106,10 @@ def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
     uprime = tan * ev["p"][(0, 0)] / ev["mu"][(0, 0)]
     g = ChebyshevGrid(grid.n, 0.0, L)
     u = uf1 * math.sqrt(T) + g.cumulative(uprime)
-    return _State(grid.n, np.log(nu), u, np.full_like(nu, T), L)
+    return NewtonState(grid.n, np.log(nu), u, np.full_like(nu, T), L)
 
 
-class _Newton:
+class SteadyNewton:
     """Residual and exact Jacobian of the steady free-boundary problem on n + 1 nodes."""
 
     def __init__(self, n, theta_deg, nu0, model, nu_top, integrated=True):
@@ -146,7 +146,7 @@ class _Newton:
             self._layout += (("xmom", slice(m + 1, m + n), slice(1, n), "u"),
                              (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"))
 
-    def evaluate(self, st: _State, jac=True):
+    def evaluate(self, st: NewtonState, jac=True):
         n, m, L = self.n, self.n + 1, st.L
         D1, D2 = self.ref.D / L, self.ref.D2 / L**2
         nu = np.exp(st.s)
@@ -215,7 +215,7 @@ class _Newton:
             J[-1, n] = 1.0
         return R, J
 
-    def solve(self, st: _State, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
+    def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
         # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
         # is handled by the line search, so numpy's warnings about it are noise
         with np.errstate(all="ignore"):
@@ -255,7 +255,7 @@ class _Newton:
                 return st, it, res, hist
             lam = 1.0
             while lam >= lam_min:
-                trial = _State.unpack(self.n, X0 + lam * dX)
+                trial = NewtonState.unpack(self.n, X0 + lam * dX)
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
                     Rt, Jt = self.evaluate(trial)
                     rt = np.abs(Rt).max()
@@ -280,13 +280,13 @@ class _NewtonFailure(Exception):
         self.state, self.history = state, history
 
 
-def _resample(st: _State, n: int) -> _State:
+def _resample(st: NewtonState, n: int) -> NewtonState:
     """Interpolate a state to n + 1 nodes on the same [0, y_max] (log ν for positivity)."""
     if st.n == n:
-        return _State(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L)
+        return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L)
     old = ChebyshevGrid(st.n, 0.0, 1.0)
     new = ChebyshevGrid(n, 0.0, 1.0).y
-    return _State(n, old.interpolate(st.s, new), old.interpolate(st.u, new),
+    return NewtonState(n, old.interpolate(st.s, new), old.interpolate(st.u, new),
                   old.interpolate(st.T, new), st.L)
 
 
@@ -297,7 +297,7 @@ def solve_state(theta, nu0, model, nu_top, n, guess=None, tol=1e-11, maxiter=60,
     Without ``guess`` the cold start runs Newton on a coarse grid first (n = 32: its
     iterations are a third of the cost) and refines; the result does not depend on it.
     """
-    newton = _Newton(n, theta, nu0, model, nu_top)
+    newton = SteadyNewton(n, theta, nu0, model, nu_top)
     it0 = 0
     if guess is None:
         guess, it0 = _cold_start(theta, nu0, model, nu_top, n)
@@ -318,7 +318,7 @@ _COARSE = 32
 
 def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
     """Isothermal guess polished by Newton (second-order x-momentum form, see
-    :meth:`_Newton.evaluate`) on the coarse grid; (state, iterations). If the coarse Newton
+    :meth:`SteadyNewton.evaluate`) on the coarse grid; (state, iterations). If the coarse Newton
     got close (residual < 1e-3) but not below tolerance, the layer may be under-resolved
     and the n grid is tried too. A cold start that converges needs at most ~15 iterations:
     failing after ``maxiter`` (and backtracking at most 10 halvings) keeps the cost of a
@@ -326,7 +326,7 @@ def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
     levels = (_COARSE, n) if n > _COARSE else (n,)
     first = None
     for m in levels:
-        newton = _Newton(m, theta, nu0, model, nu_top, integrated=False)
+        newton = SteadyNewton(m, theta, nu0, model, nu_top, integrated=False)
         try:
             st, it, _, _ = newton.solve(isothermal_guess(theta, nu0, model, nu_top, newton.ref),
                                         tol=1e-9, maxiter=maxiter, lam_min=2.0**-10)
