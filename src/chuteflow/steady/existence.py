@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from ..closures import ChuteModel
@@ -184,6 +183,9 @@ def shoot(ode: SteadyODE, nu0: float, u_floor: float, *, nu_top: float = 1e-9,
         ev.terminal = True  # type: ignore[attr-defined]  # read by solve_ivp
     top.direction = -1.0  # type: ignore[attr-defined]
     with np.errstate(all="ignore"):
+        # scipy.integrate costs ~0.3 s to import: only a cold start that failed needs it
+        from scipy.integrate import solve_ivp
+
         sol = solve_ivp(ode.rhs, (0.0, y_cap), [math.log(nu0), u_floor, T0, T0p],
                         method="RK45", rtol=rtol, atol=1e-12, events=(top, cold, packed, hot),
                         dense_output=dense)
