@@ -17,6 +17,7 @@ the best of a few repetitions after a warm-up (sympy compilation excluded).
   The baseline's accuracy (|a2 − Re α2| / |Re α2|) is in the note. In quick mode one QZ is
   timed and multiplied by three.
 """
+
 from __future__ import annotations
 
 import sys
@@ -89,29 +90,40 @@ def run(quick: bool = False) -> list[dict]:
         t_qz, a2_fit = _qz_fit(flow, lw.n, lw.dQ_drho, K_FIT, quick)
         baseline = t_steady + t_qz
         err_fit = abs(a2_fit - lw.alpha2.real) / abs(lw.alpha2.real)
-        rows.append({
-            "name": f"longwave_sign_{name}", "seconds": t_sign, "baseline_seconds": baseline,
-            "ratio": baseline / t_sign,
-            "note": f"target < 0.2 s; θ={th:g}, ν0={nu0:g}: Re α2 = {lw.alpha2.real:.5g} "
-                    f"(N = {lw.n}, change vs 4N/5 {lw.convergence_alpha2:.1e}), α1 = "
-                    f"{lw.alpha1.imag:.8g}i vs −dQ0/dρ̄0 = {-lw.dQ_drho:.8g}; steady "
-                    f"{t_steady * 1e3:.0f} ms; baseline: QZ at N = {lw.n}, k = 1e-6, 2e-6, "
-                    f"4e-6{' (1 timed × 3)' if quick else ''}, fit a2 = {a2_fit:.5g} "
-                    f"({err_fit:.1e} from α2)"})
+        rows.append(
+            {
+                "name": f"longwave_sign_{name}",
+                "seconds": t_sign,
+                "baseline_seconds": baseline,
+                "ratio": baseline / t_sign,
+                "note": f"target < 0.2 s; θ={th:g}, ν0={nu0:g}: Re α2 = {lw.alpha2.real:.5g} "
+                f"(N = {lw.n}, change vs 4N/5 {lw.convergence_alpha2:.1e}), α1 = "
+                f"{lw.alpha1.imag:.8g}i vs −dQ0/dρ̄0 = {-lw.dQ_drho:.8g}; steady "
+                f"{t_steady * 1e3:.0f} ms; baseline: QZ at N = {lw.n}, k = 1e-6, 2e-6, "
+                f"4e-6{' (1 timed × 3)' if quick else ''}, fit a2 = {a2_fit:.5g} "
+                f"({err_fit:.1e} from α2)",
+            }
+        )
         if not quick:
             t_full, lw1 = _best(lambda th=th, nu0=nu0: longwave(solve_steady(th, nu0), rtol=0.01), 2)
             t_qz1, a2_fit1 = _qz_fit(flow, lw1.n, lw1.dQ_drho, K_FIT, False)
-            rows.append({
-                "name": f"longwave_1pct_{name}", "seconds": t_full,
-                "baseline_seconds": t_steady + t_qz1, "ratio": (t_steady + t_qz1) / t_full,
-                "note": f"rtol 1e-2: Re α2 = {lw1.alpha2.real:.5g} (N = {lw1.n}, change "
-                        f"{lw1.convergence_alpha2:.1e}); baseline QZ at N = {lw1.n}: fit "
-                        f"a2 = {a2_fit1:.5g}"})
+            rows.append(
+                {
+                    "name": f"longwave_1pct_{name}",
+                    "seconds": t_full,
+                    "baseline_seconds": t_steady + t_qz1,
+                    "ratio": (t_steady + t_qz1) / t_full,
+                    "note": f"rtol 1e-2: Re α2 = {lw1.alpha2.real:.5g} (N = {lw1.n}, change "
+                    f"{lw1.convergence_alpha2:.1e}); baseline QZ at N = {lw1.n}: fit "
+                    f"a2 = {a2_fit1:.5g}",
+                }
+            )
     return rows
 
 
 def main(argv=None):
     from run import print_table  # the harness's table, when run as a script from benchmarks/
+
     print_table(run("--quick" in (argv if argv is not None else sys.argv[1:])))
 
 

@@ -16,6 +16,7 @@ best of a few repetitions after a warm-up (sympy compilation is excluded).
   (adaptive N, drift and tail at every point). Target < 2 s. Baseline: the paper's method
   on the same 50 points, two dense QZ per point, timed on one point and multiplied.
 """
+
 from __future__ import annotations
 
 import sys
@@ -61,11 +62,18 @@ def run(quick: bool = False) -> list[dict]:
 
     def targeted():
         return nearest_eigenpair(op.pencil(K), ref_mode.alpha + 1e-4)[0]
+
     t_si, alpha = _best(targeted, rep)
-    rows.append({"name": "shift_invert_vs_qz", "seconds": t_si, "baseline_seconds": t_qz,
-                 "ratio": t_qz / t_si,
-                 "note": f"N={N}, M={A.shape[0]}; |alpha - alpha_QZ| = {abs(alpha - ref):.1e} "
-                         "(target 1e-9); target ratio >= 20"})
+    rows.append(
+        {
+            "name": "shift_invert_vs_qz",
+            "seconds": t_si,
+            "baseline_seconds": t_qz,
+            "ratio": t_qz / t_si,
+            "note": f"N={N}, M={A.shape[0]}; |alpha - alpha_QZ| = {abs(alpha - ref):.1e} "
+            "(target 1e-9); target ratio >= 20",
+        }
+    )
 
     # 2. least-stable mode with its convergence estimate, end to end
     n2 = check_n(N)
@@ -77,11 +85,17 @@ def run(quick: bool = False) -> list[dict]:
 
     t_paper, _ = _best(paper, 1)
     t_ls, mode = _best(lambda: least_stable(flow, K, n=N), rep)
-    rows.append({"name": "least_stable_vs_qz", "seconds": t_ls, "baseline_seconds": t_paper,
-                 "ratio": t_paper / t_ls,
-                 "note": f"from k = 0 by continuation + drift at N'={n2} + tail; "
-                         f"|alpha - alpha_QZ| = {abs(mode.alpha - ref):.1e}, drift "
-                         f"{mode.drift:.1e}"})
+    rows.append(
+        {
+            "name": "least_stable_vs_qz",
+            "seconds": t_ls,
+            "baseline_seconds": t_paper,
+            "ratio": t_paper / t_ls,
+            "note": f"from k = 0 by continuation + drift at N'={n2} + tail; "
+            f"|alpha - alpha_QZ| = {abs(mode.alpha - ref):.1e}, drift "
+            f"{mode.drift:.1e}",
+        }
+    )
 
     # 3. a 50-point dispersion relation including the steady solve
     ks = np.linspace(0.0, 0.02, 50)
@@ -89,19 +103,27 @@ def run(quick: bool = False) -> list[dict]:
     def disp():
         f = solve_steady(THETA, NU0)
         return dispersion(f, ks)
+
     t_disp, ds = _best(disp, max(1, rep // 2))
     per_point = t_qz_vec = _best(lambda: qz(A, B), 1)[0]
     baseline = len(ks) * (per_point + t_qz * (n2 / N) ** 3)
-    rows.append({"name": "dispersion_50", "seconds": t_disp, "baseline_seconds": baseline,
-                 "ratio": baseline / t_disp,
-                 "note": f"target < 2 s; N used {sorted(set(ds['n'].values.tolist()))}, max "
-                         f"drift {float(ds['drift'].max()):.1e}; baseline = 50 x (QZ with "
-                         f"vectors at N={N}: {t_qz_vec:.2f} s, + QZ at N'={n2}, scaled)"})
+    rows.append(
+        {
+            "name": "dispersion_50",
+            "seconds": t_disp,
+            "baseline_seconds": baseline,
+            "ratio": baseline / t_disp,
+            "note": f"target < 2 s; N used {sorted(set(ds['n'].values.tolist()))}, max "
+            f"drift {float(ds['drift'].max()):.1e}; baseline = 50 x (QZ with "
+            f"vectors at N={N}: {t_qz_vec:.2f} s, + QZ at N'={n2}, scaled)",
+        }
+    )
     return rows
 
 
 def main(argv=None):
     from run import print_table  # the harness's table, when run as a script from benchmarks/
+
     print_table(run("--quick" in (argv if argv is not None else sys.argv[1:])))
 
 

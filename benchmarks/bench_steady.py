@@ -16,6 +16,7 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
   solution times the number of points with a flow (estimated, not run: ~half an hour).
   Target: < 20 s. The note also gives the one-process time.
 """
+
 from __future__ import annotations
 
 import statistics
@@ -59,21 +60,32 @@ def run(quick: bool = False) -> list[dict]:
     t_one = _median_time(lambda: solve_steady(16.0, 0.05), 5 if quick else 30, cpu)
     shot = solve_by_shooting(16.0, 0.05, Material())
     t_base = _median_time(lambda: solve_by_shooting(16.0, 0.05, Material()), 1 if quick else 3)
-    agree = max(abs(getattr(shot, k) / getattr(ref, k) - 1)
-                for k in ("u_floor", "T_floor", "rho_bar", "Q", "h"))
-    rows.append({"name": "steady_one_solution", "seconds": t_one, "baseline_seconds": t_base,
-                 "ratio": t_base / t_one,
-                 "note": f"θ=16°, ν0=0.05, cold start, n={ref.n}, change {ref.convergence:.0e}, "
-                         f"CPU {cpu[-1] * 1e3:.1f} ms; "
-                         f"baseline solve_ivp+brentq ({shot.shots} shots), agrees to "
-                         f"{agree:.0e}; target < 0.020 s"})
+    agree = max(
+        abs(getattr(shot, k) / getattr(ref, k) - 1) for k in ("u_floor", "T_floor", "rho_bar", "Q", "h")
+    )
+    rows.append(
+        {
+            "name": "steady_one_solution",
+            "seconds": t_one,
+            "baseline_seconds": t_base,
+            "ratio": t_base / t_one,
+            "note": f"θ=16°, ν0=0.05, cold start, n={ref.n}, change {ref.convergence:.0e}, "
+            f"CPU {cpu[-1] * 1e3:.1f} ms; "
+            f"baseline solve_ivp+brentq ({shot.shots} shots), agrees to "
+            f"{agree:.0e}; target < 0.020 s",
+        }
+    )
     near = solve_steady(16.0, 0.051)
-    t_cont = _median_time(lambda: solve_steady(16.0, 0.05, guess=near), 5 if quick else 30,
-                          cpu)
-    rows.append({"name": "steady_one_solution_continued", "seconds": t_cont,
-                 "baseline_seconds": t_base, "ratio": t_base / t_cont,
-                 "note": f"from the solution at ν0=0.051 (as in families and maps), CPU "
-                         f"{cpu[-1] * 1e3:.1f} ms"})
+    t_cont = _median_time(lambda: solve_steady(16.0, 0.05, guess=near), 5 if quick else 30, cpu)
+    rows.append(
+        {
+            "name": "steady_one_solution_continued",
+            "seconds": t_cont,
+            "baseline_seconds": t_base,
+            "ratio": t_base / t_cont,
+            "note": f"from the solution at ν0=0.051 (as in families and maps), CPU {cpu[-1] * 1e3:.1f} ms",
+        }
+    )
 
     size = 20 if quick else 40
     ths = np.linspace(10.0, 20.0, size)
@@ -87,18 +99,26 @@ def run(quick: bool = False) -> list[dict]:
     st = ds.status.values
     n_ok = int(((st == "ok") | (st == "thin")).sum())
     same = bool((st == ds1.status.values).all())
-    counts = ", ".join(f"{k} {int((st == k).sum())}" for k in
-                       ("ok", "thin", "no_steady_flow", "not_converged", "unreached"))
-    rows.append({"name": f"steady_map_{size}x{size}", "seconds": t_map,
-                 "baseline_seconds": n_ok * t_base, "ratio": n_ok * t_base / t_map,
-                 "note": f"φ=0.05, θ∈[10,20]°, ν0∈[0.005,0.5]; 2 processes; 1 process "
-                         f"{t_map1:.1f} s, CPU {c_map1:.1f} s (same statuses: {same}); "
-                         f"{counts}; baseline "
-                         f"estimated = {n_ok} flows × shooting time; target < 20 s"})
+    counts = ", ".join(
+        f"{k} {int((st == k).sum())}" for k in ("ok", "thin", "no_steady_flow", "not_converged", "unreached")
+    )
+    rows.append(
+        {
+            "name": f"steady_map_{size}x{size}",
+            "seconds": t_map,
+            "baseline_seconds": n_ok * t_base,
+            "ratio": n_ok * t_base / t_map,
+            "note": f"φ=0.05, θ∈[10,20]°, ν0∈[0.005,0.5]; 2 processes; 1 process "
+            f"{t_map1:.1f} s, CPU {c_map1:.1f} s (same statuses: {same}); "
+            f"{counts}; baseline "
+            f"estimated = {n_ok} flows × shooting time; target < 20 s",
+        }
+    )
     return rows
 
 
 if __name__ == "__main__":
     import json
+
     out = run(quick="--quick" in sys.argv)
     print(json.dumps(out, indent=1))

@@ -13,6 +13,7 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_sweep.
 - ``peak_memory_grid``: peak resident memory of the worker processes for an 8×8 and a 16×16
   grid of the same region; ratio = large / small (1 = independent of grid size).
 """
+
 from __future__ import annotations
 
 import os
@@ -28,6 +29,7 @@ import numpy as np
 
 def _sweep(cfg, workers, tmp=None):
     from chuteflow.sweep import Sweep
+
     sw = Sweep(cfg, None)
     t0 = time.perf_counter()
     ds = sw.run(workers=workers)
@@ -39,6 +41,7 @@ def _dense_qz_seconds(flows, nks, n=100, n_check=110):
     import scipy.linalg as sla
 
     from chuteflow.stability import operator
+
     per_solve = []
     for f in flows:
         for nn in (n, n_check):
@@ -62,17 +65,29 @@ def run(quick: bool = False) -> list[dict]:
     cfg = SweepConfig.grid(0.05, shape=shape, markers=())
     ds2, st2, t2 = _sweep(cfg, 2)
     ok = int((ds2["status"].values == 0).sum())
-    rows.append({"name": f"sweep_phi005_{shape[0]}x{shape[1]}", "seconds": t2,
-                 "baseline_seconds": 60.0, "ratio": 60.0 / t2,
-                 "note": f"2 workers; baseline = the 60 s target (ratio > 1 meets it); {ok} of "
-                         f"{cfg.size} points with a steady flow"})
+    rows.append(
+        {
+            "name": f"sweep_phi005_{shape[0]}x{shape[1]}",
+            "seconds": t2,
+            "baseline_seconds": 60.0,
+            "ratio": 60.0 / t2,
+            "note": f"2 workers; baseline = the 60 s target (ratio > 1 meets it); {ok} of "
+            f"{cfg.size} points with a steady flow",
+        }
+    )
     # speed-up 1 → 2 workers on a smaller grid of the same ranges
     sub = SweepConfig.grid(0.05, shape=(8, 8) if quick else (16, 16), markers=())
     _, _, t1 = _sweep(sub, 1)
     _, _, t2s = _sweep(sub, 2)
-    rows.append({"name": f"speedup_2_workers_{sub.shape[0]}x{sub.shape[1]}", "seconds": t2s,
-                 "baseline_seconds": t1, "ratio": t1 / t2s,
-                 "note": "2 worker processes vs one process (2 = linear)"})
+    rows.append(
+        {
+            "name": f"speedup_2_workers_{sub.shape[0]}x{sub.shape[1]}",
+            "seconds": t2s,
+            "baseline_seconds": t1,
+            "ratio": t1 / t2s,
+            "note": "2 worker processes vs one process (2 = linear)",
+        }
+    )
     # cost per point of the full diagram: the workers' own timers, per point with a flow
     pts = np.array(st2.point_seconds)
     per_point = float(st2.task_seconds) / max(ok, 1)
@@ -82,11 +97,17 @@ def run(quick: bool = False) -> list[dict]:
     model = cfg.model()
     flows = [solve_steady(t, n, model) for t, n in sample]
     paper, per_solve = _dense_qz_seconds(flows, nks)
-    rows.append({"name": "point_vs_dense_qz", "seconds": per_point, "baseline_seconds": paper,
-                 "ratio": paper / per_point,
-                 "note": f"chuteflow: all metrics incl. failed points, per point with a flow "
-                         f"(median point {np.median(pts):.3f} s); paper: {nks} k x 2 dense QZ "
-                         f"(N=100,110) at {per_solve:.3f} s each, on P1, P4, P5"})
+    rows.append(
+        {
+            "name": "point_vs_dense_qz",
+            "seconds": per_point,
+            "baseline_seconds": paper,
+            "ratio": paper / per_point,
+            "note": f"chuteflow: all metrics incl. failed points, per point with a flow "
+            f"(median point {np.median(pts):.3f} s); paper: {nks} k x 2 dense QZ "
+            f"(N=100,110) at {per_solve:.3f} s each, on P1, P4, P5",
+        }
+    )
     # peak memory of the workers against the grid size (same region, 4x the points). The
     # peak is set by the largest dense problem (long-wave operators at N up to 480), reached
     # once some point needs it; 4x4 may not contain such a point, 8x8 does here.
@@ -95,15 +116,22 @@ def run(quick: bool = False) -> list[dict]:
     large = SweepConfig.grid(0.05, shape=(16, 16), **region)
     _, sts, _ = _sweep(small, 2)
     _, stl, _ = _sweep(large, 2)
-    rows.append({"name": "peak_memory_grid", "seconds": stl.max_rss_mib,
-                 "baseline_seconds": sts.max_rss_mib,
-                 "ratio": stl.max_rss_mib / sts.max_rss_mib,
-                 "note": "'seconds' columns hold MiB: worker peak RSS for 16x16 vs 8x8 grid"})
+    rows.append(
+        {
+            "name": "peak_memory_grid",
+            "seconds": stl.max_rss_mib,
+            "baseline_seconds": sts.max_rss_mib,
+            "ratio": stl.max_rss_mib / sts.max_rss_mib,
+            "note": "'seconds' columns hold MiB: worker peak RSS for 16x16 vs 8x8 grid",
+        }
+    )
     return rows
 
 
 if __name__ == "__main__":
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     for r in run("--quick" in sys.argv):
-        print(f"{r['name']:28s} {r['seconds']:10.3f} {r['baseline_seconds']:10.3f} "
-              f"{r['ratio']:8.2f}  {r['note']}")
+        print(
+            f"{r['name']:28s} {r['seconds']:10.3f} {r['baseline_seconds']:10.3f} "
+            f"{r['ratio']:8.2f}  {r['note']}"
+        )

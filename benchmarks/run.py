@@ -12,6 +12,7 @@ Usage::
 
 NAME selects modules (``steady`` for ``bench_steady.py``) or rows whose name contains it.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,7 +34,7 @@ KEYS = ("name", "seconds", "baseline_seconds", "ratio", "note")
 
 def discover() -> list[str]:
     """Names of the benchmark modules (``bench_<name>.py``), sorted."""
-    return sorted(p.stem[len("bench_"):] for p in (ROOT / "benchmarks").glob("bench_*.py"))
+    return sorted(p.stem[len("bench_") :] for p in (ROOT / "benchmarks").glob("bench_*.py"))
 
 
 def run_module(name: str, quick: bool) -> list[dict]:
@@ -44,8 +45,15 @@ def run_module(name: str, quick: bool) -> list[dict]:
         rows = list(mod.run(quick=quick))
     except Exception as exc:  # reported as a row, the others still run
         traceback.print_exc()
-        return [{"name": f"{name}: FAILED", "seconds": math.nan, "baseline_seconds": math.nan,
-                 "ratio": math.nan, "note": f"{type(exc).__name__}: {exc}"}]
+        return [
+            {
+                "name": f"{name}: FAILED",
+                "seconds": math.nan,
+                "baseline_seconds": math.nan,
+                "ratio": math.nan,
+                "note": f"{type(exc).__name__}: {exc}",
+            }
+        ]
     for r in rows:
         missing = [k for k in KEYS if k not in r]
         if missing:
@@ -68,12 +76,22 @@ def print_table(rows: list[dict]) -> None:
             print(r)
         return
     t = Table(title="chuteflow benchmarks")
-    for col, just in (("benchmark", "left"), ("chuteflow (s)", "right"),
-                      ("baseline (s)", "right"), ("ratio", "right"), ("note", "left")):
+    for col, just in (
+        ("benchmark", "left"),
+        ("chuteflow (s)", "right"),
+        ("baseline (s)", "right"),
+        ("ratio", "right"),
+        ("note", "left"),
+    ):
         t.add_column(col, justify=just, overflow="fold")
     for r in rows:
-        t.add_row(r["name"], _fmt(r["seconds"], ".4g"), _fmt(r["baseline_seconds"], ".4g"),
-                  _fmt(r["ratio"], ".3g"), str(r["note"]))
+        t.add_row(
+            r["name"],
+            _fmt(r["seconds"], ".4g"),
+            _fmt(r["baseline_seconds"], ".4g"),
+            _fmt(r["ratio"], ".3g"),
+            str(r["note"]),
+        )
     Console(width=160).print(t)
 
 

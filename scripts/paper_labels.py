@@ -15,6 +15,7 @@ Rules (the paper uses ``\\documentclass{jfm}``, the Journal of Fluid Mechanics c
 
 Prints a markdown table ``| label | kind | printed |`` in the order of the LaTeX source.
 """
+
 from __future__ import annotations
 
 import re
@@ -23,9 +24,11 @@ from pathlib import Path
 
 DEFAULT = Path("/work/shared/paper/000_27ec9876b06dcf14.txt")
 NUMBERED = ("equation", "eqnarray", "align", "gather", "multline")
-TOKEN = re.compile(r"\\(section|subsection|subsubsection)\*?\s*\{|\\appendix\b|"
-                   r"\\begin\{(\w+\*?)\}|\\end\{(\w+\*?)\}|\\label\{([^}]*)\}|"
-                   r"\\\\|\\nonumber\b|\\notag\b")
+TOKEN = re.compile(
+    r"\\(section|subsection|subsubsection)\*?\s*\{|\\appendix\b|"
+    r"\\begin\{(\w+\*?)\}|\\end\{(\w+\*?)\}|\\label\{([^}]*)\}|"
+    r"\\\\|\\nonumber\b|\\notag\b"
+)
 
 
 def _strip_comments(text: str) -> str:
@@ -39,8 +42,8 @@ def number_labels(text: str) -> list[tuple[str, str, str]]:
     sec = sub = 0
     appendix = False
     eq = fig = tab = 0
-    env: list[str] = []           # open environments
-    row_labels: list[str] = []    # labels of the current equation row
+    env: list[str] = []  # open environments
+    row_labels: list[str] = []  # labels of the current equation row
     row_numbered = True
     float_kind: str | None = None
     float_labels: list[str] = []
@@ -82,7 +85,7 @@ def number_labels(text: str) -> list[tuple[str, str, str]]:
                 pending = None
             if pending:
                 # the label that follows the heading (before other text) names it
-                rest = text[m.end():m.end() + 400]
+                rest = text[m.end() : m.end() + 400]
                 depth, i = 1, 0
                 while i < len(rest) and depth:
                     depth += {"{": 1, "}": -1}.get(rest[i], 0)

@@ -23,6 +23,7 @@ alone. References to issue numbers are listed (``issue N: …``) but not changed
 them by hand. Prints every change as ``path:line: old → new``; running it twice changes
 nothing the second time.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -33,8 +34,19 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TABLE = ROOT / "docs" / "paper-labels.md"
 #: Labels that are also English words: replaced only where cited (see the module doc).
-WORDS = {"condition", "criterion", "table", "steady", "slope", "sum", "trans", "intro",
-         "disp", "discussion", "mechanism"}
+WORDS = {
+    "condition",
+    "criterion",
+    "table",
+    "steady",
+    "slope",
+    "sum",
+    "trans",
+    "intro",
+    "disp",
+    "discussion",
+    "mechanism",
+}
 #: Of these, the ones also recognised alone in parentheses or in ``source="…"``.
 CITED_WORDS = {"condition", "criterion"}
 SEP = r"(?:\s*(?:,|;|/|…|–|--|\band\b|\bor\b)\s*)"
@@ -69,40 +81,49 @@ class Relabeler:
         tok = _token_pattern(table)
         self.run = re.compile(
             rf"(?P<pre>\b(?i:labels?|eqs?\.?|equations?|figs?\.?|figures?)\s+)?"
-            rf"(?P<run>{tok}(?:\(\w\))?(?:{SEP}{tok}(?:\(\w\))?)*)")
+            rf"(?P<run>{tok}(?:\(\w\))?(?:{SEP}{tok}(?:\(\w\))?)*)"
+        )
         self.tok = re.compile(tok)
 
     def _cited(self, text: str, m: re.Match, labels: list[str]) -> bool:
         if m.group("pre") or any(lab not in WORDS for lab in labels) or len(labels) > 1:
             return True
-        before, after = text[:m.start()], text[m.end():]
+        before, after = text[: m.start()], text[m.end() :]
         if labels[0] not in CITED_WORDS:
             return False
         if before.endswith('"') and after.startswith('"'):
             return before.endswith('source="')  # else a whole string: a key or file name
-        return ((before.endswith("(") and after[:1] in (")", ";", ","))
-                or before.endswith('source="') or after.startswith(" (ERRATA"))
+        return (
+            (before.endswith("(") and after[:1] in (")", ";", ","))
+            or before.endswith('source="')
+            or after.startswith(" (ERRATA")
+        )
 
     def _replace(self, text: str, m: re.Match) -> str:
         run, pre = m.group("run"), (m.group("pre") or "")
         labels = [t.group(0) for t in self.tok.finditer(run)]
-        before, after = text[:m.start()], text[m.end():]
+        before, after = text[: m.start()], text[m.end() :]
         if not self._cited(text, m, labels):
             return m.group(0)
-        if (before.endswith('"') and after.startswith('"') and len(labels) == 1 and not pre
-                and not before.endswith('source="')):
+        if (
+            before.endswith('"')
+            and after.startswith('"')
+            and len(labels) == 1
+            and not pre
+            and not before.endswith('source="')
+        ):
             return m.group(0)  # a whole string: a key or file name
         kinds = {self.table[lab][0] for lab in labels}
         in_parens = before.endswith("(") and after.startswith(")") and not pre
-        body = self.tok.sub(lambda t: self._number(t.group(0), in_parens, len(kinds) > 1),
-                            run)
+        body = self.tok.sub(lambda t: self._number(t.group(0), in_parens, len(kinds) > 1), run)
         if len(kinds) > 1:
             return body
         kind, plural = kinds.pop(), len(labels) > 1
         if in_parens and kind == "equation":
             return ("eqs " if plural else "eq. ") + body
-        word = {"equation": ("eq.", "eqs"), "figure": ("figure", "figures"),
-                "table": ("table", "tables")}[kind][plural]
+        word = {"equation": ("eq.", "eqs"), "figure": ("figure", "figures"), "table": ("table", "tables")}[
+            kind
+        ][plural]
         keep = pre.strip().lower().rstrip(".")
         if keep in ("equation", "equations", "figure", "figures", "eqs"):
             word = pre.strip()
@@ -122,10 +143,8 @@ class Relabeler:
         # "figures 7, 9, 13 (7, 9, 13)": the numbers were already given
         text = re.sub(r"(figures? ([\d, and]+?)) \(\2\)", r"\1", text)
         text = re.sub(r"\bERRATA,? numerical notes", "docs/errata.md, numerical notes", text)
-        text = re.sub(r"\(ERRATA(?:\.md)?,? (?:item )?(\d)\)", r"(docs/errata.md, item \1)",
-                      text)
-        text = re.sub(r"\bERRATA(?:\.md)?,? (?:item )?(\d)\b", r"docs/errata.md, item \1",
-                      text)
+        text = re.sub(r"\(ERRATA(?:\.md)?,? (?:item )?(\d)\)", r"(docs/errata.md, item \1)", text)
+        text = re.sub(r"\bERRATA(?:\.md)?,? (?:item )?(\d)\b", r"docs/errata.md, item \1", text)
         text = re.sub(r"\(see also ERRATA\.md\)", "(see also docs/errata.md)", text)
         text = re.sub(r"\bERRATA(?:\.md)?\b", "docs/errata.md", text)
         return text

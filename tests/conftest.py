@@ -3,6 +3,7 @@
 Tests marked ``@pytest.mark.slow`` are skipped unless ``--runslow`` is given or the
 marker expression selects them (``-m slow``).
 """
+
 from __future__ import annotations
 
 import os
@@ -20,8 +21,7 @@ import pytest  # noqa: E402
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:
-    parser.addoption("--runslow", action="store_true", default=False,
-                     help="also run tests marked slow")
+    parser.addoption("--runslow", action="store_true", default=False, help="also run tests marked slow")
 
 
 def pytest_configure(config: pytest.Config) -> None:

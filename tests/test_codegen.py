@@ -1,5 +1,6 @@
 """Generated code cached on disk (chuteflow._codegen): cold and warm runs agree bitwise, the
 key follows what the expressions depend on, and a damaged or unusable cache falls back."""
+
 from __future__ import annotations
 
 import json
@@ -24,9 +25,13 @@ X, Y = sp.symbols("x y", positive=True)
 
 
 def _exprs():
-    return {"f": ((X, Y), [sp.sqrt(sp.pi) * X**Y + sp.exp(X) / (1 + Y), sp.S.Zero,
-                           sp.diff(sp.log(1 + X * Y) ** 3, X, 2)]),
-            "g": ((X,), [sp.Rational(5, 2) * X ** sp.Rational(-3, 2)], False)}, ("a", 1)
+    return {
+        "f": (
+            (X, Y),
+            [sp.sqrt(sp.pi) * X**Y + sp.exp(X) / (1 + Y), sp.S.Zero, sp.diff(sp.log(1 + X * Y) ** 3, X, 2)],
+        ),
+        "g": ((X,), [sp.Rational(5, 2) * X ** sp.Rational(-3, 2)], False),
+    }, ("a", 1)
 
 
 def _never():
@@ -61,7 +66,7 @@ def test_cold_then_warm_is_bitwise_identical_to_lambdify(cache):
     spec, _ = _exprs()
     direct = sp.lambdify(spec["f"][0], spec["f"][1], modules="numpy", cse=True)
     assert _bits(cold["f"](x, y)) == _bits(warm["f"](x, y)) == _bits(direct(x, y))
-    np.testing.assert_allclose(warm["g"](x)[0], 2.5 * x ** -1.5, rtol=1e-15)
+    np.testing.assert_allclose(warm["g"](x)[0], 2.5 * x**-1.5, rtol=1e-15)
 
 
 def test_key_changes_with_what_the_expressions_depend_on(cache, tmp_path, monkeypatch):
@@ -180,12 +185,16 @@ _RUN = textwrap.dedent("""
 
 
 def test_fresh_processes_cold_and_warm_agree_and_warm_needs_no_sympy(cache):
-    env = dict(os.environ, CHUTEFLOW_CACHE_DIR=str(cache),
-               PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+    env = dict(
+        os.environ,
+        CHUTEFLOW_CACHE_DIR=str(cache),
+        PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]),
+    )
 
     def run():
-        res = subprocess.run([sys.executable, "-c", _RUN], env=env, capture_output=True,
-                             text=True, timeout=600, check=True)
+        res = subprocess.run(
+            [sys.executable, "-c", _RUN], env=env, capture_output=True, text=True, timeout=600, check=True
+        )
         return json.loads(res.stdout.strip().splitlines()[-1])
 
     cold = run()
@@ -222,17 +231,29 @@ def shared_cache(tmp_path_factory):
     return tmp_path_factory.mktemp("cache")
 
 
-@pytest.mark.parametrize("argv", [
-    ["steady", "--theta", "16", "--nu0", "0.05", "--json"],
-    ["eig", "--theta", "16", "--nu0", "0.05", "--k", "0.002", "--json"],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["steady", "--theta", "16", "--nu0", "0.05", "--json"],
+        ["eig", "--theta", "16", "--nu0", "0.05", "--k", "0.002", "--json"],
+    ],
+)
 def test_warm_cli_imports_no_heavy_modules(argv, shared_cache):
     """A fresh ``chuteflow steady`` / ``eig`` with a warm cache loads neither sympy nor the
     plotting and data-set libraries (start-up in a fraction of a second)."""
-    env = dict(os.environ, CHUTEFLOW_CACHE_DIR=str(shared_cache),
-               PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]))
+    env = dict(
+        os.environ,
+        CHUTEFLOW_CACHE_DIR=str(shared_cache),
+        PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]),
+    )
     for _ in range(2):  # the first run fills the cache if it is cold
-        res = subprocess.run([sys.executable, "-c", _CLI, *argv], env=env,
-                             capture_output=True, text=True, timeout=600, check=True)
+        res = subprocess.run(
+            [sys.executable, "-c", _CLI, *argv],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            check=True,
+        )
     out = json.loads(res.stdout.strip().splitlines()[-1])
     assert out == {"rc": 0, "heavy": []}

@@ -1,4 +1,5 @@
 """The one continuation stepper (chuteflow.continuation): its retry rules on toy problems."""
+
 from __future__ import annotations
 
 import math
@@ -14,6 +15,7 @@ def _recorder(fail=lambda s: False):
     def solve(state, s):
         tried.append(s)
         return Trial(not fail(s), s)
+
     return solve, tried
 
 
@@ -44,6 +46,7 @@ def test_max_halvings_and_continuing_step():
 def test_growth_from_quality_and_ratio_cap():
     def solve(state, s):
         return Trial(True, s, quality=0.0)
+
     rules = StepRules(grow=lambda q: 3.0 if q < 0.02 else 1.0, max_step_ratio=2.0)
     res = continue_to(solve, 0.0, 0.0, 1.0, rules, h=1e-3, origin=0.0)
     s = [st.s for st in res.steps]
@@ -87,6 +90,7 @@ def test_subdivide_succeeds_through_substeps():
     def solve(state, s):
         calls.append((state, s))
         return Trial(not (state == 0.0 and s == 1.0), s)
+
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(retry="subdivide", max_depth=1))
     assert calls == [(0.0, 1.0), (0.0, 0.5), (0.5, 1.0)]
     assert res.reached and res.state == 1.0

@@ -1,5 +1,6 @@
 """One sign convention for phase velocities (docs/conventions.md): c = −Im α / k, > 0 down
 the slope, applied by chuteflow.conventions for every result that reports a phase velocity."""
+
 from __future__ import annotations
 
 import math

@@ -7,6 +7,7 @@ eq. (3.7) μ u0' = tan θ p; the far-field conditions of
 :func:`chuteflow.equations.far_field_conditions` are those of §4.1, eq. (4.5) with
 |k| = √(k_x² + k_z²), and are compiled with one term per power of |k|.
 """
+
 from __future__ import annotations
 
 import sympy as sp

@@ -1,4 +1,5 @@
 """Package namespace and thread limiting."""
+
 from __future__ import annotations
 
 import os
@@ -13,10 +14,13 @@ def test_version_is_a_string():
 
 
 def test_import_is_light():
-    code = ("import sys, chuteflow; heavy = [m for m in ('numpy', 'sympy', 'scipy', "
-            "'matplotlib', 'rich', 'typer') if m in sys.modules]; print(','.join(heavy))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, timeout=120).stdout.strip()
+    code = (
+        "import sys, chuteflow; heavy = [m for m in ('numpy', 'sympy', 'scipy', "
+        "'matplotlib', 'rich', 'typer') if m in sys.modules]; print(','.join(heavy))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    ).stdout.strip()
     assert out == "", f"import chuteflow loaded {out}"
 
 
@@ -43,6 +47,5 @@ def test_limit_blas_threads(monkeypatch):
     for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
         monkeypatch.delenv(var, raising=False)
     with limit_blas_threads():
-        assert all(p["num_threads"] == 1 for p in threadpool_info()
-                   if p["user_api"] == "blas")
+        assert all(p["num_threads"] == 1 for p in threadpool_info() if p["user_api"] == "blas")
         assert os.environ["OPENBLAS_NUM_THREADS"] == "1"

@@ -1,5 +1,6 @@
 """scripts/relabel.py: LaTeX labels → the paper's printed numbers (docs/paper-labels.md);
 idempotent, and code strings such as keys and file names are left alone."""
+
 from __future__ import annotations
 
 import importlib.util

@@ -4,6 +4,7 @@ Orr–Sommerfeld equation of plane Poiseuille flow U = 1 − y² at Re = 10⁴, 
 Orszag (1971, J. Fluid Mech. 50, 689) gives the least-stable eigenvalue
 c = 0.23752649 + 0.00373967i to the eight digits printed there.
 """
+
 from __future__ import annotations
 
 import numpy as np

@@ -7,6 +7,7 @@ al. 1984, Johnson–Jackson floor conditions, Chebyshev collocation).
 The package namespace is deliberately light: importing :mod:`chuteflow` loads no
 numerics. ``ChuteModel`` and ``solve_steady`` are resolved on first access.
 """
+
 from __future__ import annotations
 
 from importlib import import_module

@@ -6,6 +6,7 @@ A result file is written to a temporary file in the same folder and moved into p
 mode an ordinary ``open(path, "w")`` would have given it (``0666 & ~umask``, e.g. 0644 under
 the usual umask 022), so that colleagues sharing a cluster can read the results.
 """
+
 from __future__ import annotations
 
 import os

@@ -4,13 +4,20 @@ chuteflow parallelises over parameter points (processes or dask workers), never
 inside a dense eigenvalue solve, so a multi-threaded BLAS only oversubscribes the
 cores. Stages and worker initialisers call :func:`limit_blas_threads` first.
 """
+
 from __future__ import annotations
 
 import os
 
 #: Environment variables read by OpenMP, OpenBLAS, MKL, BLIS and Accelerate at load time.
-BLAS_ENV_VARS = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
-                 "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+BLAS_ENV_VARS = (
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "BLIS_NUM_THREADS",
+    "VECLIB_MAXIMUM_THREADS",
+    "NUMEXPR_NUM_THREADS",
+)
 
 
 def limit_blas_threads(n: int = 1, *, set_env: bool = True):

@@ -32,6 +32,7 @@ continuation it starts goes through :func:`continue_to`.
 
 This module is the bottom of the layer order (it imports nothing from chuteflow).
 """
+
 from __future__ import annotations
 
 import math
@@ -189,9 +190,16 @@ def _land(s: float, h: float, target: float, sign: float) -> float:
     return target if h >= sign * (target - s) else s + sign * h
 
 
-def continue_to(solve: Callable[[Any, float], Trial], state: Any, s0: float, target: float,
-                rules: StepRules, *, h: float | None = None, origin: float | None = None
-                ) -> Continuation:
+def continue_to(
+    solve: Callable[[Any, float], Trial],
+    state: Any,
+    s0: float,
+    target: float,
+    rules: StepRules,
+    *,
+    h: float | None = None,
+    origin: float | None = None,
+) -> Continuation:
     """Continue ``state`` (the solution at ``s0``) to the parameter ``target``.
 
     Parameters
@@ -257,7 +265,7 @@ def continue_to(solve: Callable[[Any, float], Trial], state: Any, s0: float, tar
 def _subdivide(solve, state, s0, target, rules) -> Continuation:
     steps: list[Step] = []
     for depth in range(rules.max_depth + 1):
-        k = 2 ** depth
+        k = 2**depth
         cur, s = state, s0
         for j in range(1, k + 1):
             s_new = target if j == k else s0 + (target - s0) * (j / k)

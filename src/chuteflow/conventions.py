@@ -10,16 +10,26 @@ Every phase velocity or wave speed chuteflow reports is computed by :func:`phase
 or :func:`long_wave_phase_velocity`. Units are those of the paper's scaling (lengths in σ,
 times in √(σ/g)); the strings below are the ``units`` attributes of xarray variables.
 """
+
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["PHASE_VELOCITY_CONVENTION", "VELOCITY_UNITS", "RATE_UNITS", "WAVENUMBER_UNITS",
-           "LENGTH_UNITS", "phase_velocity", "long_wave_phase_velocity"]
+__all__ = [
+    "PHASE_VELOCITY_CONVENTION",
+    "VELOCITY_UNITS",
+    "RATE_UNITS",
+    "WAVENUMBER_UNITS",
+    "LENGTH_UNITS",
+    "phase_velocity",
+    "long_wave_phase_velocity",
+]
 
 #: One line for attrs and help texts.
-PHASE_VELOCITY_CONVENTION = ("perturbations ~ exp(alpha t + i k x), x down the slope; phase "
-                             "velocity c = -Im(alpha)/k, positive down the slope")
+PHASE_VELOCITY_CONVENTION = (
+    "perturbations ~ exp(alpha t + i k x), x down the slope; phase "
+    "velocity c = -Im(alpha)/k, positive down the slope"
+)
 #: Velocities (u0, phase velocities, dQ0/dρ̄0): √(gσ).
 VELOCITY_UNITS = "sqrt(g sigma)"
 #: Rates (Re α, Im α, drag coefficient a): √(g/σ).

@@ -31,6 +31,7 @@ derivation (:func:`compiled_equations` compiles all three sets):
 Residual sign convention: every equation is written as ``N(X) − B ∂_t X = 0`` so that the
 coefficient of α is −B with B = diag(1, ν, ν, ν, 3ν/2) positive.
 """
+
 from __future__ import annotations
 
 import functools
@@ -146,15 +147,18 @@ def _continuum() -> _Continuum:
     sp_axes = ("x", "y", "z")
     grad = [[D(vel[i], sp_axes[j]) for j in range(3)] for i in range(3)]  # ∂_j u_i
     div = grad[0][0] + grad[1][1] + grad[2][2]
-    S = [[(grad[i][j] + grad[j][i]) / 2 - (sp.Rational(1, 3) * div if i == j else 0)
-          for j in range(3)] for i in range(3)]
-    Sigma = [[(F["p"] - F["zeta"] * div if i == j else 0) - 2 * F["mu"] * S[i][j]
-              for j in range(3)] for i in range(3)]
+    S = [
+        [(grad[i][j] + grad[j][i]) / 2 - (sp.Rational(1, 3) * div if i == j else 0) for j in range(3)]
+        for i in range(3)
+    ]
+    Sigma = [
+        [(F["p"] - F["zeta"] * div if i == j else 0) - 2 * F["mu"] * S[i][j] for j in range(3)]
+        for i in range(3)
+    ]
     q = [-F["kappa"] * D(T, a) for a in sp_axes]
     sin_theta, cos_theta = _gravity_symbols()
     g = (sin_theta, -cos_theta, sp.S.Zero)
-    return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)),
-                      tuple(q), g)
+    return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)), tuple(q), g)
 
 
 @functools.cache
@@ -174,11 +178,13 @@ def governing_equations() -> dict[str, sp.Expr]:
 
     eqs = {"mass": -D(nu, "t") - sum(D(nu * vel[j], sp_axes[j]) for j in range(3))}
     for i, name in enumerate(("xmom", "ymom", "zmom")):
-        eqs[name] = (nu * g[i] - sum(D(Sigma[j][i], sp_axes[j]) for j in range(3))
-                     - nu * material(vel[i]))
-    eqs["energy"] = (-sum(D(q[j], sp_axes[j]) for j in range(3))
-                     - sum(Sigma[i][j] * grad[j][i] for i in range(3) for j in range(3))
-                     - F["Gamma"] - sp.Rational(3, 2) * nu * material(T))
+        eqs[name] = nu * g[i] - sum(D(Sigma[j][i], sp_axes[j]) for j in range(3)) - nu * material(vel[i])
+    eqs["energy"] = (
+        -sum(D(q[j], sp_axes[j]) for j in range(3))
+        - sum(Sigma[i][j] * grad[j][i] for i in range(3) for j in range(3))
+        - F["Gamma"]
+        - sp.Rational(3, 2) * nu * material(T)
+    )
     # floor y = 0, n = e_y: impermeable; eq. (2.9) (tangential momentum); eq. (2.10) (energy)
     eqs["floor_v"] = vel[1]
     eqs["floor_x"] = -Sigma[1][0] - F["eta_star"] * vel[0]
@@ -246,17 +252,19 @@ def _base_substitution():
 def _partial_symbols():
     """Symbols standing for numeric partials, and a function replacing the sympy objects."""
     nu, T = jet("nu"), jet("T")
-    syms = {(name, o): sp.Symbol(f"{name}__{o[0]}{o[1]}", real=True)
-            for name in FUNCTIONS for o in ORDERS}
+    syms = {(name, o): sp.Symbol(f"{name}__{o[0]}{o[1]}", real=True) for name in FUNCTIONS for o in ORDERS}
 
     def replace(expr):
         def deriv(d):
             counts = dict(d.variable_count)
             o = (int(counts.get(nu, 0)), int(counts.get(T, 0)))
             return syms[(d.expr.func.__name__, o)]
+
         expr = expr.replace(lambda e: isinstance(e, sp.Derivative), deriv)
-        return expr.replace(lambda e: isinstance(e, sp.core.function.AppliedUndef),
-                            lambda e: syms[(e.func.__name__, (0, 0))])
+        return expr.replace(
+            lambda e: isinstance(e, sp.core.function.AppliedUndef), lambda e: syms[(e.func.__name__, (0, 0))]
+        )
+
     return syms, replace
 
 
@@ -310,10 +318,12 @@ def compiled_equations() -> dict[str, CompiledEquation]:
     (:func:`chuteflow._codegen.cached_lambdify`, keyed by this module's and the closure
     model's source), so a fresh process loads it instead of deriving again.
     """
-    code = _codegen.cached_lambdify("equations", "compiled_equations", _derive_compiled,
-                                    sources=(__name__, "chuteflow.closures.model"))
-    return {name: CompiledEquation(name, tuple(Term(*t) for t in terms), code[name])
-            for name, terms in code.data}
+    code = _codegen.cached_lambdify(
+        "equations", "compiled_equations", _derive_compiled, sources=(__name__, "chuteflow.closures.model")
+    )
+    return {
+        name: CompiledEquation(name, tuple(Term(*t) for t in terms), code[name]) for name, terms in code.data
+    }
 
 
 def _derive_compiled():
@@ -352,8 +362,7 @@ def _derive_compiled():
             e = repl(sp.sympify(e)).xreplace(zero_jets).xreplace(sub)
             at_base.append(e)
         keep = [i for i, e in enumerate(at_base[1:]) if e != 0]
-        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j, t.k) for j, t in
-                      enumerate(terms[i] for i in keep))
+        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j, t.k) for j, t in enumerate(terms[i] for i in keep))
         spec[name] = (args, [at_base[0]] + [at_base[1 + i] for i in keep])
         data.append((name, tuple((t.field, t.a, t.b, t.c, t.d, t.index, t.k) for t in terms)))
     return spec, tuple(data)
@@ -369,5 +378,14 @@ def _powers_of_k(coef: sp.Expr) -> list[tuple[int, sp.Expr]]:
 
 def base_state(nu, u, T, D1, D2) -> dict[str, np.ndarray]:
     """Jets of a y-dependent state from nodal values and differentiation matrices."""
-    return {"nu": nu, "nu_y": D1 @ nu, "nu_yy": D2 @ nu, "u": u, "u_y": D1 @ u,
-            "u_yy": D2 @ u, "T": T, "T_y": D1 @ T, "T_yy": D2 @ T}
+    return {
+        "nu": nu,
+        "nu_y": D1 @ nu,
+        "nu_yy": D2 @ nu,
+        "u": u,
+        "u_y": D1 @ u,
+        "u_yy": D2 @ u,
+        "T": T,
+        "T_y": D1 @ T,
+        "T_yy": D2 @ T,
+    }

@@ -4,6 +4,7 @@ The lowest numerical layer; used by the steady solver and the stability operator
 Nodes are Gauss–Lobatto points ordered from the left end (the floor, y = 0) to the right
 end (y = y_max).
 """
+
 from __future__ import annotations
 
 import functools

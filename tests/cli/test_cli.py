@@ -1,4 +1,5 @@
 """Command line: help, one-line user errors (exit 2), ``reproduce`` and the report."""
+
 from __future__ import annotations
 
 import json
@@ -93,6 +94,7 @@ def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
     import matplotlib.pyplot as plt
 
     with isolated_registry():
+
         @register_stage("broken", order=1)
         def broken(ctx):
             """A stage that crashes."""
@@ -109,13 +111,21 @@ def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
             plt.close(fig)
             ctx.report.add_figure(ctx.path("line.png"), "A line", id="fig1", source="figure 1")
             ctx.report.add_note("Note with <html> & | pipes.")
-            ctx.report.check("works.ok", source="§3", statement="1 = 1", computed="1",
-                             passed=True)
-            ctx.report.add_checkpoint(Checkpoint.compare(
-                "works.h", source="§3.2", statement="h ≈ 23", value=23.4, expected=23.0,
-                rtol=0.05, name="h"))
-            ctx.report.check("works.qual", source="fig:x", statement="qualitative",
-                             computed="see figure", passed=None)
+            ctx.report.check("works.ok", source="§3", statement="1 = 1", computed="1", passed=True)
+            ctx.report.add_checkpoint(
+                Checkpoint.compare(
+                    "works.h",
+                    source="§3.2",
+                    statement="h ≈ 23",
+                    value=23.4,
+                    expected=23.0,
+                    rtol=0.05,
+                    name="h",
+                )
+            )
+            ctx.report.check(
+                "works.qual", source="fig:x", statement="qualitative", computed="see figure", passed=None
+            )
 
         result = runner.invoke(app, ["reproduce", "--out", str(tmp_path), "--full"])
         assert result.exit_code == 1, result.output
@@ -141,11 +151,13 @@ def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
 
 def test_duplicate_stage_name_rejected():
     with isolated_registry():
+
         @register_stage("dup", order=1)
         def first(ctx):
             pass
 
         with pytest.raises(ValueError, match="already registered"):
+
             @register_stage("dup", order=2)
             def second(ctx):
                 pass
@@ -153,8 +165,9 @@ def test_duplicate_stage_name_rejected():
 
 def test_python_dash_m(tmp_path):
     """``python -m chuteflow`` works (subprocess: the real entry point)."""
-    result = subprocess.run([sys.executable, "-m", "chuteflow", "--help"],
-                            capture_output=True, text=True, timeout=120)
+    result = subprocess.run(
+        [sys.executable, "-m", "chuteflow", "--help"], capture_output=True, text=True, timeout=120
+    )
     assert result.returncode == 0, result.stderr
     assert "reproduce" in result.stdout
 

@@ -3,6 +3,7 @@ defaults are ChuteModel()'s, and ``--radial`` reaches the solver.
 
 The reference is ``solve_steady`` with the same model (the CLI must print exactly its numbers).
 """
+
 from __future__ import annotations
 
 import json
@@ -16,8 +17,7 @@ from chuteflow.closures import CLOSURES, FIELDS, ChuteModel
 from chuteflow.steady import solve_steady
 
 runner = CliRunner()
-MODEL_COMMANDS = ("steady", "eig", "dispersion", "longwave", "mode", "diagram", "reduced",
-                  "simulate")
+MODEL_COMMANDS = ("steady", "eig", "dispersion", "longwave", "mode", "diagram", "reduced", "simulate")
 
 
 def test_options_cover_every_field_with_the_model_defaults():

@@ -1,5 +1,6 @@
 """Stability commands: ``eig``, ``dispersion``, ``longwave``, ``mode`` (JSON against the Python
 API, files written, one-line errors with exit code 2) and the ``stability`` reproduce stage."""
+
 from __future__ import annotations
 
 import json
@@ -53,9 +54,25 @@ def test_eig_json_matches_python_api(p1_flow):
     from chuteflow.stability import least_stable
 
     out = _json(runner.invoke(app, ["eig", *P1, "--k", "0.001", "--json"]))
-    for key in ("k", "alpha_re", "alpha_im", "drift", "tail", "convergence", "physical", "n",
-                "n_check", "theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max",
-                "nu_top", "steady"):
+    for key in (
+        "k",
+        "alpha_re",
+        "alpha_im",
+        "drift",
+        "tail",
+        "convergence",
+        "physical",
+        "n",
+        "n_check",
+        "theta",
+        "nu0",
+        "roughness",
+        "wall_loss",
+        "restitution",
+        "nu_max",
+        "nu_top",
+        "steady",
+    ):
         assert key in out, key
     assert out["k"] == 0.001 and out["theta"] == 16.0 and out["roughness"] == 0.05
     assert out["physical"] is True and out["drift"] < 1e-7 and out["tail"] < 1e-7
@@ -70,21 +87,23 @@ def test_eig_json_matches_python_api(p1_flow):
     assert out["steady"]["u_floor"] == pytest.approx(8.194533212, rel=1e-8)
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["--k", "-1"], "k = -1"),
-    (["--k", "nan"], "k = nan"),
-    (["--k", "0.002", "--n", "4"], "n = 4"),
-    (["--k", "0.002", "--restitution", "1.5"], "restitution"),
-    (["--k", "0.002", "--method", "lu"], "method"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--k", "-1"], "k = -1"),
+        (["--k", "nan"], "k = nan"),
+        (["--k", "0.002", "--n", "4"], "n = 4"),
+        (["--k", "0.002", "--restitution", "1.5"], "restitution"),
+        (["--k", "0.002", "--method", "lu"], "method"),
+    ],
+)
 def test_eig_bad_input(args, needle):
     err = _one_line_error(runner.invoke(app, ["eig", *P1, *args]))
     assert needle in err
 
 
 def test_eig_no_steady_flow_is_user_error():
-    err = _one_line_error(runner.invoke(app, ["eig", "--theta", "30", "--nu0", "0.05",
-                                              "--k", "0.002"]))
+    err = _one_line_error(runner.invoke(app, ["eig", "--theta", "30", "--nu0", "0.05", "--k", "0.002"]))
     assert "steady flow" in err
 
 
@@ -92,8 +111,24 @@ def test_dispersion_json_plot_netcdf(tmp_path, p1_flow):
     import xarray as xr
 
     png, nc = tmp_path / "d.png", tmp_path / "d.nc"
-    out = _json(runner.invoke(app, ["dispersion", *P1, "--k-max", "0.012", "--num", "5",
-                                    "--json", "--plot", str(png), "--out", str(nc)]))
+    out = _json(
+        runner.invoke(
+            app,
+            [
+                "dispersion",
+                *P1,
+                "--k-max",
+                "0.012",
+                "--num",
+                "5",
+                "--json",
+                "--plot",
+                str(png),
+                "--out",
+                str(nc),
+            ],
+        )
+    )
     assert out["k"] == pytest.approx([0.0, 0.003, 0.006, 0.009, 0.012])
     assert len(out["alpha_re"]) == len(out["alpha_im"]) == len(out["drift"]) == 5
     assert all(out["physical"]) and out["max_drift"] < 1e-7
@@ -126,8 +161,18 @@ def test_longwave_json_stable_point_has_null_k_c():
     from chuteflow.steady import solve_steady, steady_tangent
 
     out = _json(runner.invoke(app, ["longwave", *P3, "--rtol", "0.2", "--json"]))
-    for key in ("alpha1_re", "alpha1_im", "alpha2_re", "alpha2_im", "dQ_drho", "k_c",
-                "convergence_alpha1", "convergence_alpha2", "n", "steady"):
+    for key in (
+        "alpha1_re",
+        "alpha1_im",
+        "alpha2_re",
+        "alpha2_im",
+        "dQ_drho",
+        "k_c",
+        "convergence_alpha1",
+        "convergence_alpha2",
+        "n",
+        "steady",
+    ):
         assert key in out, key
     assert out["k_c"] is None and out["long_wave_unstable"] is False
     # Appendix B, eq:vp0: α1 = −i dQ0/dρ̄0 with dQ0/dρ̄0 from the steady family (eq:dqdh)
@@ -148,23 +193,24 @@ def test_longwave_bad_rtol():
 
 def test_mode_plot_and_diagnostics(tmp_path):
     png = tmp_path / "m.png"
-    out = _json(runner.invoke(app, ["mode", *P1, "--k", "0.002", "--plot", str(png),
-                                    "--json"]))
+    out = _json(runner.invoke(app, ["mode", *P1, "--k", "0.002", "--plot", str(png), "--json"]))
     assert png.read_bytes()[:4] == b"\x89PNG"
     assert out["plot"] == str(png) and out["physical"] is True
     d = out["diagnostics"]
     # P1 is unstable and its grains converge onto the positive density perturbation (§4.2)
     assert out["alpha_re"] > 0 and d["compression"] > 0
     assert d["identity_residual"] < 1e-6
-    assert d["compression"] + d["vertical_advection"] == pytest.approx(out["alpha_re"],
-                                                                      rel=1e-6)
+    assert d["compression"] + d["vertical_advection"] == pytest.approx(out["alpha_re"], rel=1e-6)
 
 
-@pytest.mark.parametrize("args, needle", [
-    (["--k", "0", "--plot", "x.png"], "k = 0"),
-    (["--k", "0.002", "--plot", "x.png", "--y-top", "-1"], "y_top"),
-    (["--k", "0.002", "--plot", "x.png", "--magnify", "0.5", "0.2", "0", "1"], "magnify"),
-])
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--k", "0", "--plot", "x.png"], "k = 0"),
+        (["--k", "0.002", "--plot", "x.png", "--y-top", "-1"], "y_top"),
+        (["--k", "0.002", "--plot", "x.png", "--magnify", "0.5", "0.2", "0", "1"], "magnify"),
+    ],
+)
 def test_mode_bad_input(args, needle, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     err = _one_line_error(runner.invoke(app, ["mode", *P1, *args]))
@@ -183,14 +229,26 @@ def test_reproduce_stage_quick(tmp_path):
     failed = [(cp.id, cp.computed) for cp in sec.checkpoints if cp.passed is False]
     assert not failed, failed
     ids = {cp.id for cp in sec.checkpoints}
-    for cid in ("stability.P1_kc", "stability.P2_stable", "stability.P3_stable",
-                "stability.P4_unstable", "stability.P5_unstable", "stability.Q3_unstable",
-                "stability.alpha0", "stability.k2", "stability.phase_velocity",
-                "stability.convergence", "stability.longwave_signs",
-                "stability.least_stable_qz", "stability.P1_inflow", "stability.P3_inflow",
-                "stability.Q3_inflow", "stability.floor_velocity", "stability.AC_velocity"):
+    for cid in (
+        "stability.P1_kc",
+        "stability.P2_stable",
+        "stability.P3_stable",
+        "stability.P4_unstable",
+        "stability.P5_unstable",
+        "stability.Q3_unstable",
+        "stability.alpha0",
+        "stability.k2",
+        "stability.phase_velocity",
+        "stability.convergence",
+        "stability.longwave_signs",
+        "stability.least_stable_qz",
+        "stability.P1_inflow",
+        "stability.P3_inflow",
+        "stability.Q3_inflow",
+        "stability.floor_velocity",
+        "stability.AC_velocity",
+    ):
         assert cid in ids, cid
     figs = {f.id: f.path for f in sec.figures}
-    assert set(figs) == {"disp", "dispmag", "disp-AC", "disp01", "eigens", "eigenu",
-                         "eigenu01"}
+    assert set(figs) == {"disp", "dispmag", "disp-AC", "disp01", "eigens", "eigenu", "eigenu01"}
     assert all(p.exists() and p.stat().st_size > 10_000 for p in figs.values())

@@ -3,6 +3,7 @@
 The reference values here come from an independent numpy transcription of Table 1
 written in this file, not from the package's sympy statement.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,8 +27,9 @@ T = np.array([1e-4, 0.02, 1.0, 50.0])
 
 
 def _grid(model: ChuteModel):
-    nus = np.concatenate([NU[NU < 0.9 * model.nu_max],
-                          model.nu_max - np.array([0.05, 0.01])])  # close to ν_m too
+    nus = np.concatenate(
+        [NU[NU < 0.9 * model.nu_max], model.nu_max - np.array([0.05, 0.01])]
+    )  # close to ν_m too
     return np.meshgrid(nus, T, indexing="ij")
 
 
@@ -43,15 +45,23 @@ def table1(nu, e, nu_m, radial="lun_savage"):
     else:
         g0 = (2.0 - nu) / (2.0 * (1.0 - nu) ** 3)
     f1 = nu * (1.0 + 4.0 * eta * nu * g0)
-    f2 = (5.0 * SQPI / (96.0 * eta * (2.0 - eta))
-          * (1.0 + 8.0 / 5.0 * eta * nu * g0)
-          * (1.0 / g0 + 8.0 / 5.0 * eta * (3.0 * eta - 2.0) * nu)
-          + 8.0 / (5.0 * SQPI) * eta * nu**2 * g0)
+    f2 = (
+        5.0
+        * SQPI
+        / (96.0 * eta * (2.0 - eta))
+        * (1.0 + 8.0 / 5.0 * eta * nu * g0)
+        * (1.0 / g0 + 8.0 / 5.0 * eta * (3.0 * eta - 2.0) * nu)
+        + 8.0 / (5.0 * SQPI) * eta * nu**2 * g0
+    )
     f3 = 8.0 / (3.0 * SQPI) * eta * nu**2 * g0
-    f4 = (25.0 * SQPI / (16.0 * eta * (41.0 - 33.0 * eta))
-          * (1.0 + 12.0 / 5.0 * eta * nu * g0)
-          * (1.0 / g0 + 12.0 / 5.0 * eta**2 * (4.0 * eta - 3.0) * nu)
-          + 4.0 / SQPI * eta * nu**2 * g0)
+    f4 = (
+        25.0
+        * SQPI
+        / (16.0 * eta * (41.0 - 33.0 * eta))
+        * (1.0 + 12.0 / 5.0 * eta * nu * g0)
+        * (1.0 / g0 + 12.0 / 5.0 * eta**2 * (4.0 * eta - 3.0) * nu)
+        + 4.0 / SQPI * eta * nu**2 * g0
+    )
     f5 = 12.0 / SQPI * nu**2 * g0
     f6 = math.sqrt(3.0) * math.pi * nu * g0 / (2.0 * nu_m * f4)
     f7 = math.pi * nu * g0 / (2.0 * math.sqrt(3.0) * nu_m * f2)
@@ -97,9 +107,11 @@ def _fd_check(an, fd, lower, scale, label):
     bound = RTOL_FD * (np.abs(an) + np.abs(lower) / scale)
     err = np.abs(fd - an)
     worst = np.unravel_index(np.argmax(err / bound), err.shape)
-    assert np.all(err <= bound), (f"{label}: |fd - analytic| = {err[worst]:.3e} > "
-                                  f"{bound[worst]:.3e} at index {worst} "
-                                  f"(analytic {an[worst]:.10g}, fd {fd[worst]:.10g})")
+    assert np.all(err <= bound), (
+        f"{label}: |fd - analytic| = {err[worst]:.3e} > "
+        f"{bound[worst]:.3e} at index {worst} "
+        f"(analytic {an[worst]:.10g}, fd {fd[worst]:.10g})"
+    )
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
@@ -113,9 +125,14 @@ def test_partials_match_finite_differences(name):
     t_p, t_m = model.evaluate(nu, t + h_t), model.evaluate(nu, t - h_t)
 
     # (order checked, order differenced, variable): d/dν or d/dT of a lower order.
-    chains = [((1, 0), (0, 0), "nu"), ((0, 1), (0, 0), "T"),
-              ((2, 0), (1, 0), "nu"), ((1, 1), (1, 0), "T"),
-              ((1, 1), (0, 1), "nu"), ((0, 2), (0, 1), "T")]
+    chains = [
+        ((1, 0), (0, 0), "nu"),
+        ((0, 1), (0, 0), "T"),
+        ((2, 0), (1, 0), "nu"),
+        ((1, 1), (1, 0), "T"),
+        ((1, 1), (0, 1), "nu"),
+        ((0, 2), (0, 1), "T"),
+    ]
     assert {c[0] for c in chains} | {(0, 0)} == set(ORDERS)
     for fname in FUNCTIONS:
         for target, lower, var in chains:
@@ -125,8 +142,13 @@ def test_partials_match_finite_differences(name):
             else:
                 fd = (t_p[fname][lower] - t_m[fname][lower]) / (2 * h_t)
                 scale = t
-            _fd_check(np.asarray(base[fname][target], float), fd, base[fname][lower], scale,
-                      f"{name}: {fname} {target} from d/d{var} of {lower}")
+            _fd_check(
+                np.asarray(base[fname][target], float),
+                fd,
+                base[fname][lower],
+                scale,
+                f"{name}: {fname} {target} from d/d{var} of {lower}",
+            )
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
@@ -154,8 +176,7 @@ def test_values_match_table1_transcription(name):
     got = model.evaluate(nu, t)
     ref = transport(model, nu, t)
     for fname in FUNCTIONS:
-        np.testing.assert_allclose(got[fname][(0, 0)], ref[fname], rtol=1e-11, atol=0,
-                                   err_msg=fname)
+        np.testing.assert_allclose(got[fname][(0, 0)], ref[fname], rtol=1e-11, atol=0, err_msg=fname)
     nus = nu[:, 0]
     f = model.f(nus)
     tab = table1(nus, model.restitution, model.nu_max, model.radial.name)
@@ -172,10 +193,10 @@ def test_floor_terms_match_collision_rate_definition(name):
     got = model.evaluate(nu, t)
     g0 = table1(nu, model.restitution, model.nu_max, model.radial.name)["g0"]
     omega = np.sqrt(3 * t) * nu * g0 / model.nu_max
-    np.testing.assert_allclose(got["eta_star"][(0, 0)],
-                               math.pi / 6 * model.roughness * omega, rtol=1e-11)
-    np.testing.assert_allclose(got["Gamma_star"][(0, 0)],
-                               model.wall_loss * math.pi / 6 * 1.5 * t * omega, rtol=1e-11)
+    np.testing.assert_allclose(got["eta_star"][(0, 0)], math.pi / 6 * model.roughness * omega, rtol=1e-11)
+    np.testing.assert_allclose(
+        got["Gamma_star"][(0, 0)], model.wall_loss * math.pi / 6 * 1.5 * t * omega, rtol=1e-11
+    )
 
 
 @pytest.mark.parametrize("e", [0.3, 0.7, 0.95, 1.0])
@@ -184,27 +205,27 @@ def test_dilute_limit(e):
     model = ChuteModel(restitution=e)
     eta = (1 + e) / 2
     limits = {
-        "f1": (1, 1.0),                                        # f1/ν → 1
+        "f1": (1, 1.0),  # f1/ν → 1
         "f2": (0, 5 * SQPI / (96 * eta * (2 - eta))),
-        "f3": (2, 8 * eta / (3 * SQPI)),                       # f3/ν² → 8η/(3√π)
+        "f3": (2, 8 * eta / (3 * SQPI)),  # f3/ν² → 8η/(3√π)
         "f4": (0, 25 * SQPI / (16 * eta * (41 - 33 * eta))),
-        "f5": (2, 12 / SQPI),                                  # f5/ν² → 12/√π
+        "f5": (2, 12 / SQPI),  # f5/ν² → 12/√π
     }
     nus = np.array([1e-2, 1e-4, 1e-6, 1e-8])
     f = model.f(nus)
     for k, (power, lim) in limits.items():
         rel = np.abs(f[k][0] / nus**power / lim - 1)
-        assert np.all(rel <= 20 * nus), (k, rel)              # O(ν) approach
+        assert np.all(rel <= 20 * nus), (k, rel)  # O(ν) approach
         assert rel[-1] <= 1e-6, (k, rel[-1])
     g0 = model.g0(nus)[0]
-    assert np.all(np.abs(g0 - 1) <= 3 * nus)                   # g0 = 1 + 2.5 ν + O(ν²)
+    assert np.all(np.abs(g0 - 1) <= 3 * nus)  # g0 = 1 + 2.5 ν + O(ν²)
     # f6, f7 vanish ∝ ν with the slopes implied by their definitions.
-    np.testing.assert_allclose(f["f6"][0][-1] / 1e-8,
-                               math.sqrt(3) * math.pi / (2 * model.nu_max * limits["f4"][1]),
-                               rtol=1e-6)
-    np.testing.assert_allclose(f["f7"][0][-1] / 1e-8,
-                               math.pi / (2 * math.sqrt(3) * model.nu_max * limits["f2"][1]),
-                               rtol=1e-6)
+    np.testing.assert_allclose(
+        f["f6"][0][-1] / 1e-8, math.sqrt(3) * math.pi / (2 * model.nu_max * limits["f4"][1]), rtol=1e-6
+    )
+    np.testing.assert_allclose(
+        f["f7"][0][-1] / 1e-8, math.pi / (2 * math.sqrt(3) * model.nu_max * limits["f2"][1]), rtol=1e-6
+    )
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
@@ -216,8 +237,11 @@ def test_transport_forms_eq_pmuetc(name):
     f = {k: v[0] for k, v in model.f(nu).items()}
     e, phi, Phi = model.restitution, model.roughness, model.wall_loss
     forms = {
-        "p": f["f1"] * t, "mu": f["f2"] * t**0.5, "zeta": f["f3"] * t**0.5,
-        "kappa": f["f4"] * t**0.5, "Gamma": (1 - e**2) * f["f5"] * t**1.5,
+        "p": f["f1"] * t,
+        "mu": f["f2"] * t**0.5,
+        "zeta": f["f3"] * t**0.5,
+        "kappa": f["f4"] * t**0.5,
+        "Gamma": (1 - e**2) * f["f5"] * t**1.5,
         "eta_star": phi * f["f7"] * f["f2"] * t**0.5,
         "Gamma_star": 0.5 * Phi * f["f6"] * f["f4"] * t**1.5,
     }
@@ -228,19 +252,22 @@ def test_transport_forms_eq_pmuetc(name):
 # ---------------------------------------------------------------------------------------
 # (c) Parameter validation.
 # ---------------------------------------------------------------------------------------
-@pytest.mark.parametrize("kwargs, name, rng", [
-    ({"restitution": 1.5}, "restitution", "(0, 1]"),
-    ({"restitution": 0.0}, "restitution", "(0, 1]"),
-    ({"restitution": -0.2}, "restitution", "(0, 1]"),
-    ({"restitution": float("nan")}, "restitution", "(0, 1]"),
-    ({"nu_max": 0.0}, "nu_max", "(0, 0.74048]"),
-    ({"nu_max": 0.8}, "nu_max", "(0, 0.74048]"),
-    ({"roughness": 0.0}, "roughness", "(0, inf)"),
-    ({"roughness": -0.05}, "roughness", "(0, inf)"),
-    ({"roughness": float("nan")}, "roughness", "(0, inf)"),
-    ({"wall_loss": -0.01}, "wall_loss", "[0, 1]"),
-    ({"wall_loss": 1.01}, "wall_loss", "[0, 1]"),
-])
+@pytest.mark.parametrize(
+    "kwargs, name, rng",
+    [
+        ({"restitution": 1.5}, "restitution", "(0, 1]"),
+        ({"restitution": 0.0}, "restitution", "(0, 1]"),
+        ({"restitution": -0.2}, "restitution", "(0, 1]"),
+        ({"restitution": float("nan")}, "restitution", "(0, 1]"),
+        ({"nu_max": 0.0}, "nu_max", "(0, 0.74048]"),
+        ({"nu_max": 0.8}, "nu_max", "(0, 0.74048]"),
+        ({"roughness": 0.0}, "roughness", "(0, inf)"),
+        ({"roughness": -0.05}, "roughness", "(0, inf)"),
+        ({"roughness": float("nan")}, "roughness", "(0, inf)"),
+        ({"wall_loss": -0.01}, "wall_loss", "[0, 1]"),
+        ({"wall_loss": 1.01}, "wall_loss", "[0, 1]"),
+    ],
+)
 def test_invalid_parameters_raise(kwargs, name, rng):
     with pytest.raises(ParameterError) as info:
         ChuteModel(**kwargs)
@@ -273,10 +300,17 @@ def test_parameters_stored_as_float_and_partials_float():
     assert all(a.dtype == float for f in ev.values() for a in f.values())
 
 
-@pytest.mark.parametrize("kwargs", [
-    {"restitution": 1.0}, {"restitution": 1e-3}, {"nu_max": 0.74048}, {"roughness": 10.0},
-    {"wall_loss": 0.0}, {"wall_loss": 1.0},
-])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"restitution": 1.0},
+        {"restitution": 1e-3},
+        {"nu_max": 0.74048},
+        {"roughness": 10.0},
+        {"wall_loss": 0.0},
+        {"wall_loss": 1.0},
+    ],
+)
 def test_valid_edge_parameters_accepted(kwargs):
     ChuteModel(**kwargs)
 
@@ -291,8 +325,9 @@ def test_johnson_jackson_identities(name):
     nu, t = _grid(model)
     got = model.evaluate(nu, t)
     f = {k: v[0] for k, v in model.f(nu).items()}
-    np.testing.assert_allclose(got["eta_star"][(0, 0)] / got["mu"][(0, 0)],
-                               model.roughness * f["f7"], rtol=1e-12)
+    np.testing.assert_allclose(
+        got["eta_star"][(0, 0)] / got["mu"][(0, 0)], model.roughness * f["f7"], rtol=1e-12
+    )
     np.testing.assert_allclose(f["f6"] * f["f4"] / 3, f["f7"] * f["f2"], rtol=1e-12)
 
 
@@ -315,13 +350,13 @@ def test_floor_conditions_reduce_to_eq_T0b_dT0b(name, theta_deg):
     # eq:T0b, then check bc1 with u0' from eq:u00.
     T0 = (phi * f["f2"] * f["f7"] / (f["f1"] * tan) * u0) ** 2
     ev = model.evaluate(nu, T0)
-    du0 = f["f1"] * np.sqrt(T0) / f["f2"] * tan                          # eq:u00
+    du0 = f["f1"] * np.sqrt(T0) / f["f2"] * tan  # eq:u00
     np.testing.assert_allclose(ev["mu"][(0, 0)] * du0, ev["eta_star"][(0, 0)] * u0, rtol=1e-12)
 
     # eq:dT0b from bc2 with u0' from bc1, at arbitrary T (not only T0b).
     T = np.array([0.01, 1.0, 7.0])[:, None, None]
     ev = model.evaluate(nu, T)
-    du0 = ev["eta_star"][(0, 0)] * u0 / ev["mu"][(0, 0)]                 # bc1
+    du0 = ev["eta_star"][(0, 0)] * u0 / ev["mu"][(0, 0)]  # bc1
     dT_bc2 = (ev["Gamma_star"][(0, 0)] - ev["mu"][(0, 0)] * u0 * du0) / ev["kappa"][(0, 0)]
-    dT_paper = -f["f6"] * (phi * u0**2 / 3 - 0.5 * Phi * T)              # eq:dT0b
+    dT_paper = -f["f6"] * (phi * u0**2 / 3 - 0.5 * Phi * T)  # eq:dT0b
     np.testing.assert_allclose(dT_bc2, dT_paper, rtol=1e-11, atol=1e-14)

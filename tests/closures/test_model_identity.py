@@ -3,6 +3,7 @@
 Numbers here are identities of the definitions (a scaled g0 is the scaled Lun–Savage g0 of
 paper §2.1), not physics results.
 """
+
 from __future__ import annotations
 
 import json
@@ -88,8 +89,7 @@ def test_a_new_closure_is_one_class_and_a_registration(scaled):
     nu = np.array([0.05, 0.2, 0.4])
     g_ls = ChuteModel().g0(nu)[0]
     np.testing.assert_allclose(m.g0(nu)[0], 2.0 * g_ls, rtol=1e-14)
-    np.testing.assert_allclose(ChuteModel(radial="test_scaled_lun_savage").g0(nu)[0], g_ls,
-                               rtol=1e-14)
+    np.testing.assert_allclose(ChuteModel(radial="test_scaled_lun_savage").g0(nu)[0], g_ls, rtol=1e-14)
     assert m != ChuteModel(radial=scaled(3.0)) and m.key() != ChuteModel(radial=scaled(3.0)).key()
 
 
@@ -104,11 +104,14 @@ def test_fields_accept_names_or_instances():
         ChuteModel(transport=3)
 
 
-@pytest.mark.parametrize("model", [
-    ChuteModel(),
-    ChuteModel(radial="carnahan_starling"),
-    ChuteModel(restitution=0.95, nu_max=0.64, roughness=0.1, wall_loss=0.2),
-])
+@pytest.mark.parametrize(
+    "model",
+    [
+        ChuteModel(),
+        ChuteModel(radial="carnahan_starling"),
+        ChuteModel(restitution=0.95, nu_max=0.64, roughness=0.1, wall_loss=0.2),
+    ],
+)
 def test_to_dict_from_dict_round_trip(model):
     d = model.to_dict()
     assert tuple(d) == FIELDS

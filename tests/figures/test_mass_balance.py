@@ -6,6 +6,7 @@ first equation) as −ν0 (ik û + v̂') and −ν0' v̂; it now takes those ter
 equations (:func:`chuteflow.stability.equation_terms`). :func:`hand_written` keeps the old
 code as the reference.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -25,8 +26,7 @@ def modes():
         warnings.simplefilter("ignore", RuntimeWarning)
         p1 = solve_steady(16.0, 0.05)
         p5 = solve_steady(17.0, 0.10)
-    return [(p1, least_stable(p1, 2e-3)), (p1, least_stable(p1, 2e-2)),
-            (p5, least_stable(p5, 1e-2))]
+    return [(p1, least_stable(p1, 2e-3)), (p1, least_stable(p1, 2e-2)), (p5, least_stable(p5, 1e-2))]
 
 
 def hand_written(mode, flow):

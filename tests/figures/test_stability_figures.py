@@ -1,6 +1,7 @@
 """Stability figures (figs disp, dispmag, eigens/eigenu/eigenu01): files written, axes
 labelled, the eigenfunction's phase convention and the diagnostics behind the paper's
 qualitative statements."""
+
 from __future__ import annotations
 
 import math
@@ -36,9 +37,11 @@ def _synthetic(k, alpha, physical=None, **attrs):
     k = np.asarray(k, dtype=float)
     alpha = np.asarray(alpha, dtype=complex)
     phys = np.ones(len(k), bool) if physical is None else np.asarray(physical)
-    return xr.Dataset({"alpha_re": ("k", alpha.real), "alpha_im": ("k", alpha.imag),
-                       "physical": ("k", phys)}, coords={"k": k},
-                      attrs={"theta": 16.0, "nu0": 0.05, "roughness": 0.05, **attrs})
+    return xr.Dataset(
+        {"alpha_re": ("k", alpha.real), "alpha_im": ("k", alpha.imag), "physical": ("k", phys)},
+        coords={"k": k},
+        attrs={"theta": 16.0, "nu0": 0.05, "roughness": 0.05, **attrs},
+    )
 
 
 def _labels(ax):
@@ -49,8 +52,9 @@ def test_dispersion_figure_file_and_labels(tmp_path):
     k = np.linspace(0, 0.02, 11)
     a = 0.3 * k**2 * (1 - (k / 0.007) ** 2) - 4.15j * k
     ds = _synthetic(k, a, k_c=0.007)
-    path = dispersion_figure([("P1", ds), ("P2", _synthetic(k, -k**2 - 7j * k))],
-                             tmp_path / "sub" / "disp.png", title="test")
+    path = dispersion_figure(
+        [("P1", ds), ("P2", _synthetic(k, -(k**2) - 7j * k))], tmp_path / "sub" / "disp.png", title="test"
+    )
     assert path.exists() and path.read_bytes()[:4] == b"\x89PNG"
     fig = dispersion_figure([("P1", ds)])
     top, bottom = fig.axes[0], fig.axes[1]
@@ -67,7 +71,7 @@ def test_dispersion_figure_file_and_labels(tmp_path):
 
 def test_dispersion_figure_marks_unconverged_points():
     k = np.linspace(0, 0.01, 6)
-    ds = _synthetic(k, -k**2 - 1j * k, physical=[True] * 5 + [False])
+    ds = _synthetic(k, -(k**2) - 1j * k, physical=[True] * 5 + [False])
     fig = dispersion_figure([("X", ds)])
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert any("not converged" in s for s in labels)
@@ -77,8 +81,9 @@ def test_magnification_figure(tmp_path):
     k = np.unique(np.concatenate([np.linspace(0, 1e-4, 6), np.geomspace(1e-6, 1e-3, 5)]))
     a2 = 12460 - 1546j
     ds = _synthetic(k, a2 * k**2 / (1 + (k / 2e-4) ** 2) - 4.152j * k)
-    path = magnification_figure(ds, tmp_path / "mag.png", alpha2=a2, dQ_drho=4.152,
-                                alpha2_uncertainty=0.07, k_mag=1e-4, label="P1")
+    path = magnification_figure(
+        ds, tmp_path / "mag.png", alpha2=a2, dQ_drho=4.152, alpha2_uncertainty=0.07, k_mag=1e-4, label="P1"
+    )
     assert path.exists()
     fig = magnification_figure(ds, alpha2=a2, dQ_drho=4.152, k_mag=1e-4)
     (ax1, ax2, ax3) = fig.axes[:3]
@@ -117,10 +122,8 @@ def test_eigenfunction_diagnostics_mass_balance(p1):
     flow, mode = p1
     d = eigenfunction_diagnostics(mode, flow)
     assert d["identity_residual"] < 1e-6
-    assert d["compression"] + d["vertical_advection"] == pytest.approx(mode.alpha.real,
-                                                                      rel=1e-6)
-    for key in ("temperature_density", "temperature_at_peak", "floor_velocity_density",
-                "velocity_density"):
+    assert d["compression"] + d["vertical_advection"] == pytest.approx(mode.alpha.real, rel=1e-6)
+    for key in ("temperature_density", "temperature_at_peak", "floor_velocity_density", "velocity_density"):
         assert -1 <= d[key] <= 1
     # paper §4.2, fig eigenu: P1 grains flow into the positive density region, T̂ < 0 there
     assert d["compression"] > 0 and d["temperature_at_peak"] < 0
@@ -163,7 +166,7 @@ def test_eigenfunction_errors(p1):
 
 def test_dispersion_figure_shows_where_the_branch_was_lost():
     k = np.linspace(0, 0.01, 6)
-    a = -k**2 - 1j * k
+    a = -(k**2) - 1j * k
     a[4:] = np.nan
     fig = dispersion_figure([("X", _synthetic(k, a, physical=[True] * 4 + [False] * 2))])
     texts = [t.get_text() for t in fig.axes[0].texts]

@@ -1,4 +1,5 @@
 """Long-wave theory (paper §5.1.1, Appendix B): α(k) = α1 k + α2 k² + O(k³)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -50,7 +51,7 @@ def test_null_vector_is_family_tangent(p1):
     r = A0 @ V0
     m = op.n + 1
     interior = np.ones(r.size, bool)
-    interior[m - 1::m] = False  # top decay rows are not part of the steady problem
+    interior[m - 1 :: m] = False  # top decay rows are not part of the steady problem
     scale = np.abs(A0).max(axis=1) * np.abs(V0).max()
     assert (np.abs(r[interior]) / scale[interior]).max() < 1e-9
 
@@ -87,13 +88,16 @@ def test_alpha2_vs_eigenvalue_at_paper_top(p1):
     assert abs(qz.real - lw.alpha_check.real) < 2e-2 * abs(qz.real)
 
 
-@pytest.mark.parametrize("theta, nu0, roughness, unstable", [
-    (16, 0.05, 0.05, True),    # P1, regime B (§4.2.1)
-    (16, 0.10, 0.05, False),   # P3, stable
-    (14, 0.05, 0.05, True),    # P4, regime A
-    (17, 0.10, 0.05, True),    # P5, regime C
-    (20, 0.17, 0.10, True),    # Q3 (§4.2.2)
-])
+@pytest.mark.parametrize(
+    "theta, nu0, roughness, unstable",
+    [
+        (16, 0.05, 0.05, True),  # P1, regime B (§4.2.1)
+        (16, 0.10, 0.05, False),  # P3, stable
+        (14, 0.05, 0.05, True),  # P4, regime A
+        (17, 0.10, 0.05, True),  # P5, regime C
+        (20, 0.17, 0.10, True),  # Q3 (§4.2.2)
+    ],
+)
 def test_long_wave_stability_of_paper_points(theta, nu0, roughness, unstable):
     """Sign of Re α2 at the paper's points P1, P3–P5, Q3 (rtol 0.2: the sign only)."""
     lw = longwave(solve_steady(theta, nu0, ChuteModel(roughness=roughness)), rtol=0.2)

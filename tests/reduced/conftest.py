@@ -1,4 +1,5 @@
 """Shared fixtures: a short steady family at θ = 16° (φ = 0.05), built once per session."""
+
 from __future__ import annotations
 
 import warnings

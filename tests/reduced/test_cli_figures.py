@@ -1,4 +1,5 @@
 """``chuteflow reduced`` / ``chuteflow simulate`` and the figures of the 1D model."""
+
 from __future__ import annotations
 
 import json
@@ -15,8 +16,9 @@ runner = CliRunner()
 
 
 def test_reduced_json_reports_the_family_and_the_state():
-    res = runner.invoke(app, ["reduced", "--theta", "16", "--nu0", "0.12", "--json",
-                              "--nu0-min", "0.04", "--nu0-max", "0.2"])
+    res = runner.invoke(
+        app, ["reduced", "--theta", "16", "--nu0", "0.12", "--json", "--nu0-min", "0.04", "--nu0-max", "0.2"]
+    )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert d["theta"] == 16.0 and d["roughness"] == 0.05
@@ -43,9 +45,31 @@ def test_functions_figure(rm16, tmp_path):
 
 def test_simulate_writes_netcdf_and_figure(tmp_path):
     nc, png = tmp_path / "run.nc", tmp_path / "run.png"
-    res = runner.invoke(app, ["simulate", "--theta", "16", "--nu0", "0.12", "--length", "40",
-                              "--time", "30", "--cells", "128", "--out", str(nc), "--plot",
-                              str(png), "--json", "--nu0-min", "0.04", "--nu0-max", "0.2"])
+    res = runner.invoke(
+        app,
+        [
+            "simulate",
+            "--theta",
+            "16",
+            "--nu0",
+            "0.12",
+            "--length",
+            "40",
+            "--time",
+            "30",
+            "--cells",
+            "128",
+            "--out",
+            str(nc),
+            "--plot",
+            str(png),
+            "--json",
+            "--nu0-min",
+            "0.04",
+            "--nu0-max",
+            "0.2",
+        ],
+    )
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout.strip().splitlines()[-1])
     assert s["status"] == "completed" and s["n_cells"] == 128 and s["t_end"] == 30.0
@@ -69,15 +93,28 @@ def test_phase_diagram_figure_with_full_model(tmp_path):
     T, N = np.meshgrid(th, nu, indexing="ij")
     h = 30 * N / (T - 13)  # any smooth one-to-one map will do for drawing
     nb = N / 3
-    base = {"h": (("theta", "nu0"), h), "nu_mean": (("theta", "nu0"), nb),
-            "status": (("theta", "nu0"), np.zeros(T.shape, dtype=np.int8)),
-            "monotonic": (("theta", "nu0"), (N < 0.12).astype(np.int8))}
-    red = xr.Dataset({**base, "r1d_unstable": (("theta", "nu0"), (T > 14.5).astype(np.int8)),
-                      "r1d_short_wave": (("theta", "nu0"), (N < 0.07).astype(np.int8))},
-                     coords={"theta": th, "nu0": nu}, attrs={"roughness": 0.05})
-    full = xr.Dataset({**base, "unstable": (("theta", "nu0"), (T > 15.0).astype(np.int8))},
-                      coords={"theta": th, "nu0": nu}, attrs={"roughness": 0.05})
+    base = {
+        "h": (("theta", "nu0"), h),
+        "nu_mean": (("theta", "nu0"), nb),
+        "status": (("theta", "nu0"), np.zeros(T.shape, dtype=np.int8)),
+        "monotonic": (("theta", "nu0"), (N < 0.12).astype(np.int8)),
+    }
+    red = xr.Dataset(
+        {
+            **base,
+            "r1d_unstable": (("theta", "nu0"), (T > 14.5).astype(np.int8)),
+            "r1d_short_wave": (("theta", "nu0"), (N < 0.07).astype(np.int8)),
+        },
+        coords={"theta": th, "nu0": nu},
+        attrs={"roughness": 0.05},
+    )
+    full = xr.Dataset(
+        {**base, "unstable": (("theta", "nu0"), (T > 15.0).astype(np.int8))},
+        coords={"theta": th, "nu0": nu},
+        attrs={"roughness": 0.05},
+    )
     from chuteflow.reduced import agreement
+
     a = agreement(red, full, h_min=0)
     assert a["compared"] == 20 and a["only_1d_unstable"] == 5
     png = save(plot_phase_diagrams([red], [full], agreement=[a]), tmp_path / "pd.png")
@@ -88,16 +125,31 @@ def test_reduced_at_the_lowest_floor_density_of_the_family_answers():
     # paper point P4 (θ = 14°, ν0(0) = 0.05) is the lowest flow of the 14° family (below it
     # h < 1): the state there is a knot and was answered by scipy's raw "f(a) and f(b) must
     # have different signs". A family starting at 0.05 reproduces it cheaply.
-    res = runner.invoke(app, ["reduced", "--theta", "14", "--nu0", "0.05", "--json",
-                              "--nu0-min", "0.05", "--nu0-max", "0.1"])
+    res = runner.invoke(
+        app, ["reduced", "--theta", "14", "--nu0", "0.05", "--json", "--nu0-min", "0.05", "--nu0-max", "0.1"]
+    )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
     assert d["nu0_range"][0] == 0.05
     st = d["state"]
     assert st["nu0"] == 0.05 and st["rho0"] == d["points"][0]["rho0"]
     # a wave about the end of the family has nowhere to go: one line naming nu0 and the range
-    res = runner.invoke(app, ["simulate", "--theta", "14", "--nu0", "0.05", "--length", "300",
-                              "--nu0-min", "0.05", "--nu0-max", "0.1"])
+    res = runner.invoke(
+        app,
+        [
+            "simulate",
+            "--theta",
+            "14",
+            "--nu0",
+            "0.05",
+            "--length",
+            "300",
+            "--nu0-min",
+            "0.05",
+            "--nu0-max",
+            "0.1",
+        ],
+    )
     assert res.exit_code == 2
     assert "nu0 = 0.05" in res.output and "[0.05, 0.1]" in res.output
     assert "Traceback" not in res.output and "f(a) and f(b)" not in res.output

@@ -1,4 +1,5 @@
 """1D stability diagrams (fig phaseoned) and their agreement with a full-model Dataset."""
+
 from __future__ import annotations
 
 import warnings
@@ -12,16 +13,19 @@ from chuteflow.reduced import agreement, local_coefficients, reduced_diagram
 
 
 def _full(theta, nu0, unstable):
-    return xr.Dataset({"unstable": (("theta", "nu0"), np.asarray(unstable, dtype=np.int8))},
-                      coords={"theta": theta, "nu0": nu0})
+    return xr.Dataset(
+        {"unstable": (("theta", "nu0"), np.asarray(unstable, dtype=np.int8))},
+        coords={"theta": theta, "nu0": nu0},
+    )
 
 
 def _red(theta, nu0, unstable, short=None):
     u = np.asarray(unstable, dtype=np.int8)
     s = np.zeros_like(u) if short is None else np.asarray(short, dtype=np.int8)
-    return xr.Dataset({"r1d_unstable": (("theta", "nu0"), u),
-                       "r1d_short_wave": (("theta", "nu0"), s)},
-                      coords={"theta": theta, "nu0": nu0})
+    return xr.Dataset(
+        {"r1d_unstable": (("theta", "nu0"), u), "r1d_short_wave": (("theta", "nu0"), s)},
+        coords={"theta": theta, "nu0": nu0},
+    )
 
 
 def test_agreement_counts_on_a_sub_grid():

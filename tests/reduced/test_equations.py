@@ -7,6 +7,7 @@ linearisation of LocalCoefficients, the viscosity μ̄ = (4/3) f2(0) T̄^{3/2}/c
 finite-volume right-hand side, its exact sparse Jacobian and its closed-form Fourier symbol.
 They must agree with the derived forms to round-off.
 """
+
 from __future__ import annotations
 
 import math
@@ -27,12 +28,18 @@ def _state(rho0=0.5, U=8.0, dU=5.0, Tbar=1.5, dTbar=-2.0, mu=0.3, dmu=0.4, theta
     s = math.sin(math.radians(theta))
     a = rho0 * s / U
     da = (s / a - dU) * a**2 / (rho0 * s)
-    return LocalCoefficients(theta=theta, rho0=rho0, F=0.1, dF=0.2, Tbar=Tbar, dTbar=dTbar,
-                             a=a, da=da, mu_bar=mu, dmu_bar=dmu)
+    return LocalCoefficients(
+        theta=theta, rho0=rho0, F=0.1, dF=0.2, Tbar=Tbar, dTbar=dTbar, a=a, da=da, mu_bar=mu, dmu_bar=dmu
+    )
 
 
-STATES = [_state(), _state(dU=-3.0, dTbar=-10.0), _state(dU=0.5, dTbar=0.5),
-          _state(rho0=1.3, dU=2.0, dTbar=-0.6, mu=0.05), _state(rho0=0.2, dU=1.0, dTbar=1.0)]
+STATES = [
+    _state(),
+    _state(dU=-3.0, dTbar=-10.0),
+    _state(dU=0.5, dTbar=0.5),
+    _state(rho0=1.3, dU=2.0, dTbar=-0.6, mu=0.05),
+    _state(rho0=0.2, dU=1.0, dTbar=1.0),
+]
 
 
 # -- hand-written forms (reference) -------------------------------------------------------
@@ -40,8 +47,14 @@ def _uniform_by_hand(c):
     s = c.sin_theta
     U = c.rho0 * s / c.a
     dU = s / c.a - c.rho0 * s * c.da / c.a**2
-    return {"U": U, "dU": dU, "P": c.rho0 * c.Tbar, "dP": c.Tbar + c.rho0 * c.dTbar,
-            "q0": c.rho0 * U, "dq0": U + c.rho0 * dU}
+    return {
+        "U": U,
+        "dU": dU,
+        "P": c.rho0 * c.Tbar,
+        "dP": c.Tbar + c.rho0 * c.dTbar,
+        "q0": c.rho0 * U,
+        "dq0": U + c.rho0 * dU,
+    }
 
 
 def _matrix_by_hand(c, k):
@@ -66,8 +79,14 @@ def _kernels_by_hand(rm, rho_c, rho_f):
     a = np.exp(sa(rho_f))
     c = rm.mu_prefactor
     dT = T * sT(rho_c, 1)
-    return dict(a=a, da=a * sa(rho_f, 1), P=rho_c * T, dP=T + rho_c * dT, mu=c * T * np.sqrt(T),
-                dmu=1.5 * c * np.sqrt(T) * dT)
+    return dict(
+        a=a,
+        da=a * sa(rho_f, 1),
+        P=rho_c * T,
+        dP=T + rho_c * dT,
+        mu=c * T * np.sqrt(T),
+        dmu=1.5 * c * np.sqrt(T) * dT,
+    )
 
 
 def _rhs_by_hand(s, y):
@@ -107,8 +126,7 @@ def _jacobian_by_hand(s, y):
     dS_m = -sp.diags(k["a"]) @ dudm
     C_rho = (s.D_fc @ s.A_cf) * s.c
     C_m = (s.D_cf @ s.A_fc) * s.c
-    return sp.bmat([[C_rho, -s.D_fc], [-s.D_cf @ dPi_r + dS_r, -s.D_cf @ dPi_m + dS_m + C_m]],
-                   format="csc")
+    return sp.bmat([[C_rho, -s.D_fc], [-s.D_cf @ dPi_r + dS_r, -s.D_cf @ dPi_m + dS_m + C_m]], format="csc")
 
 
 def _symbol_by_hand(s, rho0, n):
@@ -122,8 +140,9 @@ def _symbol_by_hand(s, rho0, n):
     M = np.empty(n.shape + (2, 2), dtype=complex)
     M[..., 0, 0] = 1j * s.c * np.sin(k * s.dx) / s.dx
     M[..., 0, 1] = -1j * K
-    M[..., 1, 0] = (-1j * K * (U * U + c.dP) + 1j * K * G * U * C / r
-                    + (s.sin - c.da * U) * C + c.a * U * C / r)
+    M[..., 1, 0] = (
+        -1j * K * (U * U + c.dP) + 1j * K * G * U * C / r + (s.sin - c.da * U) * C + c.a * U * C / r
+    )
     M[..., 1, 1] = -1j * K * G / r - c.a / r + 1j * s.c * np.sin(k * s.dx) / s.dx
     return M
 
@@ -164,8 +183,8 @@ def test_scheme_jacobian_and_symbol_are_the_hand_written_forms(rm16, state16, fr
     rng = np.random.default_rng(3)
     s = WaveSolver(rm16, L, 48, frame_speed=frame)
     y = s.uniform(state16.rho0)
-    y[:s.N] *= 1 + 0.05 * rng.standard_normal(s.N)
-    y[s.N:] *= 1 + 0.05 * rng.standard_normal(s.N)
+    y[: s.N] *= 1 + 0.05 * rng.standard_normal(s.N)
+    y[s.N :] *= 1 + 0.05 * rng.standard_normal(s.N)
     f, fh = s.rhs(0.0, y), _rhs_by_hand(s, y)
     # the momentum rows are differences of fluxes Π/dx ~ 1e2 × the result: round-off of Π
     assert np.abs(f - fh).max() <= 1e-12 * np.abs(fh).max()

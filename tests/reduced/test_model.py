@@ -1,4 +1,5 @@
 """The 1D model of §5.1.2: functions from the steady family and its analytic linear theory."""
+
 from __future__ import annotations
 
 import math
@@ -17,12 +18,18 @@ def _state(rho0=0.5, a=0.02, U=8.0, dU=5.0, Tbar=1.5, dTbar=-2.0, mu=0.3, theta=
     s = math.sin(math.radians(theta))
     a = rho0 * s / U  # U = ρ0 sinθ / a
     da = (s / a - dU) * a**2 / (rho0 * s)  # U' = sinθ/a − ρ0 sinθ a'/a²
-    return LocalCoefficients(theta=theta, rho0=rho0, F=0.1, dF=0.2, Tbar=Tbar, dTbar=dTbar,
-                             a=a, da=da, mu_bar=mu, dmu_bar=0.0)
+    return LocalCoefficients(
+        theta=theta, rho0=rho0, F=0.1, dF=0.2, Tbar=Tbar, dTbar=dTbar, a=a, da=da, mu_bar=mu, dmu_bar=0.0
+    )
 
 
-STATES = [_state(), _state(dU=-3.0, dTbar=-10.0), _state(dU=0.5, dTbar=0.5),
-          _state(rho0=1.3, dU=2.0, dTbar=-0.6, mu=0.05), _state(rho0=0.2, dU=1.0, dTbar=1.0)]
+STATES = [
+    _state(),
+    _state(dU=-3.0, dTbar=-10.0),
+    _state(dU=0.5, dTbar=0.5),
+    _state(rho0=1.3, dU=2.0, dTbar=-0.6, mu=0.05),
+    _state(rho0=0.2, dU=1.0, dTbar=1.0),
+]
 
 
 def test_manufactured_states_have_the_prescribed_slopes():
@@ -187,10 +194,14 @@ def test_outside_the_family_is_an_error_naming_the_range(rm16):
         rm16.rho_at_nu0(0.3)
 
 
-@pytest.mark.parametrize("kw, match", [({"theta": 95.0}, "theta"),
-                                       ({"theta": 16.0, "nu0_min": 0.3, "nu0_max": 0.2},
-                                        "nu0_min"),
-                                       ({"theta": 16.0, "tol": 0.5}, "tol")])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"theta": 95.0}, "theta"),
+        ({"theta": 16.0, "nu0_min": 0.3, "nu0_max": 0.2}, "nu0_min"),
+        ({"theta": 16.0, "tol": 0.5}, "tol"),
+    ],
+)
 def test_bad_parameters(kw, match):
     theta = kw.pop("theta")
     with pytest.raises(ParameterError, match=match):

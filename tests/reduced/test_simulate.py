@@ -3,6 +3,7 @@
 Setting: θ = 16°, ν0(0) = 0.12 (ρ0 ≈ 0.520, k_c ≈ 0.443), periodic L = 40: modes n = 1, 2
 (k = 0.157, 0.314) grow, n = 3 (k = 0.471 > k_c) decays.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,8 +22,8 @@ def test_exact_jacobian_matches_finite_differences(rm16, state16):
     for c in (0.0, 9.0):
         s = WaveSolver(rm16, L, 24, frame_speed=c)
         y = s.uniform(state16.rho0)
-        y[:s.N] *= 1 + 0.05 * rng.standard_normal(s.N)
-        y[s.N:] *= 1 + 0.05 * rng.standard_normal(s.N)
+        y[: s.N] *= 1 + 0.05 * rng.standard_normal(s.N)
+        y[s.N :] *= 1 + 0.05 * rng.standard_normal(s.N)
         J = s.jacobian(0.0, y).toarray()
         Jfd = np.empty_like(J)
         for j in range(2 * s.N):
@@ -32,7 +33,7 @@ def test_exact_jacobian_matches_finite_differences(rm16, state16):
         # central differences: truncation ~1e-12 relative, round-off ~1e-16/1e-6
         assert np.abs(J - Jfd).max() <= 1e-7 * np.abs(J).max()
         # its mass rows sum to zero column by column, exactly as the fluxes telescope
-        assert np.abs(J[:s.N].sum(axis=0)).max() <= 1e-13 * np.abs(J).max()
+        assert np.abs(J[: s.N].sum(axis=0)).max() <= 1e-13 * np.abs(J).max()
 
 
 @pytest.mark.parametrize("frame", [0.0, 9.16])
@@ -55,14 +56,12 @@ def test_discrete_dispersion_converges_to_the_2x2_relation_at_second_order(rm16,
     errs = []
     for N in (128, 256, 512, 1024):
         s = WaveSolver(rm16, L, N)
-        d = np.array([s.discrete_dispersion(state16.rho0, n, numerical=True)[0]
-                      for n in (1, 2, 3)])
+        d = np.array([s.discrete_dispersion(state16.rho0, n, numerical=True)[0] for n in (1, 2, 3)])
         a = state16.dispersion(2 * np.pi * np.arange(1, 4) / L)[:, 0]
         errs.append(np.abs(d - a).max())
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
     # 3.43, 3.82, 3.95: approaching 4 from below (asymptotic from N ≈ 256, k dx ≲ 0.07)
-    assert np.all(ratios > 3.3) and np.all(np.diff(ratios) > 0) and 3.8 < ratios[-1] < 4.2, \
-        ratios
+    assert np.all(ratios > 3.3) and np.all(np.diff(ratios) > 0) and 3.8 < ratios[-1] < 4.2, ratios
     assert errs[-1] < 1e-3 * np.abs(a).max()  # (k dx)² ≈ 3e-4 for n = 3
 
 
@@ -84,8 +83,9 @@ def mode_runs(rm16, state16):
     """Runs from single discrete eigenmodes n = 1, 2, 3, amplitude 1e-5 ρ0, to t = 60."""
     out = {}
     for n in (1, 2, 3):
-        out[n] = simulate(rm16, L, rho0=state16.rho0, n_cells=512, mode=n, amplitude=1e-5,
-                          t_end=60.0, n_out=61, rtol=1e-8)
+        out[n] = simulate(
+            rm16, L, rho0=state16.rho0, n_cells=512, mode=n, amplitude=1e-5, t_end=60.0, n_out=61, rtol=1e-8
+        )
     return out
 
 
@@ -127,8 +127,9 @@ def test_phase_velocity_in_the_run(mode_runs, rm16, state16):
 def test_mass_is_conserved_to_round_off(mode_runs, rm16, state16):
     for ds in mode_runs.values():
         assert ds.attrs["mass_drift"] < 1e-14
-    ds = simulate(rm16, L, rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05,
-                  t_end=40.0, n_out=11, frame="lab")
+    ds = simulate(
+        rm16, L, rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05, t_end=40.0, n_out=11, frame="lab"
+    )
     m = ds["mass"].values
     assert np.abs(m - m[0]).max() / m[0] < 1e-14
     assert float(ds["amplitude"][-1]) > 2 * float(ds["amplitude"][0])  # nonlinear growth
@@ -145,8 +146,18 @@ def test_second_order_convergence_in_space_nonlinear(rm16, state16):
     # frame (speed 9.16) for all grids: the "wave" frame's speed depends on the grid.
     sols = {}
     for N in (128, 256, 512, 2048):
-        ds = simulate(rm16, L, rho0=state16.rho0, n_cells=N, mode=1, amplitude=0.05,
-                      t_end=25.0, n_out=2, rtol=1e-10, frame=9.16)
+        ds = simulate(
+            rm16,
+            L,
+            rho0=state16.rho0,
+            n_cells=N,
+            mode=1,
+            amplitude=0.05,
+            t_end=25.0,
+            n_out=2,
+            rtol=1e-10,
+            frame=9.16,
+        )
         sols[N] = ds["rho"].values[-1]
     assert np.abs(sols[2048] - state16.rho0).max() > 0.15 * state16.rho0  # grew 3×
     ref = sols[2048]
@@ -160,8 +171,7 @@ def test_second_order_convergence_in_space_nonlinear(rm16, state16):
 def test_convergence_in_time(rm16, state16):
     kw = dict(rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05, t_end=25.0, n_out=2)
     ref = simulate(rm16, L, rtol=1e-11, **kw)["rho"].values[-1]
-    errs = [np.abs(simulate(rm16, L, rtol=r, **kw)["rho"].values[-1] - ref).max()
-            for r in (1e-4, 1e-6, 1e-8)]
+    errs = [np.abs(simulate(rm16, L, rtol=r, **kw)["rho"].values[-1] - ref).max() for r in (1e-4, 1e-6, 1e-8)]
     assert errs[0] > errs[1] > errs[2]
     assert errs[2] < 1e-7 * state16.rho0
     assert errs[0] / errs[2] > 100  # Radau IIA, order 5: error falls with the tolerance
@@ -192,15 +202,18 @@ def test_stable_state_decays(rm16):
     assert ds.attrs["max_growth_rate"] < 0
 
 
-@pytest.mark.parametrize("kw, match", [
-    ({"rho0": 0.5, "nu0": 0.1}, "exactly one"),
-    ({"rho0": 5.0}, "rho0"),
-    ({"rho0": 0.5, "amplitude": 0.9}, "amplitude"),
-    ({"rho0": 0.5, "rtol": 1.0}, "rtol"),
-    ({"rho0": 0.5, "t_end": -1.0}, "time"),
-    ({"rho0": 0.5, "frame": "nowhere"}, "frame"),
-    ({"rho0": 0.5, "n_cells": 4}, "n_cells"),
-])
+@pytest.mark.parametrize(
+    "kw, match",
+    [
+        ({"rho0": 0.5, "nu0": 0.1}, "exactly one"),
+        ({"rho0": 5.0}, "rho0"),
+        ({"rho0": 0.5, "amplitude": 0.9}, "amplitude"),
+        ({"rho0": 0.5, "rtol": 1.0}, "rtol"),
+        ({"rho0": 0.5, "t_end": -1.0}, "time"),
+        ({"rho0": 0.5, "frame": "nowhere"}, "frame"),
+        ({"rho0": 0.5, "n_cells": 4}, "n_cells"),
+    ],
+)
 def test_bad_input(rm16, kw, match):
     with pytest.raises(ParameterError, match=match):
         simulate(rm16, L, **kw)
@@ -216,8 +229,11 @@ def test_stepper_with_trackers_is_what_simulate_returns(rm16, state16):
     ref = simulate(rm16, L, t_end=30.0, n_out=31, **kw)
     sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=128)
     snaps, seen = SnapshotTracker(count=31), []
-    info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 30.0,
-                   trackers=[snaps, ProgressTracker(lambda t, te: seen.append((t, te)))])
+    info = sim.run(
+        sim.perturbed(mode=1, amplitude=1e-3),
+        30.0,
+        trackers=[snaps, ProgressTracker(lambda t, te: seen.append((t, te)))],
+    )
     ds = sim.dataset(snaps, info)
     assert info.status == "completed" and info.t == 30.0 and not info.auto_time
     assert np.array_equal(ds["rho"].values, ref["rho"].values)
@@ -239,14 +255,13 @@ def test_snapshot_interval_and_a_custom_stop_condition(rm16, state16):
             self.a0 = initial.amplitude
 
         def handle(self, sim, step):
-            a = np.abs(step.y[:sim.solver.N] - sim.rho0).max()
+            a = np.abs(step.y[: sim.solver.N] - sim.rho0).max()
             return "grown" if a > 10 * self.a0 else None
 
     sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=128, frame="lab")
     assert sim.frame_speed == 0.0
     snaps = SnapshotTracker(interval=5.0)
-    info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 1000.0,
-                   trackers=[snaps, GrownTenfold()])
+    info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 1000.0, trackers=[snaps, GrownTenfold()])
     # mode 1 grows at Re α ≈ 0.036: ten-fold after ln 10 / 0.036 ≈ 64
     rate = float(sim.growth_discrete[0].real)
     assert info.status == "grown" and abs(info.t - math.log(10) / rate) < 0.1 * info.t
@@ -276,12 +291,15 @@ def test_saturation_stop_and_leave_family_stop(rm16, state16):
     assert snaps.times[-1] == info.t and np.array_equal(snaps.states[-1], info.y)
 
 
-@pytest.mark.parametrize("cls, kw, match", [
-    ("SnapshotTracker", {"count": 1}, "n_out"),
-    ("SnapshotTracker", {}, "exactly one"),
-    ("SnapshotTracker", {"interval": -1.0}, "interval"),
-    ("SaturationStop", {"tol": 2.0, "count": 5}, "saturation_tol"),
-])
+@pytest.mark.parametrize(
+    "cls, kw, match",
+    [
+        ("SnapshotTracker", {"count": 1}, "n_out"),
+        ("SnapshotTracker", {}, "exactly one"),
+        ("SnapshotTracker", {"interval": -1.0}, "interval"),
+        ("SaturationStop", {"tol": 2.0, "count": 5}, "saturation_tol"),
+    ],
+)
 def test_bad_tracker_input(cls, kw, match):
     import chuteflow.reduced as reduced
 

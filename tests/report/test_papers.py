@@ -1,5 +1,6 @@
 """Paper packages: the paper's points defined once, stage discovery per paper, and the layer
 rule (nothing in the library imports chuteflow.papers except report discovery and the CLI)."""
+
 from __future__ import annotations
 
 import re
@@ -46,6 +47,7 @@ def test_stages_belong_to_the_default_paper():
 
 def test_a_second_paper_is_a_sibling():
     with isolated_registry():
+
         @register_stage("other_steady", order=5, paper="other2030")
         def other_steady(ctx):
             """Another paper's stage."""
@@ -55,14 +57,16 @@ def test_a_second_paper_is_a_sibling():
             """A stage of no paper (runs with any)."""
 
         assert [s.name for s in select_stages(None, ["mitarai2004"])] == ["generic"]
-        assert [s.name for s in select_stages(None, ["other2030"])] == ["other_steady",
-                                                                         "generic"]
+        assert [s.name for s in select_stages(None, ["other2030"])] == ["other_steady", "generic"]
 
 
 def test_library_does_not_import_papers():
     """Layer rule: only report (stage discovery) and cli import chuteflow.papers."""
-    pat = re.compile(r"^\s*(from\s+(chuteflow|\.+)\s*\.?\s*papers\b|from\s+chuteflow\.papers\b|"
-                     r"import\s+chuteflow\.papers\b|from\s+\.\.papers\b)", re.M)
+    pat = re.compile(
+        r"^\s*(from\s+(chuteflow|\.+)\s*\.?\s*papers\b|from\s+chuteflow\.papers\b|"
+        r"import\s+chuteflow\.papers\b|from\s+\.\.papers\b)",
+        re.M,
+    )
     bad = []
     for f in SRC.rglob("*.py"):
         rel = f.relative_to(SRC).parts

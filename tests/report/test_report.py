@@ -1,4 +1,5 @@
 """Checkpoint and Report without the runner."""
+
 from __future__ import annotations
 
 import math
@@ -18,14 +19,16 @@ def test_checkpoint_status_and_coercion():
 
 
 def test_checkpoint_compare():
-    ok = Checkpoint.compare("h", source="§3", statement="h ≈ 23", value=23.5, expected=23.0,
-                            rtol=0.05, name="h")
+    ok = Checkpoint.compare(
+        "h", source="§3", statement="h ≈ 23", value=23.5, expected=23.0, rtol=0.05, name="h"
+    )
     assert ok.passed and "h = 23.5" in ok.computed and "paper 23" in ok.computed
-    bad = Checkpoint.compare("h2", source="§3", statement="h ≈ 23", value=30.0,
-                             expected=23.0, rtol=0.05)
+    bad = Checkpoint.compare("h2", source="§3", statement="h ≈ 23", value=30.0, expected=23.0, rtol=0.05)
     assert bad.passed is False
-    assert Checkpoint.compare("h3", source="", statement="", value=math.nan,
-                              expected=1.0, atol=1.0).passed is False
+    assert (
+        Checkpoint.compare("h3", source="", statement="", value=math.nan, expected=1.0, atol=1.0).passed
+        is False
+    )
 
 
 def test_report_sections_and_duplicates(tmp_path):

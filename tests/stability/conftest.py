@@ -1,4 +1,5 @@
 """Shared steady flows of the paper's checkpoints (solved once per session)."""
+
 from __future__ import annotations
 
 import pytest
@@ -21,12 +22,19 @@ def p1_flow():
 def flows():
     """Lazily solved checkpoint flows: flows('P3')."""
     cache = {}
-    spec = {"P1": (P1, 0.05), "P2": (P2, 0.05), "P3": (P3, 0.05), "P4": (P4, 0.05),
-            "P5": (P5, 0.05), "Q3": (Q3, 0.10)}
+    spec = {
+        "P1": (P1, 0.05),
+        "P2": (P2, 0.05),
+        "P3": (P3, 0.05),
+        "P4": (P4, 0.05),
+        "P5": (P5, 0.05),
+        "Q3": (Q3, 0.10),
+    }
 
     def get(name):
         if name not in cache:
             (theta, nu0), phi = spec[name]
             cache[name] = solve_steady(theta, nu0, ChuteModel(roughness=phi))
         return cache[name]
+
     return get

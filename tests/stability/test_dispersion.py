@@ -3,6 +3,7 @@
 Numbers quoted in comments were measured with this code (φ = 0.05 unless stated,
 ν_top = 1e-9, N from the adaptive ladder 80, 100, 125, …).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -10,8 +11,14 @@ import pytest
 
 from chuteflow.errors import ConvergenceError, ParameterError
 from chuteflow.steady import solve_steady, steady_tangent
-from chuteflow.stability import (BranchTracker, critical_k, dispersion, least_stable,
-                                 null_vectors, stability_operator)
+from chuteflow.stability import (
+    BranchTracker,
+    critical_k,
+    dispersion,
+    least_stable,
+    null_vectors,
+    stability_operator,
+)
 
 from .conftest import P1
 
@@ -21,8 +28,11 @@ def tangent_at_fixed_y(flow, y):
     tg = steady_tangent(flow)
     g = flow.grid
     shift = (g.y / flow.y_max) * tg["y_max"]  # the family's tangent is at fixed y/y_max
-    at_y = {"nu": flow.nu * tg["log_nu"] - shift * (g.D @ flow.nu),
-            "u": tg["u"] - shift * (g.D @ flow.u), "T": tg["T"] - shift * (g.D @ flow.T)}
+    at_y = {
+        "nu": flow.nu * tg["log_nu"] - shift * (g.D @ flow.nu),
+        "u": tg["u"] - shift * (g.D @ flow.u),
+        "T": tg["T"] - shift * (g.D @ flow.T),
+    }
     return {f: g.interpolate(v, y) for f, v in at_y.items()}
 
 
@@ -137,8 +147,7 @@ def test_domain_top_moves_results_as_in_errata():
     out = {}
     for nu_top in (1e-7, 1e-13):
         flow = solve_steady(*P1, nu_top=nu_top)
-        out[nu_top] = (least_stable(flow, 2e-3).alpha.real,
-                       critical_k(flow, k_max=0.02, num=12))
+        out[nu_top] = (least_stable(flow, 2e-3).alpha.real, critical_k(flow, k_max=0.02, num=12))
     d_re = (out[1e-13][0] - out[1e-7][0]) / out[1e-7][0]
     d_kc = (out[1e-13][1] - out[1e-7][1]) / out[1e-7][1]
     assert -0.007 < d_re < -0.003

@@ -5,6 +5,7 @@ Before the derivation, the operator wrote the §4.1 top conditions (eq. (4.5):
 û' = −kû, v̂' = −kv̂, T̂' = −kT̂, and ν̂' = −(cos θ/T0) ν̂) into its matrices by hand;
 :func:`old_top_rows` keeps that code as the reference.
 """
+
 from __future__ import annotations
 
 import math
@@ -77,8 +78,7 @@ def test_eigenvalues_unchanged(p1_flow, kx, kz):
     op = StabilityOperator(p1_flow, 64, three_d=True)
     old = _hand_written_operator(op)
     for eq in (False, True):
-        assert np.array_equal(op.matrix(kx, kz, equilibrated=eq),
-                              old.matrix(kx, kz, equilibrated=eq))
+        assert np.array_equal(op.matrix(kx, kz, equilibrated=eq), old.matrix(kx, kz, equilibrated=eq))
     guess = -7.5j * math.hypot(kx, kz)  # the branch's phase velocity ≈ 7.5 (P1)
     a_new, _ = nearest_eigenpair(op.pencil(kx, kz), guess)
     a_old, _ = nearest_eigenpair(old.pencil(kx, kz), guess)
@@ -89,9 +89,11 @@ def test_eigenvalues_pinned_before_derivation(p1_flow):
     """α of P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05) at adaptive N, as computed with the
     hand-written top rows and steady x-momentum rows (commit f630553); the derivation moves
     them by round-off only (measured ≤ 3e-12)."""
-    before = {1e-3: 0.0009447314691881007 - 0.007047900698229443j,
-              2e-3: 0.0011789671835718402 - 0.014999339430787921j,
-              2e-2: -0.007043233311927519 - 0.15526975574875104j}
+    before = {
+        1e-3: 0.0009447314691881007 - 0.007047900698229443j,
+        2e-3: 0.0011789671835718402 - 0.014999339430787921j,
+        2e-2: -0.007043233311927519 - 0.15526975574875104j,
+    }
     for k, alpha in before.items():
         assert abs(least_stable(p1_flow, k).alpha - alpha) < 1e-10, k
 

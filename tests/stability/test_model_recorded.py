@@ -1,5 +1,6 @@
 """Modes and long-wave coefficients record the model they were computed with (and put it in
 their summaries), so results of different closures cannot be mixed up."""
+
 from __future__ import annotations
 
 from chuteflow.closures import ChuteModel

@@ -1,4 +1,5 @@
 """Eigen-solvers and spurious-mode rejection (paper §4.1)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -6,8 +7,7 @@ import pytest
 
 from chuteflow.errors import ParameterError
 from chuteflow.spectral import ChebyshevGrid
-from chuteflow.stability import (Mode, ShiftInvert, least_stable, qz, spectrum,
-                                 stability_operator, tail)
+from chuteflow.stability import Mode, ShiftInvert, least_stable, qz, spectrum, stability_operator, tail
 from chuteflow.stability.modes import nearest_eigenpair, normalise
 
 K = 2e-3  # the wavenumber of the paper's eigenfunction figures (eigens, eigenu)

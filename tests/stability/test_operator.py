@@ -1,4 +1,5 @@
 """The stability operator against Appendix A, and its assembly against the raw equations."""
+
 from __future__ import annotations
 
 import math
@@ -42,38 +43,68 @@ def appendix_a(flow, y):
     one = np.ones_like(nu0)
     return {
         # eq:leqnu
-        "mass": {("nu", 1, 0, 0): one, ("nu", 0, 1, 0): u0, ("u", 0, 1, 0): nu0,
-                 ("v", 0, 0, 0): nu0y, ("v", 0, 0, 1): nu0},
+        "mass": {
+            ("nu", 1, 0, 0): one,
+            ("nu", 0, 1, 0): u0,
+            ("u", 0, 1, 0): nu0,
+            ("v", 0, 0, 0): nu0y,
+            ("v", 0, 0, 1): nu0,
+        },
         # x-momentum
-        "xmom": {("nu", 0, 0, 0): sin + u0yy * F("mu", 1, 0) + u0y * Fy("mu", 1, 0),
-                 ("nu", 0, 1, 0): -F("p", 1, 0), ("nu", 0, 0, 1): u0y * F("mu", 1, 0),
-                 ("u", 1, 0, 0): -nu0, ("u", 0, 1, 0): -nu0 * u0, ("u", 0, 2, 0): xi + 2 * mu,
-                 ("u", 0, 0, 1): mu_y, ("u", 0, 0, 2): mu,
-                 ("v", 0, 0, 0): -nu0 * u0y, ("v", 0, 1, 0): mu_y, ("v", 0, 1, 1): xi + mu,
-                 ("T", 0, 1, 0): -F("p", 0, 1),
-                 ("T", 0, 0, 0): u0yy * F("mu", 0, 1) + u0y * Fy("mu", 0, 1),
-                 ("T", 0, 0, 1): u0y * F("mu", 0, 1)},
+        "xmom": {
+            ("nu", 0, 0, 0): sin + u0yy * F("mu", 1, 0) + u0y * Fy("mu", 1, 0),
+            ("nu", 0, 1, 0): -F("p", 1, 0),
+            ("nu", 0, 0, 1): u0y * F("mu", 1, 0),
+            ("u", 1, 0, 0): -nu0,
+            ("u", 0, 1, 0): -nu0 * u0,
+            ("u", 0, 2, 0): xi + 2 * mu,
+            ("u", 0, 0, 1): mu_y,
+            ("u", 0, 0, 2): mu,
+            ("v", 0, 0, 0): -nu0 * u0y,
+            ("v", 0, 1, 0): mu_y,
+            ("v", 0, 1, 1): xi + mu,
+            ("T", 0, 1, 0): -F("p", 0, 1),
+            ("T", 0, 0, 0): u0yy * F("mu", 0, 1) + u0y * Fy("mu", 0, 1),
+            ("T", 0, 0, 1): u0y * F("mu", 0, 1),
+        },
         # y-momentum
-        "ymom": {("nu", 0, 0, 0): -cos - Fy("p", 1, 0), ("nu", 0, 0, 1): -F("p", 1, 0),
-                 ("nu", 0, 1, 0): u0y * F("mu", 1, 0),
-                 ("u", 0, 1, 0): xi_y, ("u", 0, 1, 1): xi + mu,
-                 ("v", 1, 0, 0): -nu0, ("v", 0, 1, 0): -nu0 * u0,
-                 ("v", 0, 0, 1): xi_y + 2 * mu_y, ("v", 0, 0, 2): xi + 2 * mu,
-                 ("v", 0, 2, 0): mu,
-                 ("T", 0, 0, 0): -Fy("p", 0, 1), ("T", 0, 0, 1): -F("p", 0, 1),
-                 ("T", 0, 1, 0): u0y * F("mu", 0, 1)},
+        "ymom": {
+            ("nu", 0, 0, 0): -cos - Fy("p", 1, 0),
+            ("nu", 0, 0, 1): -F("p", 1, 0),
+            ("nu", 0, 1, 0): u0y * F("mu", 1, 0),
+            ("u", 0, 1, 0): xi_y,
+            ("u", 0, 1, 1): xi + mu,
+            ("v", 1, 0, 0): -nu0,
+            ("v", 0, 1, 0): -nu0 * u0,
+            ("v", 0, 0, 1): xi_y + 2 * mu_y,
+            ("v", 0, 0, 2): xi + 2 * mu,
+            ("v", 0, 2, 0): mu,
+            ("T", 0, 0, 0): -Fy("p", 0, 1),
+            ("T", 0, 0, 1): -F("p", 0, 1),
+            ("T", 0, 1, 0): u0y * F("mu", 0, 1),
+        },
         # eq:leqT
-        "energy": {("nu", 0, 0, 0): Fy("kappa", 1, 0) * T0y + F("kappa", 1, 0) * T0yy
-                   - F("Gamma", 1, 0) + u0y**2 * F("mu", 1, 0),
-                   ("nu", 0, 0, 1): F("kappa", 1, 0) * T0y,
-                   ("u", 0, 1, 0): -p, ("u", 0, 0, 1): 2 * mu * u0y,
-                   ("v", 0, 0, 0): -1.5 * nu0 * T0y, ("v", 0, 0, 1): -p,
-                   ("v", 0, 1, 0): 2 * mu * u0y,
-                   ("T", 1, 0, 0): -1.5 * nu0, ("T", 0, 1, 0): -1.5 * nu0 * u0,
-                   ("T", 0, 2, 0): kap, ("T", 0, 0, 1): kap_y + F("kappa", 0, 1) * T0y,
-                   ("T", 0, 0, 2): kap,
-                   ("T", 0, 0, 0): Fy("kappa", 0, 1) * T0y + F("kappa", 0, 1) * T0yy
-                   - F("Gamma", 0, 1) + u0y**2 * F("mu", 0, 1)},
+        "energy": {
+            ("nu", 0, 0, 0): Fy("kappa", 1, 0) * T0y
+            + F("kappa", 1, 0) * T0yy
+            - F("Gamma", 1, 0)
+            + u0y**2 * F("mu", 1, 0),
+            ("nu", 0, 0, 1): F("kappa", 1, 0) * T0y,
+            ("u", 0, 1, 0): -p,
+            ("u", 0, 0, 1): 2 * mu * u0y,
+            ("v", 0, 0, 0): -1.5 * nu0 * T0y,
+            ("v", 0, 0, 1): -p,
+            ("v", 0, 1, 0): 2 * mu * u0y,
+            ("T", 1, 0, 0): -1.5 * nu0,
+            ("T", 0, 1, 0): -1.5 * nu0 * u0,
+            ("T", 0, 2, 0): kap,
+            ("T", 0, 0, 1): kap_y + F("kappa", 0, 1) * T0y,
+            ("T", 0, 0, 2): kap,
+            ("T", 0, 0, 0): Fy("kappa", 0, 1) * T0y
+            + F("kappa", 0, 1) * T0yy
+            - F("Gamma", 0, 1)
+            + u0y**2 * F("mu", 0, 1),
+        },
     }
 
 
@@ -84,8 +115,11 @@ def derived(flow, y, name):
     th = math.radians(flow.theta)
     ce = compiled_equations()[name]
     _, coefs = ce.evaluate(b, P, math.sin(th), math.cos(th))
-    return {(t.field, t.a, t.b, t.c): np.broadcast_to(c, y.shape)
-            for t, c in zip(ce.terms, coefs) if not t.d and t.field != "w"}
+    return {
+        (t.field, t.a, t.b, t.c): np.broadcast_to(c, y.shape)
+        for t, c in zip(ce.terms, coefs)
+        if not t.d and t.field != "w"
+    }
 
 
 # the paper writes eq:leqnu as ∂_t ν1 + … = 0; the derived residual is −∂_t ν − ∇·(νu)
@@ -118,8 +152,12 @@ def test_floor_conditions_agree_with_eq_bc0u_and_eq_bc0T(p1_flow):
     P = p1_flow.model.evaluate(b["nu"], b["T"])
     m = p1_flow.model
     f = m.f(b["nu"])
-    f6, f6n, f7, f7n = (float(f["f6"][0][0]), float(f["f6"][1][0]), float(f["f7"][0][0]),
-                        float(f["f7"][1][0]))
+    f6, f6n, f7, f7n = (
+        float(f["f6"][0][0]),
+        float(f["f6"][1][0]),
+        float(f["f7"][0][0]),
+        float(f["f7"][1][0]),
+    )
     phi, Phi = m.roughness, m.wall_loss
     u0, T0, u0y, T0y = (float(b[q][0]) for q in ("u", "T", "u_y", "T_y"))
     mu0, kap0 = float(P["mu"][(0, 0)][0]), float(P["kappa"][(0, 0)][0])
@@ -127,23 +165,31 @@ def test_floor_conditions_agree_with_eq_bc0u_and_eq_bc0T(p1_flow):
     assert abs(T0y - (0.5 * Phi * f6 * T0 - phi * f6 * u0**2 / 3)) < 1e-9 * T0
 
     def row(name):
-        return {k: float(np.asarray(v).reshape(-1)[0])
-                for k, v in derived(p1_flow, y, name).items()}
+        return {k: float(np.asarray(v).reshape(-1)[0]) for k, v in derived(p1_flow, y, name).items()}
 
     fx, fe = row("floor_x"), row("floor_energy")
     # eq:bc0u: ∂_y u1 = φ [u0 f7,ν ν1 + f7 u1]
     ours = {k: v / mu0 for k, v in fx.items()}
-    paper = {("u", 0, 0, 1): 1.0, ("nu", 0, 0, 0): -phi * u0 * f7n, ("u", 0, 0, 0): -phi * f7,
-             ("T", 0, 0, 0): 0.0}
+    paper = {
+        ("u", 0, 0, 1): 1.0,
+        ("nu", 0, 0, 0): -phi * u0 * f7n,
+        ("u", 0, 0, 0): -phi * f7,
+        ("T", 0, 0, 0): 0.0,
+    }
     assert ours.pop(("v", 0, 1, 0)) == pytest.approx(1.0)  # μ ∂_x v1 / μ, with v̂(0) = 0
     assert set(ours) == set(paper)
     for key, want in paper.items():
         assert ours[key] == pytest.approx(want, rel=1e-8, abs=1e-10), key
     # eq:bc0T: ∂_y T1 = −f6,ν [φu0²/3 − ΦT0/2] ν1 − f6 [2φu0 u1/3 − Φ T1/2]
     comb = {k: (fe.get(k, 0.0) - u0 * fx.get(k, 0.0)) / kap0 for k in set(fe) | set(fx)}
-    paper = {("T", 0, 0, 1): 1.0, ("nu", 0, 0, 0): f6n * (phi * u0**2 / 3 - 0.5 * Phi * T0),
-             ("u", 0, 0, 0): 2 * phi * f6 * u0 / 3, ("T", 0, 0, 0): -0.5 * Phi * f6,
-             ("u", 0, 0, 1): 0.0, ("v", 0, 1, 0): 0.0}
+    paper = {
+        ("T", 0, 0, 1): 1.0,
+        ("nu", 0, 0, 0): f6n * (phi * u0**2 / 3 - 0.5 * Phi * T0),
+        ("u", 0, 0, 0): 2 * phi * f6 * u0 / 3,
+        ("T", 0, 0, 0): -0.5 * Phi * f6,
+        ("u", 0, 0, 1): 0.0,
+        ("v", 0, 1, 0): 0.0,
+    }
     assert set(comb) == set(paper)
     for key, want in paper.items():
         assert comb[key] == pytest.approx(want, rel=1e-8, abs=1e-10), key
@@ -170,8 +216,7 @@ def test_pencil_solves_the_raw_linearised_equations(p1_flow):
         for t, c in zip(ce.terms, coefs):
             if t.field == "w" or t.d:
                 continue
-            term = (np.broadcast_to(c, y.shape) * mode.alpha**t.a * (1j * k)**t.b
-                    * (D[t.c] @ F[t.field]))
+            term = np.broadcast_to(c, y.shape) * mode.alpha**t.a * (1j * k) ** t.b * (D[t.c] @ F[t.field])
             total += term
             size = np.maximum(size, np.abs(term))
         where = slice(1, -1) if name in ("mass", "xmom", "ymom", "energy") else slice(0, 1)
@@ -193,15 +238,14 @@ def test_k_expansion_pieces_rebuild_the_operator(p1_flow):
     assert np.isrealobj(A0)
     for k in (0.0, 3e-3, 0.2):
         A = op.matrix(k)
-        assert np.allclose(A0 + 1j * k * A1 + (1j * k) ** 2 * A2, A, rtol=0, atol=1e-12 *
-                           np.abs(A).max())
+        assert np.allclose(A0 + 1j * k * A1 + (1j * k) ** 2 * A2, A, rtol=0, atol=1e-12 * np.abs(A).max())
     B = np.diag(op.B)
     m = op.n + 1
     assert np.count_nonzero(op.B - np.diag(B)) == 0  # diagonal
     boundary = np.zeros(op.size, bool)
-    boundary[0::m] = boundary[m - 1::m] = True
+    boundary[0::m] = boundary[m - 1 :: m] = True
     assert (B[boundary] == 0).all() and (B[~boundary] > 0).all()
-    assert np.allclose(B[1:m - 1], 1.0)  # mass rows: ∂_t ν̂ with coefficient 1
+    assert np.allclose(B[1 : m - 1], 1.0)  # mass rows: ∂_t ν̂ with coefficient 1
 
 
 def test_three_dimensional_operator_reduces_at_kz_zero(p1_flow):
@@ -211,6 +255,7 @@ def test_three_dimensional_operator_reduces_at_kz_zero(p1_flow):
     two = least_stable(p1_flow, k, n=64)
     op3 = StabilityOperator(p1_flow, 64, three_d=True)
     from chuteflow.stability.modes import nearest_eigenpair
+
     a3, _ = nearest_eigenpair(op3.pencil(k, 0.0), two.alpha)
     assert abs(a3 - two.alpha) < 1e-10
     a_obl, _ = nearest_eigenpair(op3.pencil(k, 1e-4), two.alpha)

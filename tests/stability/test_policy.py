@@ -1,4 +1,5 @@
 """The rejection policy object and the operator cache of the stability solvers."""
+
 from __future__ import annotations
 
 import dataclasses

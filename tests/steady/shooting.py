@@ -14,6 +14,7 @@ from the floor values eq:T0b, eq:dT0b, shooting on u0(0) until T0' = 0 where ν0
 sign change of T0' coming down from large u0(0), not by the smallness of T0' (which a thin
 cold layer with u0(0) → 0 also has). Also used as the benchmark's plain baseline.
 """
+
 from __future__ import annotations
 
 import math
@@ -39,10 +40,22 @@ def _table1(nu, mat: Material):
     eta = (1 + mat.e) / 2
     g0 = (1 - nu / mat.nu_m) ** (-2.5 * mat.nu_m)
     f1 = nu * (1 + 4 * eta * nu * g0)
-    f2 = (5 * SQPI / (96 * eta * (2 - eta)) * (1 + 1.6 * eta * nu * g0)
-          * (1 / g0 + 1.6 * eta * (3 * eta - 2) * nu) + 8 / (5 * SQPI) * eta * nu**2 * g0)
-    f4 = (25 * SQPI / (16 * eta * (41 - 33 * eta)) * (1 + 2.4 * eta * nu * g0)
-          * (1 / g0 + 2.4 * eta**2 * (4 * eta - 3) * nu) + 4 / SQPI * eta * nu**2 * g0)
+    f2 = (
+        5
+        * SQPI
+        / (96 * eta * (2 - eta))
+        * (1 + 1.6 * eta * nu * g0)
+        * (1 / g0 + 1.6 * eta * (3 * eta - 2) * nu)
+        + 8 / (5 * SQPI) * eta * nu**2 * g0
+    )
+    f4 = (
+        25
+        * SQPI
+        / (16 * eta * (41 - 33 * eta))
+        * (1 + 2.4 * eta * nu * g0)
+        * (1 / g0 + 2.4 * eta**2 * (4 * eta - 3) * nu)
+        + 4 / SQPI * eta * nu**2 * g0
+    )
     f5 = 12 / SQPI * nu**2 * g0
     f6 = math.sqrt(3) * math.pi * nu * g0 / (2 * mat.nu_m * f4)
     f7 = math.pi * nu * g0 / (2 * math.sqrt(3) * mat.nu_m * f2)
@@ -70,6 +83,7 @@ def _rhs(theta_deg, mat):
         up = f1 * math.sqrt(T) * tn / f2
         Tpp = (loss * f5 * T - f2 * up * up - f4p * nup * Tp - f4 * Tp * Tp / (2 * T)) / f4
         return [nup / nu, up, Tp, Tpp, nu, nu * u]
+
     return rhs
 
 
@@ -88,9 +102,16 @@ def shoot(theta_deg, nu0, u0, mat, nu_top=1e-9, rtol=1e-11, dense=False, y_cap=1
     top.terminal = True
     cold = lambda y, z: z[2] - 1e-10 * T0  # noqa: E731
     cold.terminal = True
-    return solve_ivp(_rhs(theta_deg, mat), (0.0, y_cap), [math.log(nu0), u0, T0, Tp0, 0.0, 0.0],
-                     method="DOP853", rtol=rtol, atol=1e-14, events=[top, cold],
-                     dense_output=dense)
+    return solve_ivp(
+        _rhs(theta_deg, mat),
+        (0.0, y_cap),
+        [math.log(nu0), u0, T0, Tp0, 0.0, 0.0],
+        method="DOP853",
+        rtol=rtol,
+        atol=1e-14,
+        events=[top, cold],
+        dense_output=dense,
+    )
 
 
 def _miss(theta_deg, nu0, u0, mat, nu_top, rtol):
@@ -113,8 +134,9 @@ class ShotFlow:
     shots: int
 
 
-def solve_by_shooting(theta_deg, nu0, mat=Material(), *, nu_top=1e-9, rtol=1e-11,
-                      u_hi=200.0, n_scan=40, xtol=1e-13):
+def solve_by_shooting(
+    theta_deg, nu0, mat=Material(), *, nu_top=1e-9, rtol=1e-11, u_hi=200.0, n_scan=40, xtol=1e-13
+):
     """The physical steady flow by shooting on u0(0); ρ̄0 and Q0 include the tail above
     y_max as in chuteflow's definition (∫ν dy above = p(y_max)/cosθ, u0 constant there)."""
     us = np.geomspace(u_hi, 1e-2, n_scan)

@@ -1,4 +1,5 @@
 """``chuteflow steady``: JSON object, table, one-line errors (issue 2, CLI)."""
+
 from __future__ import annotations
 
 import json
@@ -16,8 +17,23 @@ def test_json_output():
     r = runner.invoke(app, ["steady", "--theta", "16", "--nu0", "0.05", "--json"])
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
-    for k in ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
-              "T_floor", "h", "nu_mean", "rho_bar", "Q", "monotonic", "y_max", "convergence"):
+    for k in (
+        "theta",
+        "nu0",
+        "roughness",
+        "wall_loss",
+        "restitution",
+        "nu_max",
+        "u_floor",
+        "T_floor",
+        "h",
+        "nu_mean",
+        "rho_bar",
+        "Q",
+        "monotonic",
+        "y_max",
+        "convergence",
+    ):
         assert k in d, k
     f = solve_steady(16, 0.05)
     assert d["rho_bar"] == pytest.approx(f.rho_bar, rel=1e-12)
@@ -25,12 +41,31 @@ def test_json_output():
 
 
 def test_model_options_reach_the_solver():
-    r = runner.invoke(app, ["steady", "--theta", "20", "--nu0", "0.1", "--roughness", "0.1",
-                            "--wall-loss", "0.39", "--restitution", "0.7", "--nu-max", "0.6",
-                            "--nu-top", "1e-9", "--json"])
+    r = runner.invoke(
+        app,
+        [
+            "steady",
+            "--theta",
+            "20",
+            "--nu0",
+            "0.1",
+            "--roughness",
+            "0.1",
+            "--wall-loss",
+            "0.39",
+            "--restitution",
+            "0.7",
+            "--nu-max",
+            "0.6",
+            "--nu-top",
+            "1e-9",
+            "--json",
+        ],
+    )
     assert r.exit_code == 0, r.output
     d = json.loads(r.stdout)
     from chuteflow.closures import ChuteModel
+
     f = solve_steady(20, 0.1, ChuteModel(roughness=0.1))
     assert d["roughness"] == 0.1 and d["h"] == pytest.approx(f.h, rel=1e-12)
 
@@ -41,12 +76,15 @@ def test_table_output():
     assert "slip velocity" in r.stdout and "8.19453" in r.stdout
 
 
-@pytest.mark.parametrize("args, words", [
-    (["--theta", "16", "--nu0", "0.7"], ["nu0", "nu_max"]),
-    (["--theta", "-2", "--nu0", "0.05"], ["theta"]),
-    (["--theta", "16", "--nu0", "0.05", "--roughness", "-1"], ["roughness"]),
-    (["--theta", "16", "--nu0", "0.05", "--restitution", "1.5"], ["restitution"]),
-])
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        (["--theta", "16", "--nu0", "0.7"], ["nu0", "nu_max"]),
+        (["--theta", "-2", "--nu0", "0.05"], ["theta"]),
+        (["--theta", "16", "--nu0", "0.05", "--roughness", "-1"], ["roughness"]),
+        (["--theta", "16", "--nu0", "0.05", "--restitution", "1.5"], ["restitution"]),
+    ],
+)
 def test_bad_input_one_line_error(args, words):
     r = runner.invoke(app, ["steady", *args])
     assert r.exit_code == 2

@@ -7,6 +7,7 @@ T0' = 0 on top (eq. (3.13)) and the cold start's u0' = 0 on top by hand from the
 p and μ. That code is kept here, verbatim up to names, as the reference: the derived rows
 must equal it to round-off, and Newton must take the same iterates.
 """
+
 from __future__ import annotations
 
 import math
@@ -36,20 +37,20 @@ def hand_written_rows(newton, st, jac=True):
     mu, p = part["mu"], part["p"]
     if not newton.integrated:
         R[m + n] = u1[n]
-        J[m + n, m:2 * m] = D1[n]
+        J[m + n, m : 2 * m] = D1[n]
         J[m + n, -1] = -R[m + n] / L
         xrows = slice(m + n, m + n + 1)
     else:
-        R[m + 1:m + m] = sc * (mu[(0, 0)][1:] * u1[1:] - tan * p[(0, 0)][1:])
-        Jr = J[m + 1:m + m]
+        R[m + 1 : m + m] = sc * (mu[(0, 0)][1:] * u1[1:] - tan * p[(0, 0)][1:])
+        Jr = J[m + 1 : m + m]
         i = np.arange(n)
-        Jr[:, m:2 * m] = sc * mu[(0, 0)][1:, None] * D1[1:]
+        Jr[:, m : 2 * m] = sc * mu[(0, 0)][1:, None] * D1[1:]
         Jr[i, 1 + i] = sc * nu[1:] * (mu[(1, 0)][1:] * u1[1:] - tan * p[(1, 0)][1:])
         Jr[i, 2 * m + 1 + i] = sc * (mu[(0, 1)][1:] * u1[1:] - tan * p[(0, 1)][1:])
         Jr[:, -1] = -sc * mu[(0, 0)][1:] * u1[1:] / L
         xrows = slice(m + 1, 2 * m)
     R[2 * m + n] = T1[n]
-    J[2 * m + n, 2 * m:3 * m] = D1[n]
+    J[2 * m + n, 2 * m : 3 * m] = D1[n]
     J[2 * m + n, -1] = -R[2 * m + n] / L
     trows = slice(2 * m + n, 2 * m + n + 1)
     return [(xrows, R[xrows], J[xrows]), (trows, R[trows], J[trows])]
@@ -87,8 +88,9 @@ def test_derived_rows_equal_hand_written(theta, nu0, integrated):
         R, J = newton.evaluate(st)
         for rows, r, j in hand_written_rows(newton, st):
             scale_r = max(np.abs(r).max(), 1e-300)
-            assert np.abs(R[rows] - r).max() <= 1e-13 * max(scale_r, np.abs(J[rows]).max()
-                                                            * np.abs(st.pack()).max())
+            assert np.abs(R[rows] - r).max() <= 1e-13 * max(
+                scale_r, np.abs(J[rows]).max() * np.abs(st.pack()).max()
+            )
             for a, b in zip(J[rows], j):
                 assert np.abs(a - b).max() <= 1e-13 * np.abs(b).max(), rows
 
@@ -102,8 +104,9 @@ def test_same_newton_iterates_as_hand_written(theta, nu0):
     out = []
     for cls in (SteadyNewton, _HandWrittenNewton):
         cold = cls(32, theta, nu0, model, 1e-9, integrated=False)
-        st, it0, _, h0 = cold.solve(isothermal_guess(theta, nu0, model, 1e-9, cold.ref),
-                                    tol=1e-9, maxiter=30, lam_min=2.0**-10)
+        st, it0, _, h0 = cold.solve(
+            isothermal_guess(theta, nu0, model, 1e-9, cold.ref), tol=1e-9, maxiter=30, lam_min=2.0**-10
+        )
         polish = cls(32, theta, nu0, model, 1e-9)
         st, it, _, h1 = polish.solve(st, tol=1e-11)
         out.append((st.pack(), it0, it, np.array(h0), np.array(h1)))
@@ -121,14 +124,23 @@ def test_top_condition_is_far_field_at_k_zero():
     far-field conditions û' + |k| û = 0, T̂' + |k| T̂ = 0 at |k| = 0: their residual at a
     state is the top derivative."""
     from chuteflow.equations import TOP_OF, compiled_equations
+
     model = ChuteModel()
     newton = SteadyNewton(32, 16.0, 0.05, model, 1e-9)
     st = isothermal_guess(16.0, 0.05, model, 1e-9, newton.ref)
     st.T = st.T * (1 + 0.1 * newton.ref.y)
     D1 = newton.ref.D / st.L
-    base = {"nu": st.nu, "nu_y": D1 @ st.nu, "nu_yy": D1 @ D1 @ st.nu, "u": st.u,
-            "u_y": D1 @ st.u, "u_yy": D1 @ D1 @ st.u, "T": st.T, "T_y": D1 @ st.T,
-            "T_yy": D1 @ D1 @ st.T}
+    base = {
+        "nu": st.nu,
+        "nu_y": D1 @ st.nu,
+        "nu_yy": D1 @ D1 @ st.nu,
+        "u": st.u,
+        "u_y": D1 @ st.u,
+        "u_yy": D1 @ D1 @ st.u,
+        "T": st.T,
+        "T_y": D1 @ st.T,
+        "T_yy": D1 @ D1 @ st.T,
+    }
     part = model.evaluate(st.nu, st.T)
     th = math.radians(16.0)
     for f in ("u", "T"):

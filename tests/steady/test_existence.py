@@ -6,6 +6,7 @@ with its own trial sequence and classified by the blow-up direction (ERRATA, num
 on shooting: the physical flow is the first hot → cold change of the sign of T0' at the top
 coming down from large u0(0), never the thin cold layer u0(0) → 0).
 """
+
 from __future__ import annotations
 
 import math
@@ -26,8 +27,10 @@ def test_ode_matches_independent_transcription():
     """ν0', u0', T0'' derived from the compiled residuals (equations.py) equal eq:nu0,
     eq:u00, eq:T00 (ERRATA 1) typed independently, and the floor values eq:T0b, eq:dT0b,
     to round-off."""
-    for theta, phi, z in ((16.0, 0.05, [math.log(0.05), 10.0, 3.0, -0.2]),
-                          (22.0, 0.10, [math.log(0.3), 4.0, 0.7, 0.05])):
+    for theta, phi, z in (
+        (16.0, 0.05, [math.log(0.05), 10.0, 3.0, -0.2]),
+        (22.0, 0.10, [math.log(0.3), 4.0, 0.7, 0.05]),
+    ):
         ode = SteadyODE(theta, ChuteModel(roughness=phi))
         mine = ode.rhs(0.0, z)
         theirs = ref._rhs(theta, ref.Material(phi=phi))(0.0, z + [0.0, 0.0])[:4]
@@ -87,8 +90,9 @@ def _points(n, seed=20260909):
     out = []
     for i in range(n):
         phi, (a, b) = (0.05, (12.0, 20.0)) if i % 2 == 0 else (0.10, (15.0, 25.0))
-        out.append((phi, float(rng.uniform(a, b)),
-                    float(math.exp(rng.uniform(math.log(0.008), math.log(0.22))))))
+        out.append(
+            (phi, float(rng.uniform(a, b)), float(math.exp(rng.uniform(math.log(0.008), math.log(0.22)))))
+        )
     return out
 
 

@@ -1,4 +1,5 @@
 """Families at fixed θ and (θ, ν0) maps (§3.2): datasets, continuation, paper checkpoints."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -91,6 +92,7 @@ def test_flux_minimum_at_16_degrees():
     assert 0.15 < r["rho_bar"] < 0.3
     f = solve_steady(16.0, r["nu0"])
     from chuteflow.steady import steady_tangent
+
     assert abs(steady_tangent(f)["dQ_drho"]) < 1e-6
 
 
@@ -131,8 +133,9 @@ def test_map_two_workers_equals_one():
 def test_existence_range_phi005():
     """§3.2: φ = 0.05, solutions for roughly 8° ≲ θ ≲ 20°. Measured: the branches end at
     ≈ 9.3° (ν0(0) = 0.55, h ≪ 1) and ≈ 19.7° (ν0(0) = 0.005, dense band over a hot cushion)."""
-    ds, flows = steady_map(np.arange(8.0, 22.01, 1.0), np.geomspace(0.005, 0.55, 12),
-                           workers=2, return_flows=True)
+    ds, flows = steady_map(
+        np.arange(8.0, 22.01, 1.0), np.geomspace(0.005, 0.55, 12), workers=2, return_flows=True
+    )
     lo = existence_limit(flows, ds, "low")
     hi = existence_limit(flows, ds, "high")
     assert abs(lo["theta"] - 8.0) <= 2.0 and abs(hi["theta"] - 20.0) <= 2.0

@@ -1,4 +1,5 @@
 """Steady figures (figs steadyphase005/010, steady, steady01) draw from computed results."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -24,6 +25,7 @@ def test_phase_figure(tmp_path, small):
 def test_h_nubar_lines_are_the_rows(small):
     """Each θ row of the map is one contour line of θ in the (h, ν̄) plane."""
     import matplotlib.pyplot as plt
+
     mp, _ = small
     ax = plot_h_nubar(mp)
     lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > 1]
@@ -35,6 +37,7 @@ def test_h_nubar_lines_are_the_rows(small):
 
 def test_flux_density_plot(small):
     import matplotlib.pyplot as plt
+
     _, fam = small
     ax = plot_flux_density([fam])
     x, y = ax.get_lines()[0].get_data()

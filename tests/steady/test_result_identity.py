@@ -3,6 +3,7 @@
 No physics numbers: identities of the result object (the solver is deterministic, so the same
 call gives the same arrays bit for bit).
 """
+
 from __future__ import annotations
 
 import dataclasses

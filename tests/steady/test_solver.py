@@ -4,6 +4,7 @@ Tolerances come from the convergence study in ``test_convergence_*`` (changes â‰
 the resolution or tolerance is tightened) and from the agreement with the independent
 shooting solution (â‰² 1e-10 relative, the shooting's own rtol-stability being ~1e-12).
 """
+
 from __future__ import annotations
 
 import math
@@ -103,8 +104,7 @@ def test_against_independent_shooting(p1):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("theta, nu0, phi", [(16.0, 0.10, 0.05), (14.0, 0.08, 0.05),
-                                             (20.0, 0.10, 0.10)])
+@pytest.mark.parametrize("theta, nu0, phi", [(16.0, 0.10, 0.05), (14.0, 0.08, 0.05), (20.0, 0.10, 0.10)])
 def test_against_independent_shooting_more(theta, nu0, phi):
     f = solve_steady(theta, nu0, ChuteModel(roughness=phi))
     s = solve_by_shooting(theta, nu0, Material(phi=phi))
@@ -158,10 +158,20 @@ def test_guess_gives_same_solution(p1):
         assert getattr(c, k) == pytest.approx(getattr(g, k), rel=1e-9), k
 
 
-@pytest.mark.parametrize("theta, nu0, match", [
-    (16.0, 0.6, "nu0"), (16.0, 0.7, "nu0"), (16.0, 0.0, "nu0"), (16.0, -0.1, "nu0"),
-    (0.0, 0.05, "theta"), (-5.0, 0.05, "theta"), (90.0, 0.05, "theta"),
-    (float("nan"), 0.05, "theta"), ("abc", 0.05, "number")])
+@pytest.mark.parametrize(
+    "theta, nu0, match",
+    [
+        (16.0, 0.6, "nu0"),
+        (16.0, 0.7, "nu0"),
+        (16.0, 0.0, "nu0"),
+        (16.0, -0.1, "nu0"),
+        (0.0, 0.05, "theta"),
+        (-5.0, 0.05, "theta"),
+        (90.0, 0.05, "theta"),
+        (float("nan"), 0.05, "theta"),
+        ("abc", 0.05, "number"),
+    ],
+)
 def test_parameter_errors(theta, nu0, match):
     with pytest.raises(ParameterError, match=match):
         solve_steady(theta, nu0)
@@ -224,8 +234,23 @@ def test_fallback_finds_non_monotonic_branch():
 
 def test_summary_and_xarray(p1):
     s = p1.summary()
-    for k in ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "u_floor",
-              "T_floor", "h", "nu_mean", "rho_bar", "Q", "monotonic", "y_max", "convergence"):
+    for k in (
+        "theta",
+        "nu0",
+        "roughness",
+        "wall_loss",
+        "restitution",
+        "nu_max",
+        "u_floor",
+        "T_floor",
+        "h",
+        "nu_mean",
+        "rho_bar",
+        "Q",
+        "monotonic",
+        "y_max",
+        "convergence",
+    ):
         assert k in s
     ds = p1.to_xarray()
     assert ds.sizes["y"] == p1.n + 1 and ds.attrs["roughness"] == 0.05

@@ -1,4 +1,5 @@
 """Point functions used by the sweep tests (importable by test subprocesses too)."""
+
 from __future__ import annotations
 
 import time

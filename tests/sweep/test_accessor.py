@@ -1,5 +1,6 @@
 """The ``ds.chute`` accessor: the dataset-level operations as methods, the same results as the
 free functions, and the model a Dataset was computed with."""
+
 from __future__ import annotations
 
 import json
@@ -45,8 +46,10 @@ def test_model_from_attributes():
 
 def test_agreement_method_and_extension_rule():
     full = _synthetic_ds()
-    red = xr.Dataset({"r1d_unstable": (("theta", "nu0"), full["unstable"].values.copy()),
-                      "h": full["h"]}, coords=full.coords)
+    red = xr.Dataset(
+        {"r1d_unstable": (("theta", "nu0"), full["unstable"].values.copy()), "h": full["h"]},
+        coords=full.coords,
+    )
     red["r1d_unstable"][0, 0] = 1 - red["r1d_unstable"].values[0, 0]
     assert red.chute.agreement(full, h_min=0) == agreement(red, full, h_min=0)
     assert red.chute.agreement(full, h_min=0)["fraction"] == pytest.approx(15 / 16)

@@ -1,5 +1,6 @@
 """Classification: regimes A, B, C from the contour kind, the paper's checks, and the known
 points of §4.2 (P1 unstable in B with k_c ≈ 0.007, P2 and P3 stable, P4 and P5 unstable)."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,21 +19,19 @@ from chuteflow.sweep.classify import REGIMES, regimes
 def test_regimes_from_contour_kind():
     """Rows whose least dense flow gets slower when lighter (dU/dρ̄ ≥ 0) are A-kind; a
     denser-faster unstable region on rows that end in lighter-faster flows is C."""
-    un = np.array([[1, 0, 0, 1],    # A-kind row: A at low density, A at high density too
-                   [1, 0, 0, 0],
-                   [1, 1, 0, 1],    # B at low density; C at the dense end
-                   [1, 0, 1, 1]])
-    dU = np.array([[+2., +1, +1, +1],
-                   [+3., +1, +1, +1],
-                   [-5., -1, +1, +2],
-                   [-6., +1, +1, +2]])
+    un = np.array(
+        [
+            [1, 0, 0, 1],  # A-kind row: A at low density, A at high density too
+            [1, 0, 0, 0],
+            [1, 1, 0, 1],  # B at low density; C at the dense end
+            [1, 0, 1, 1],
+        ]
+    )
+    dU = np.array([[+2.0, +1, +1, +1], [+3.0, +1, +1, +1], [-5.0, -1, +1, +2], [-6.0, +1, +1, +2]])
     h = np.ones((4, 4))
     reg = regimes(un, dU, h, h)
     A, B, C, S = REGIMES["A"], REGIMES["B"], REGIMES["C"], REGIMES["stable"]
-    np.testing.assert_array_equal(reg, [[A, S, S, A],
-                                        [A, S, S, S],
-                                        [B, B, S, C],
-                                        [B, S, C, C]])
+    np.testing.assert_array_equal(reg, [[A, S, S, A], [A, S, S, S], [B, B, S, C], [B, S, C, C]])
     # missing stability → unknown
     un2 = un.copy()
     un2[0, 0] = -1
@@ -44,15 +43,23 @@ def _synthetic_ds():
     nu = np.array([0.02, 0.05, 0.1, 0.2])
     d = ("theta", "nu0")
     T, N = np.meshgrid(th, nu, indexing="ij")
-    a2 = np.array([[5., -1, -1, -1], [3, -1, -1, -1], [50, -1, -1, 9], [80, -1, 7, 9]])
-    dU = np.array([[2., 1, 1, 1], [3, 1, 1, 1], [-5, -1, 1, 2], [-6, 1, 1, 2]])
+    a2 = np.array([[5.0, -1, -1, -1], [3, -1, -1, -1], [50, -1, -1, 9], [80, -1, 7, 9]])
+    dU = np.array([[2.0, 1, 1, 1], [3, 1, 1, 1], [-5, -1, 1, 2], [-6, 1, 1, 2]])
     h = np.where(T < 15, 0.5 + 10 * N, 30 - 80 * N)
     nb = np.where(T < 15, 0.2 * N, 0.5 * N)
     mono = (N < 0.08).astype(np.int8)
-    ds = xr.Dataset({"alpha2_re": (d, a2), "dU_drho": (d, dU), "h": (d, h),
-                     "nu_mean": (d, nb), "monotonic": (d, mono),
-                     "status": (d, np.zeros(T.shape, np.int8))},
-                    coords={"theta": th, "nu0": nu}, attrs={"roughness": 0.05})
+    ds = xr.Dataset(
+        {
+            "alpha2_re": (d, a2),
+            "dU_drho": (d, dU),
+            "h": (d, h),
+            "nu_mean": (d, nb),
+            "monotonic": (d, mono),
+            "status": (d, np.zeros(T.shape, np.int8)),
+        },
+        coords={"theta": th, "nu0": nu},
+        attrs={"roughness": 0.05},
+    )
     return classify(ds)
 
 
@@ -81,8 +88,7 @@ def test_checks_on_a_synthetic_diagram():
 def test_P1_unstable_P3_stable():
     """§4.2, fig disp: along θ = 16°, P1 (ν0 = 0.05) is unstable with the lighter flow faster
     (regime B) and P3 (ν0 = 0.10) is stable (sign of Re α2)."""
-    cfg = SweepConfig(theta=(16.0,), nu0=(0.05, 0.10), metrics=("steady", "kinematic",
-                                                                 "longwave"))
+    cfg = SweepConfig(theta=(16.0,), nu0=(0.05, 0.10), metrics=("steady", "kinematic", "longwave"))
     ds = run_sweep(cfg, workers=1)
     assert list(ds["unstable"].values[0]) == [1, 0]
     assert list(ds["regime"].values[0]) == [REGIMES["B"], REGIMES["stable"]]
@@ -96,8 +102,12 @@ def test_known_points_of_the_paper():
     unstable with the denser flow faster (A, C). Tolerance on k_c: 5 % (the paper quotes one
     digit; the growth metric refines k_c to 1e-6 relative on a converged branch)."""
     metrics = ("steady", "kinematic", "longwave", {"name": "growth", "options": {"stride": 1}})
-    cfg = SweepConfig(theta=(16.0,), nu0=(0.05, 0.08, 0.10), metrics=metrics,
-                      markers=(("P4", 14.0, 0.05), ("P5", 17.0, 0.10)))
+    cfg = SweepConfig(
+        theta=(16.0,),
+        nu0=(0.05, 0.08, 0.10),
+        metrics=metrics,
+        markers=(("P4", 14.0, 0.05), ("P5", 17.0, 0.10)),
+    )
     ds = run_sweep(cfg, workers=1)
     assert (ds["status"].values == STATUS["ok"]).all(), ds["message"].values
     assert list(ds["unstable"].values[0]) == [1, 0, 0]

@@ -1,4 +1,5 @@
 """Diagram figure (grid triangulation) and the ``diagram`` / ``plot`` commands."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -29,35 +30,48 @@ def _synthetic():
     th = np.linspace(14, 17, 6)
     nu = np.linspace(0.1, 0.5, 5)
     T, N = np.meshgrid(th, nu, indexing="ij")
-    h = 3 * (T - 13) / N ** 0.5
+    h = 3 * (T - 13) / N**0.5
     nb = N * 0.5
     st = np.zeros(T.shape, np.int8)
     st[0, 0] = 1
     d = ("theta", "nu0")
-    ds = xr.Dataset({"h": (d, np.where(st == 0, h, np.nan)),
-                     "nu_mean": (d, np.where(st == 0, nb, np.nan)),
-                     "status": (d, st), "monotonic": (d, (N < 0.35).astype(np.int8)),
-                     "unstable": (d, (N < 0.3).astype(np.int8)),
-                     "regime": (d, np.where(N < 0.3, 2, 0).astype(np.int8)),
-                     "finite_k_disagrees": (d, np.zeros(T.shape, np.int8))},
-                    coords={"theta": th, "nu0": nu}, attrs={"roughness": 0.05})
+    ds = xr.Dataset(
+        {
+            "h": (d, np.where(st == 0, h, np.nan)),
+            "nu_mean": (d, np.where(st == 0, nb, np.nan)),
+            "status": (d, st),
+            "monotonic": (d, (N < 0.35).astype(np.int8)),
+            "unstable": (d, (N < 0.3).astype(np.int8)),
+            "regime": (d, np.where(N < 0.3, 2, 0).astype(np.int8)),
+            "finite_k_disagrees": (d, np.zeros(T.shape, np.int8)),
+        },
+        coords={"theta": th, "nu0": nu},
+        attrs={"roughness": 0.05},
+    )
     return ds
 
 
 def test_plot_diagram_draws_unstable_fill():
     import matplotlib.pyplot as plt
+
     ds = _synthetic()
     fig = plot_diagram(ds)
     ax = fig.axes[0]
     # the grey fill covers exactly the mapped region ν0 < 0.3 (ν̄ < 0.15): its vertices
     # stay below the 0.5 level crossing between ν0 = 0.2 and 0.3 (ν̄ = 0.125)
-    fills = [c for c in ax.collections if type(c).__name__ in ("QuadContourSet",
-                                                                 "TriContourSet",
-                                                                 "PathCollection")]
-    verts = np.concatenate([p.vertices for c in ax.collections
-                            if hasattr(c, "get_paths") and c.get_facecolor().size
-                            and np.allclose(c.get_facecolor()[0][:3], 0.72)
-                            for p in c.get_paths()])
+    fills = [
+        c for c in ax.collections if type(c).__name__ in ("QuadContourSet", "TriContourSet", "PathCollection")
+    ]
+    verts = np.concatenate(
+        [
+            p.vertices
+            for c in ax.collections
+            if hasattr(c, "get_paths")
+            and c.get_facecolor().size
+            and np.allclose(c.get_facecolor()[0][:3], 0.72)
+            for p in c.get_paths()
+        ]
+    )
     assert fills and verts[:, 1].max() <= 0.125 + 1e-9
     assert verts[:, 1].min() >= 0.05 - 1e-9
     plt.close(fig)
@@ -65,9 +79,27 @@ def test_plot_diagram_draws_unstable_fill():
 
 def test_cli_diagram_then_plot(tmp_path, capsys):
     out = tmp_path / "d.nc"
-    rc = main(["diagram", "--grid", "2x2", "--theta-range", "15", "16", "--nu0-range", "0.05",
-               "0.06", "--metrics", "steady,kinematic", "--out", str(out), "-j", "1",
-               "--no-progress", "--no-markers"])
+    rc = main(
+        [
+            "diagram",
+            "--grid",
+            "2x2",
+            "--theta-range",
+            "15",
+            "16",
+            "--nu0-range",
+            "0.05",
+            "0.06",
+            "--metrics",
+            "steady,kinematic",
+            "--out",
+            str(out),
+            "-j",
+            "1",
+            "--no-progress",
+            "--no-markers",
+        ]
+    )
     assert rc == 0
     assert out.exists() and out.with_suffix(".png").stat().st_size > 10_000
     ds = load_sweep(out)
@@ -77,9 +109,30 @@ def test_cli_diagram_then_plot(tmp_path, capsys):
     assert png.stat().st_size > 10_000
     # same command: resumes from the final file (nothing recomputed)
     capsys.readouterr()
-    assert main(["diagram", "--grid", "2x2", "--theta-range", "15", "16", "--nu0-range",
-                 "0.05", "0.06", "--metrics", "steady,kinematic", "--out", str(out), "-j",
-                 "1", "--no-progress", "--no-markers"]) == 0
+    assert (
+        main(
+            [
+                "diagram",
+                "--grid",
+                "2x2",
+                "--theta-range",
+                "15",
+                "16",
+                "--nu0-range",
+                "0.05",
+                "0.06",
+                "--metrics",
+                "steady,kinematic",
+                "--out",
+                str(out),
+                "-j",
+                "1",
+                "--no-progress",
+                "--no-markers",
+            ]
+        )
+        == 0
+    )
     assert "0 / 2" in capsys.readouterr().err  # tasks computed / reused
 
 
@@ -89,8 +142,9 @@ def test_cli_errors_are_one_line(tmp_path, capsys):
     assert err.startswith("error: file:") and err.count("\n") == 1
     assert main(["diagram", "--grid", "0x3", "--out", str(tmp_path / "x.nc")]) == 2
     assert "grid" in capsys.readouterr().err
-    assert main(["diagram", "--grid", "2x2", "--nu0-range", "0.05", "0.9",
-                 "--out", str(tmp_path / "y.nc")]) == 2
+    assert (
+        main(["diagram", "--grid", "2x2", "--nu0-range", "0.05", "0.9", "--out", str(tmp_path / "y.nc")]) == 2
+    )
     assert "nu0" in capsys.readouterr().err
 
 

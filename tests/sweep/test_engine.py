@@ -1,4 +1,5 @@
 """Sweep engine: values, per-point status, persistence, resume after SIGKILL, config hashing."""
+
 from __future__ import annotations
 
 import os
@@ -54,8 +55,7 @@ def test_values_equal_direct_solves(tmp_path):
             assert ds["monotonic"].values[i, j] == int(f.monotonic)
     # U = Q0/ρ̄0 and dU/dρ̄0 = (dQ0/dρ̄0 − U)/ρ̄0: identities of the definitions
     np.testing.assert_allclose(ds["U"], ds["Q"] / ds["rho_bar"], rtol=1e-14)
-    np.testing.assert_allclose(ds["dU_drho"], (ds["dQ_drho"] - ds["U"]) / ds["rho_bar"],
-                               rtol=1e-12)
+    np.testing.assert_allclose(ds["dU_drho"], (ds["dQ_drho"] - ds["U"]) / ds["rho_bar"], rtol=1e-12)
     # reference value of the project (θ = 16°, ν0 = 0.05): dQ0/dρ̄0 = 4.1524 (eq:dqdh)
     assert ds["dQ_drho"].sel(theta=16.0, nu0=0.05).item() == pytest.approx(4.1524, rel=1e-4)
 
@@ -64,9 +64,10 @@ def test_point_status_and_messages():
     """No steady flow, a metric that does not converge, one that crashes, and one returning
     an undeclared variable each become the point's status, with a message; the other points
     are unaffected."""
-    metrics = ("steady", {"name": "test_faulty", "options": {"diverge_at": 0.05,
-                                                            "crash_at": 0.06,
-                                                            "undeclared_at": 0.07}})
+    metrics = (
+        "steady",
+        {"name": "test_faulty", "options": {"diverge_at": 0.05, "crash_at": 0.06, "undeclared_at": 0.07}},
+    )
     # θ = 13°, ν0 = 0.1 has h ≈ 2.3: with min_thickness = 3 it is rejected as too thin
     cfg = SweepConfig(theta=(13.0,), nu0=(0.1,), metrics=metrics, min_thickness=3.0)
     ds = run_sweep(cfg, workers=1)
@@ -95,6 +96,7 @@ def test_netcdf_round_trip_with_attrs(tmp_path):
     back = load_sweep(out)
     xr.testing.assert_identical(ds, back)
     from chuteflow import __version__
+
     a = back.attrs
     assert a["chuteflow_version"] == __version__
     assert a["config_digest"] == cfg.digest()
@@ -104,8 +106,7 @@ def test_netcdf_round_trip_with_attrs(tmp_path):
     assert back["theta"].attrs["units"] == "degree"
     assert back["status"].attrs["flag_meanings"] == "ok no_steady_flow not_converged error"
     assert str(back["marker"].values[0]) == "P1"
-    assert back["marker_h"].values[0] == pytest.approx(back["h"].sel(theta=16, nu0=0.05).item(),
-                                                       rel=1e-7)
+    assert back["marker_h"].values[0] == pytest.approx(back["h"].sel(theta=16, nu0=0.05).item(), rel=1e-7)
     assert SweepConfig.from_dict(__import__("json").loads(a["config_json"])) == cfg
     # same command again: the final file is returned, nothing is computed
     sw = Sweep(cfg, out)
@@ -163,8 +164,13 @@ _KILL_SCRIPT = textwrap.dedent("""
 
 
 def _kill_config():
-    return dict(theta=THETA, nu0=NU0, roughness=0.05, chunk=2,
-                metrics=({"name": "test_slow", "options": {"seconds": 0.2}},))
+    return dict(
+        theta=THETA,
+        nu0=NU0,
+        roughness=0.05,
+        chunk=2,
+        metrics=({"name": "test_slow", "options": {"seconds": 0.2}},),
+    )
 
 
 def test_resume_after_sigkill_equals_uninterrupted(tmp_path):
@@ -174,15 +180,19 @@ def test_resume_after_sigkill_equals_uninterrupted(tmp_path):
     kw = _kill_config()
     script = _KILL_SCRIPT.format(src=str(REPO / "src"), repo=str(REPO), cfg=kw, out=str(out))
     env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(REPO / "src"))
-    proc = subprocess.Popen([sys.executable, "-c", script], env=env, start_new_session=True,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script],
+        env=env,
+        start_new_session=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     parts = parts_dir(out)
     ntasks = len(SweepConfig(**kw).tasks())
     t0 = time.monotonic()
     try:
         while time.monotonic() - t0 < 60:
-            done = [p for p in parts.glob("*.npz") if not p.name.startswith(".")] \
-                if parts.exists() else []
+            done = [p for p in parts.glob("*.npz") if not p.name.startswith(".")] if parts.exists() else []
             if len(done) >= 2 or proc.poll() is not None:
                 break
             time.sleep(0.01)
@@ -217,12 +227,33 @@ def test_ctrl_c_then_resume(tmp_path):
     """SIGINT (Ctrl-C) to the process group: the CLI exits 130, keeps the finished parts,
     and the same command completes the sweep."""
     out = tmp_path / "c.nc"
-    args = [sys.executable, "-m", "chuteflow", "diagram", "--grid", "2x6", "--theta-range",
-            "15", "16", "--nu0-range", "0.04", "0.09", "--metrics", "steady,kinematic",
-            "--chunk", "1", "--out", str(out), "-j", "2", "--no-progress"]
+    args = [
+        sys.executable,
+        "-m",
+        "chuteflow",
+        "diagram",
+        "--grid",
+        "2x6",
+        "--theta-range",
+        "15",
+        "16",
+        "--nu0-range",
+        "0.04",
+        "0.09",
+        "--metrics",
+        "steady,kinematic",
+        "--chunk",
+        "1",
+        "--out",
+        str(out),
+        "-j",
+        "2",
+        "--no-progress",
+    ]
     env = dict(os.environ, OMP_NUM_THREADS="1", PYTHONPATH=str(REPO / "src"))
-    proc = subprocess.Popen(args, env=env, start_new_session=True, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
+    proc = subprocess.Popen(
+        args, env=env, start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
     parts = parts_dir(out)
     t0 = time.monotonic()
     while time.monotonic() - t0 < 60 and proc.poll() is None:
@@ -272,14 +303,12 @@ def test_tasks_cover_grid_once_and_hash_is_stable():
     cover = np.zeros(cfg.shape, int)
     for t in cfg.tasks():
         if t.i >= 0:
-            cover[t.i, t.j0:t.j1] += 1
+            cover[t.i, t.j0 : t.j1] += 1
     assert (cover == 1).all()
     assert max(t.size for t in cfg.tasks() if t.i >= 0) <= 3
     assert [t for t in cfg.tasks() if t.i < 0][0].size == 5  # P1–P5 for φ = 0.05
-    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=3,
-                            markers=paper_markers(0.05)).digest() == cfg.digest()
-    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4,
-                            markers=paper_markers(0.05)).digest() != cfg.digest()
+    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=3, markers=paper_markers(0.05)).digest() == cfg.digest()
+    assert SweepConfig.grid(0.05, shape=(3, 7), chunk=4, markers=paper_markers(0.05)).digest() != cfg.digest()
 
 
 def test_steady_family_statuses_map_to_point_status(monkeypatch):
@@ -296,21 +325,31 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
 
     def fake(theta, nu0_values, model, **kw):
         seen.update(kw, theta=theta, nus=list(nu0_values))
-        ds = xr.Dataset({"status": ("nu0", np.array(fam_status)),
-                         "error": ("nu0", np.array([f"why {s}" for s in fam_status]))})
+        ds = xr.Dataset(
+            {
+                "status": ("nu0", np.array(fam_status)),
+                "error": ("nu0", np.array([f"why {s}" for s in fam_status])),
+            }
+        )
         flows = [types.SimpleNamespace(h=1.5) if s == "ok" else None for s in fam_status]
         return ds, flows
 
     monkeypatch.setattr(runner, "steady_family", fake)
-    cfg = SweepConfig(theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},),
-                      min_thickness=0.5, nu_top=1e-10)
+    cfg = SweepConfig(
+        theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},), min_thickness=0.5, nu_top=1e-10
+    )
     ds = run_sweep(cfg, workers=1)
     assert seen["nus"] == list(nus) and seen["theta"] == 16.0
     assert seen["min_thickness"] == 0.5 and seen["nu_top"] == 1e-10
     assert seen["return_flows"] is True
     st, msg = ds["status"].values[0], ds["message"].values[0]
-    assert list(st) == [STATUS["not_converged"], STATUS["no_steady_flow"], STATUS["ok"],
-                        STATUS["no_steady_flow"], STATUS["not_converged"]]
+    assert list(st) == [
+        STATUS["not_converged"],
+        STATUS["no_steady_flow"],
+        STATUS["ok"],
+        STATUS["no_steady_flow"],
+        STATUS["not_converged"],
+    ]
     assert msg[0] == "steady: not attempted: why unreached"
     assert msg[1] == "steady: why no_steady_flow" and msg[2] == ""
     assert ds["twice_h"].values[0, 2] == 3.0 and np.isnan(ds["twice_h"].values[0, [0, 1, 3, 4]]).all()

@@ -1,5 +1,6 @@
 """Sweep outputs get the mode the umask implies (0644 under umask 022), not mkstemp's 0600,
 so that colleagues on a shared cluster can read them."""
+
 from __future__ import annotations
 
 import os
@@ -42,8 +43,7 @@ def test_atomic_files_follow_the_umask(tmp_path, umask):
 def test_sweep_outputs_are_0644_under_umask_022(tmp_path):
     old = os.umask(0o022)
     try:
-        cfg = SweepConfig(theta=THETA[:1], nu0=NU0[:2], roughness=0.05,
-                          metrics=("steady",))
+        cfg = SweepConfig(theta=THETA[:1], nu0=NU0[:2], roughness=0.05, metrics=("steady",))
         out = tmp_path / "d.nc"
         run_sweep(cfg, out=out, workers=1, keep_parts=True)
     finally:

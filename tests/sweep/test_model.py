@@ -5,6 +5,7 @@ Lun–Savage results, and a 1D diagram silently computed with Lun–Savage).
 Reference values are the steady solver's own (``solve_steady`` with the same model), so the
 sweep must reproduce them to the steady solver's tolerance (rtol 1e-8, margin 10).
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -38,7 +39,8 @@ def test_config_holds_the_model():
     kw = SweepConfig(**GRID, radial="carnahan_starling")
     assert kw == cfg and hash(kw) == hash(cfg) and kw.digest() == cfg.digest()
     assert SweepConfig(**GRID, model=CS, roughness=0.1).model == ChuteModel(
-        roughness=0.1, radial="carnahan_starling")
+        roughness=0.1, radial="carnahan_starling"
+    )
     assert resolve_model(CS.to_dict()) == CS
     again = dataclasses.replace(cfg, chunk=1)
     assert again.model == CS and again.chunk == 1 and dataclasses.replace(cfg) == cfg
@@ -57,8 +59,7 @@ def test_closures_change_hash_and_round_trip():
     old.update(roughness=0.05, wall_loss=0.39, restitution=0.7, nu_max=0.6)
     assert SweepConfig.from_dict(old) == a
     g = SweepConfig.grid(shape=(2, 2), model=CS, metrics=("steady",))
-    assert g.model == CS and g.digest() != SweepConfig.grid(shape=(2, 2),
-                                                            metrics=("steady",)).digest()
+    assert g.model == CS and g.digest() != SweepConfig.grid(shape=(2, 2), metrics=("steady",)).digest()
 
 
 def test_sweep_with_carnahan_starling(tmp_path):

@@ -3,6 +3,7 @@ options: one option per :class:`~chuteflow.closures.ChuteModel` field, generated
 fields (defaults, help, and the registered closure names as choices), added to a command by
 :func:`with_model_options`. Generating them imports :mod:`chuteflow.closures` (and so sympy,
 ~0.3 s) at start-up; nothing is derived or compiled until a command runs."""
+
 from __future__ import annotations
 
 import dataclasses
@@ -70,8 +71,9 @@ app = typer.Typer(
 
 @app.callback()
 def _root(
-    version: bool = typer.Option(False, "--version", callback=_version_callback,
-                                 is_eager=True, help="Show the version and exit."),
+    version: bool = typer.Option(
+        False, "--version", callback=_version_callback, is_eager=True, help="Show the version and exit."
+    ),
 ) -> None:
     """chuteflow: steady chute flows, linear stability, stability diagrams."""
 
@@ -88,11 +90,13 @@ _FIELDS = {f.name: f for f in dataclasses.fields(ChuteModel)}
 #: (tests/cli/test_cli.py checks them against ChuteModel()).
 MODEL_OPTIONS: dict[str, tuple[float, str]] = {
     name: (float(_FIELDS[name].default), _FIELDS[name].metadata["help"])  # type: ignore[arg-type]
-    for name in PARAMETERS}
+    for name in PARAMETERS
+}
 #: CLI defaults (registered names), help and choices of the closure fields of ChuteModel.
 CLOSURE_OPTIONS: dict[str, tuple[str, str, type[enum.Enum]]] = {
-    name: (str(reg.spec(_FIELDS[name].default)), _FIELDS[name].metadata["help"],
-           _closure_choices(name)) for name, reg in CLOSURES.items()}
+    name: (str(reg.spec(_FIELDS[name].default)), _FIELDS[name].metadata["help"], _closure_choices(name))
+    for name, reg in CLOSURES.items()
+}
 
 
 def model_option(name: str):
@@ -109,8 +113,7 @@ def model_option(name: str):
 def model_from_options(**values: Any) -> ChuteModel:
     """The ChuteModel of parsed model options (``roughness=…, radial=…``; enum choices are
     taken by value). Raises ParameterError (a one-line CLI error) for bad values."""
-    return ChuteModel(**{k: (v.value if isinstance(v, enum.Enum) else v)
-                         for k, v in values.items()})
+    return ChuteModel(**{k: (v.value if isinstance(v, enum.Enum) else v) for k, v in values.items()})
 
 
 #: Default of the ``model`` parameter of a command decorated with :func:`with_model_options`
@@ -131,15 +134,19 @@ def with_model_options(command: Callable[..., Any]) -> Callable[..., Any]:
         raise TypeError(f"{command.__name__}: with_model_options needs a parameter 'model'")
     i = names.index("model")
     kind = inspect.Parameter.POSITIONAL_OR_KEYWORD
-    options = [inspect.Parameter(name, kind, default=model_option(name),
-                                 annotation=(CLOSURE_OPTIONS[name][2] if name in CLOSURE_OPTIONS
-                                             else float))
-               for name in ChuteModel.__dataclass_fields__]
+    options = [
+        inspect.Parameter(
+            name,
+            kind,
+            default=model_option(name),
+            annotation=(CLOSURE_OPTIONS[name][2] if name in CLOSURE_OPTIONS else float),
+        )
+        for name in ChuteModel.__dataclass_fields__
+    ]
     clash = set(names) & {p.name for p in options}
     if clash:
-        raise TypeError(f"{command.__name__}: parameters {sorted(clash)} clash with the model "
-                        "options")
-    new = params[:i] + options + params[i + 1:]
+        raise TypeError(f"{command.__name__}: parameters {sorted(clash)} clash with the model options")
+    new = params[:i] + options + params[i + 1 :]
 
     @functools.wraps(command)
     def wrapper(**kwargs: Any) -> Any:

@@ -1,4 +1,5 @@
 """``chuteflow reproduce``: run the reproduction stages and write the report."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,17 +12,23 @@ from ._app import app
 
 @app.command("reproduce")
 def reproduce(
-    out: Path = typer.Option(Path("reproduce-out"), "--out", "-o",
-                             help="Output folder for report.md, report.html and figures."),
-    quick: bool = typer.Option(True, "--quick/--full",
-                               help="Quick mode (minutes) or the paper's full resolution."),
-    stage: list[str] | None = typer.Option(None, "--stage", "-s",
-                                           metavar="NAME", help="Run only this stage (repeatable)."),
+    out: Path = typer.Option(
+        Path("reproduce-out"), "--out", "-o", help="Output folder for report.md, report.html and figures."
+    ),
+    quick: bool = typer.Option(
+        True, "--quick/--full", help="Quick mode (minutes) or the paper's full resolution."
+    ),
+    stage: list[str] | None = typer.Option(
+        None, "--stage", "-s", metavar="NAME", help="Run only this stage (repeatable)."
+    ),
     list_stages: bool = typer.Option(False, "--list", help="List the stages and exit."),
     paper: list[str] | None = typer.Option(
-        None, "--paper", "-p", metavar="NAME",
-        help="Reproduce this paper (repeatable; default: mitarai2004). Papers: "
-             + ", ".join(PAPERS) + "."),
+        None,
+        "--paper",
+        "-p",
+        metavar="NAME",
+        help="Reproduce this paper (repeatable; default: mitarai2004). Papers: " + ", ".join(PAPERS) + ".",
+    ),
 ) -> None:
     """Reproduce the papers' results; exit code 1 if any checkpoint fails."""
     from chuteflow.report import load_stages, registered_stages, run_reproduce

@@ -9,6 +9,7 @@ The heat-flux term κ_h ∇ν is neglected, as in the paper (§2.1). A transport
 small frozen class that states f1 … f7 and the transport functions in sympy, given g0(ν)
 from the radial distribution function; register a new one with :func:`register_transport`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -33,13 +34,23 @@ def lun_functions(nu, e, nu_max, g0):
     eta = (1 + e) / 2
     sqpi = sp.sqrt(sp.pi)
     f1 = nu * (1 + 4 * eta * nu * g0)
-    f2 = (5 * sqpi / (96 * eta * (2 - eta)) * (1 + sp.Rational(8, 5) * eta * nu * g0)
-          * (1 / g0 + sp.Rational(8, 5) * eta * (3 * eta - 2) * nu)
-          + 8 / (5 * sqpi) * eta * nu**2 * g0)
+    f2 = (
+        5
+        * sqpi
+        / (96 * eta * (2 - eta))
+        * (1 + sp.Rational(8, 5) * eta * nu * g0)
+        * (1 / g0 + sp.Rational(8, 5) * eta * (3 * eta - 2) * nu)
+        + 8 / (5 * sqpi) * eta * nu**2 * g0
+    )
     f3 = 8 / (3 * sqpi) * eta * nu**2 * g0
-    f4 = (25 * sqpi / (16 * eta * (41 - 33 * eta)) * (1 + sp.Rational(12, 5) * eta * nu * g0)
-          * (1 / g0 + sp.Rational(12, 5) * eta**2 * (4 * eta - 3) * nu)
-          + 4 / sqpi * eta * nu**2 * g0)
+    f4 = (
+        25
+        * sqpi
+        / (16 * eta * (41 - 33 * eta))
+        * (1 + sp.Rational(12, 5) * eta * nu * g0)
+        * (1 / g0 + sp.Rational(12, 5) * eta**2 * (4 * eta - 3) * nu)
+        + 4 / sqpi * eta * nu**2 * g0
+    )
     f5 = 12 / sqpi * nu**2 * g0
     f6 = sp.sqrt(3) * sp.pi * nu * g0 / (2 * nu_max * f4)
     f7 = sp.pi * nu * g0 / (2 * sp.sqrt(3) * nu_max * f2)

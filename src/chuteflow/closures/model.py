@@ -14,6 +14,7 @@ A model is frozen, compares and hashes by value, and round-trips through
 :meth:`ChuteModel.to_dict` / :meth:`ChuteModel.from_dict`; :meth:`ChuteModel.key` is a short
 stable content hash for caches and sweep identity.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -55,9 +56,12 @@ def _compiled(transport: TransportClosure, radial: RadialDistribution, wall: Wal
     (:func:`chuteflow._codegen.cached_lambdify`), so a fresh process loads it instead of
     deriving again.
     """
-    code = cached_lambdify("closure", repr((transport, radial, wall)),
-                           lambda: _derive(transport, radial, wall),
-                           sources=(__name__, transport, radial, wall))
+    code = cached_lambdify(
+        "closure",
+        repr((transport, radial, wall)),
+        lambda: _derive(transport, radial, wall),
+        sources=(__name__, transport, radial, wall),
+    )
     return code["partials"], code["f"], code["g0"], list(code.data)
 
 
@@ -73,9 +77,11 @@ def _derive(transport, radial, wall):
         for i, j in ORDERS:
             flat.append(sp.diff(exprs[name], nu, i, T, j) if (i or j) else exprs[name])
     fflat = [sp.diff(fs[k], nu, n) for k in sorted(fs) for n in range(3)]
-    spec = {"partials": ((nu, T, e, num, phi, phiw), flat),
-            "f": ((nu, e, num), fflat),
-            "g0": ((nu, num), [g0, sp.diff(g0, nu), sp.diff(g0, nu, 2)], False)}
+    spec = {
+        "partials": ((nu, T, e, num, phi, phiw), flat),
+        "f": ((nu, e, num), fflat),
+        "g0": ((nu, num), [g0, sp.diff(g0, nu), sp.diff(g0, nu, 2)], False),
+    }
     return spec, tuple(sorted(fs))
 
 
@@ -122,22 +128,49 @@ class ChuteModel:
     nu_max: float = _param(0.6, "Maximum packing ν_m of g0(ν).", "ν_m")
     roughness: float = _param(0.05, "Floor roughness φ (§2.2).", "φ")
     wall_loss: float = _param(0.39, "Floor energy loss Φ (§2.2).", "Φ")
-    radial: RadialDistribution = field(default=_LUN_SAVAGE, metadata={
-        "help": "Radial distribution function g0(ν) at contact.", "registry": RADIALS})
-    wall: WallCondition = field(default=_JOHNSON_JACKSON, metadata={
-        "help": "Floor (wall) condition.", "registry": WALLS})
-    transport: TransportClosure = field(default=_LUN, metadata={
-        "help": "Kinetic-theory transport closure.", "registry": TRANSPORTS})
+    radial: RadialDistribution = field(
+        default=_LUN_SAVAGE,
+        metadata={"help": "Radial distribution function g0(ν) at contact.", "registry": RADIALS},
+    )
+    wall: WallCondition = field(
+        default=_JOHNSON_JACKSON, metadata={"help": "Floor (wall) condition.", "registry": WALLS}
+    )
+    transport: TransportClosure = field(
+        default=_LUN, metadata={"help": "Kinetic-theory transport closure.", "registry": TRANSPORTS}
+    )
 
     def __post_init__(self):
-        _check("restitution", self.restitution, 0.0, 1.0, lo_open=True,
-               why="e_p is a restitution coefficient (η = (1+e_p)/2 must stay in (1/2, 1])")
-        _check("nu_max", self.nu_max, 0.0, math.pi / math.sqrt(18.0), lo_open=True,
-               why="ν_m is a packing fraction below the close-packing limit π/√18")
-        _check("roughness", self.roughness, 0.0, math.inf, lo_open=True,
-               why="φ is the fraction of slip momentum lost per floor collision")
-        _check("wall_loss", self.wall_loss, 0.0, 1.0,
-               why="Φ is the fraction of fluctuation energy lost per floor collision")
+        _check(
+            "restitution",
+            self.restitution,
+            0.0,
+            1.0,
+            lo_open=True,
+            why="e_p is a restitution coefficient (η = (1+e_p)/2 must stay in (1/2, 1])",
+        )
+        _check(
+            "nu_max",
+            self.nu_max,
+            0.0,
+            math.pi / math.sqrt(18.0),
+            lo_open=True,
+            why="ν_m is a packing fraction below the close-packing limit π/√18",
+        )
+        _check(
+            "roughness",
+            self.roughness,
+            0.0,
+            math.inf,
+            lo_open=True,
+            why="φ is the fraction of slip momentum lost per floor collision",
+        )
+        _check(
+            "wall_loss",
+            self.wall_loss,
+            0.0,
+            1.0,
+            why="Φ is the fraction of fluctuation energy lost per floor collision",
+        )
         for name in PARAMETERS:
             object.__setattr__(self, name, float(getattr(self, name)))
         for name, registry in CLOSURES.items():
@@ -146,8 +179,10 @@ class ChuteModel:
     def __hash__(self) -> int:
         # the closure's type is part of the hash: closures without parameters (LunSavage(),
         # CarnahanStarling()) hash alike by themselves
-        return hash(tuple(getattr(self, n) for n in PARAMETERS)
-                    + tuple((type(getattr(self, n)), getattr(self, n)) for n in CLOSURES))
+        return hash(
+            tuple(getattr(self, n) for n in PARAMETERS)
+            + tuple((type(getattr(self, n)), getattr(self, n)) for n in CLOSURES)
+        )
 
     @property
     def closures(self) -> tuple[TransportClosure, RadialDistribution, WallCondition]:
@@ -196,14 +231,18 @@ class ChuteModel:
 
     def attrs(self) -> dict[str, float | str]:
         """:meth:`to_dict` as NetCDF attributes (a closure with parameters as JSON text)."""
-        return {k: (v if isinstance(v, (int, float, str)) else json.dumps(v, sort_keys=True))
-                for k, v in self.to_dict().items()}
+        return {
+            k: (v if isinstance(v, (int, float, str)) else json.dumps(v, sort_keys=True))
+            for k, v in self.to_dict().items()
+        }
 
     def describe(self) -> str:
         """One line for captions, e.g. ``φ = 0.05, Φ = 0.39, e_p = 0.7, ν_m = 0.6`` followed
         by ``radial carnahan_starling`` etc. for closures other than the defaults."""
-        parts = [f"{_FIELD_BY_NAME[n].metadata['symbol']} = {getattr(self, n):g}"
-                 for n in ("roughness", "wall_loss", "restitution", "nu_max")]
+        parts = [
+            f"{_FIELD_BY_NAME[n].metadata['symbol']} = {getattr(self, n):g}"
+            for n in ("roughness", "wall_loss", "restitution", "nu_max")
+        ]
         for name, reg in CLOSURES.items():
             if getattr(self, name) != _FIELD_BY_NAME[name].default:
                 parts.append(f"{name} {reg.spec(getattr(self, name))}")
@@ -227,10 +266,14 @@ class ChuteModel:
         _, ffun, _, names = _compiled(*self.closures)
         nu = np.asarray(nu, dtype=float)
         flat = ffun(nu, self.restitution, self.nu_max)
-        return {k: (np.broadcast_to(flat[3 * i], nu.shape),
-                    np.broadcast_to(flat[3 * i + 1], nu.shape),
-                    np.broadcast_to(flat[3 * i + 2], nu.shape))
-                for i, k in enumerate(names)}
+        return {
+            k: (
+                np.broadcast_to(flat[3 * i], nu.shape),
+                np.broadcast_to(flat[3 * i + 1], nu.shape),
+                np.broadcast_to(flat[3 * i + 2], nu.shape),
+            )
+            for i, k in enumerate(names)
+        }
 
     def g0(self, nu):
         """g0(ν) with its first and second derivatives."""
@@ -260,5 +303,4 @@ def _check(name, value, lo, hi, *, lo_open=False, why=""):
     if bad:
         lb = "(" if lo_open else "["
         rb = ")" if hi == math.inf else "]"
-        raise ParameterError(f"{name} = {value!r} is outside the allowed range "
-                             f"{lb}{lo:g}, {hi:g}{rb}: {why}")
+        raise ParameterError(f"{name} = {value!r} is outside the allowed range {lb}{lo:g}, {hi:g}{rb}: {why}")

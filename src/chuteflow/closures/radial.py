@@ -4,6 +4,7 @@ A radial distribution function is a small frozen class that returns a sympy expr
 ν and the maximum packing ``nu_max``; everything numeric (values, derivatives) is
 derived from that one expression. Register a new one with :func:`register_radial`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -14,6 +14,7 @@ Each kind of closure (radial distribution g0, wall condition, transport closure)
 after which ``ChuteModel(radial="torquato")``, ``chuteflow steady --radial torquato`` and
 the sweeps know it; nothing else changes.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -55,8 +56,7 @@ class Registry(Generic[T]):
         if not isinstance(name, str) or not name:
             raise TypeError(f"{self.kind}: {cls.__name__} needs a class attribute 'name'")
         if name in self._classes and self._classes[name] is not cls:
-            raise ValueError(f"{self.kind}: the name {name!r} is taken by "
-                             f"{self._classes[name].__name__}")
+            raise ValueError(f"{self.kind}: the name {name!r} is taken by {self._classes[name].__name__}")
         self._classes[name] = cls
         return cls
 
@@ -75,8 +75,9 @@ class Registry(Generic[T]):
         try:
             return self._classes[name]
         except KeyError:
-            raise ParameterError(f"{self.kind}: unknown closure {name!r}; choose one of "
-                                 f"{list(self.names())}") from None
+            raise ParameterError(
+                f"{self.kind}: unknown closure {name!r}; choose one of {list(self.names())}"
+            ) from None
 
     def create(self, spec: Any) -> T:
         """An instance from a name, a ``{"name": ..., **parameters}`` dict or an instance."""
@@ -89,10 +90,13 @@ class Registry(Generic[T]):
             try:
                 return self[spec["name"]](**params)
             except TypeError as exc:
-                raise ParameterError(f"{self.kind}: bad parameters {params!r} for "
-                                     f"{spec['name']!r}: {exc}") from None
-        raise ParameterError(f"{self.kind}: expected a closure name (one of "
-                             f"{list(self.names())}) or a {self.base.__name__}, got {spec!r}")
+                raise ParameterError(
+                    f"{self.kind}: bad parameters {params!r} for {spec['name']!r}: {exc}"
+                ) from None
+        raise ParameterError(
+            f"{self.kind}: expected a closure name (one of "
+            f"{list(self.names())}) or a {self.base.__name__}, got {spec!r}"
+        )
 
     def spec(self, obj: T) -> str | dict[str, Any]:
         """JSON-ready form of ``obj``: its name, or ``{"name", **parameters}`` if it has any.
@@ -101,8 +105,9 @@ class Registry(Generic[T]):
         """
         name = type(obj).name  # type: ignore[attr-defined]
         if self._classes.get(name) is not type(obj):
-            raise ParameterError(f"{self.kind}: {type(obj).__name__} is not registered (use "
-                                 "the registry's register decorator)")
+            raise ParameterError(
+                f"{self.kind}: {type(obj).__name__} is not registered (use the registry's register decorator)"
+            )
         params = {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}  # type: ignore[arg-type]
         return {"name": name, **params} if params else name
 

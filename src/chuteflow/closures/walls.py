@@ -5,6 +5,7 @@ loss Γ*(ν, T) (paper §2.2, "Boundary conditions", where η* and Γ* are defin
 expressions; the floor conditions themselves are stated once in :mod:`chuteflow.equations`.
 Register a new one with :func:`register_wall`.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -16,6 +16,7 @@ Delaunay triangles bridging regions without flows:
 A second panel (optional) shows the same classification on the (θ, ν0) grid, with the points
 where no steady flow was found or a solver did not converge.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -65,8 +66,10 @@ def grid_triangulation(x, y, valid):
         return None
     tris = np.array(tris)
     xf, yf = np.nan_to_num(x.ravel()), np.nan_to_num(y.ravel())
-    area = 0.5 * ((xf[tris[:, 1]] - xf[tris[:, 0]]) * (yf[tris[:, 2]] - yf[tris[:, 0]]) -
-                  (xf[tris[:, 2]] - xf[tris[:, 0]]) * (yf[tris[:, 1]] - yf[tris[:, 0]]))
+    area = 0.5 * (
+        (xf[tris[:, 1]] - xf[tris[:, 0]]) * (yf[tris[:, 2]] - yf[tris[:, 0]])
+        - (xf[tris[:, 2]] - xf[tris[:, 0]]) * (yf[tris[:, 1]] - yf[tris[:, 0]])
+    )
     tris = tris[np.abs(area) > 1e-14 * (np.ptp(xf) * np.ptp(yf) + 1e-300)]
     if len(tris) == 0:
         return None
@@ -75,12 +78,12 @@ def grid_triangulation(x, y, valid):
 
 def _boundary_segments(tri):
     """Edges used by exactly one triangle: the outline of the triangulated domain."""
-    edges = np.sort(np.concatenate([tri.triangles[:, [0, 1]], tri.triangles[:, [1, 2]],
-                                    tri.triangles[:, [2, 0]]]), axis=1)
+    edges = np.sort(
+        np.concatenate([tri.triangles[:, [0, 1]], tri.triangles[:, [1, 2]], tri.triangles[:, [2, 0]]]), axis=1
+    )
     uniq, counts = np.unique(edges, axis=0, return_counts=True)
     b = uniq[counts == 1]
-    return np.stack([np.c_[tri.x[b[:, 0]], tri.y[b[:, 0]]],
-                     np.c_[tri.x[b[:, 1]], tri.y[b[:, 1]]]], axis=1)
+    return np.stack([np.c_[tri.x[b[:, 0]], tri.y[b[:, 0]]], np.c_[tri.x[b[:, 1]], tri.y[b[:, 1]]]], axis=1)
 
 
 def _label_position(x, y, sel, xlim, ylim):
@@ -96,9 +99,16 @@ def _label_position(x, y, sel, xlim, ylim):
     return xs[k], ys[k]
 
 
-def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = None,
-                 nu_max: float | None = None, theta_step: float | None = None,
-                 title: str | None = None):
+def plot_diagram(
+    ds,
+    *,
+    ax=None,
+    grid_panel: bool = True,
+    h_max: float | None = None,
+    nu_max: float | None = None,
+    theta_step: float | None = None,
+    title: str | None = None,
+):
     """Draw the stability diagram of a sweep Dataset.
 
     Parameters
@@ -124,8 +134,7 @@ def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = 
 
     if ax is None:
         if grid_panel:
-            fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12.5, 5.2),
-                                          gridspec_kw={"width_ratios": [1.35, 1]})
+            fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12.5, 5.2), gridspec_kw={"width_ratios": [1.35, 1]})
         else:
             fig, ax = plt.subplots(figsize=(7.2, 5.4))
             ax2 = None
@@ -157,10 +166,8 @@ def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = 
         if "monotonic" in ds:
             mono = ds["monotonic"].values.astype(float).ravel()
             if (mono[ok.ravel()] == 0).any() and (mono[ok.ravel()] == 1).any():
-                ax.tricontour(tri, mono, levels=[0.5], colors="k", linestyles="--",
-                              linewidths=1.3)
-                handles.append(Line2D([], [], color="k", ls="--",
-                                      label="monotonic / non-monotonic ν₀(y)"))
+                ax.tricontour(tri, mono, levels=[0.5], colors="k", linestyles="--", linewidths=1.3)
+                handles.append(Line2D([], [], color="k", ls="--", label="monotonic / non-monotonic ν₀(y)"))
         tf = T.ravel().astype(float)
         step = theta_step or _nice_step(np.ptp(th) / 8 if len(th) > 1 else 1.0)
         lev = np.arange(np.ceil(th.min() / step) * step, th.max() + 1e-9, step)
@@ -170,46 +177,53 @@ def plot_diagram(ds, *, ax=None, grid_panel: bool = True, h_max: float | None = 
             handles.append(Line2D([], [], color="0.35", lw=0.6, label="θ contours"))
         seg = _boundary_segments(tri)
         from matplotlib.collections import LineCollection
+
         ax.add_collection(LineCollection(seg, colors="0.25", linewidths=0.8))
         handles.append(Line2D([], [], color="0.25", lw=0.8, label="edge of swept flows"))
     ax.axvspan(0.0, 1.0, facecolor="none", edgecolor="0.45", hatch="....", lw=0)
-    handles.append(Patch(facecolor="none", edgecolor="0.45", hatch="....",
-                         label="h < 1: not examined"))
+    handles.append(Patch(facecolor="none", edgecolor="0.45", hatch="....", label="h < 1: not examined"))
     if "regime" in ds:
         reg = ds["regime"].values
         for name, code in (("A", 1), ("B", 2), ("C", 3)):
             pos = _label_position(h, nb, (reg == code) & ok, xlim, ylim)
             if pos is not None:
-                ax.text(*pos, name, fontsize=17, fontweight="bold", ha="center", va="center",
-                        color="k", bbox=dict(boxstyle="circle,pad=0.15", fc="white",
-                                             ec="none", alpha=0.65))
+                ax.text(
+                    *pos,
+                    name,
+                    fontsize=17,
+                    fontweight="bold",
+                    ha="center",
+                    va="center",
+                    color="k",
+                    bbox=dict(boxstyle="circle,pad=0.15", fc="white", ec="none", alpha=0.65),
+                )
     if "finite_k_disagrees" in ds:
         bad = (ds["finite_k_disagrees"].values == 1) & ok
         if bad.any():
             ax.plot(h[bad], nb[bad], "x", color="crimson", ms=7, mew=1.6)
-            handles.append(Line2D([], [], marker="x", color="crimson", ls="",
-                                  label="dispersion sample disagrees"))
+            handles.append(
+                Line2D([], [], marker="x", color="crimson", ls="", label="dispersion sample disagrees")
+            )
     if "marker" in ds.dims:
         mh, mn = ds["marker_h"].values, ds["marker_nu_mean"].values
-        mu = ds["marker_unstable"].values if "marker_unstable" in ds else \
-            np.full(len(mh), -1)
+        mu = ds["marker_unstable"].values if "marker_unstable" in ds else np.full(len(mh), -1)
         for name, x, y, uu in zip(ds["marker"].values, mh, mn, mu):
             if not (np.isfinite(x) and np.isfinite(y)):
                 continue
             ax.plot(x, y, "o", ms=6, mec="k", mfc="k" if uu == 1 else "white", zorder=5)
-            ax.annotate(str(name), (x, y), xytext=(4, 4), textcoords="offset points",
-                        fontsize=9, zorder=6)
-        handles.append(Line2D([], [], marker="o", color="k", ls="", mfc="k",
-                              label="marked point, unstable"))
-        handles.append(Line2D([], [], marker="o", color="k", ls="", mfc="white",
-                              label="marked point, stable"))
+            ax.annotate(str(name), (x, y), xytext=(4, 4), textcoords="offset points", fontsize=9, zorder=6)
+        handles.append(Line2D([], [], marker="o", color="k", ls="", mfc="k", label="marked point, unstable"))
+        handles.append(
+            Line2D([], [], marker="o", color="k", ls="", mfc="white", label="marked point, stable")
+        )
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
     ax.set_xlabel("thickness h (particle diameters)")
     ax.set_ylabel("mean density ν̄")
     phi = ds.attrs.get("roughness", float("nan"))
-    ax.set_title(title or f"Stability diagram, φ = {phi:g}" +
-                 ("" if have_stab else " (steady quantities only)"))
+    ax.set_title(
+        title or f"Stability diagram, φ = {phi:g}" + ("" if have_stab else " (steady quantities only)")
+    )
     ax.legend(handles=handles, fontsize=7, loc="upper right", framealpha=0.85)
     if ax2 is not None:
         _grid_panel(ax2, ds)
@@ -229,20 +243,39 @@ def _grid_panel(ax, ds):
     code = np.full(st.shape, 6, dtype=int)
     if "regime" in ds:
         reg = ds["regime"].values
-        code = np.where(reg == 0, 2, np.where(reg == 1, 3, np.where(reg == 2, 4,
-                        np.where(reg == 3, 5, 6))))
-    skipped = (np.char.find(ds["message"].values.astype(str), "not attempted") >= 0
-               if "message" in ds else np.zeros(st.shape, bool))
+        code = np.where(reg == 0, 2, np.where(reg == 1, 3, np.where(reg == 2, 4, np.where(reg == 3, 5, 6))))
+    skipped = (
+        np.char.find(ds["message"].values.astype(str), "not attempted") >= 0
+        if "message" in ds
+        else np.zeros(st.shape, bool)
+    )
     code = np.where(st == 1, 0, np.where(skipped, 7, np.where(st >= 2, 1, code)))
-    colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd",
-               "#f6e0e0"]
-    names = ["no steady flow", "not converged / error", "stable", "A", "B", "C",
-             "steady only", "not attempted"]
-    ax.pcolormesh(_edges(nu), _edges(th), code, cmap=ListedColormap(colours), vmin=-0.5,
-                  vmax=7.5, shading="flat", edgecolors="0.85", linewidth=0.2)
+    colours = ["white", "#e8a0a0", "#f4f4f4", "#9ecae1", "#fdae6b", "#a1d99b", "#dddddd", "#f6e0e0"]
+    names = [
+        "no steady flow",
+        "not converged / error",
+        "stable",
+        "A",
+        "B",
+        "C",
+        "steady only",
+        "not attempted",
+    ]
+    ax.pcolormesh(
+        _edges(nu),
+        _edges(th),
+        code,
+        cmap=ListedColormap(colours),
+        vmin=-0.5,
+        vmax=7.5,
+        shading="flat",
+        edgecolors="0.85",
+        linewidth=0.2,
+    )
     if "monotonic" in ds and len(th) > 1 and len(nu) > 1:
-        mono = np.where((st == 0) & (ds["monotonic"].values >= 0),
-                        ds["monotonic"].values.astype(float), np.nan)
+        mono = np.where(
+            (st == 0) & (ds["monotonic"].values >= 0), ds["monotonic"].values.astype(float), np.nan
+        )
         if (mono == 0).any() and (mono == 1).any():
             ax.contour(nu, th, mono, levels=[0.5], colors="k", linestyles="--", linewidths=1)
     if "finite_k_disagrees" in ds:
@@ -251,14 +284,16 @@ def _grid_panel(ax, ds):
             Ti, Nj = np.meshgrid(th, nu, indexing="ij")
             ax.plot(Nj[bad], Ti[bad], "x", color="crimson", ms=6)
     if "marker" in ds.dims:
-        for name, t, n in zip(ds["marker"].values, ds["marker_theta"].values,
-                              ds["marker_nu0"].values):
+        for name, t, n in zip(ds["marker"].values, ds["marker_theta"].values, ds["marker_nu0"].values):
             ax.plot(n, t, "ko", ms=4)
-            ax.annotate(str(name), (n, t), xytext=(3, 3), textcoords="offset points",
-                        fontsize=8)
+            ax.annotate(str(name), (n, t), xytext=(3, 3), textcoords="offset points", fontsize=8)
     present = sorted(set(np.unique(code)))
-    ax.legend(handles=[Patch(facecolor=colours[c], edgecolor="0.6", label=names[c])
-                       for c in present], fontsize=7, loc="lower right", framealpha=0.9)
+    ax.legend(
+        handles=[Patch(facecolor=colours[c], edgecolor="0.6", label=names[c]) for c in present],
+        fontsize=7,
+        loc="lower right",
+        framealpha=0.9,
+    )
     ax.set_xlabel("floor density ν₀(0)")
     ax.set_ylabel("inclination θ (degrees)")
     ax.set_title("classification on the (θ, ν₀(0)) grid")

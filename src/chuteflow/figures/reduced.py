@@ -8,6 +8,7 @@
 - :func:`plot_spacetime`: ρ̄(x, t) of a simulation, the wave amplitude against the linear
   growth, and late profiles.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -73,14 +74,15 @@ def plot_functions(rm, n: int = 300):
     pad = 0.1 * (ylim[1] - ylim[0] + 1e-12)
     ax.set_ylim(ylim[0] - pad, ylim[1] + pad)
     ax.fill_between(r, *ax.get_ylim(), where=m > 0, color="0.85", label="unstable (eq. 5.13)")
-    ax.fill_between(r, *ax.get_ylim(), where=dP < 0, color="0.6", alpha=0.5,
-                    label="(ρ̄T̄)′ < 0: all k grow")
+    ax.fill_between(r, *ax.get_ylim(), where=dP < 0, color="0.6", alpha=0.5, label="(ρ̄T̄)′ < 0: all k grow")
     ax.set_xlabel("ρ̄")
     ax.legend(fontsize=8)
     phi = rm.model.roughness
-    fig.suptitle(f"1D model functions, θ = {rm.theta:g}°, φ = {phi:g} "
-                 f"(knots: {len(rm.rho)}, interpolation error ≤ "
-                 f"{max(rm.accuracy.get(k, np.nan) for k in ('F', 'Tbar', 'a')):.1e})")
+    fig.suptitle(
+        f"1D model functions, θ = {rm.theta:g}°, φ = {phi:g} "
+        f"(knots: {len(rm.rho)}, interpolation error ≤ "
+        f"{max(rm.accuracy.get(k, np.nan) for k in ('F', 'Tbar', 'a')):.1e})"
+    )
     fig.tight_layout()
     return fig
 
@@ -89,14 +91,15 @@ def _panel(ax, ds, var, title, *, short_var=None, disagree=None):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
-
     h, nb = ds["h"].values, ds["nu_mean"].values
     ok = (ds["status"].values == 0) & np.isfinite(h) & np.isfinite(nb)
     tri = grid_triangulation(h, nb, ok)
     handles = []
     if tri is not None:
-        for name, colour, label in ((var, "0.72", "unstable"),
-                                    (short_var, "0.4", "unstable at every k ((ρ̄T̄)′ < 0)")):
+        for name, colour, label in (
+            (var, "0.72", "unstable"),
+            (short_var, "0.4", "unstable at every k ((ρ̄T̄)′ < 0)"),
+        ):
             if name is None or name not in ds:
                 continue
             u = ds[name].values.astype(float)
@@ -114,8 +117,7 @@ def _panel(ax, ds, var, title, *, short_var=None, disagree=None):
     ax.plot(h[ok], nb[ok], ".", color="0.3", ms=2)
     if disagree is not None and disagree.any():
         ax.plot(h[disagree], nb[disagree], "x", color="crimson", ms=6, mew=1.4)
-        handles.append(Line2D([], [], marker="x", color="crimson", ls="",
-                              label="classified differently"))
+        handles.append(Line2D([], [], marker="x", color="crimson", ls="", label="classified differently"))
     if ok.any():
         ax.set_xlim(0, min(60.0, 1.05 * float(np.nanmax(h[ok]))))
         ax.set_ylim(0, 1.05 * float(np.nanmax(nb[ok])))
@@ -136,13 +138,14 @@ def plot_phase_diagrams(reduced, full=None, *, agreement=None):
     import matplotlib.pyplot as plt
 
     red = list(reduced) if isinstance(reduced, (list, tuple)) else [reduced]
-    fulls = list(full) if isinstance(full, (list, tuple)) else ([full] if full is not None
-                                                               else [])
-    agr = list(agreement) if isinstance(agreement, (list, tuple)) else (
-        [agreement] if agreement is not None else [])
+    fulls = list(full) if isinstance(full, (list, tuple)) else ([full] if full is not None else [])
+    agr = (
+        list(agreement)
+        if isinstance(agreement, (list, tuple))
+        else ([agreement] if agreement is not None else [])
+    )
     rows = 2 if fulls else 1
-    fig, axs = plt.subplots(rows, len(red), figsize=(5.6 * len(red), 4.8 * rows),
-                            squeeze=False)
+    fig, axs = plt.subplots(rows, len(red), figsize=(5.6 * len(red), 4.8 * rows), squeeze=False)
     for c, ds in enumerate(red):
         phi = ds.attrs.get("roughness", float("nan"))
         fds = fulls[c] if c < len(fulls) else None
@@ -153,8 +156,7 @@ def plot_phase_diagrams(reduced, full=None, *, agreement=None):
         if c < len(agr) and agr[c]:
             a = agr[c]
             title += f": {100 * a['fraction']:.0f} % of {a['compared']} points as full model"
-        _panel(axs[0, c], ds, "r1d_unstable", title, short_var="r1d_short_wave",
-               disagree=dis)
+        _panel(axs[0, c], ds, "r1d_unstable", title, short_var="r1d_short_wave", disagree=dis)
         if fds is not None:
             _panel(axs[1, c], fds, "unstable", f"full model (Re α₂ > 0), φ = {phi:g}")
     fig.tight_layout()
@@ -189,9 +191,8 @@ def plot_spacetime(ds, *, profiles: int = 3):
     fig, axs = plt.subplots(1, 3, figsize=(15, 4.8), gridspec_kw={"width_ratios": [1.3, 1, 1]})
     ax = axs[0]
     dev = rho - rho0
-    lim = float(np.nanpercentile(np.abs(dev[-max(len(t) // 5, 1):]), 99.5)) or 1e-12
-    pm = ax.pcolormesh(x, t, dev, shading="auto", cmap="RdBu_r", vmin=-lim, vmax=lim,
-                       rasterized=True)
+    lim = float(np.nanpercentile(np.abs(dev[-max(len(t) // 5, 1) :]), 99.5)) or 1e-12
+    pm = ax.pcolormesh(x, t, dev, shading="auto", cmap="RdBu_r", vmin=-lim, vmax=lim, rasterized=True)
     fig.colorbar(pm, ax=ax, label="ρ̄ − ρ₀")
     c = float(ds.attrs.get("frame_speed", 0.0))
     ax.set_xlabel("x (down the slope, σ)" if c == 0 else f"ξ = x − {c:.3g} t (σ)")
@@ -208,8 +209,7 @@ def plot_spacetime(ds, *, profiles: int = 3):
         ax.semilogy(t, ma[:, n_best], "C0-", lw=1, label=f"|ρ̂| of mode {mode}")
         ref = ma[0, n_best] * np.exp(sigma * t)
         keep = ref < 10 * amp.max()
-        ax.semilogy(t[keep], ref[keep], "C3--", lw=1,
-                    label=f"linear theory, Re α = {sigma:.3g}")
+        ax.semilogy(t[keep], ref[keep], "C3--", lw=1, label=f"linear theory, Re α = {sigma:.3g}")
     ax.set_xlabel("t")
     ax.legend(fontsize=8)
     ax.set_title(f"status: {ds.attrs.get('status', '?')}", fontsize=10)
@@ -222,11 +222,16 @@ def plot_spacetime(ds, *, profiles: int = 3):
     ax.set_ylabel("ρ̄")
     ax.legend(fontsize=8)
     ax.set_title("wave profiles", fontsize=10)
-    fig.suptitle(f"1D model, θ = {ds.attrs['theta']:g}°, φ = {ds.attrs['roughness']:g}, "
-                 f"ρ₀ = {rho0:.4g} (ν₀(0) = {ds.attrs['nu0']:.4g}), L = {ds.attrs['length']:g}, "
-                 f"N = {ds.attrs['n_cells']}; " +
-                 ("(ρ̄T̄)′ < 0: every k grows, no L_c"
-                  if str(ds.attrs.get("short_wave_unstable")) == "True"
-                  else f"L_c = {ds.attrs['L_c']:.4g}"), fontsize=11)
+    fig.suptitle(
+        f"1D model, θ = {ds.attrs['theta']:g}°, φ = {ds.attrs['roughness']:g}, "
+        f"ρ₀ = {rho0:.4g} (ν₀(0) = {ds.attrs['nu0']:.4g}), L = {ds.attrs['length']:g}, "
+        f"N = {ds.attrs['n_cells']}; "
+        + (
+            "(ρ̄T̄)′ < 0: every k grows, no L_c"
+            if str(ds.attrs.get("short_wave_unstable")) == "True"
+            else f"L_c = {ds.attrs['L_c']:.4g}"
+        ),
+        fontsize=11,
+    )
     fig.tight_layout()
     return fig

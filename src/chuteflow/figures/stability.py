@@ -15,6 +15,7 @@
 Plots are drawn on :class:`matplotlib.figure.Figure` objects (no pyplot state), so they can
 be made from worker threads and never leak figures.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,8 +26,15 @@ import numpy as np
 from ..spectral import ChebyshevGrid
 from ..stability.operator import equation_terms
 
-__all__ = ["dispersion_figure", "magnification_figure", "eigenfunction_figure",
-           "eigenfunction_fields", "default_height", "eigenfunction_diagnostics", "point_label"]
+__all__ = [
+    "dispersion_figure",
+    "magnification_figure",
+    "eigenfunction_figure",
+    "eigenfunction_fields",
+    "default_height",
+    "eigenfunction_diagnostics",
+    "point_label",
+]
 
 #: Units of α (time scale sqrt(σ/g)) and k (1/σ), σ the grain diameter.
 _ALPHA_UNIT = r"$(g/\sigma)^{1/2}$"
@@ -69,8 +77,9 @@ def _crossing_marks(ds, k_c):
     return [float(v) for v in vals if np.isfinite(v)]
 
 
-def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int = 150,
-                      k_max: float | None = None):
+def dispersion_figure(
+    panels, path=None, *, title: str | None = None, dpi: int = 150, k_max: float | None = None
+):
     """Dispersion relations α(k) of the least-stable branch (figures 7, 9, 13).
 
     Parameters
@@ -109,25 +118,32 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
         k = k[order]
         re = np.asarray(ds["alpha_re"].values)[order]
         im = np.asarray(ds["alpha_im"].values)[order]
-        phys = (np.asarray(ds["physical"].values, dtype=bool)[order] if "physical" in ds
-                else np.ones(len(k), dtype=bool))
+        phys = (
+            np.asarray(ds["physical"].values, dtype=bool)[order]
+            if "physical" in ds
+            else np.ones(len(k), dtype=bool)
+        )
         a = ds.attrs
-        head = point_label(a.get("theta", math.nan), a.get("nu0", math.nan),
-                           a.get("roughness"))
+        head = point_label(a.get("theta", math.nan), a.get("nu0", math.nan), a.get("roughness"))
         for i, (vals, name) in enumerate(((re, r"Re $\alpha$"), (im, r"Im $\alpha$"))):
             ax = axes[i, j]
             ax.plot(k, vals, "k-", lw=1.2)
             ax.plot(k[phys], vals[phys], "k.", ms=3.5)
             bad = ~phys & np.isfinite(vals)
             if bad.any():
-                ax.plot(k[bad], vals[bad], "rx", ms=5,
-                        label="not converged (drift or tail > 1e-7)")
+                ax.plot(k[bad], vals[bad], "rx", ms=5, label="not converged (drift or tail > 1e-7)")
                 ax.legend(fontsize=7, loc="best")
             if not np.all(np.isfinite(vals)):
                 k_lost = float(k[~np.isfinite(vals)].min())
                 ax.axvspan(k_lost, k.max(), color="mistyrose", zorder=0)
-                ax.annotate(f"branch lost from k = {k_lost:.3g}", (0.98, 0.04),
-                            xycoords="axes fraction", ha="right", fontsize=7, color="red")
+                ax.annotate(
+                    f"branch lost from k = {k_lost:.3g}",
+                    (0.98, 0.04),
+                    xycoords="axes fraction",
+                    ha="right",
+                    fontsize=7,
+                    color="red",
+                )
             ax.axhline(0.0, color="0.5", lw=0.6)
             for kc in marks:
                 ax.axvline(kc, color="0.3", ls=":", lw=1.0)
@@ -135,9 +151,14 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
             ax.ticklabel_format(axis="y", style="sci", scilimits=(-2, 3))
             ax.set_xlim(0.0, k_max or float(k.max()))
         if marks:
-            axes[0, j].annotate(f"$k_c$ = {marks[0]:.4g}", (marks[0], 0.06),
-                                xycoords=axes[0, j].get_xaxis_transform(),
-                                xytext=(4, 0), textcoords="offset points", fontsize=8)
+            axes[0, j].annotate(
+                f"$k_c$ = {marks[0]:.4g}",
+                (marks[0], 0.06),
+                xycoords=axes[0, j].get_xaxis_transform(),
+                xytext=(4, 0),
+                textcoords="offset points",
+                fontsize=8,
+            )
         axes[0, j].set_title(f"({chr(97 + j)}) {label}: {head}", fontsize=9)
         axes[1, j].set_xlabel(f"wavenumber $k$ [{_K_UNIT}]")
         axes[1, j].ticklabel_format(axis="x", style="sci", scilimits=(-2, 3))
@@ -146,9 +167,18 @@ def dispersion_figure(panels, path=None, *, title: str | None = None, dpi: int =
     return _save(fig, path, dpi) if path is not None else fig
 
 
-def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
-                         alpha2_uncertainty: float | None = None, k_mag: float | None = None,
-                         label: str = "", title: str | None = None, dpi: int = 150):
+def magnification_figure(
+    ds,
+    path=None,
+    *,
+    alpha2: complex,
+    dQ_drho: float,
+    alpha2_uncertainty: float | None = None,
+    k_mag: float | None = None,
+    label: str = "",
+    title: str | None = None,
+    dpi: int = 150,
+):
     """The least-stable branch near k = 0 with the long-wave expansion (figure 8).
 
     Parameters
@@ -172,20 +202,32 @@ def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
     im = np.asarray(ds["alpha_im"].values)[order]
     k_mag = float(k_mag or 0.2 * k.max())
     a = ds.attrs
-    head = (f"{label + ': ' if label else ''}"
-            f"{point_label(a.get('theta', math.nan), a.get('nu0', math.nan), a.get('roughness'))}")
+    head = (
+        f"{label + ': ' if label else ''}"
+        f"{point_label(a.get('theta', math.nan), a.get('nu0', math.nan), a.get('roughness'))}"
+    )
     fig = _new_figure(12.0, 3.9)
     ax1, ax2, ax3 = fig.subplots(1, 3)
     lin = k <= k_mag * (1 + 1e-12)
     kk = np.linspace(0.0, k_mag, 200)
     ax1.plot(k[lin], re[lin], "ko-", ms=3, lw=1.0, label=r"Re $\alpha$ (eigenvalue)")
-    ax1.plot(kk, alpha2.real * kk**2, "k--", lw=1.0,
-             label=rf"Re $\alpha_2\,k^2$, Re $\alpha_2$ = {alpha2.real:.4g}")
+    ax1.plot(
+        kk,
+        alpha2.real * kk**2,
+        "k--",
+        lw=1.0,
+        label=rf"Re $\alpha_2\,k^2$, Re $\alpha_2$ = {alpha2.real:.4g}",
+    )
     ax1.set_ylabel(rf"Re $\alpha$ [{_ALPHA_UNIT}]")
     ax1.set_title("(a) growth rate", fontsize=9)
     ax2.plot(k[lin], im[lin], "ko-", ms=3, lw=1.0, label=r"Im $\alpha$ (eigenvalue)")
-    ax2.plot(kk, -dQ_drho * kk, "k--", lw=1.0,
-             label=rf"$-(dQ_0/d\bar\rho_0)\,k$, $dQ_0/d\bar\rho_0$ = {dQ_drho:.5g}")
+    ax2.plot(
+        kk,
+        -dQ_drho * kk,
+        "k--",
+        lw=1.0,
+        label=rf"$-(dQ_0/d\bar\rho_0)\,k$, $dQ_0/d\bar\rho_0$ = {dQ_drho:.5g}",
+    )
     ax2.set_ylabel(rf"Im $\alpha$ [{_ALPHA_UNIT}]")
     ax2.set_title("(b) frequency", fontsize=9)
     for ax in (ax1, ax2):
@@ -195,13 +237,17 @@ def magnification_figure(ds, path=None, *, alpha2: complex, dQ_drho: float,
         ax.ticklabel_format(style="sci", scilimits=(-2, 3))
         ax.legend(fontsize=7, loc="best")
     pos = k > 0
-    ax3.semilogx(k[pos], re[pos] / k[pos] ** 2, "ko-", ms=3, lw=1.0,
-                 label=r"Re $\alpha / k^2$ (eigenvalues)")
+    ax3.semilogx(k[pos], re[pos] / k[pos] ** 2, "ko-", ms=3, lw=1.0, label=r"Re $\alpha / k^2$ (eigenvalues)")
     ax3.axhline(alpha2.real, color="k", ls="--", lw=1.0, label=r"Re $\alpha_2$ (long-wave)")
     if alpha2_uncertainty:
         d = abs(alpha2.real) * alpha2_uncertainty
-        ax3.axhspan(alpha2.real - d, alpha2.real + d, color="0.85", zorder=0,
-                    label=f"± {alpha2_uncertainty:.1%} (convergence of α2)")
+        ax3.axhspan(
+            alpha2.real - d,
+            alpha2.real + d,
+            color="0.85",
+            zorder=0,
+            label=f"± {alpha2_uncertainty:.1%} (convergence of α2)",
+        )
     ax3.axhline(0.0, color="0.5", lw=0.6)
     ax3.set_xlabel(f"$k$ [{_K_UNIT}]")
     ax3.set_ylabel(r"Re $\alpha / k^2$ [$\sigma^{2}\,(g/\sigma)^{1/2}$]")
@@ -216,8 +262,10 @@ def _mode_grid(mode, flow):
 
     g = ChebyshevGrid(mode.n, 0.0, flow.y_max)
     if len(mode.y) != len(g.y) or not np.allclose(mode.y, g.y, rtol=1e-10, atol=1e-10):
-        raise ValueError("mode and flow do not match: the mode's nodes are not the "
-                         "Chebyshev nodes of the flow's domain [0, y_max]")
+        raise ValueError(
+            "mode and flow do not match: the mode's nodes are not the "
+            "Chebyshev nodes of the flow's domain [0, y_max]"
+        )
     return g
 
 
@@ -245,8 +293,9 @@ def default_height(flow, fraction: float = 0.1) -> float:
     return float(y[below[0]]) if len(below) else float(flow.y_max)
 
 
-def eigenfunction_fields(mode, flow, *, y_top: float | None = None, nx: int = 121,
-                         ny: int = 161, x_peak: float = 0.0) -> dict:
+def eigenfunction_fields(
+    mode, flow, *, y_top: float | None = None, nx: int = 121, ny: int = 161, x_peak: float = 0.0
+) -> dict:
     """Perturbation fields over one wavelength, on a regular (x/λ, y) grid.
 
     Parameters
@@ -335,12 +384,17 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
         d = abs(a) * abs(b)
         return float((a * np.conj(b)).real / d) if d > 0 else math.nan
 
-    return {"compression": comp, "vertical_advection": vert,
-            "identity_residual": abs(comp + vert - growth) / scale if scale > 0 else math.nan,
-            "growth_rate": growth, "temperature_density": tnu,
-            "temperature_at_peak": cos(T[j], nu[j]),
-            "floor_velocity_density": cos(u[0], nu[0]), "velocity_density": unu,
-            "y_peak": float(g.y[j])}
+    return {
+        "compression": comp,
+        "vertical_advection": vert,
+        "identity_residual": abs(comp + vert - growth) / scale if scale > 0 else math.nan,
+        "growth_rate": growth,
+        "temperature_density": tnu,
+        "temperature_at_peak": cos(T[j], nu[j]),
+        "floor_velocity_density": cos(u[0], nu[0]),
+        "velocity_density": unu,
+        "y_peak": float(g.y[j]),
+    }
 
 
 def _contour_panel(fig, ax, F, key, cbar_label, levels=15):
@@ -352,6 +406,7 @@ def _contour_panel(fig, ax, F, key, cbar_label, levels=15):
         ax.contour(x, y, Z, levels=[0.0], colors="k", linewidths=0.6, linestyles="--")
     cb = fig.colorbar(cs, ax=ax, shrink=0.9)
     from matplotlib.ticker import MaxNLocator
+
     cb.locator = MaxNLocator(7, symmetric=True)
     cb.update_ticks()
     cb.set_label(cbar_label, fontsize=8)
@@ -379,13 +434,32 @@ def _arrows(ax, F, xlim=(0.0, 1.0), ylim=None, nxq=17, nyq=12):
     # with scale_units="xy" an arrow spans (U, V)/scale data units, i.e. `size`/scale axes
     # fractions at most: make the longest arrow 0.9 of a cell
     scale = size * max(nxq, nyq) / 0.9
-    ax.quiver(x[ix], y[iy], U, V, angles="xy", scale_units="xy", scale=scale,
-              color="tab:red", width=0.004, headwidth=3.5)
+    ax.quiver(
+        x[ix],
+        y[iy],
+        U,
+        V,
+        angles="xy",
+        scale_units="xy",
+        scale=scale,
+        color="tab:red",
+        width=0.004,
+        headwidth=3.5,
+    )
 
 
-def eigenfunction_figure(mode, flow, path=None, *, label: str = "", y_top: float | None = None,
-                         x_peak: float = 0.0, magnify: tuple | None = None,
-                         title: str | None = None, dpi: int = 150):
+def eigenfunction_figure(
+    mode,
+    flow,
+    path=None,
+    *,
+    label: str = "",
+    y_top: float | None = None,
+    x_peak: float = 0.0,
+    magnify: tuple | None = None,
+    title: str | None = None,
+    dpi: int = 150,
+):
     """Eigenfunction over one wavelength (figures 10, 11, 14).
 
     Parameters
@@ -421,29 +495,31 @@ def eigenfunction_figure(mode, flow, path=None, *, label: str = "", y_top: float
     ax_a.set_title(r"(a) density $\nu_1$ and velocity $(u_1, v_1)$", fontsize=9)
     _contour_panel(fig, ax_b, F, "T", r"Re$[\hat T\,e^{ikx}]$ / max$|\hat\nu|$")
     if F["nu"].min() < 0 < F["nu"].max():
-        ax_b.contour(F["x"], F["y"], F["nu"], levels=[0.0], colors="tab:blue",
-                     linewidths=0.8, linestyles=":")
+        ax_b.contour(F["x"], F["y"], F["nu"], levels=[0.0], colors="tab:blue", linewidths=0.8, linestyles=":")
     ax_b.set_title(r"(b) temperature $T_1$ (dotted: $\nu_1 = 0$)", fontsize=9)
     if magnify:
         x0, x1, y0, y1 = (float(v) for v in magnify)
         G = eigenfunction_fields(mode, flow, y_top=y1, x_peak=x_peak, nx=161, ny=121)
         sel_x = (G["x"] >= x0) & (G["x"] <= x1)
         sel_y = G["y"] >= y0
-        H = dict(G, x=G["x"][sel_x], y=G["y"][sel_y],
-                 **{f: G[f][np.ix_(sel_y, sel_x)] for f in mode.fields})
+        H = dict(G, x=G["x"][sel_x], y=G["y"][sel_y], **{f: G[f][np.ix_(sel_y, sel_x)] for f in mode.fields})
         ax_c = axes[2]
         _contour_panel(fig, ax_c, H, "nu", r"Re$[\hat\nu\,e^{ikx}]$ / max$|\hat\nu|$")
-        _arrows(ax_c, H, xlim=(H["x"][0], H["x"][-1]), ylim=(H["y"][0], H["y"][-1]),
-                nxq=11, nyq=9)
-        ax_c.set_title(f"(c) (a) magnified: x/λ ∈ [{x0:g}, {x1:g}], y ∈ [{y0:g}, {y1:g}]",
-                       fontsize=9)
+        _arrows(ax_c, H, xlim=(H["x"][0], H["x"][-1]), ylim=(H["y"][0], H["y"][-1]), nxq=11, nyq=9)
+        ax_c.set_title(f"(c) (a) magnified: x/λ ∈ [{x0:g}, {x1:g}], y ∈ [{y0:g}, {y1:g}]", fontsize=9)
         ax_a.add_patch(_rect(x0, x1, y0, min(y1, F["y"][-1])))
     a = mode.alpha
     lam = 2 * math.pi / mode.k
     head = point_label(mode.theta, mode.nu0, getattr(flow.model, "roughness", None))
-    fig.suptitle(title or (f"{label + ': ' if label else ''}{head}, k = {mode.k:g} "
-                           f"(λ = {lam:.0f}), α = {a.real:.4g} {a.imag:+.4g}i "
-                           f"({'unstable' if a.real > 0 else 'stable'})"), fontsize=10)
+    fig.suptitle(
+        title
+        or (
+            f"{label + ': ' if label else ''}{head}, k = {mode.k:g} "
+            f"(λ = {lam:.0f}), α = {a.real:.4g} {a.imag:+.4g}i "
+            f"({'unstable' if a.real > 0 else 'stable'})"
+        ),
+        fontsize=10,
+    )
     return _save(fig, path, dpi) if path is not None else fig
 
 

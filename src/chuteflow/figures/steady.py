@@ -8,6 +8,7 @@
 - :func:`plot_profiles` — figures 3 / 5: ν0(y), u0(y), T0(y).
 - :func:`steady_phase_figure`, :func:`profiles_figure` — the paper's panel layouts, saved.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -16,8 +17,7 @@ import numpy as np
 
 from .diagram import grid_triangulation
 
-__all__ = ["plot_h_nubar", "plot_flux_density", "plot_profiles", "steady_phase_figure",
-           "profiles_figure"]
+__all__ = ["plot_h_nubar", "plot_flux_density", "plot_profiles", "steady_phase_figure", "profiles_figure"]
 
 _STYLES = ("-", "--", (0, (5, 2)), ":", "-.", (0, (1, 1)))
 
@@ -37,7 +37,6 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
         Upper limit of the h axis (default 50, as far as the paper's figures go).
     """
     import matplotlib.pyplot as plt
-
 
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 4))
@@ -61,14 +60,16 @@ def plot_h_nubar(ds, ax=None, *, label_every: int | None = None, h_max: float | 
         drawn += 1
         if (drawn - 1) % k == 0:
             j = np.nonzero(ok)[0][-1]
-            ax.annotate(f"{th:g}°", (h[i, j], nb[i, j]), fontsize=7, xytext=(2, 2),
-                        textcoords="offset points")
+            ax.annotate(
+                f"{th:g}°", (h[i, j], nb[i, j]), fontsize=7, xytext=(2, 2), textcoords="offset points"
+            )
     ax.set_xlim(0, h_max or 50.0)
     ax.set_ylim(0, min(0.6, float(np.nanmax(nb)) * 1.05) if valid.any() else 0.6)
     ax.set_xlabel("thickness h (σ)")
     ax.set_ylabel("mean density ν̄")
-    ax.set_title(f"φ = {ds.attrs.get('roughness', '?')}: contour lines of θ; grey: "
-                 "non-monotonic ν0", fontsize=8)
+    ax.set_title(
+        f"φ = {ds.attrs.get('roughness', '?')}: contour lines of θ; grey: non-monotonic ν0", fontsize=8
+    )
     return ax
 
 
@@ -89,8 +90,13 @@ def plot_flux_density(families, ax=None, *, minima: dict | None = None):
     for k, fam in enumerate(families):
         ok = fam.status.values == "ok"
         th = float(fam.attrs["theta"])
-        ax.plot(fam.rho_bar.values[ok], fam.Q.values[ok], color="k",
-                linestyle=_STYLES[k % len(_STYLES)], label=f"θ = {th:g}°")
+        ax.plot(
+            fam.rho_bar.values[ok],
+            fam.Q.values[ok],
+            color="k",
+            linestyle=_STYLES[k % len(_STYLES)],
+            label=f"θ = {th:g}°",
+        )
         mn = (minima or {}).get(th)
         if mn:
             ax.plot([mn["rho_bar"]], [mn["Q"]], "ko", ms=4)

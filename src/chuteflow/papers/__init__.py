@@ -16,6 +16,7 @@ except the stage discovery of :mod:`chuteflow.report` and the command line.
 The catalogue of papers (:data:`PAPERS`, :func:`load_paper`) lives in
 :mod:`chuteflow.report.papers` and is re-exported here.
 """
+
 from __future__ import annotations
 
 from ..report.papers import DEFAULT_PAPERS, PAPERS, import_errors, load_paper, register_paper

@@ -13,27 +13,46 @@
   :class:`WaveSolver` (the discrete system) and the wrapper :func:`simulate`: nonlinear
   waves on a periodic slope.
 """
+
 from . import accessor as _accessor  # noqa: F401 - adds ds.chute.agreement
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
 from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
 from .simulate import (
-                       InitialState,
-                       LeaveFamilyStop,
-                       ProgressTracker,
-                       RunInfo,
-                       SaturationStop,
-                       SnapshotTracker,
-                       Step,
-                       Tracker,
-                       WaveSimulation,
-                       WaveSolver,
-                       default_cells,
-                       growth_rate_fit,
-                       simulate,
+    InitialState,
+    LeaveFamilyStop,
+    ProgressTracker,
+    RunInfo,
+    SaturationStop,
+    SnapshotTracker,
+    Step,
+    Tracker,
+    WaveSimulation,
+    WaveSolver,
+    default_cells,
+    growth_rate_fit,
+    simulate,
 )
 
-__all__ = ["LocalCoefficients", "ReducedModel", "local_coefficients", "reduced_model",
-           "WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",
-           "SnapshotTracker", "SaturationStop", "ProgressTracker", "LeaveFamilyStop",
-           "default_cells", "growth_rate_fit", "simulate", "Reduced1D", "agreement",
-           "reduced_diagram", "reduced_diagram_config"]
+__all__ = [
+    "LocalCoefficients",
+    "ReducedModel",
+    "local_coefficients",
+    "reduced_model",
+    "WaveSolver",
+    "WaveSimulation",
+    "InitialState",
+    "RunInfo",
+    "Step",
+    "Tracker",
+    "SnapshotTracker",
+    "SaturationStop",
+    "ProgressTracker",
+    "LeaveFamilyStop",
+    "default_cells",
+    "growth_rate_fit",
+    "simulate",
+    "Reduced1D",
+    "agreement",
+    "reduced_diagram",
+    "reduced_diagram_config",
+]

@@ -1,4 +1,5 @@
 """``ds.chute`` methods that need the reduced 1D model (added to :class:`ChuteAccessor`)."""
+
 from __future__ import annotations
 
 from typing import Any

@@ -6,6 +6,7 @@ tangent (:func:`~chuteflow.reduced.model.local_coefficients`), so the diagram is
 defined here. On the same grid as a full-model sweep the two classifications compare point by
 point (:func:`agreement`).
 """
+
 from __future__ import annotations
 
 import math
@@ -29,8 +30,7 @@ from ..sweep import (
 )
 from .model import local_coefficients
 
-__all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement",
-           "QUICK_SHAPE", "FULL_SHAPE"]
+__all__ = ["Reduced1D", "reduced_diagram_config", "reduced_diagram", "agreement", "QUICK_SHAPE", "FULL_SHAPE"]
 
 #: Grid shapes (n_theta, n_nu0) of the diagrams. The quick shape takes every other point of
 #: the 13 × 13 quick grid of the full-model diagrams, so the two compare point by point.
@@ -49,20 +49,32 @@ class Reduced1D(PointFunction):
     version = "1"
     requires = ("steady",)
     variables = (
-        Variable("r1d_margin", "1", "(ρ0 U')² − (ρ0 T̄)' of the 1D model (> 0: unstable)",
-                 source="eq. (5.13)"),
-        Variable("r1d_unstable", "1", "1D model long-wave unstable, (ρ0U')² > (ρ0T̄)'",
-                 kind="flag", source="eq. (5.13)"),
-        Variable("r1d_short_wave", "1", "(ρ0T̄)' < 0: the 1D model grows at every wavelength",
-                 kind="flag"),
-        Variable("r1d_alpha2", "sigma^(3/2) g^(1/2)", "α2 of the 1D model",
-                 source="eq. (5.14)"),
-        Variable("r1d_k_c", "1/sigma", "critical wavenumber k_c of the 1D model (inf: all k "
-                 "grow, 0: stable)", source="eq. (5.12) (docs/errata.md, item 4)"),
+        Variable(
+            "r1d_margin", "1", "(ρ0 U')² − (ρ0 T̄)' of the 1D model (> 0: unstable)", source="eq. (5.13)"
+        ),
+        Variable(
+            "r1d_unstable",
+            "1",
+            "1D model long-wave unstable, (ρ0U')² > (ρ0T̄)'",
+            kind="flag",
+            source="eq. (5.13)",
+        ),
+        Variable("r1d_short_wave", "1", "(ρ0T̄)' < 0: the 1D model grows at every wavelength", kind="flag"),
+        Variable("r1d_alpha2", "sigma^(3/2) g^(1/2)", "α2 of the 1D model", source="eq. (5.14)"),
+        Variable(
+            "r1d_k_c",
+            "1/sigma",
+            "critical wavenumber k_c of the 1D model (inf: all k grow, 0: stable)",
+            source="eq. (5.12) (docs/errata.md, item 4)",
+        ),
         Variable("r1d_U", "sqrt(g sigma)", "U(ρ0) = ρ0 sinθ / a(ρ0)", source="eq. (5.11)"),
         Variable("r1d_dU", "sqrt(g sigma)/sigma", "U'(ρ0)", source="eq. (5.11)"),
-        Variable("r1d_dq0", "sqrt(g sigma)", "dq0/dρ0 = (ρ0 U)' (the long-wave phase velocity, "
-                 "positive down the slope)", source="eq. (5.14)"),
+        Variable(
+            "r1d_dq0",
+            "sqrt(g sigma)",
+            "dq0/dρ0 = (ρ0 U)' (the long-wave phase velocity, positive down the slope)",
+            source="eq. (5.14)",
+        ),
         Variable("r1d_dP", "g sigma", "(ρ0 T̄)'"),
         Variable("r1d_a", "sqrt(g/sigma)", "floor drag a(ρ0) = η*(F, T̄)", source="eq. (5.11)"),
         Variable("r1d_Tbar", "g sigma", "mean temperature T̄(ρ0)"),
@@ -70,15 +82,32 @@ class Reduced1D(PointFunction):
 
     def compute(self, flow, point):
         c = local_coefficients(flow)
-        return {"r1d_margin": c.criterion_margin, "r1d_unstable": c.unstable,
-                "r1d_short_wave": c.short_wave_unstable, "r1d_alpha2": c.alpha2,
-                "r1d_k_c": c.k_c, "r1d_U": c.U, "r1d_dU": c.dU, "r1d_dq0": c.dq0,
-                "r1d_dP": c.dP, "r1d_a": c.a, "r1d_Tbar": c.Tbar}
+        return {
+            "r1d_margin": c.criterion_margin,
+            "r1d_unstable": c.unstable,
+            "r1d_short_wave": c.short_wave_unstable,
+            "r1d_alpha2": c.alpha2,
+            "r1d_k_c": c.k_c,
+            "r1d_U": c.U,
+            "r1d_dU": c.dU,
+            "r1d_dq0": c.dq0,
+            "r1d_dP": c.dP,
+            "r1d_a": c.a,
+            "r1d_Tbar": c.Tbar,
+        }
 
 
-def reduced_diagram_config(roughness: float | None = None, *, shape=QUICK_SHAPE,
-                           theta_range=None, nu0_range=None, grid=None, full: bool = False,
-                           model=None, **kw) -> SweepConfig:
+def reduced_diagram_config(
+    roughness: float | None = None,
+    *,
+    shape=QUICK_SHAPE,
+    theta_range=None,
+    nu0_range=None,
+    grid=None,
+    full: bool = False,
+    model=None,
+    **kw,
+) -> SweepConfig:
     """Sweep configuration of a 1D diagram (``full=True``: with the full model's long-wave
     stability too, for a point-by-point comparison on the same grid).
 
@@ -93,16 +122,35 @@ def reduced_diagram_config(roughness: float | None = None, *, shape=QUICK_SHAPE,
     kw.setdefault("markers", ())
     if grid is not None:
         th, nu = (tuple(float(v) for v in np.asarray(g, dtype=float).ravel()) for g in grid)
-        return SweepConfig(theta=th, nu0=nu, model=resolve_model(model, roughness=roughness),
-                           metrics=tuple(metrics), **kw)
-    return SweepConfig.grid(roughness, shape=tuple(shape), theta_range=theta_range,
-                            nu0_range=nu0_range, model=model, metrics=tuple(metrics), **kw)
+        return SweepConfig(
+            theta=th, nu0=nu, model=resolve_model(model, roughness=roughness), metrics=tuple(metrics), **kw
+        )
+    return SweepConfig.grid(
+        roughness,
+        shape=tuple(shape),
+        theta_range=theta_range,
+        nu0_range=nu0_range,
+        model=model,
+        metrics=tuple(metrics),
+        **kw,
+    )
 
 
-def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_range=None,
-                    nu0_range=None, grid=None, engine: str = "sweep", out=None,
-                    workers: int | None = 1, progress=None, full: bool = False, model=None,
-                    fresh: bool = False):
+def reduced_diagram(
+    roughness: float | None = None,
+    *,
+    shape=QUICK_SHAPE,
+    theta_range=None,
+    nu0_range=None,
+    grid=None,
+    engine: str = "sweep",
+    out=None,
+    workers: int | None = 1,
+    progress=None,
+    full: bool = False,
+    model=None,
+    fresh: bool = False,
+):
     """The 1D model's stability over a (θ, ν0(0)) grid (figure 15), as a Dataset.
 
     Parameters
@@ -148,21 +196,19 @@ def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_
     if engine not in ("sweep", "walk"):
         raise ParameterError(f"engine = {engine!r}: choose 'sweep' or 'walk'")
     if full and engine != "sweep":
-        raise ParameterError("full = True needs engine = 'sweep' (the full model's stability "
-                             "is a sweep metric)")
+        raise ParameterError(
+            "full = True needs engine = 'sweep' (the full model's stability is a sweep metric)"
+        )
     if model is None:
         model = ChuteModel() if roughness is None else ChuteModel(roughness=roughness)
     if roughness is None:
         roughness = model.roughness
     if not math.isclose(model.roughness, roughness):
-        raise ParameterError(f"model.roughness = {model.roughness:g} differs from roughness = "
-                             f"{roughness:g}")
+        raise ParameterError(f"model.roughness = {model.roughness:g} differs from roughness = {roughness:g}")
     if grid is not None:
         thetas, nus = (np.asarray(g, dtype=float).ravel() for g in grid)
-        if (len(thetas) < 1 or len(nus) < 2 or np.any(np.diff(thetas) <= 0)
-                or np.any(np.diff(nus) <= 0)):
-            raise ParameterError("grid: need increasing theta values and at least two "
-                                 "increasing nu0 values")
+        if len(thetas) < 1 or len(nus) < 2 or np.any(np.diff(thetas) <= 0) or np.any(np.diff(nus) <= 0):
+            raise ParameterError("grid: need increasing theta values and at least two increasing nu0 values")
         tr, nr = (thetas[0], thetas[-1]), (nus[0], nus[-1])
     else:
         dt, dn = default_ranges(roughness)
@@ -172,13 +218,14 @@ def reduced_diagram(roughness: float | None = None, *, shape=QUICK_SHAPE, theta_
         if nt < 1 or nn < 2:
             raise ParameterError(f"shape = {shape!r}: need n_theta >= 1 and n_nu0 >= 2")
     if not (0 < tr[0] <= tr[1] < 90 and 0 < nr[0] < nr[1] < model.nu_max):
-        raise ParameterError(f"theta_range = {tr!r}, nu0_range = {nr!r}: need 0 < theta < 90 "
-                             f"degrees and 0 < nu0 < nu_max = {model.nu_max:g}, low < high")
+        raise ParameterError(
+            f"theta_range = {tr!r}, nu0_range = {nr!r}: need 0 < theta < 90 "
+            f"degrees and 0 < nu0 < nu_max = {model.nu_max:g}, low < high"
+        )
     if grid is None:
         thetas = np.round(np.linspace(tr[0], tr[1], nt), 12)
         nus = np.round(np.linspace(nr[0], nr[1], nn), 12)
     if engine == "sweep":
-
         cfg = reduced_diagram_config(grid=(thetas, nus), full=full, model=model)
         ds = run_sweep(cfg, out, workers=workers, progress=progress or False, fresh=fresh)
         return classify(ds) if full else ds
@@ -195,8 +242,7 @@ def _solve_from(theta, nu0, model, guess):
         if guess is None:
             return solve_steady(theta, nu0, model, continuation=False)
         return solve_steady(theta, nu0, model, guess=guess, continuation=False)
-    except (NoSteadyFlowError, ConvergenceError, ArithmeticError, ValueError,
-            np.linalg.LinAlgError):
+    except (NoSteadyFlowError, ConvergenceError, ArithmeticError, ValueError, np.linalg.LinAlgError):
         return None
 
 
@@ -278,11 +324,11 @@ def _walk_grid(thetas, nus, model, progress):
 def _dataset(thetas, nus, flows, model):
     import xarray as xr
 
-
     nt, nn = len(thetas), len(nus)
     fl = {v.name: np.full((nt, nn), v.missing, dtype=v.dtype) for v in Reduced1D.variables}
-    base = {k: np.full((nt, nn), np.nan) for k in ("h", "nu_mean", "rho_bar", "Q", "T_mean",
-                                                     "u_floor", "T_floor")}
+    base = {
+        k: np.full((nt, nn), np.nan) for k in ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor")
+    }
     mono = np.full((nt, nn), -1, dtype=np.int8)
     status = np.ones((nt, nn), dtype=np.int8)
     fn = Reduced1D()
@@ -299,30 +345,52 @@ def _dataset(thetas, nus, flows, model):
                 fl[v][i, j] = val
     var = {v.name: v for v in Reduced1D.variables}
     data = {k: (("theta", "nu0"), a, var[k].attrs()) for k, a in fl.items()}
-    names = {"h": ("thickness h", "sigma"), "nu_mean": ("mean density ν̄", "1"),
-             "rho_bar": ("one-dimensional density ρ̄0", "sigma"), "Q": ("flux Q0", "sigma^2"),
-             "T_mean": ("mean temperature T̄0", "g sigma"),
-             "u_floor": ("slip velocity u0(0)", "sqrt(g sigma)"),
-             "T_floor": ("floor temperature T0(0)", "g sigma")}
+    names = {
+        "h": ("thickness h", "sigma"),
+        "nu_mean": ("mean density ν̄", "1"),
+        "rho_bar": ("one-dimensional density ρ̄0", "sigma"),
+        "Q": ("flux Q0", "sigma^2"),
+        "T_mean": ("mean temperature T̄0", "g sigma"),
+        "u_floor": ("slip velocity u0(0)", "sqrt(g sigma)"),
+        "T_floor": ("floor temperature T0(0)", "g sigma"),
+    }
     for k, a in base.items():
         data[k] = (("theta", "nu0"), a, {"long_name": names[k][0], "units": names[k][1]})
-    data["monotonic"] = (("theta", "nu0"), mono, {
-        "long_name": "ν0 decreases monotonically from the floor", "units": "1",
-        "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-        "flag_meanings": "missing false true"})
-    data["status"] = (("theta", "nu0"), status, {
-        "long_name": "0: steady flow; 1: none found (outside the existence band, or beyond "
-                     "the first failure of the continuation along ν0)",
-        "flag_values": np.array([0, 1], dtype=np.int8),
-        "flag_meanings": "ok no_steady_flow"})
+    data["monotonic"] = (
+        ("theta", "nu0"),
+        mono,
+        {
+            "long_name": "ν0 decreases monotonically from the floor",
+            "units": "1",
+            "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+            "flag_meanings": "missing false true",
+        },
+    )
+    data["status"] = (
+        ("theta", "nu0"),
+        status,
+        {
+            "long_name": "0: steady flow; 1: none found (outside the existence band, or beyond "
+            "the first failure of the continuation along ν0)",
+            "flag_values": np.array([0, 1], dtype=np.int8),
+            "flag_meanings": "ok no_steady_flow",
+        },
+    )
     attrs = dict(model.attrs())
-    attrs.update(model_key=model.key(),
-                 title="1D model stability diagram (Mitarai & Nakanishi figure 15)",
-                 engine="walk", chuteflow_version=__version__)
-    return xr.Dataset(data, coords={
-        "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),
-        "nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"})},
-        attrs=attrs)
+    attrs.update(
+        model_key=model.key(),
+        title="1D model stability diagram (Mitarai & Nakanishi figure 15)",
+        engine="walk",
+        chuteflow_version=__version__,
+    )
+    return xr.Dataset(
+        data,
+        coords={
+            "theta": ("theta", thetas, {"long_name": "inclination θ", "units": "degree"}),
+            "nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"}),
+        },
+        attrs=attrs,
+    )
 
 
 def _grid_match(a, b):
@@ -354,20 +422,25 @@ def agreement(reduced_ds, full_ds, *, full_var: str = "unstable", h_min: float =
         ``thin_excluded`` (points left out for h < ``h_min``).
     """
     if "r1d_unstable" not in reduced_ds:
-        raise ParameterError("reduced_ds: no variable 'r1d_unstable' (a 1D diagram from "
-                             "chuteflow.reduced.reduced_diagram)")
+        raise ParameterError(
+            "reduced_ds: no variable 'r1d_unstable' (a 1D diagram from chuteflow.reduced.reduced_diagram)"
+        )
     if full_var not in full_ds:
-        raise ParameterError(f"full_ds: no variable {full_var!r}; run chuteflow.sweep.classify "
-                             "on a sweep with the 'longwave' metric, or name the variable")
+        raise ParameterError(
+            f"full_ds: no variable {full_var!r}; run chuteflow.sweep.classify "
+            "on a sweep with the 'longwave' metric, or name the variable"
+        )
     ii = _grid_match(reduced_ds["theta"].values, full_ds["theta"].values)
     jj = _grid_match(reduced_ds["nu0"].values, full_ds["nu0"].values)
     if ii is None or jj is None:
-        raise ParameterError("agreement: the 1D grid is not a sub-grid of the full model's "
-                             "(theta, nu0) grid")
+        raise ParameterError("agreement: the 1D grid is not a sub-grid of the full model's (theta, nu0) grid")
     r = reduced_ds["r1d_unstable"].values.astype(float)
     f = full_ds[full_var].values.astype(float)[np.ix_(ii, jj)]
-    sw = reduced_ds["r1d_short_wave"].values.astype(float) if "r1d_short_wave" in reduced_ds \
+    sw = (
+        reduced_ds["r1d_short_wave"].values.astype(float)
+        if "r1d_short_wave" in reduced_ds
         else np.zeros_like(r)
+    )
     known = (r >= 0) & np.isfinite(r) & (f >= 0) & np.isfinite(f)
     thin = np.zeros_like(known)
     if h_min > 0 and "h" in reduced_ds:
@@ -377,8 +450,14 @@ def agreement(reduced_ds, full_ds, *, full_var: str = "unstable", h_min: float =
     rb, fb = r[known] == 1, f[known] == 1
     n = int(known.sum())
     agree = int((rb == fb).sum())
-    return {"fraction": agree / n if n else math.nan, "compared": n, "agree": agree,
-            "both_unstable": int((rb & fb).sum()), "both_stable": int((~rb & ~fb).sum()),
-            "only_1d_unstable": int((rb & ~fb).sum()),
-            "only_full_unstable": int((~rb & fb).sum()),
-            "short_wave": int((sw[known] == 1).sum()), "thin_excluded": int(thin.sum())}
+    return {
+        "fraction": agree / n if n else math.nan,
+        "compared": n,
+        "agree": agree,
+        "both_unstable": int((rb & fb).sum()),
+        "both_stable": int((~rb & ~fb).sum()),
+        "only_1d_unstable": int((rb & ~fb).sum()),
+        "only_full_unstable": int((~rb & fb).sum()),
+        "short_wave": int((sw[known] == 1).sum()),
+        "thin_excluded": int(thin.sum()),
+    }

@@ -32,6 +32,7 @@ Every numeric function takes the closure values as an object with attributes ``T
 :class:`~chuteflow.reduced.LocalCoefficients`); an attribute an expression does not use may
 be ``None``.
 """
+
 from __future__ import annotations
 
 import functools
@@ -41,10 +42,22 @@ from typing import Any, NamedTuple
 import numpy as np
 import sympy as sp
 
-__all__ = ["ClosureValues", "derivation", "MASS_FLUX", "MOMENTUM_FLUX", "SOURCE", "VISCOSITY",
-           "momentum_flux", "source", "flux_partials", "source_partials", "uniform_state",
-           "viscosity",
-           "linear_matrix", "dispersion_coefficients"]
+__all__ = [
+    "ClosureValues",
+    "derivation",
+    "MASS_FLUX",
+    "MOMENTUM_FLUX",
+    "SOURCE",
+    "VISCOSITY",
+    "momentum_flux",
+    "source",
+    "flux_partials",
+    "source_partials",
+    "uniform_state",
+    "viscosity",
+    "linear_matrix",
+    "dispersion_coefficients",
+]
 
 # -- the statement ------------------------------------------------------------------------
 RHO, U, UX = sp.symbols("rho u u_x", real=True)
@@ -116,8 +129,7 @@ def derivation() -> dict:
     (u0,) = sp.solve(sp.Eq(s, 0), U)
     pressure = fm.subs({U: 0, UX: 0})
     q0 = MASS_FLUX.subs(U, u0)
-    out["uniform"] = [u0, sp.diff(u0, RHO), pressure, sp.diff(pressure, RHO), q0,
-                      sp.diff(q0, RHO)]
+    out["uniform"] = [u0, sp.diff(u0, RHO), pressure, sp.diff(pressure, RHO), q0, sp.diff(q0, RHO)]
     # linearisation about (ρ0, U0, ∂x ū = 0) for exp(αt + ikx) in (ρ̂, û)
     rh, uh = sp.symbols("rho_hat u_hat")
 
@@ -141,12 +153,14 @@ def derivation() -> dict:
 def _derived():
     """Lambdify (once per process) everything :func:`derivation` gives."""
     d = derivation()
-    out = {name: _lambdify(d[name]) for name in ("flux", "source", "flux_partials",
-                                                 "source_partials", "uniform")}
+    out = {
+        name: _lambdify(d[name]) for name in ("flux", "source", "flux_partials", "source_partials", "uniform")
+    }
     for name in ("matrix", "quadratic"):
         out[name] = _lambdify(d[name], extra=(K, U0))
-    out["viscosity"] = sp.lambdify((_TB, COS_THETA, F2_0), [VISCOSITY, sp.diff(VISCOSITY, _TB)],
-                                   modules="numpy")
+    out["viscosity"] = sp.lambdify(
+        (_TB, COS_THETA, F2_0), [VISCOSITY, sp.diff(VISCOSITY, _TB)], modules="numpy"
+    )
     return out
 
 

@@ -19,6 +19,7 @@ family tangent; :class:`ReducedModel` holds F, T̄, a as smooth functions of ρ�
 family (piecewise Hermite cubics through solved flows, with exact slopes from the tangent)
 with their interpolation error measured against direct solves.
 """
+
 from __future__ import annotations
 
 import functools
@@ -35,8 +36,7 @@ from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..steady import SteadyFlow, solve_steady, steady_tangent
 from . import equations as eq
 
-__all__ = ["LocalCoefficients", "local_coefficients", "ReducedModel", "reduced_model",
-           "mu_bar_prefactor"]
+__all__ = ["LocalCoefficients", "local_coefficients", "ReducedModel", "reduced_model", "mu_bar_prefactor"]
 
 
 def _f2_0(model: ChuteModel) -> float:
@@ -239,19 +239,48 @@ class LocalCoefficients:
         from scipy.optimize import minimize_scalar
 
         kc = self.k_c
-        res = minimize_scalar(lambda x: -float(self.growth_rate(x * kc)), bounds=(1e-6, 1.0),
-                              method="bounded", options={"xatol": 1e-10})
+        res = minimize_scalar(
+            lambda x: -float(self.growth_rate(x * kc)),
+            bounds=(1e-6, 1.0),
+            method="bounded",
+            options={"xatol": 1e-10},
+        )
         return float(res.x * kc), float(-res.fun)
 
     def summary(self) -> dict:
         """JSON-ready dict of the coefficients and the linear theory."""
         kmax, smax = self.most_unstable()
-        d = {k: float(getattr(self, k)) for k in (
-            "theta", "rho0", "F", "dF", "Tbar", "dTbar", "a", "da", "U", "dU", "P", "dP",
-            "mu_bar", "q0", "dq0", "criterion_margin", "alpha2", "phase_velocity", "k_c",
-            "L_c")}
-        d.update(unstable=bool(self.unstable), short_wave_unstable=bool(self.short_wave_unstable),
-                 k_max=kmax, growth_max=smax)
+        d = {
+            k: float(getattr(self, k))
+            for k in (
+                "theta",
+                "rho0",
+                "F",
+                "dF",
+                "Tbar",
+                "dTbar",
+                "a",
+                "da",
+                "U",
+                "dU",
+                "P",
+                "dP",
+                "mu_bar",
+                "q0",
+                "dq0",
+                "criterion_margin",
+                "alpha2",
+                "phase_velocity",
+                "k_c",
+                "L_c",
+            )
+        }
+        d.update(
+            unstable=bool(self.unstable),
+            short_wave_unstable=bool(self.short_wave_unstable),
+            k_max=kmax,
+            growth_max=smax,
+        )
         return d
 
 
@@ -269,7 +298,8 @@ def local_coefficients(flow: SteadyFlow, tangent: dict | None = None) -> LocalCo
         raise NoSteadyFlowError(
             f"rho_bar does not increase with nu0 at theta = {flow.theta:g}, nu0 = {flow.nu0:g} "
             f"(d rho_bar/d nu0 = {drho:.3g}): F(rho_bar) is not single-valued here, so the "
-            "1D model (§5.1.2) is undefined")
+            "1D model (§5.1.2) is undefined"
+        )
     beta, T = flow.nu0, flow.T_mean
     dT = float(tangent["dT_mean"]) / drho
     eta = model.evaluate(beta, T)["eta_star"]
@@ -277,13 +307,24 @@ def local_coefficients(flow: SteadyFlow, tangent: dict | None = None) -> LocalCo
     dF = 1.0 / drho
     da = float(eta[(1, 0)]) * dF + float(eta[(0, 1)]) * dT
     mu, dmu = eq.viscosity(T, dT, flow.theta, _f2_0(model))
-    return LocalCoefficients(theta=flow.theta, rho0=flow.rho_bar, F=beta, dF=dF, Tbar=T,
-                             dTbar=dT, a=a, da=da, mu_bar=float(mu), dmu_bar=float(dmu))
+    return LocalCoefficients(
+        theta=flow.theta,
+        rho0=flow.rho_bar,
+        F=beta,
+        dF=dF,
+        Tbar=T,
+        dTbar=dT,
+        a=a,
+        da=da,
+        mu_bar=float(mu),
+        dmu_bar=float(dmu),
+    )
 
 
 # ---------------------------------------------------------------------------------------
 # The family as smooth functions of ρ̄
 # ---------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class _Knot:
@@ -345,14 +386,16 @@ class ReducedModel:
     def _check(self, rho) -> np.ndarray:
         rho = np.asarray(rho, dtype=float)
         lo, hi = self.rho_range
-        if rho.size and (not np.isfinite(rho).all() or rho.min() < lo * (1 - 1e-12)
-                         or rho.max() > hi * (1 + 1e-12)):
+        if rho.size and (
+            not np.isfinite(rho).all() or rho.min() < lo * (1 - 1e-12) or rho.max() > hi * (1 + 1e-12)
+        ):
             bad = rho[~np.isfinite(rho) | (rho < lo) | (rho > hi)]
             raise NoSteadyFlowError(
                 f"rho_bar = {float(bad.flat[0]):.4g} is outside [{lo:.4g}, {hi:.4g}], the range "
                 f"of the steady family at theta = {self.theta:g} deg (roughness = "
                 f"{self.model.roughness:g}) on which F and T̄ of the 1D model are defined "
-                f"(family ends: {self.ends[0]} / {self.ends[1]})")
+                f"(family ends: {self.ends[0]} / {self.ends[1]})"
+            )
         return rho
 
     def _eval(self, name, rho, nu):
@@ -393,8 +436,7 @@ class ReducedModel:
         """T̄, a, μ̄ and their ρ̄-slopes at ``rho`` (values for :mod:`.equations`)."""
         T, dT = self.Tbar(rho), self.Tbar(rho, 1)
         mu, dmu = eq.viscosity(T, dT, self.theta, self.f2_0)
-        return eq.ClosureValues(Tbar=T, dTbar=dT, a=self.a(rho), da=self.a(rho, 1), mu_bar=mu,
-                                dmu_bar=dmu)
+        return eq.ClosureValues(Tbar=T, dTbar=dT, a=self.a(rho), da=self.a(rho, 1), mu_bar=mu, dmu_bar=dmu)
 
     def _uniform(self, rho, nu, name):
         if nu not in (0, 1):
@@ -422,10 +464,18 @@ class ReducedModel:
         """:class:`LocalCoefficients` at ρ0 from the interpolants."""
         r = float(self._check(rho0))
         c = self.closure(r)
-        return LocalCoefficients(theta=self.theta, rho0=r, F=float(self.F(r)),
-                                 dF=float(self.F(r, 1)), Tbar=float(c.Tbar),
-                                 dTbar=float(c.dTbar), a=float(c.a), da=float(c.da),
-                                 mu_bar=float(c.mu_bar), dmu_bar=float(c.dmu_bar))
+        return LocalCoefficients(
+            theta=self.theta,
+            rho0=r,
+            F=float(self.F(r)),
+            dF=float(self.F(r, 1)),
+            Tbar=float(c.Tbar),
+            dTbar=float(c.dTbar),
+            a=float(c.a),
+            da=float(c.da),
+            mu_bar=float(c.mu_bar),
+            dmu_bar=float(c.dmu_bar),
+        )
 
     def rho_at_nu0(self, nu0: float) -> float:
         """ρ̄0 of the steady flow with floor density ``nu0`` (inverse of F).
@@ -435,8 +485,10 @@ class ReducedModel:
         """
         lo, hi = self.nu0[0], self.nu0[-1]
         if not lo <= nu0 <= hi:
-            raise ParameterError(f"nu0 = {nu0:g} is outside [{lo:.4g}, {hi:.4g}], the floor "
-                                 f"densities of the steady family at theta = {self.theta:g} deg")
+            raise ParameterError(
+                f"nu0 = {nu0:g} is outside [{lo:.4g}, {hi:.4g}], the floor "
+                f"densities of the steady family at theta = {self.theta:g} deg"
+            )
         hit = np.flatnonzero(self.nu0 == nu0)
         if hit.size:  # a knot, e.g. an end of the family: F(ρ̄) − ν0 is round-off there
             return float(self.rho[hit[0]])
@@ -462,24 +514,34 @@ class ReducedModel:
             "dU": (self.U(r, 1), "U'(ρ̄)"),
             "dP": (self.P(r, 1), "(ρ̄ T̄)'"),
             "mu_bar": (self.mu_bar(r), "viscosity μ̄(ρ̄)"),
-            "criterion_margin": (np.array([c.criterion_margin for c in cs]),
-                                 "(ρ̄ U')² − (ρ̄ T̄)' (eq. (5.13); > 0 unstable)"),
+            "criterion_margin": (
+                np.array([c.criterion_margin for c in cs]),
+                "(ρ̄ U')² − (ρ̄ T̄)' (eq. (5.13); > 0 unstable)",
+            ),
             "alpha2": (np.array([c.alpha2 for c in cs]), "α2 (eq. 5.14)"),
             "k_c": (np.array([c.k_c for c in cs]), "critical wavenumber k_c"),
         }
-        ds = xr.Dataset({k: ("rho", v, {"long_name": n_}) for k, (v, n_) in data.items()},
-                        coords={"rho": ("rho", r, {"long_name": "one-dimensional density ρ̄",
-                                                   "units": "sigma"})})
-        ds.attrs.update(theta=self.theta, **self.model.attrs(),
-                        **{f"accuracy_{k}": float(v) for k, v in self.accuracy.items()})
+        ds = xr.Dataset(
+            {k: ("rho", v, {"long_name": n_}) for k, (v, n_) in data.items()},
+            coords={"rho": ("rho", r, {"long_name": "one-dimensional density ρ̄", "units": "sigma"})},
+        )
+        ds.attrs.update(
+            theta=self.theta,
+            **self.model.attrs(),
+            **{f"accuracy_{k}": float(v) for k, v in self.accuracy.items()},
+        )
         return ds
 
     def summary(self) -> dict:
-        return {"theta": self.theta, "roughness": self.model.roughness,
-                "rho_range": list(self.rho_range),
-                "nu0_range": [float(self.nu0[0]), float(self.nu0[-1])],
-                "knots": int(len(self.rho)), "accuracy": dict(self.accuracy),
-                "ends": list(self.ends)}
+        return {
+            "theta": self.theta,
+            "roughness": self.model.roughness,
+            "rho_range": list(self.rho_range),
+            "nu0_range": [float(self.nu0[0]), float(self.nu0[-1])],
+            "knots": int(len(self.rho)),
+            "accuracy": dict(self.accuracy),
+            "ends": list(self.ends),
+        }
 
 
 def _solve(theta, nu0, model, guess, nu_top, cold_retry=True):
@@ -531,10 +593,18 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
 
 
 @functools.lru_cache(maxsize=32)
-def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: float = 5e-3,
-                  nu0_max: float | None = None, step: float = 0.15, tol: float = 1e-4,
-                  max_knots: int = 200, nu_top: float = 1e-9,
-                  seeds: tuple = (0.05, 0.1, 0.15, 0.03, 0.2, 0.3)) -> ReducedModel:
+def reduced_model(
+    theta: float,
+    model: ChuteModel | None = None,
+    *,
+    nu0_min: float = 5e-3,
+    nu0_max: float | None = None,
+    step: float = 0.15,
+    tol: float = 1e-4,
+    max_knots: int = 200,
+    nu_top: float = 1e-9,
+    seeds: tuple = (0.05, 0.1, 0.15, 0.03, 0.2, 0.3),
+) -> ReducedModel:
     """Build the 1D model's F, T̄, a over the steady family at fixed ``theta``.
 
     Parameters
@@ -574,8 +644,10 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
         raise ParameterError(f"theta = {theta!r} is outside (0, 90) degrees")
     nu0_max = 0.75 * model.nu_max if nu0_max is None else float(nu0_max)
     if not 0.0 < nu0_min < nu0_max < model.nu_max:
-        raise ParameterError(f"nu0_min = {nu0_min!r}, nu0_max = {nu0_max!r}: need "
-                             f"0 < nu0_min < nu0_max < nu_max = {model.nu_max:g}")
+        raise ParameterError(
+            f"nu0_min = {nu0_min!r}, nu0_max = {nu0_max!r}: need "
+            f"0 < nu0_min < nu0_max < nu_max = {model.nu_max:g}"
+        )
     if not 0.0 < tol < 1e-1:
         raise ParameterError(f"tol = {tol!r} is outside (0, 0.1): relative interpolation error")
     start, errors = None, []
@@ -590,14 +662,16 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
     if start is None:
         raise NoSteadyFlowError(
             f"no steady flow to build the 1D model on at theta = {theta:g} deg, roughness = "
-            f"{model.roughness:g}: " + "; ".join(errors))
+            f"{model.roughness:g}: " + "; ".join(errors)
+        )
     down, why_lo = _walk(theta, model, start, -1, nu0_min, step, step / 4, nu_top)
     up, why_hi = _walk(theta, model, start, +1, nu0_max, step, step / 4, nu_top)
     knots = down[::-1] + [start] + up
     if len(knots) < 3:
         raise NoSteadyFlowError(
             f"the steady family at theta = {theta:g} deg is too short to build the 1D model "
-            f"on ({len(knots)} flow(s); ends: {why_lo} / {why_hi})")
+            f"on ({len(knots)} flow(s); ends: {why_lo} / {why_hi})"
+        )
     # adaptive refinement: compare the interpolants at each midpoint with a direct solve
     checked: dict[tuple[float, float], dict] = {}
     while True:
@@ -615,9 +689,9 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
                     # an unverifiable interval ends the family on the side it lies
                     cut = f"no steady flow found at nu0 = {mid:.4g} ({exc})"
                     if i + 1 >= len(knots) - 1 - i:
-                        knots, why_hi = knots[:i + 1], cut
+                        knots, why_hi = knots[: i + 1], cut
                     else:
-                        knots, why_lo = knots[i + 1:], cut
+                        knots, why_lo = knots[i + 1 :], cut
                     break
                 checked[key] = {"knot": km, "err": _errors(rm, km.coef)}
             err = checked[key]["err"]
@@ -632,14 +706,16 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
                 raise ConvergenceError(
                     f"1D model at theta = {theta:g}: interpolation error "
                     f"{max(worst.values()):.2e} still above tol = {tol:g} with {len(knots)} "
-                    f"knots (max_knots = {max_knots})")
+                    f"knots (max_knots = {max_knots})"
+                )
             for i, km in reversed(insert):
                 knots.insert(i + 1, km)
             continue
         if len(knots) < 3:
             raise NoSteadyFlowError(
                 f"the steady family at theta = {theta:g} deg is too short to build the 1D "
-                f"model on ({len(knots)} flow(s); ends: {why_lo} / {why_hi})")
+                f"model on ({len(knots)} flow(s); ends: {why_lo} / {why_hi})"
+            )
     worst["midpoints"] = len(knots) - 1
     return _assemble(theta, model, knots, worst, (why_lo, why_hi))
 
@@ -647,9 +723,14 @@ def reduced_model(theta: float, model: ChuteModel | None = None, *, nu0_min: flo
 def _errors(rm: ReducedModel, exact: LocalCoefficients) -> dict:
     r = exact.rho0
     rel = lambda x, y: abs(float(x) - y) / max(abs(y), 1e-300)  # noqa: E731
-    return {"F": rel(rm.F(r), exact.F), "Tbar": rel(rm.Tbar(r), exact.Tbar),
-            "a": rel(rm.a(r), exact.a), "dF": rel(rm.F(r, 1), exact.dF),
-            "dTbar": rel(rm.Tbar(r, 1), exact.dTbar), "da": rel(rm.a(r, 1), exact.da)}
+    return {
+        "F": rel(rm.F(r), exact.F),
+        "Tbar": rel(rm.Tbar(r), exact.Tbar),
+        "a": rel(rm.a(r), exact.a),
+        "dF": rel(rm.F(r, 1), exact.dF),
+        "dTbar": rel(rm.Tbar(r, 1), exact.dTbar),
+        "da": rel(rm.a(r, 1), exact.da),
+    }
 
 
 def _assemble(theta, model, knots, accuracy, ends) -> ReducedModel:
@@ -657,19 +738,25 @@ def _assemble(theta, model, knots, accuracy, ends) -> ReducedModel:
     if not (np.diff(rho) > 0).all():
         raise NoSteadyFlowError(
             f"rho_bar is not monotonic in nu0 along the family at theta = {theta:g} deg: "
-            "F(rho_bar) of the 1D model is not single-valued")
+            "F(rho_bar) of the 1D model is not single-valued"
+        )
     cs = [k.coef for k in knots]
     splines = {}
     for name, val, der in (("F", "F", "dF"), ("Tbar", "Tbar", "dTbar"), ("a", "a", "da")):
         v = np.array([getattr(c, val) for c in cs])
         d = np.array([getattr(c, der) for c in cs])
         splines[name] = CubicHermiteSpline(rho, np.log(v), d / v, extrapolate=False)
-    return ReducedModel(theta=theta, model=model, rho=rho,
-                        nu0=np.array([k.flow.nu0 for k in knots]),
-                        coefficients_at_knots=tuple(cs),
-                        flux=np.array([k.flow.Q for k in knots]),
-                        h=np.array([k.flow.h for k in knots]),
-                        nu_mean=np.array([k.flow.nu_mean for k in knots]),
-                        monotonic=np.array([bool(k.flow.monotonic) for k in knots]),
-                        accuracy=dict(accuracy), ends=ends,
-                        _splines=splines)
+    return ReducedModel(
+        theta=theta,
+        model=model,
+        rho=rho,
+        nu0=np.array([k.flow.nu0 for k in knots]),
+        coefficients_at_knots=tuple(cs),
+        flux=np.array([k.flow.Q for k in knots]),
+        h=np.array([k.flow.h for k in knots]),
+        nu_mean=np.array([k.flow.nu_mean for k in knots]),
+        monotonic=np.array([bool(k.flow.monotonic) for k in knots]),
+        accuracy=dict(accuracy),
+        ends=ends,
+        _splines=splines,
+    )

@@ -33,6 +33,7 @@ py-pde's ``solve(..., tracker=[...])``): :class:`SnapshotTracker`, :class:`Satur
 :class:`ProgressTracker`, :class:`LeaveFamilyStop`, or a subclass of :class:`Tracker`.
 :func:`simulate` is the convenience wrapper returning an xarray Dataset.
 """
+
 from __future__ import annotations
 
 import math
@@ -48,9 +49,22 @@ from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from . import equations as eq
 from .model import LocalCoefficients, ReducedModel
 
-__all__ = ["WaveSolver", "WaveSimulation", "InitialState", "RunInfo", "Step", "Tracker",
-           "SnapshotTracker", "SaturationStop", "ProgressTracker", "LeaveFamilyStop",
-           "simulate", "default_cells", "growth_rate_fit", "wave_diagnostics"]
+__all__ = [
+    "WaveSolver",
+    "WaveSimulation",
+    "InitialState",
+    "RunInfo",
+    "Step",
+    "Tracker",
+    "SnapshotTracker",
+    "SaturationStop",
+    "ProgressTracker",
+    "LeaveFamilyStop",
+    "simulate",
+    "default_cells",
+    "growth_rate_fit",
+    "wave_diagnostics",
+]
 
 
 def _closures(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
@@ -84,8 +98,7 @@ def _assemble(ops, diag, flux, source, u, rho_f, c: float) -> list:
     dPi_m = G @ dudm
     dS_r = diag(source.rho) @ A_cf + diag(source.u) @ dudr
     dS_m = diag(source.u) @ dudm
-    return [[(D_fc @ A_cf) * c, -D_fc],
-            [-D_cf @ dPi_r + dS_r, -D_cf @ dPi_m + dS_m + (D_cf @ A_fc) * c]]
+    return [[(D_fc @ A_cf) * c, -D_fc], [-D_cf @ dPi_r + dS_r, -D_cf @ dPi_m + dS_m + (D_cf @ A_fc) * c]]
 
 
 class _ModeDiagonal(np.ndarray):
@@ -108,8 +121,7 @@ class WaveSolver:
         Number of finite-volume cells N.
     """
 
-    def __init__(self, reduced: ReducedModel, length: float, n_cells: int,
-                 frame_speed: float = 0.0):
+    def __init__(self, reduced: ReducedModel, length: float, n_cells: int, frame_speed: float = 0.0):
         if not (math.isfinite(length) and length > 0):
             raise ParameterError(f"length = {length!r} must be a positive number of diameters")
         if int(n_cells) != n_cells or n_cells < 8:
@@ -126,14 +138,10 @@ class WaveSolver:
         im = (i - 1) % N
         ones = np.ones(N)
         # face j = j+½ from cells j, j+1; cell i from faces i−½ (= face i−1) and i+½ (= face i)
-        self.A_cf = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[i, ip])),
-                                  shape=(N, N))
-        self.D_cf = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[i, ip])),
-                                  shape=(N, N))
-        self.A_fc = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[im, i])),
-                                  shape=(N, N))
-        self.D_fc = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[im, i])),
-                                  shape=(N, N))
+        self.A_cf = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[i, ip])), shape=(N, N))
+        self.D_cf = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[i, ip])), shape=(N, N))
+        self.A_fc = sp.csr_matrix((np.r_[ones, ones] * 0.5, (np.r_[i, i], np.r_[im, i])), shape=(N, N))
+        self.D_fc = sp.csr_matrix((np.r_[-ones, ones] * h, (np.r_[i, i], np.r_[im, i])), shape=(N, N))
         # frame moving down the slope at speed c: ∂t|ξ = ∂t|x + c ∂x, in flux form
         # (fluxes m − cρ and ρu² − c m), so mass stays conserved to round-off
         self.c = float(frame_speed)
@@ -143,11 +151,11 @@ class WaveSolver:
 
     # -- state helpers -----------------------------------------------------------------
     def split(self, y):
-        return y[:self.N], y[self.N:]
+        return y[: self.N], y[self.N :]
 
     def mass(self, y) -> float:
         """Total mass Σ ρ_i dx = ∫ ρ̄ dx."""
-        return float(np.sum(y[:self.N]) * self.dx)
+        return float(np.sum(y[: self.N]) * self.dx)
 
     def uniform(self, rho0: float) -> np.ndarray:
         """The uniform state ρ̄ = ρ0, ū = U(ρ0): an exact equilibrium of the discrete system."""
@@ -200,9 +208,15 @@ class WaveSolver:
         u = m / rf
         uc = 0.5 * (u + np.roll(u, 1))
         du = (u - np.roll(u, 1)) / self.dx
-        blocks = _assemble((self.A_cf, self.D_cf, self.A_fc, self.D_fc), sp.diags,
-                           eq.flux_partials(rho, uc, du, centres),
-                           eq.source_partials(rf, u, self.sin, faces), u, rf, self.c)
+        blocks = _assemble(
+            (self.A_cf, self.D_cf, self.A_fc, self.D_fc),
+            sp.diags,
+            eq.flux_partials(rho, uc, du, centres),
+            eq.source_partials(rf, u, self.sin, faces),
+            u,
+            rf,
+            self.c,
+        )
         return sp.bmat(blocks, format="csc")
 
     # -- linear theory of the discrete system ---------------------------------------------
@@ -211,8 +225,7 @@ class WaveSolver:
         k = 2 * math.pi * n / self.L
         return np.exp(1j * k * self.x), np.exp(1j * k * self.x_face)
 
-    def mode_matrix(self, rho0: float, n: int, *, numerical: bool = True,
-                    eps: float = 1e-7) -> np.ndarray:
+    def mode_matrix(self, rho0: float, n: int, *, numerical: bool = True, eps: float = 1e-7) -> np.ndarray:
         """2×2 block of the linearised discrete operator on Fourier mode ``n`` about the
         uniform state, in the variables (ρ̂, m̂).
 
@@ -233,8 +246,9 @@ class WaveSolver:
                 scale = eps * max(abs(y0[comp * N]), 1.0)
                 Jv = np.zeros(2 * N, dtype=complex)
                 for part, fac in ((v.real, 1.0), (v.imag, 1j)):
-                    Jv += fac * (self.rhs(0, y0 + scale * part) - self.rhs(0, y0 - scale * part)
-                                 ) / (2 * scale)
+                    Jv += (
+                        fac * (self.rhs(0, y0 + scale * part) - self.rhs(0, y0 - scale * part)) / (2 * scale)
+                    )
             else:
                 Jv = self.jacobian(0, y0) @ v
             cols.append([np.vdot(er, Jv[:N]) / N, np.vdot(ef, Jv[N:]) / N])
@@ -261,8 +275,15 @@ class WaveSolver:
             return np.broadcast_to(np.asarray(v, dtype=complex), k.shape).view(_ModeDiagonal)
 
         A, D = diag(C), diag(iK)
-        blocks = _assemble((A, D, A, D), diag, eq.flux_partials(c.rho0, c.U, 0.0, c),
-                           eq.source_partials(c.rho0, c.U, self.sin, c), c.U, c.rho0, self.c)
+        blocks = _assemble(
+            (A, D, A, D),
+            diag,
+            eq.flux_partials(c.rho0, c.U, 0.0, c),
+            eq.source_partials(c.rho0, c.U, self.sin, c),
+            c.U,
+            c.rho0,
+            self.c,
+        )
         M = np.empty(n.shape + (2, 2), dtype=complex)
         for i in (0, 1):
             for j in (0, 1):
@@ -289,23 +310,25 @@ class WaveSolver:
         v = v / v[0]
         er, ef = self.mode_vectors(n)
         y = self.uniform(rho0)
-        y[:self.N] += amplitude * (v[0] * er).real
-        y[self.N:] += amplitude * (v[1] * ef).real
+        y[: self.N] += amplitude * (v[0] * er).real
+        y[self.N :] += amplitude * (v[1] * ef).real
         return y
 
 
 # ---------------------------------------------------------------------------------------
 
+
 def wave_diagnostics(solver: WaveSolver, rho0: float, y: np.ndarray, n_modes: int):
     """Amplitude max|ρ − ρ0|, mass and |ρ̂_n| (n = 1..n_modes, normalised like a cosine
     amplitude) of one state."""
-    rho = y[:solver.N]
+    rho = y[: solver.N]
     c = np.fft.rfft(rho - rho0) * (2.0 / solver.N)
-    return float(np.abs(rho - rho0).max()), solver.mass(y), np.abs(c[1:n_modes + 1])
+    return float(np.abs(rho - rho0).max()), solver.mass(y), np.abs(c[1 : n_modes + 1])
 
 
-def default_cells(reduced: ReducedModel, rho0: float, length: float, *, tol: float = 0.05,
-                  n_max: int = 16384) -> int:
+def default_cells(
+    reduced: ReducedModel, rho0: float, length: float, *, tol: float = 0.05, n_max: int = 16384
+) -> int:
     """Cells for a run: the growth rates of the discrete system must match the 2×2 dispersion
     relation (eq. (5.12)'s exact form) to ``tol`` × the largest growth rate.
 
@@ -334,6 +357,7 @@ def default_cells(reduced: ReducedModel, rho0: float, length: float, *, tol: flo
 # ---------------------------------------------------------------------------------------
 # The time stepper and its trackers
 # ---------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class InitialState:
@@ -505,8 +529,13 @@ class SaturationStop(_Sampler):
     "decayed" once it fell below e⁻¹⁰ of its start.
     """
 
-    def __init__(self, tol: float = 0.02, count: int | None = None,
-                 interval: float | None = None, min_samples: int = 10):
+    def __init__(
+        self,
+        tol: float = 0.02,
+        count: int | None = None,
+        interval: float | None = None,
+        min_samples: int = 10,
+    ):
         super().__init__(count, interval)
         if not 0.0 < tol < 1.0:
             raise ParameterError(f"saturation_tol = {tol!r} must be in (0, 1)")
@@ -521,7 +550,8 @@ class SaturationStop(_Sampler):
 
     def check(self, sim):
         if len(self.amplitudes) >= self.min_samples and _saturated(
-                np.array(self.amplitudes), self._a0, self.tol, sim.max_growth_rate):
+            np.array(self.amplitudes), self._a0, self.tol, sim.max_growth_rate
+        ):
             return "saturated" if sim.max_growth_rate > 0 else "decayed"
         return None
 
@@ -598,9 +628,19 @@ class WaveSimulation:
     >>> ds = sim.dataset(snaps, info)                                # doctest: +SKIP
     """
 
-    def __init__(self, reduced: ReducedModel, length: float, *, rho0: float | None = None,
-                 nu0: float | None = None, n_cells: int | None = None, frame="wave",
-                 rtol: float = 1e-6, method: str = "Radau", max_steps: int = 200000):
+    def __init__(
+        self,
+        reduced: ReducedModel,
+        length: float,
+        *,
+        rho0: float | None = None,
+        nu0: float | None = None,
+        n_cells: int | None = None,
+        frame="wave",
+        rtol: float = 1e-6,
+        method: str = "Radau",
+        max_steps: int = 200000,
+    ):
         if (rho0 is None) == (nu0 is None):
             raise ParameterError("give exactly one of rho0 (1D density) and nu0 (floor density)")
         lo, hi = reduced.rho_range
@@ -611,11 +651,14 @@ class WaveSimulation:
                     f"nu0 = {nu0:g} is an end of the steady family at theta = "
                     f"{reduced.theta:g} deg (floor densities [{reduced.nu0[0]:.4g}, "
                     f"{reduced.nu0[-1]:.4g}]): a wave about it would leave the range where "
-                    "the 1D model is defined at once; choose nu0 inside")
+                    "the 1D model is defined at once; choose nu0 inside"
+                )
         rho0 = float(rho0)  # type: ignore[arg-type]  # one of rho0, nu0 is set
         if not lo < rho0 < hi:
-            raise ParameterError(f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of "
-                                 f"the steady family at theta = {reduced.theta:g} deg")
+            raise ParameterError(
+                f"rho0 = {rho0:g} is outside ({lo:.4g}, {hi:.4g}), the range of "
+                f"the steady family at theta = {reduced.theta:g} deg"
+            )
         if not (math.isfinite(length) and length > 0):
             raise ParameterError(f"length = {length!r} must be a positive number of diameters")
         if n_cells is not None and (int(n_cells) != n_cells or n_cells < 8):
@@ -651,8 +694,7 @@ class WaveSimulation:
         self.solver = WaveSolver(reduced, length, n_cells, frame_speed=c) if c else lab
 
     # -- initial states and the time span ---------------------------------------------------
-    def perturbed(self, mode: int | None = None, amplitude: float = 1e-3,
-                  seed: int = 0) -> InitialState:
+    def perturbed(self, mode: int | None = None, amplitude: float = 1e-3, seed: int = 0) -> InitialState:
         """The uniform state plus a perturbation of relative size ``amplitude``.
 
         ``mode`` given: the least-stable discrete eigenmode ``mode`` (k = 2π mode/L) with
@@ -660,8 +702,7 @@ class WaveSimulation:
         density mode (zero mean, max|δρ̄| = ``amplitude`` ρ0) at uniform velocity.
         """
         if not 0.0 < amplitude < 0.5:
-            raise ParameterError(f"amplitude = {amplitude!r} must be in (0, 0.5) (relative to "
-                                 "rho0)")
+            raise ParameterError(f"amplitude = {amplitude!r} must be in (0, 0.5) (relative to rho0)")
         s, rho0, N = self.solver, self.rho0, self.solver.N
         if mode is None:
             rng = np.random.default_rng(seed)
@@ -674,8 +715,9 @@ class WaveSimulation:
             init = f"random noise (seed {seed}), max |δρ|/ρ0 = {amplitude:g}"
         else:
             y0 = s.eigenmode(rho0, int(mode), amplitude * rho0)
-            init = (f"discrete eigenmode {mode} (k = {2 * math.pi * mode / s.L:.5g}), "
-                    f"amplitude {amplitude:g} ρ0")
+            init = (
+                f"discrete eigenmode {mode} (k = {2 * math.pi * mode / s.L:.5g}), amplitude {amplitude:g} ρ0"
+            )
         return InitialState(y=y0, amplitude=amplitude * rho0, description=init)
 
     def default_t_end(self) -> float:
@@ -685,8 +727,7 @@ class WaveSimulation:
         return min((40.0 if sigma > 0 else 10.0) / max(rate, 1e-6), 1e6)
 
     # -- the stepper --------------------------------------------------------------------------
-    def run(self, initial: InitialState, t_end: float | None = None,
-            trackers=()) -> RunInfo:
+    def run(self, initial: InitialState, t_end: float | None = None, trackers=()) -> RunInfo:
         """Integrate from ``initial`` to ``t_end`` (default :meth:`default_t_end`).
 
         Trackers (:class:`SnapshotTracker`, :class:`SaturationStop`, :class:`ProgressTracker`,
@@ -717,11 +758,20 @@ class WaveSimulation:
         # atol floor 1e-12 ρ0: the right-hand side carries round-off ~1e-16 Π/dx that no step
         # size can resolve
         rtol = self.rtol
-        scale = max(rtol * initial.amplitude, 1e-12 * rho0) / rtol * np.concatenate(
-            [np.ones(N), np.full(N, abs(self.coef.U) + 1.0)])
+        scale = (
+            max(rtol * initial.amplitude, 1e-12 * rho0)
+            / rtol
+            * np.concatenate([np.ones(N), np.full(N, abs(self.coef.U) + 1.0)])
+        )
         ode = {"Radau": Radau, "BDF": BDF}[self.method](
-            lambda t, z: solver.rhs(t, y_u + z), 0.0, initial.y - y_u, t_end, rtol=rtol,
-            atol=rtol * scale, jac=lambda t, z: solver.jacobian(t, y_u + z))
+            lambda t, z: solver.rhs(t, y_u + z),
+            0.0,
+            initial.y - y_u,
+            t_end,
+            rtol=rtol,
+            atol=rtol * scale,
+            jac=lambda t, z: solver.jacobian(t, y_u + z),
+        )
         for tr in trackers:
             tr.initialize(self, initial, t_end)
         t0 = _time.perf_counter()
@@ -739,17 +789,27 @@ class WaveSimulation:
                 status = "left_family"
                 break
             if steps > self.max_steps:
-                raise ConvergenceError(f"time integration needed more than {self.max_steps} "
-                                       f"steps (reached t = {ode.t:.6g} of {t_end:.6g})")
+                raise ConvergenceError(
+                    f"time integration needed more than {self.max_steps} "
+                    f"steps (reached t = {ode.t:.6g} of {t_end:.6g})"
+                )
             solver.out_of_range = None
             step = Step(ode, t_prev, y_u, steps)
             stops = [r for r in [tr.handle(self, step) for tr in trackers] if r]
             if stops:
                 status = stops[0]
                 break
-        info = RunInfo(status=status, t=float(ode.t), y=y_u + ode.y, t_end=t_end,
-                       auto_time=auto, initial=initial, steps=steps,
-                       wall_time_s=_time.perf_counter() - t0, left_family=left)
+        info = RunInfo(
+            status=status,
+            t=float(ode.t),
+            y=y_u + ode.y,
+            t_end=t_end,
+            auto_time=auto,
+            initial=initial,
+            steps=steps,
+            wall_time_s=_time.perf_counter() - t0,
+            left_family=left,
+        )
         for tr in trackers:
             tr.finalize(self, info)
         return info
@@ -759,10 +819,12 @@ class WaveSimulation:
         lo, hi = rm.rho_range
         assert self.solver.out_of_range is not None
         _, rb = self.solver.out_of_range
-        return (f"the density wave left the steady family at t ≈ {t:.4g}: rho_bar reached "
-                f"{rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D model are "
-                f"defined (theta = {rm.theta:g} deg; family ends: {rm.ends[0]} / "
-                f"{rm.ends[1]})")
+        return (
+            f"the density wave left the steady family at t ≈ {t:.4g}: rho_bar reached "
+            f"{rb:.4g}, outside [{lo:.4g}, {hi:.4g}] where F and T̄ of the 1D model are "
+            f"defined (theta = {rm.theta:g} deg; family ends: {rm.ends[0]} / "
+            f"{rm.ends[1]})"
+        )
 
     # -- output ---------------------------------------------------------------------------------
     def dataset(self, snapshots: SnapshotTracker, info: RunInfo):
@@ -785,49 +847,98 @@ class WaveSimulation:
         drift = float(np.abs(mass - M0).max() / M0)
         analytic = self.growth_analytic
         ds = xr.Dataset(
-            {"rho": (("t", "x"), rho, {"long_name": "one-dimensional density ρ̄",
-                                       "units": "sigma"}),
-             "u": (("t", "x"), u_c, {"long_name": "mean velocity ū", "units": "sqrt(g sigma)"}),
-             "mass": ("t", mass, {"long_name": "∫ ρ̄ dx", "units": "sigma^2"}),
-             "amplitude": ("t", amp, {"long_name": "max |ρ̄ − ρ0|", "units": "sigma"}),
-             "mode_amplitude": (("t", "mode"), np.abs(c[:, 1:n_modes + 1]),
-                                {"long_name": "|ρ̂_n| (cosine amplitude of mode n)",
-                                 "units": "sigma"}),
-             "growth_analytic": ("mode", analytic.real,
-                                 {"long_name": "Re α(k_n), 2×2 dispersion relation (1D model)"}),
-             "frequency_analytic": ("mode", analytic.imag, {"long_name": "Im α(k_n)"}),
-             },
-            coords={"t": ("t", t_used, {"long_name": "time", "units": "sqrt(sigma/g)"}),
-                    "x": ("x", solver.x, {"long_name": "position down the slope in the frame "
-                                                       "moving at frame_speed, ξ = x − c t",
-                                          "units": "sigma"}),
-                    "mode": ("mode", self.modes),
-                    "k": ("mode", self.k, {"long_name": "wavenumber 2πn/L"})})
-        ds["growth_discrete"] = ("mode", self.growth_discrete.real,
-                                 {"long_name": "Re α of the linearised discrete system"})
-        ds.attrs.update({
-            "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
-            "theta": rm.theta, **rm.model.attrs(), "rho0": rho0, "nu0": coef.F, "U0": coef.U,
-            "length": solver.L, "n_cells": N, "dx": solver.dx, "rtol": self.rtol,
-            "method": self.method, "initial_condition": info.initial.description,
-            "frame_speed": self.frame_speed, "t_end": float(t_used[-1]),
-            "auto_time": str(info.auto_time),
-            "status": info.status, "left_family": info.left_family, "mass_drift": drift,
-            "steps": info.steps, "rhs_evaluations": solver.n_rhs,
-            "jacobian_evaluations": solver.n_jac, "wall_time_s": info.wall_time_s,
-            "k_c": coef.k_c, "L_c": coef.L_c, "criterion_margin": coef.criterion_margin,
-            "short_wave_unstable": str(coef.short_wave_unstable),
-            "max_growth_rate": self.max_growth_rate, "rho_range_family": [lo, hi],
-        })
+            {
+                "rho": (("t", "x"), rho, {"long_name": "one-dimensional density ρ̄", "units": "sigma"}),
+                "u": (("t", "x"), u_c, {"long_name": "mean velocity ū", "units": "sqrt(g sigma)"}),
+                "mass": ("t", mass, {"long_name": "∫ ρ̄ dx", "units": "sigma^2"}),
+                "amplitude": ("t", amp, {"long_name": "max |ρ̄ − ρ0|", "units": "sigma"}),
+                "mode_amplitude": (
+                    ("t", "mode"),
+                    np.abs(c[:, 1 : n_modes + 1]),
+                    {"long_name": "|ρ̂_n| (cosine amplitude of mode n)", "units": "sigma"},
+                ),
+                "growth_analytic": (
+                    "mode",
+                    analytic.real,
+                    {"long_name": "Re α(k_n), 2×2 dispersion relation (1D model)"},
+                ),
+                "frequency_analytic": ("mode", analytic.imag, {"long_name": "Im α(k_n)"}),
+            },
+            coords={
+                "t": ("t", t_used, {"long_name": "time", "units": "sqrt(sigma/g)"}),
+                "x": (
+                    "x",
+                    solver.x,
+                    {
+                        "long_name": "position down the slope in the frame "
+                        "moving at frame_speed, ξ = x − c t",
+                        "units": "sigma",
+                    },
+                ),
+                "mode": ("mode", self.modes),
+                "k": ("mode", self.k, {"long_name": "wavenumber 2πn/L"}),
+            },
+        )
+        ds["growth_discrete"] = (
+            "mode",
+            self.growth_discrete.real,
+            {"long_name": "Re α of the linearised discrete system"},
+        )
+        ds.attrs.update(
+            {
+                "title": "1D model (Mitarai & Nakanishi §5.1.2): nonlinear density waves",
+                "theta": rm.theta,
+                **rm.model.attrs(),
+                "rho0": rho0,
+                "nu0": coef.F,
+                "U0": coef.U,
+                "length": solver.L,
+                "n_cells": N,
+                "dx": solver.dx,
+                "rtol": self.rtol,
+                "method": self.method,
+                "initial_condition": info.initial.description,
+                "frame_speed": self.frame_speed,
+                "t_end": float(t_used[-1]),
+                "auto_time": str(info.auto_time),
+                "status": info.status,
+                "left_family": info.left_family,
+                "mass_drift": drift,
+                "steps": info.steps,
+                "rhs_evaluations": solver.n_rhs,
+                "jacobian_evaluations": solver.n_jac,
+                "wall_time_s": info.wall_time_s,
+                "k_c": coef.k_c,
+                "L_c": coef.L_c,
+                "criterion_margin": coef.criterion_margin,
+                "short_wave_unstable": str(coef.short_wave_unstable),
+                "max_growth_rate": self.max_growth_rate,
+                "rho_range_family": [lo, hi],
+            }
+        )
         return ds
 
 
-def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
-             nu0: float | None = None, n_cells: int | None = None, t_end: float | None = None,
-             mode: int | None = None, amplitude: float = 1e-3, seed: int = 0,
-             rtol: float = 1e-6, n_out: int = 200, saturation_tol: float = 0.02,
-             progress: Callable[[float, float], None] | None = None, max_steps: int = 200000,
-             method: str = "Radau", on_exit: str = "raise", frame="wave"):
+def simulate(
+    reduced: ReducedModel,
+    length: float,
+    *,
+    rho0: float | None = None,
+    nu0: float | None = None,
+    n_cells: int | None = None,
+    t_end: float | None = None,
+    mode: int | None = None,
+    amplitude: float = 1e-3,
+    seed: int = 0,
+    rtol: float = 1e-6,
+    n_out: int = 200,
+    saturation_tol: float = 0.02,
+    progress: Callable[[float, float], None] | None = None,
+    max_steps: int = 200000,
+    method: str = "Radau",
+    on_exit: str = "raise",
+    frame="wave",
+):
     """Integrate the 1D model in time from a perturbed uniform state; returns an xarray Dataset.
 
     A convenience wrapper of :class:`WaveSimulation` with a :class:`SnapshotTracker` of
@@ -888,14 +999,22 @@ def simulate(reduced: ReducedModel, length: float, *, rho0: float | None = None,
         trackers.append(ProgressTracker(progress))
     if on_exit == "stop":
         trackers.append(LeaveFamilyStop())
-    sim = WaveSimulation(reduced, length, rho0=rho0, nu0=nu0, n_cells=n_cells, frame=frame,
-                         rtol=rtol, method=method, max_steps=max_steps)
+    sim = WaveSimulation(
+        reduced,
+        length,
+        rho0=rho0,
+        nu0=nu0,
+        n_cells=n_cells,
+        frame=frame,
+        rtol=rtol,
+        method=method,
+        max_steps=max_steps,
+    )
     info = sim.run(sim.perturbed(mode, amplitude, seed), t_end, trackers)
     return sim.dataset(snapshots, info)
 
 
-def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 10.0
-                    ) -> tuple[float, float]:
+def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 10.0) -> tuple[float, float]:
     """Least-squares rate of ln |ρ̂_mode|(t) over the early, linear stage.
 
     The window runs from t = 0 until the amplitude has changed by ``factor`` from its
@@ -913,8 +1032,10 @@ def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 1
         stop += 1
     sel = slice(0, stop + 1)
     if stop < 3:
-        raise ConvergenceError(f"growth_rate_fit: only {stop + 1} snapshots in the linear "
-                               "window; store more snapshots (n_out) or shorten t_end")
+        raise ConvergenceError(
+            f"growth_rate_fit: only {stop + 1} snapshots in the linear "
+            "window; store more snapshots (n_out) or shorten t_end"
+        )
     p = np.polyfit(t[sel], lnA[sel], 1)
     res = lnA[sel] - np.polyval(p, t[sel])
     return float(p[0]), float(np.sqrt(np.mean(res**2)))

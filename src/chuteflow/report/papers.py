@@ -7,6 +7,7 @@ by name at import time). ``chuteflow reproduce`` loads the papers named with ``-
 ``stages`` subpackage by its module path, as a plug-in loader does. A second paper is a
 sibling package plus one entry in :data:`PAPERS` (or :func:`register_paper` at run time).
 """
+
 from __future__ import annotations
 
 from importlib import import_module
@@ -22,7 +23,7 @@ PACKAGE = "chuteflow.papers"
 #: Paper packages: name → one-line citation.
 PAPERS: dict[str, str] = {
     "mitarai2004": "N. Mitarai & H. Nakanishi, linear stability analysis of rapid granular "
-                   "flow down a slope and density wave formation, J. Fluid Mech. (2004)",
+    "flow down a slope and density wave formation, J. Fluid Mech. (2004)",
 }
 
 #: Papers reproduced when none is named.
@@ -35,8 +36,7 @@ def load_paper(name: str) -> ModuleType:
     Raises :class:`~chuteflow.errors.ParameterError` for a name not in :data:`PAPERS`.
     """
     if name not in PAPERS:
-        raise ParameterError(f"paper: unknown paper {name!r} (available: "
-                             f"{', '.join(PAPERS)})")
+        raise ParameterError(f"paper: unknown paper {name!r} (available: {', '.join(PAPERS)})")
     return import_module(f"{PACKAGE}.{name}.stages")
 
 

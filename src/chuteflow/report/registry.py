@@ -15,6 +15,7 @@ stages when imported, and :func:`load_stages` imports the papers asked for::
         ctx.report.check("steady.h16", source="§3.2", statement="...", computed="...",
                          passed=True)
 """
+
 from __future__ import annotations
 
 import re
@@ -28,15 +29,30 @@ from ..errors import ParameterError
 from .papers import DEFAULT_PAPERS, import_errors
 from .report import Report
 
-__all__ = ["Stage", "StageContext", "ProgressCallback", "register_stage", "registered_stages",
-           "get_stage", "select_stages", "load_stages", "isolated_registry"]
+__all__ = [
+    "Stage",
+    "StageContext",
+    "ProgressCallback",
+    "register_stage",
+    "registered_stages",
+    "get_stage",
+    "select_stages",
+    "load_stages",
+    "isolated_registry",
+]
 
 
 class ProgressCallback(Protocol):
     """What ``ctx.progress`` accepts: a message and/or rich-style progress counts."""
 
-    def __call__(self, message: str | None = None, *, advance: float | None = None,
-                 total: float | None = None, completed: float | None = None) -> None: ...
+    def __call__(
+        self,
+        message: str | None = None,
+        *,
+        advance: float | None = None,
+        total: float | None = None,
+        completed: float | None = None,
+    ) -> None: ...
 
 
 def _no_progress(message: str | None = None, **_: Any) -> None:
@@ -124,8 +140,9 @@ def _paper_of(module: str) -> str | None:
     return None
 
 
-def register_stage(name: str, order: float, *, title: str | None = None,
-                   paper: str | None = None) -> Callable[[StageFunc], StageFunc]:
+def register_stage(
+    name: str, order: float, *, title: str | None = None, paper: str | None = None
+) -> Callable[[StageFunc], StageFunc]:
     """Decorator registering ``func(ctx) -> None`` as stage ``name``.
 
     Parameters
@@ -146,17 +163,19 @@ def register_stage(name: str, order: float, *, title: str | None = None,
     raises ``ValueError``.
     """
     if not isinstance(name, str) or not _NAME.match(name):
-        raise ValueError(f"stage name {name!r}: use letters, digits, '-' and '_' "
-                         "(starting with a letter)")
+        raise ValueError(f"stage name {name!r}: use letters, digits, '-' and '_' (starting with a letter)")
 
     def decorator(func: StageFunc) -> StageFunc:
         doc_lines = (func.__doc__ or "").strip().splitlines()
         heading = title or (doc_lines[0].rstrip(".") if doc_lines else name)
         old = _REGISTRY.get(name)
-        if old is not None and (old.func.__module__, old.func.__qualname__) != \
-                (func.__module__, func.__qualname__):
-            raise ValueError(f"stage {name!r} is already registered by "
-                             f"{old.func.__module__}.{old.func.__qualname__}")
+        if old is not None and (old.func.__module__, old.func.__qualname__) != (
+            func.__module__,
+            func.__qualname__,
+        ):
+            raise ValueError(
+                f"stage {name!r} is already registered by {old.func.__module__}.{old.func.__qualname__}"
+            )
         owner = paper if paper is not None else _paper_of(func.__module__)
         _REGISTRY[name] = Stage(name, float(order), func, heading, owner)
         return func
@@ -172,7 +191,7 @@ def load_stages(papers: Sequence[str] | None = None) -> dict[str, BaseException]
     :class:`~chuteflow.errors.ParameterError`.
     """
     errors: dict[str, BaseException] = {}
-    for paper in (DEFAULT_PAPERS if papers is None else papers):
+    for paper in DEFAULT_PAPERS if papers is None else papers:
         for module, exc in import_errors(paper).items():
             errors[f"{paper}.{module}"] = exc
     return errors
@@ -198,8 +217,7 @@ def get_stage(name: str) -> Stage:
         raise ParameterError(f"stage: unknown stage {name!r} (available: {avail})") from None
 
 
-def select_stages(names: Sequence[str] | None,
-                  papers: Sequence[str] | None = None) -> list[Stage]:
+def select_stages(names: Sequence[str] | None, papers: Sequence[str] | None = None) -> list[Stage]:
     """Stages to run: all (of ``papers``, if given) for ``None``; else the named ones,
     deduplicated, in run order."""
     if names is None:

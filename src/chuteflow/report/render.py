@@ -1,4 +1,5 @@
 """Render a :class:`~chuteflow.report.report.Report` as Markdown or self-contained HTML."""
+
 from __future__ import annotations
 
 import base64
@@ -13,8 +14,14 @@ if TYPE_CHECKING:
 
 __all__ = ["render_markdown", "render_html"]
 
-_MIME = {".png": "image/png", ".jpg": "image/jpeg", ".jpeg": "image/jpeg",
-         ".svg": "image/svg+xml", ".gif": "image/gif", ".webp": "image/webp"}
+_MIME = {
+    ".png": "image/png",
+    ".jpg": "image/jpeg",
+    ".jpeg": "image/jpeg",
+    ".svg": "image/svg+xml",
+    ".gif": "image/gif",
+    ".webp": "image/webp",
+}
 _SYMBOL = {"pass": "✅ pass", "fail": "❌ FAIL", "not checked": "– not checked"}
 
 
@@ -36,11 +43,15 @@ def _fmt_value(value: Any) -> str:
 
 def _header_rows(report: Report) -> list[tuple[str, str]]:
     counts = report.counts()
-    rows = [("chuteflow version", report.version),
-            ("date (UTC)", report.created.strftime("%Y-%m-%d %H:%M:%S")),
-            ("wall time", _fmt_time(report.wall_time)),
-            ("checkpoints", f"{counts['pass']} passed, {counts['fail']} failed, "
-                            f"{counts['not checked']} not checked")]
+    rows = [
+        ("chuteflow version", report.version),
+        ("date (UTC)", report.created.strftime("%Y-%m-%d %H:%M:%S")),
+        ("wall time", _fmt_time(report.wall_time)),
+        (
+            "checkpoints",
+            f"{counts['pass']} passed, {counts['fail']} failed, {counts['not checked']} not checked",
+        ),
+    ]
     rows += [(str(k), _fmt_value(v)) for k, v in report.parameters.items()]
     rows += [(k, v) for k, v in report.environment.items()]
     return rows
@@ -62,8 +73,14 @@ def _md_section(sec: Section, base: Path) -> list[str]:
     if sec.checkpoints:
         lines += ["| ID | Source | Paper | Computed | Result |", "|---|---|---|---|---|"]
         for cp in sec.checkpoints:
-            lines.append("| " + " | ".join(_md_cell(x) for x in (
-                f"`{cp.id}`", cp.source, cp.statement, cp.computed, _SYMBOL[cp.status])) + " |")
+            lines.append(
+                "| "
+                + " | ".join(
+                    _md_cell(x)
+                    for x in (f"`{cp.id}`", cp.source, cp.statement, cp.computed, _SYMBOL[cp.status])
+                )
+                + " |"
+            )
         lines.append("")
         detailed = [cp for cp in sec.checkpoints if cp.detail]
         if detailed:
@@ -132,39 +149,46 @@ def _img(fig) -> str:
     mime = _MIME.get(fig.path.suffix.lower())
     if mime is None or not fig.path.is_file():
         what = "missing figure" if not fig.path.is_file() else "figure"
-        return f'<p><a href="{_e(fig.path.as_uri() if fig.path.is_absolute() else fig.path)}">' \
-               f"{what}: {_e(fig.path.name)}</a></p>"
+        return (
+            f'<p><a href="{_e(fig.path.as_uri() if fig.path.is_absolute() else fig.path)}">'
+            f"{what}: {_e(fig.path.name)}</a></p>"
+        )
     data = base64.b64encode(fig.path.read_bytes()).decode("ascii")
     return f'<img src="data:{mime};base64,{data}" alt="{_e(fig.caption)}">'
 
 
 def _html_section(sec: Section) -> str:
     parts = [f'<section id="stage-{_e(sec.name)}"><h2>{_e(sec.title)}</h2>']
-    status = f'<span class="failed">{_e(sec.status)}</span>' if sec.status == "failed" \
-        else _e(sec.status)
-    parts.append(f'<p class="meta">Stage <code>{_e(sec.name)}</code>: {status}'
-                 f'{", " + _fmt_time(sec.wall_time) if sec.wall_time is not None else ""}.</p>')
+    status = f'<span class="failed">{_e(sec.status)}</span>' if sec.status == "failed" else _e(sec.status)
+    parts.append(
+        f'<p class="meta">Stage <code>{_e(sec.name)}</code>: {status}'
+        f"{', ' + _fmt_time(sec.wall_time) if sec.wall_time is not None else ''}.</p>"
+    )
     parts += [f"<p>{_e(n)}</p>" for n in sec.notes]
     if sec.checkpoints:
-        parts.append("<table><thead><tr><th>ID</th><th>Source</th><th>Paper</th>"
-                     "<th>Computed</th><th>Result</th></tr></thead><tbody>")
+        parts.append(
+            "<table><thead><tr><th>ID</th><th>Source</th><th>Paper</th>"
+            "<th>Computed</th><th>Result</th></tr></thead><tbody>"
+        )
         for cp in sec.checkpoints:
             cls = cp.status.replace(" ", "-")
             detail = ""
             if cp.detail:
                 open_ = " open" if cp.passed is False else ""
-                detail = (f"<details{open_}><summary>detail</summary>"
-                          f"<pre>{_e(cp.detail.rstrip())}</pre></details>")
-            parts.append(f'<tr class="{cls}"><td><code>{_e(cp.id)}</code></td>'
-                         f"<td>{_e(cp.source)}</td><td>{_e(cp.statement)}</td>"
-                         f"<td>{_e(cp.computed)}{detail}</td>"
-                         f'<td class="status">{_e(_SYMBOL[cp.status])}</td></tr>')
+                detail = (
+                    f"<details{open_}><summary>detail</summary><pre>{_e(cp.detail.rstrip())}</pre></details>"
+                )
+            parts.append(
+                f'<tr class="{cls}"><td><code>{_e(cp.id)}</code></td>'
+                f"<td>{_e(cp.source)}</td><td>{_e(cp.statement)}</td>"
+                f"<td>{_e(cp.computed)}{detail}</td>"
+                f'<td class="status">{_e(_SYMBOL[cp.status])}</td></tr>'
+            )
         parts.append("</tbody></table>")
     for fig in sec.figures:
         label = f"<b>{_e(fig.id)}</b>: " if fig.id else ""
         src = f" (paper: {_e(fig.source)})" if fig.source else ""
-        parts.append(f"<figure>{_img(fig)}<figcaption>{label}{_e(fig.caption)}{src}"
-                     "</figcaption></figure>")
+        parts.append(f"<figure>{_img(fig)}<figcaption>{label}{_e(fig.caption)}{src}</figcaption></figure>")
     parts.append("</section>")
     return "\n".join(parts)
 
@@ -173,15 +197,19 @@ def render_html(report: Report) -> str:
     """Self-contained HTML page of ``report`` (inline CSS, figures as data URIs)."""
     counts = report.counts()
     summary_cls = "summary-fail" if counts["fail"] else "summary-ok"
-    header = "".join(f"<tr><td>{_e(k)}</td><td>{_e(v)}</td></tr>"
-                     for k, v in _header_rows(report))
-    body = [f"<h1>{_e(report.title)}</h1>",
-            f'<p class="{summary_cls}">{counts["pass"]} passed, {counts["fail"]} failed, '
-            f'{counts["not checked"]} not checked</p>',
-            f'<table class="header">{header}</table>']
+    header = "".join(f"<tr><td>{_e(k)}</td><td>{_e(v)}</td></tr>" for k, v in _header_rows(report))
+    body = [
+        f"<h1>{_e(report.title)}</h1>",
+        f'<p class="{summary_cls}">{counts["pass"]} passed, {counts["fail"]} failed, '
+        f"{counts['not checked']} not checked</p>",
+        f'<table class="header">{header}</table>',
+    ]
     if not report.sections:
         body.append("<p><em>No stage was run.</em></p>")
     body += [_html_section(sec) for sec in report.sections.values()]
-    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-            f"<title>{_e(report.title)}</title><style>{_CSS}</style></head><body>\n"
-            + "\n".join(body) + "\n</body></html>\n")
+    return (
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        f"<title>{_e(report.title)}</title><style>{_CSS}</style></head><body>\n"
+        + "\n".join(body)
+        + "\n</body></html>\n"
+    )

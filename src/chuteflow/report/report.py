@@ -6,6 +6,7 @@ the reproduction (steady flows, dispersion relations, stability diagrams, …); 
 keeps one :class:`Section` per stage and writes ``report.md``, a self-contained
 ``report.html`` and ``checkpoints.json``.
 """
+
 from __future__ import annotations
 
 import json
@@ -75,9 +76,20 @@ class Checkpoint:
         return STATUS_PASS if self.passed else STATUS_FAIL
 
     @classmethod
-    def compare(cls, id: str, *, source: str, statement: str, value: float,
-                expected: float, rtol: float = 0.0, atol: float = 0.0, name: str = "value",
-                fmt: str = ".4g", detail: str = "") -> Checkpoint:
+    def compare(
+        cls,
+        id: str,
+        *,
+        source: str,
+        statement: str,
+        value: float,
+        expected: float,
+        rtol: float = 0.0,
+        atol: float = 0.0,
+        name: str = "value",
+        fmt: str = ".4g",
+        detail: str = "",
+    ) -> Checkpoint:
         """Checkpoint for ``|value − expected| ≤ atol + rtol·|expected|``.
 
         ``computed`` reads e.g. ``"h = 23.41 (paper 23; |Δ| = 0.41 ≤ 1.15)"``.
@@ -86,8 +98,10 @@ class Checkpoint:
         tol = atol + rtol * abs(expected)
         diff = abs(value - expected)
         passed = bool(math.isfinite(value) and diff <= tol)
-        computed = (f"{name} = {value:{fmt}} (paper {expected:{fmt}}; "
-                    f"|Δ| = {diff:.2g} {'≤' if passed else '>'} {tol:.2g})")
+        computed = (
+            f"{name} = {value:{fmt}} (paper {expected:{fmt}}; "
+            f"|Δ| = {diff:.2g} {'≤' if passed else '>'} {tol:.2g})"
+        )
         return cls(id, source, statement, computed, passed, detail)
 
     def to_dict(self) -> dict[str, Any]:
@@ -144,8 +158,7 @@ class Report:
     ``checkpoints.json``.
     """
 
-    def __init__(self, title: str = DEFAULT_TITLE, *,
-                 parameters: Mapping[str, Any] | None = None) -> None:
+    def __init__(self, title: str = DEFAULT_TITLE, *, parameters: Mapping[str, Any] | None = None) -> None:
         from chuteflow import __version__
 
         self.title = title
@@ -195,14 +208,29 @@ class Report:
         self._target(stage).checkpoints.append(checkpoint)
         return checkpoint
 
-    def check(self, id: str, *, source: str, statement: str, computed: str,
-              passed: bool | None, detail: str = "", stage: str | None = None) -> Checkpoint:
+    def check(
+        self,
+        id: str,
+        *,
+        source: str,
+        statement: str,
+        computed: str,
+        passed: bool | None,
+        detail: str = "",
+        stage: str | None = None,
+    ) -> Checkpoint:
         """Build a :class:`Checkpoint` from the fields and add it."""
-        return self.add_checkpoint(Checkpoint(id, source, statement, computed, passed, detail),
-                                   stage=stage)
+        return self.add_checkpoint(Checkpoint(id, source, statement, computed, passed, detail), stage=stage)
 
-    def add_figure(self, path: str | Path, caption: str, *, id: str | None = None,
-                   source: str = "", stage: str | None = None) -> Figure:
+    def add_figure(
+        self,
+        path: str | Path,
+        caption: str,
+        *,
+        id: str | None = None,
+        source: str = "",
+        stage: str | None = None,
+    ) -> Figure:
         """Add a figure file (written by the stage, usually under ``ctx.out``)."""
         fig = Figure(Path(path), caption, id, source)
         self._target(stage).figures.append(fig)
@@ -250,11 +278,18 @@ class Report:
             "environment": self.environment,
             "counts": self.counts(),
             "stages": [
-                {"name": s.name, "title": s.title, "status": s.status, "wall_time_s": s.wall_time,
-                 "checkpoints": [cp.to_dict() for cp in s.checkpoints],
-                 "figures": [{"path": str(f.path), "caption": f.caption, "id": f.id,
-                              "source": f.source} for f in s.figures],
-                 "notes": list(s.notes)}
+                {
+                    "name": s.name,
+                    "title": s.title,
+                    "status": s.status,
+                    "wall_time_s": s.wall_time,
+                    "checkpoints": [cp.to_dict() for cp in s.checkpoints],
+                    "figures": [
+                        {"path": str(f.path), "caption": f.caption, "id": f.id, "source": f.source}
+                        for f in s.figures
+                    ],
+                    "notes": list(s.notes),
+                }
                 for s in self.sections.values()
             ],
         }
@@ -277,12 +312,12 @@ class Report:
         out.mkdir(parents=True, exist_ok=True)
         if wall_time is not None:
             self.wall_time = float(wall_time)
-        paths = {"md": out / "report.md", "html": out / "report.html",
-                 "json": out / "checkpoints.json"}
+        paths = {"md": out / "report.md", "html": out / "report.html", "json": out / "checkpoints.json"}
         paths["md"].write_text(self.to_markdown(out), encoding="utf-8")
         paths["html"].write_text(self.to_html(), encoding="utf-8")
-        paths["json"].write_text(json.dumps(self.to_dict(), indent=2, ensure_ascii=False) + "\n",
-                                 encoding="utf-8")
+        paths["json"].write_text(
+            json.dumps(self.to_dict(), indent=2, ensure_ascii=False) + "\n", encoding="utf-8"
+        )
         self.paths = paths
         return paths
 

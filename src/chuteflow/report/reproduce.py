@@ -5,6 +5,7 @@ its own report section; a stage that raises is recorded as a failed checkpoint
 (``<stage>.completed``, with the traceback as detail) and the run goes on. The report
 is rewritten after every stage, so an interrupted run still leaves one.
 """
+
 from __future__ import annotations
 
 import os
@@ -44,13 +45,20 @@ class StageProgress:
     apart from remembering the last message.
     """
 
-    def __init__(self, progress: Progress | None = None, task: TaskID | None = None,
-                 prefix: str = "") -> None:
+    def __init__(
+        self, progress: Progress | None = None, task: TaskID | None = None, prefix: str = ""
+    ) -> None:
         self._progress, self._task, self._prefix = progress, task, prefix
         self.message: str = ""
 
-    def __call__(self, message: str | None = None, *, advance: float | None = None,
-                 total: float | None = None, completed: float | None = None) -> None:
+    def __call__(
+        self,
+        message: str | None = None,
+        *,
+        advance: float | None = None,
+        total: float | None = None,
+        completed: float | None = None,
+    ) -> None:
         if message is not None:
             self.message = str(message)
         if self._progress is None or self._task is None:
@@ -66,8 +74,9 @@ class StageProgress:
             kw["advance"] = advance
         self._progress.update(self._task, **kw)
 
-    def track(self, iterable: Iterable[T], description: str | None = None,
-              total: float | None = None) -> Iterator[T]:
+    def track(
+        self, iterable: Iterable[T], description: str | None = None, total: float | None = None
+    ) -> Iterator[T]:
         """Yield from ``iterable``, advancing the task by one per item."""
         if total is None and hasattr(iterable, "__len__"):
             total = len(iterable)  # type: ignore[arg-type]
@@ -80,16 +89,17 @@ class StageProgress:
 def summary_table(report: Report) -> Table:
     """Rich table of all checkpoints, coloured by result."""
     counts = report.counts()
-    table = Table(title="chuteflow reproduce: checkpoints",
-                  caption=f"{counts['pass']} passed, {counts['fail']} failed, "
-                          f"{counts['not checked']} not checked", show_lines=False)
+    table = Table(
+        title="chuteflow reproduce: checkpoints",
+        caption=f"{counts['pass']} passed, {counts['fail']} failed, {counts['not checked']} not checked",
+        show_lines=False,
+    )
     for col in ("Stage", "Checkpoint", "Source", "Computed", "Result"):
         table.add_column(col, overflow="fold")
     style = {"pass": "green", "fail": "bold red", "not checked": "dim"}
     for stage, cp in report.iter_checkpoints():
         computed = cp.computed if len(cp.computed) <= 160 else cp.computed[:157] + "..."
-        table.add_row(stage, cp.id, cp.source, computed,
-                      f"[{style[cp.status]}]{cp.status}[/]")
+        table.add_row(stage, cp.id, cp.source, computed, f"[{style[cp.status]}]{cp.status}[/]")
     return table
 
 
@@ -102,11 +112,16 @@ def _model_defaults() -> dict[str, Any]:
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
-def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
-                  stages: Sequence[str] | None = None, *, console: Console | None = None,
-                  show_progress: bool | None = None,
-                  parameters: dict[str, Any] | None = None,
-                  papers: Sequence[str] | None = None) -> Report:
+def run_reproduce(
+    out: str | Path = "reproduce-out",
+    quick: bool = True,
+    stages: Sequence[str] | None = None,
+    *,
+    console: Console | None = None,
+    show_progress: bool | None = None,
+    parameters: dict[str, Any] | None = None,
+    papers: Sequence[str] | None = None,
+) -> Report:
     """Run the reproduction stages and write ``report.md`` / ``report.html`` in ``out``.
 
     Parameters
@@ -155,29 +170,49 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
         "BLAS threads": 1,
     }
     params.update(parameters or {})
-    report = Report(title="chuteflow: reproduction of " + "; ".join(
-        PAPERS.get(p, p) for p in papers), parameters=params)
+    report = Report(
+        title="chuteflow: reproduction of " + "; ".join(PAPERS.get(p, p) for p in papers), parameters=params
+    )
     for module, exc in import_errors.items():
         paper, _, name = module.partition(".")
-        report.add_checkpoint(Checkpoint(
-            id=f"import.{name}", source=f"chuteflow.papers.{paper}.stages.{name}",
-            statement="The stage module imports.", computed=f"{type(exc).__name__}: {exc}",
-            passed=False, detail="".join(traceback.format_exception(exc))), stage="import")
+        report.add_checkpoint(
+            Checkpoint(
+                id=f"import.{name}",
+                source=f"chuteflow.papers.{paper}.stages.{name}",
+                statement="The stage module imports.",
+                computed=f"{type(exc).__name__}: {exc}",
+                passed=False,
+                detail="".join(traceback.format_exception(exc)),
+            ),
+            stage="import",
+        )
     report.write(out, wall_time=time.perf_counter() - t_start)
 
     live = console.is_terminal if show_progress is None else show_progress
     shared: dict[str, Any] = {}
     n = len(selected)
-    progress = Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(),
-                        MofNCompleteColumn(), TimeElapsedColumn(), console=console,
-                        transient=True, disable=not live)
+    progress = Progress(
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+        disable=not live,
+    )
     with progress:
         overall = progress.add_task("stages", total=n)
         for i, stage in enumerate(selected, 1):
             task = progress.add_task(f"{stage.name}", total=None)
-            ctx = StageContext(out=out, quick=quick, report=report, stage=stage.name,
-                               progress=StageProgress(progress, task, f"{stage.name}: "),
-                               shared=shared)
+            ctx = StageContext(
+                out=out,
+                quick=quick,
+                report=report,
+                stage=stage.name,
+                progress=StageProgress(progress, task, f"{stage.name}: "),
+                shared=shared,
+            )
             t0 = time.perf_counter()
             with report.stage(stage.name, stage.title) as section:
                 section.status = "running"
@@ -185,11 +220,16 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
                     stage.func(ctx)
                 except Exception as exc:  # recorded, run continues
                     section.status = "failed"
-                    report.add_checkpoint(Checkpoint(
-                        id=f"{stage.name}.completed", source=f"chuteflow stage '{stage.name}'",
-                        statement="The stage runs to completion.",
-                        computed=f"{type(exc).__name__}: {exc}", passed=False,
-                        detail=traceback.format_exc()))
+                    report.add_checkpoint(
+                        Checkpoint(
+                            id=f"{stage.name}.completed",
+                            source=f"chuteflow stage '{stage.name}'",
+                            statement="The stage runs to completion.",
+                            computed=f"{type(exc).__name__}: {exc}",
+                            passed=False,
+                            detail=traceback.format_exc(),
+                        )
+                    )
                 else:
                     section.status = "ok"
                 section.wall_time = time.perf_counter() - t0
@@ -197,18 +237,23 @@ def run_reproduce(out: str | Path = "reproduce-out", quick: bool = True,
             progress.advance(overall)
             n_fail = sum(cp.passed is False for cp in section.checkpoints)
             colour = "red" if section.status == "failed" or n_fail else "green"
-            console.print(f"[{i}/{n}] {stage.name}: [{colour}]{section.status}[/]"
-                          f"{f', {n_fail} failed checkpoint(s)' if n_fail else ''}"
-                          f" ({section.wall_time:.1f} s)", highlight=False)
+            console.print(
+                f"[{i}/{n}] {stage.name}: [{colour}]{section.status}[/]"
+                f"{f', {n_fail} failed checkpoint(s)' if n_fail else ''}"
+                f" ({section.wall_time:.1f} s)",
+                highlight=False,
+            )
             report.write(out, wall_time=time.perf_counter() - t_start)
 
     report.write(out, wall_time=time.perf_counter() - t_start)
     if report.checkpoints:
         console.print(summary_table(report))
     counts = report.counts()
-    console.print(f"{len(selected)} stage(s) run in {report.wall_time:.1f} s; "
-                  f"{counts['pass']} passed, {counts['fail']} failed, "
-                  f"{counts['not checked']} not checked checkpoints", highlight=False)
-    console.print(f"report: {report.paths['md']}  {report.paths['html']}", highlight=False,
-                  soft_wrap=True)
+    console.print(
+        f"{len(selected)} stage(s) run in {report.wall_time:.1f} s; "
+        f"{counts['pass']} passed, {counts['fail']} failed, "
+        f"{counts['not checked']} not checked checkpoints",
+        highlight=False,
+    )
+    console.print(f"report: {report.paths['md']}  {report.paths['html']}", highlight=False, soft_wrap=True)
     return report

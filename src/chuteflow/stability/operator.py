@@ -29,6 +29,7 @@ which the impermeability row sets to zero, so dropping it changes nothing. The t
 the far-field conditions of :func:`chuteflow.equations.far_field_conditions`, compiled like
 the bulk equations; a term with |k| (k = √(k_x² + k_z²)) goes to K.
 """
+
 from __future__ import annotations
 
 import math
@@ -64,15 +65,27 @@ def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
     s = g.interpolate(flow.log_nu, y)
     nu = np.exp(s)
     s1, s2 = g.interpolate(g.D @ flow.log_nu, y), g.interpolate(g.D2 @ flow.log_nu, y)
-    return {"nu": nu, "nu_y": nu * s1, "nu_yy": nu * (s2 + s1**2),
-            "u": g.interpolate(flow.u, y), "u_y": g.interpolate(d["u_y"], y),
-            "u_yy": g.interpolate(d["u_yy"], y),
-            "T": g.interpolate(flow.T, y), "T_y": g.interpolate(d["T_y"], y),
-            "T_yy": g.interpolate(d["T_yy"], y)}
+    return {
+        "nu": nu,
+        "nu_y": nu * s1,
+        "nu_yy": nu * (s2 + s1**2),
+        "u": g.interpolate(flow.u, y),
+        "u_y": g.interpolate(d["u_y"], y),
+        "u_yy": g.interpolate(d["u_yy"], y),
+        "T": g.interpolate(flow.T, y),
+        "T_y": g.interpolate(d["T_y"], y),
+        "T_yy": g.interpolate(d["T_yy"], y),
+    }
 
 
-def equation_terms(flow: SteadyFlow, name: str, fields: dict[str, np.ndarray], kx: float,
-                   kz: float = 0.0, alpha: complex = 0.0) -> list[tuple[Term, np.ndarray]]:
+def equation_terms(
+    flow: SteadyFlow,
+    name: str,
+    fields: dict[str, np.ndarray],
+    kx: float,
+    kz: float = 0.0,
+    alpha: complex = 0.0,
+) -> list[tuple[Term, np.ndarray]]:
     """Each term of one linearised equation, applied to a normal-mode perturbation.
 
     Parameters
@@ -265,10 +278,20 @@ class StabilityOperator:
         # by the inertia ν0 instead (B = I) multiplies the top rows by ~1e9 and, QZ and LU
         # being normwise backward stable, buries the dense layer's eigenvalues in round-off
         # (α(0) ~ 1e-4 instead of ~1e-12 at θ = 16°, ν0 = 0.05).
-        bulk_scale = {"mass": np.ones(m), "xmom": 1.0 / mu, "ymom": 1.0 / mu,
-                      "zmom": 1.0 / mu, "energy": 1.0 / kap}
-        floor_scale = {"ymom": 1.0 / mu[0], "floor_x": 1.0 / mu[0], "floor_v": 1.0,
-                       "floor_z": 1.0 / mu[0], "floor_energy": 1.0 / kap[0]}
+        bulk_scale = {
+            "mass": np.ones(m),
+            "xmom": 1.0 / mu,
+            "ymom": 1.0 / mu,
+            "zmom": 1.0 / mu,
+            "energy": 1.0 / kap,
+        }
+        floor_scale = {
+            "ymom": 1.0 / mu[0],
+            "floor_x": 1.0 / mu[0],
+            "floor_v": 1.0,
+            "floor_z": 1.0 / mu[0],
+            "floor_energy": 1.0 / kap[0],
+        }
         self.residuals = {}
         cache = {}
 
@@ -302,7 +325,7 @@ class StabilityOperator:
             r0 = i * m
             name = BULK_OF[f]
             add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
-            scale_all[r0 + 1:r0 + m - 1] = bulk_scale[name][inner]
+            scale_all[r0 + 1 : r0 + m - 1] = bulk_scale[name][inner]
             name = FLOOR_OF[f]
             add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
             scale_all[r0] = floor_scale[name]
@@ -316,7 +339,7 @@ class StabilityOperator:
         # numerically zero rows: A − σB is singular to round-off in several directions at
         # once and shift-invert fails near the continuum (and at k = 0).
         self.row_eq = np.ones(M)
-        self.row_eq[1:m - 1] = 1.0 / base["nu"][1:m - 1]
+        self.row_eq[1 : m - 1] = 1.0 / base["nu"][1 : m - 1]
         self.col_eq = np.ones(M)
         self.col_eq[:m] = base["nu"]
         r, c = self.row_eq[:, None], self.col_eq[None, :]
@@ -332,8 +355,7 @@ class StabilityOperator:
         kx, kz = _check_k(kx, "k"), _check_k(kz, "kz", signed=True)
         if kz and not self.three_d:
             raise ParameterError("kz != 0 needs the three-dimensional operator (three_d=True)")
-        pieces, K = ((self._pieces_eq, self._K_eq) if equilibrated else
-                     (self.pieces, self._K_sparse))
+        pieces, K = (self._pieces_eq, self._K_eq) if equilibrated else (self.pieces, self._K_sparse)
         A = np.empty(pieces[(0, 0)].shape, dtype=complex)
         # (ik)^b is real for even b, imaginary for odd: fill real and imaginary parts apart
         re, im = pieces[(0, 0)].copy(), None
@@ -384,9 +406,11 @@ def _check_n(n) -> int:
         raise ParameterError(f"n = {n!r}: expected an integer number of intervals") from None
     lo, hi = N_RANGE
     if not lo <= n <= hi:
-        raise ParameterError(f"n = {n} is outside [{lo}, {hi}]: the number of Chebyshev "
-                             "intervals must resolve the layer and the dense solve must fit "
-                             "in memory")
+        raise ParameterError(
+            f"n = {n} is outside [{lo}, {hi}]: the number of Chebyshev "
+            "intervals must resolve the layer and the dense solve must fit "
+            "in memory"
+        )
     return n
 
 
@@ -396,6 +420,8 @@ def _check_k(k, name, signed=False) -> float:
     except (TypeError, ValueError):
         raise ParameterError(f"{name} = {k!r}: expected a number") from None
     if not math.isfinite(k) or (k < 0 and not signed):
-        raise ParameterError(f"{name} = {k!r} is outside [0, inf): the wavenumber of the "
-                             "perturbation exp(ikx) is taken non-negative (α(−k) = conj α(k))")
+        raise ParameterError(
+            f"{name} = {k!r} is outside [0, inf): the wavenumber of the "
+            "perturbation exp(ikx) is taken non-negative (α(−k) = conj α(k))"
+        )
     return k

@@ -1,4 +1,5 @@
 """User-facing steady solver with automatic resolution and a convergence estimate."""
+
 from __future__ import annotations
 
 import math
@@ -23,10 +24,19 @@ def _quantities(theta, st: NewtonState, model):
     return g, q
 
 
-def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
-                 nu_top: float = 1e-9, n: int = 64, rtol: float = 1e-8, n_max: int = 384,
-                 guess: SteadyFlow | None = None, min_thickness: float = 1.0,
-                 continuation: bool = True) -> SteadyFlow:
+def solve_steady(
+    theta: float,
+    nu0: float,
+    model: ChuteModel | None = None,
+    *,
+    nu_top: float = 1e-9,
+    n: int = 64,
+    rtol: float = 1e-8,
+    n_max: int = 384,
+    guess: SteadyFlow | None = None,
+    min_thickness: float = 1.0,
+    continuation: bool = True,
+) -> SteadyFlow:
     """Steady flow at inclination ``theta`` (degrees) and floor density ``nu0`` (paper §3).
 
     Parameters
@@ -74,8 +84,9 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
     model = model or ChuteModel()
     theta, nu0 = validate_point(theta, nu0, model, nu_top)
     if guess is not None:
-        start = NewtonState(guess.n, np.asarray(guess.log_nu), np.asarray(guess.u),
-                       np.asarray(guess.T), guess.y_max)
+        start = NewtonState(
+            guess.n, np.asarray(guess.log_nu), np.asarray(guess.u), np.asarray(guess.T), guess.y_max
+        )
         return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
     try:
         return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
@@ -92,15 +103,17 @@ def solve_steady(theta: float, nu0: float, model: ChuteModel | None = None, *,
         # sharp dense bands need more nodes than n to be represented: double until it works
         # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
         try:
-            return solve_point(theta, nu0, model, nu_top, m, rtol, n_max,
-                          verdict.starting_state(m), min_thickness)
+            return solve_point(
+                theta, nu0, model, nu_top, m, rtol, n_max, verdict.starting_state(m), min_thickness
+            )
         except ThinLayerError:
             raise
         except (NoSteadyFlowError, ConvergenceError) as exc:
             first = ConvergenceError(
                 f"steady solver did not converge although shooting finds a solution — "
                 f"{verdict.reason}; tried Newton from the isothermal cold start ({cold}) and "
-                f"from the shooting profile starting at n = {n} … {m} ({exc})")
+                f"from the shooting profile starting at n = {n} … {m} ({exc})"
+            )
         m *= 2
     if not verdict.physical:
         raise NoSteadyFlowError(verdict.reason)
@@ -133,8 +146,7 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
             continue
     if anchor is None:
         raise first_error
-    cur, reached = follow_theta(anchor, theta, max_steps=_MAX_STEPS, n=n, rtol=rtol,
-                                n_max=n_max)
+    cur, reached = follow_theta(anchor, theta, max_steps=_MAX_STEPS, n=n, rtol=rtol, n_max=n_max)
     if reached:
         return cur
     direction = 1.0 if theta > anchor.theta else -1.0
@@ -144,7 +156,8 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
         f"{model.roughness:g}, wall_loss = {model.wall_loss:g}: the cold start failed and "
         f"the branch followed in theta from {anchor.theta:g} deg ends near "
         f"{cur.theta:.4g} deg (there h = {cur.h:.3g}, y_max = {cur.y_max:.3g}, peak "
-        f"density {cur.nu_peak:.3g}) — the angle is too {too} for this floor density")
+        f"density {cur.nu_peak:.3g}) — the angle is too {too} for this floor density"
+    )
 
 
 def follow_theta(flow: SteadyFlow, theta: float, **kw):
@@ -153,9 +166,18 @@ def follow_theta(flow: SteadyFlow, theta: float, **kw):
     return follow(flow, theta=theta, **kw)
 
 
-def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = None, *,
-           step: float = 0.5, min_step: float = 1.0 / 128, max_steps: int = 200, n: int = 64,
-           rtol: float = 1e-8, n_max: int = 384):
+def follow(
+    flow: SteadyFlow,
+    theta: float | None = None,
+    nu0: float | None = None,
+    *,
+    step: float = 0.5,
+    min_step: float = 1.0 / 128,
+    max_steps: int = 200,
+    n: int = 64,
+    rtol: float = 1e-8,
+    n_max: int = 384,
+):
     """Follow the branch of ``flow`` along the straight path to (``theta``, ``nu0``).
 
     Adaptive natural-parameter continuation (:func:`chuteflow.continuation.continue_to`,
@@ -185,46 +207,52 @@ def follow(flow: SteadyFlow, theta: float | None = None, nu0: float | None = Non
     def solve(cur, s):
         th, nu = th0 + s * (th1 - th0), nu00 + s * (nu1 - nu00)
         dxb, dxt = tangent_vectors(cur, theta=True)
-        X = NewtonState(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T),
-                   cur.y_max).pack()
+        X = NewtonState(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T), cur.y_max).pack()
         pred = NewtonState.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb)
-        if not (0.5 * cur.y_max < pred.L < 2 * cur.y_max and (pred.T > 0).all()
-                and (pred.s < np.log(model.nu_max)).all()):
+        if not (
+            0.5 * cur.y_max < pred.L < 2 * cur.y_max
+            and (pred.T > 0).all()
+            and (pred.s < np.log(model.nu_max)).all()
+        ):
             pred = NewtonState.unpack(cur.n, X)
         try:
-            return Trial(True, solve_point(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0,
-                                      maxiter=15, lam_min=1.0 / 16))
+            return Trial(
+                True,
+                solve_point(th, nu, model, nu_top, n, rtol, n_max, pred, 0.0, maxiter=15, lam_min=1.0 / 16),
+            )
         except (NoSteadyFlowError, ConvergenceError, ParameterError) as exc:
             return Trial(False, str(exc))
 
     # steps in degrees (θ moves) or ν0(0)/10 per unit s; a failed step onto the end of the
     # path is retried there with the halved nominal step (clip=False)
-    rules = StepRules(grow=1.5, shrink=0.5, max_step=2.0, min_step=min_step,
-                      max_attempts=max_steps, clip=False, scale=scale)
+    rules = StepRules(
+        grow=1.5, shrink=0.5, max_step=2.0, min_step=min_step, max_attempts=max_steps, clip=False, scale=scale
+    )
     res = continue_to(solve, flow, 0.0, 1.0, rules, h=step / scale)
     return res.state, res.reached
 
 
 def _thin_message(theta, nu0, model, h, min_thickness):
-    return (f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
-            f"{model.roughness:g}: thickness h = {h:.3g} is below {min_thickness:g} "
-            "particle diameter — the angle is too small for this roughness (or the floor "
-            "density too low)")
+    return (
+        f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
+        f"{model.roughness:g}: thickness h = {h:.3g} is below {min_thickness:g} "
+        "particle diameter — the angle is too small for this roughness (or the floor "
+        "density too low)"
+    )
 
 
-def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60,
-           lam_min=1e-6):
+def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60, lam_min=1e-6):
     """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start)."""
-    st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter,
-                              lam_min=lam_min)
+    st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter, lam_min=lam_min)
     _, q = _quantities(theta, st, model)
     change = math.inf
     while True:
         n2 = n + max(n // 2, 8)
         # at least one Newton correction on the finer grid, so that the change measures
         # the discretisation even when the interpolated coarse solution already passes tol
-        st2, it2, res2 = solve_state(theta, nu0, model, nu_top, n2, guess=st, maxiter=maxiter,
-                                     lam_min=lam_min, min_iter=1)
+        st2, it2, res2 = solve_state(
+            theta, nu0, model, nu_top, n2, guess=st, maxiter=maxiter, lam_min=lam_min, min_iter=1
+        )
         it += it2
         g2, q2 = _quantities(theta, st2, model)
         change = max(abs(q2[k] - q[k]) / max(abs(q2[k]), 1e-300) for k in _KEYS)
@@ -235,11 +263,24 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
         raise ConvergenceError(
             f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
             f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
-            f"(n_max = {n_max})")
-    flow = SteadyFlow(theta=theta, nu0=nu0, model=model, nu_top=nu_top, n=n2, y=g2.y,
-                      log_nu=st2.s, u=st2.u, T=st2.T, residual=float(res2), iterations=it,
-                      convergence=float(change),
-                      spectral_tail=spectral_tail(st2.s, st2.u, st2.T), **q2)
+            f"(n_max = {n_max})"
+        )
+    flow = SteadyFlow(
+        theta=theta,
+        nu0=nu0,
+        model=model,
+        nu_top=nu_top,
+        n=n2,
+        y=g2.y,
+        log_nu=st2.s,
+        u=st2.u,
+        T=st2.T,
+        residual=float(res2),
+        iterations=it,
+        convergence=float(change),
+        spectral_tail=spectral_tail(st2.s, st2.u, st2.T),
+        **q2,
+    )
     if q2["h"] < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, q2["h"], min_thickness), flow)
     return flow
@@ -275,10 +316,9 @@ def steady_tangent(flow: SteadyFlow) -> dict:
 
 def tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
     """steady_tangent's dict from the packed tangent dX/dβ."""
-    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
-                flow.y_max)
+    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
     m = flow.n + 1
-    out = {"log_nu": dX[:m], "u": dX[m:2 * m], "T": dX[2 * m:3 * m], "y_max": dX[-1]}
+    out = {"log_nu": dX[:m], "u": dX[m : 2 * m], "T": dX[2 * m : 3 * m], "y_max": dX[-1]}
     X = st.pack()
     eps = 1e-6 * flow.nu0
     qp = _quantities(flow.theta, NewtonState.unpack(flow.n, X + eps * dX), flow.model)[1]
@@ -295,19 +335,19 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
     import scipy.linalg as sla
 
-
     newton = SteadyNewton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
-    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T),
-                flow.y_max)
+    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
     _, J = newton.evaluate(st)
     rhs = np.zeros((J.shape[0], 2 if theta else 1))
     rhs[0, 0] = -1.0 / flow.nu0
     if theta:
         eps = 1e-3
         Rp = SteadyNewton(flow.n, flow.theta + eps, flow.nu0, flow.model, flow.nu_top).evaluate(
-            st, jac=False)[0]
+            st, jac=False
+        )[0]
         Rm = SteadyNewton(flow.n, flow.theta - eps, flow.nu0, flow.model, flow.nu_top).evaluate(
-            st, jac=False)[0]
+            st, jac=False
+        )[0]
         rhs[:, 1] = (Rp - Rm) / (2 * eps)
     sol = -sla.lu_solve(sla.lu_factor(J, check_finite=False), rhs, check_finite=False)
     return sol[:, 0], (sol[:, 1] if theta else None)

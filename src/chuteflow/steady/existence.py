@@ -32,6 +32,7 @@ it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq. (3.7) as 
 Newton solver, and the floor values come from the floor_x and floor_energy residuals
 (eqs 2.9, 2.10), all with the transport functions of :meth:`ChuteModel.evaluate`.
 """
+
 from __future__ import annotations
 
 import math
@@ -86,8 +87,17 @@ class SteadyODE:
 
     def _base(self, nu, u, T, T_y, part):
         u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq. (3.7)
-        return {"nu": nu, "nu_y": 0.0, "nu_yy": 0.0, "u": u, "u_y": u_y, "u_yy": 0.0,
-                "T": T, "T_y": T_y, "T_yy": 0.0}
+        return {
+            "nu": nu,
+            "nu_y": 0.0,
+            "nu_yy": 0.0,
+            "u": u,
+            "u_y": u_y,
+            "u_yy": 0.0,
+            "T": T,
+            "T_y": T_y,
+            "T_yy": 0.0,
+        }
 
     def rhs(self, y, z):
         """d/dy of (ln ν0, u0, T0, T0'). Outside the closures' domain (trial stages of the
@@ -153,8 +163,16 @@ class Shot:
         return self.dT_top if self.kind == "top" else float(self.sign)
 
 
-def shoot(ode: SteadyODE, nu0: float, u_floor: float, *, nu_top: float = 1e-9,
-          rtol: float = 1e-6, y_cap: float = 1e5, dense: bool = False) -> Shot:
+def shoot(
+    ode: SteadyODE,
+    nu0: float,
+    u_floor: float,
+    *,
+    nu_top: float = 1e-9,
+    rtol: float = 1e-6,
+    y_cap: float = 1e5,
+    dense: bool = False,
+) -> Shot:
     """Integrate the steady equations upwards from the floor at trial ``u_floor``.
 
     Stops where ν0 = ``nu_top`` (the top), where T0 falls below 1e-4 T0(0) (cold collapse),
@@ -186,9 +204,16 @@ def shoot(ode: SteadyODE, nu0: float, u_floor: float, *, nu_top: float = 1e-9,
         # scipy.integrate costs ~0.3 s to import: only a cold start that failed needs it
         from scipy.integrate import solve_ivp
 
-        sol = solve_ivp(ode.rhs, (0.0, y_cap), [math.log(nu0), u_floor, T0, T0p],
-                        method="RK45", rtol=rtol, atol=1e-12, events=(top, cold, packed, hot),
-                        dense_output=dense)
+        sol = solve_ivp(
+            ode.rhs,
+            (0.0, y_cap),
+            [math.log(nu0), u_floor, T0, T0p],
+            method="RK45",
+            rtol=rtol,
+            atol=1e-12,
+            events=(top, cold, packed, hot),
+            dense_output=dense,
+        )
     y_end = float(sol.t[-1])
     if len(sol.t_events[0]):
         d = float(sol.y_events[0][0][3])
@@ -261,8 +286,10 @@ class _Separatrix(Exception):
 
 
 def _where(theta, nu0, model):
-    return (f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
-            f"wall_loss = {model.wall_loss:g}")
+    return (
+        f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
+        f"wall_loss = {model.wall_loss:g}"
+    )
 
 
 def _thickness(sol, y_max) -> float:
@@ -278,10 +305,18 @@ def _thickness(sol, y_max) -> float:
     return float(brentq(lambda t: sol.sol(t)[0] - target, y[j - 1], y[j], xtol=1e-10))
 
 
-def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, *,
-                     nu_top: float = 1e-9, u_range: tuple[float, float] = U_RANGE,
-                     ratio: float = 2.0, rtol: float = 1e-4, fine_rtol: float = 1e-6,
-                     min_thickness: float = 1.0) -> ExistenceVerdict:
+def steady_existence(
+    theta: float,
+    nu0: float,
+    model: ChuteModel | None = None,
+    *,
+    nu_top: float = 1e-9,
+    u_range: tuple[float, float] = U_RANGE,
+    ratio: float = 2.0,
+    rtol: float = 1e-4,
+    fine_rtol: float = 1e-6,
+    min_thickness: float = 1.0,
+) -> ExistenceVerdict:
     """Decide whether a steady flow exists at (``theta``, ``nu0``) by a shooting scan.
 
     Trials u0(0) = u_max, u_max/ratio, … (down to u_min) are integrated from the floor at
@@ -338,9 +373,15 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
         return shoot(ode, nu0, float(u), nu_top=nu_top, rtol=rtol)
 
     def done(kind, reason, **kw):
-        return ExistenceVerdict(exists=kind in ("flow", "thin"), physical=kind == "flow",
-                                kind=kind, reason=reason, shots=count[0],
-                                seconds=time.perf_counter() - t_start, **kw)
+        return ExistenceVerdict(
+            exists=kind in ("flow", "thin"),
+            physical=kind == "flow",
+            kind=kind,
+            reason=reason,
+            shots=count[0],
+            seconds=time.perf_counter() - t_start,
+            **kw,
+        )
 
     def refine(cold, hot):
         """Brent on the signed miss in ln u0(0) at ``fine_rtol``; trials that do not reach
@@ -365,9 +406,13 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
         hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
         # a trial that solves the top condition eq. (3.13): T0' small on the scale of the
         # layer (T0(y_max)/y_max); one far from it is a stray trial beside a separatrix
-        reached = [v for v, sh in ends.items()
-                   if sh.kind == "top" and sh.solution.sol is not None
-                   and abs(sh.dT_top) * sh.y_end < 1e-3 * float(sh.solution.y[2, -1])]
+        reached = [
+            v
+            for v, sh in ends.items()
+            if sh.kind == "top"
+            and sh.solution.sol is not None
+            and abs(sh.dT_top) * sh.y_end < 1e-3 * float(sh.solution.y[2, -1])
+        ]
         best = ends[min(reached, key=lambda v: abs(v - x))] if reached else None
         nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
         return best, (cold_u, hot_u), nu_peak
@@ -391,38 +436,62 @@ def steady_existence(theta: float, nu0: float, model: ChuteModel | None = None, 
     if final is None and separatrix is not None:
         bracket, nu_peak = separatrix
         packs = nu_peak > 0.95 * model.nu_max
-        return done("too_large" if packs else "no_sign_change", (
-            f"no steady flow at {where}: the change from a heating to a cooling layer at "
-            f"u0(0) ≈ {math.sqrt(bracket[0] * bracket[1]):.6g} is a separatrix, not a "
-            f"solution — no trial there reaches nu0 = {nu_top:g}"
-            + (f" (the density piles up to {nu_peak:.3g}, close to nu_max = "
-               f"{model.nu_max:g}): the angle is too large for this floor density"
-               if packs else "")), bracket=bracket)
+        return done(
+            "too_large" if packs else "no_sign_change",
+            (
+                f"no steady flow at {where}: the change from a heating to a cooling layer at "
+                f"u0(0) ≈ {math.sqrt(bracket[0] * bracket[1]):.6g} is a separatrix, not a "
+                f"solution — no trial there reaches nu0 = {nu_top:g}"
+                + (
+                    f" (the density piles up to {nu_peak:.3g}, close to nu_max = "
+                    f"{model.nu_max:g}): the angle is too large for this floor density"
+                    if packs
+                    else ""
+                )
+            ),
+            bracket=bracket,
+        )
     if final is None:
         rng = f"u0(0) in [{u_min:g}, {u_max:g}]"
         if all(s > 0 for s in signs):
-            return done("too_small", (
-                f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
-                f"for {rng} — every trial layer heats up (T0' > 0 where nu0 reaches "
-                f"{nu_top:g}, even the thin cold layer): the angle is too small for this "
-                "roughness and floor density"))
+            return done(
+                "too_small",
+                (
+                    f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
+                    f"for {rng} — every trial layer heats up (T0' > 0 where nu0 reaches "
+                    f"{nu_top:g}, even the thin cold layer): the angle is too small for this "
+                    "roughness and floor density"
+                ),
+            )
         if all(s < 0 for s in signs):
-            return done("too_large", (
-                f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
-                f"for {rng} — every trial layer cools and collapses or packs to nu_max: "
-                "the angle is too large for this roughness and floor density"))
-        return done("no_sign_change", (
-            f"no steady flow at {where}: shooting finds no change from a heating to a "
-            f"cooling layer as u0(0) decreases over {rng}"))
+            return done(
+                "too_large",
+                (
+                    f"no steady flow at {where}: shooting finds no sign change of T0' at the top "
+                    f"for {rng} — every trial layer cools and collapses or packs to nu_max: "
+                    "the angle is too large for this roughness and floor density"
+                ),
+            )
+        return done(
+            "no_sign_change",
+            (
+                f"no steady flow at {where}: shooting finds no change from a heating to a "
+                f"cooling layer as u0(0) decreases over {rng}"
+            ),
+        )
     kw = {"bracket": bracket}
     kw["u_floor"] = final.u_floor
     y_max = final.y_end
     h = _thickness(final.solution, y_max)
     kw.update(h=h, y_max=y_max, solution=final.solution)
     if h < min_thickness:
-        return done("thin", (
-            f"no physical steady flow at {where}: the solution (u0(0) = {final.u_floor:.4g}) "
-            f"has thickness h = {h:.3g}, below {min_thickness:g} particle diameter — the "
-            "angle is too small for this roughness (or the floor density too low)"), **kw)
-    return done("flow", (f"steady flow at {where}: u0(0) = {final.u_floor:.6g}, "
-                         f"h = {h:.4g}"), **kw)
+        return done(
+            "thin",
+            (
+                f"no physical steady flow at {where}: the solution (u0(0) = {final.u_floor:.4g}) "
+                f"has thickness h = {h:.3g}, below {min_thickness:g} particle diameter — the "
+                "angle is too small for this roughness (or the floor density too low)"
+            ),
+            **kw,
+        )
+    return done("flow", (f"steady flow at {where}: u0(0) = {final.u_floor:.6g}, h = {h:.4g}"), **kw)

@@ -7,6 +7,7 @@ parameter regions where the isothermal cold start fails (the non-monotonic layer
 dilute hot cushion under a denser band). Every point is nevertheless converged and
 checked at two resolutions exactly as :func:`~chuteflow.steady.solve_steady` does.
 """
+
 from __future__ import annotations
 
 import functools
@@ -23,8 +24,22 @@ from .result import SteadyFlow
 from .solver import NewtonState, validate_point
 
 #: Scalar variables of a family / map dataset (float, NaN where no steady flow).
-SCALARS = ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max", "y_peak",
-           "nu_peak", "convergence", "dQ_drho", "drho_dnu0", "dQ_dnu0")
+SCALARS = (
+    "h",
+    "nu_mean",
+    "rho_bar",
+    "Q",
+    "T_mean",
+    "u_floor",
+    "T_floor",
+    "y_max",
+    "y_peak",
+    "nu_peak",
+    "convergence",
+    "dQ_drho",
+    "drho_dnu0",
+    "dQ_dnu0",
+)
 
 _ATTRS = {
     "h": ("thickness h (ν0 = 1 % of its maximum)", "sigma"),
@@ -38,15 +53,12 @@ _ATTRS = {
     "y_peak": ("height of the density maximum (0 if monotonic)", "sigma"),
     "nu_peak": ("maximum packing fraction", "1"),
     "convergence": ("relative change of the scalars between resolutions n and 3n/2", "1"),
-    "dQ_drho": ("dQ0/dρ̄0 along the family (exact tangent; eq. (B 6))",
-                "sqrt(g sigma)"),
+    "dQ_drho": ("dQ0/dρ̄0 along the family (exact tangent; eq. (B 6))", "sqrt(g sigma)"),
     "drho_dnu0": ("dρ̄0/dν0(0) along the family (exact tangent)", "sigma"),
     "dQ_dnu0": ("dQ0/dν0(0) along the family (exact tangent)", "sigma^2 sqrt(g/sigma)"),
-    "monotonic": ("1 if ν0 decreases monotonically from the floor, 0 if its maximum is "
-                  "above the floor", "1"),
+    "monotonic": ("1 if ν0 decreases monotonically from the floor, 0 if its maximum is above the floor", "1"),
     "n": ("Chebyshev intervals of the accepted resolution", "1"),
-    "status": ("'ok', 'thin' (h < min_thickness), 'no_steady_flow', 'not_converged' or "
-               "'unreached'", ""),
+    "status": ("'ok', 'thin' (h < min_thickness), 'no_steady_flow', 'not_converged' or 'unreached'", ""),
     "error": ("message of the error for points without a steady flow", ""),
 }
 
@@ -93,12 +105,14 @@ class _Point:
 _UNREACHED = "unreached"
 
 
-def _attempt(theta, nu0, model, opts: Options, start: NewtonState | None, n: int,
-             cold: bool = False) -> _Point:
+def _attempt(
+    theta, nu0, model, opts: Options, start: NewtonState | None, n: int, cold: bool = False
+) -> _Point:
     kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
     try:
-        flow = solve_point(theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start,
-                      opts.min_thickness, **kw)
+        flow = solve_point(
+            theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start, opts.min_thickness, **kw
+        )
         return _Point("ok", flow)
     except ThinLayerError as exc:
         return _Point("thin", exc.flow, str(exc))
@@ -124,8 +138,11 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
         st = NewtonState.unpack(f.n, Xp)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
-        if (0.5 * f.y_max < st.L < 2.0 * f.y_max and (st.T > 0).all()
-                and (st.s < np.log(f.model.nu_max)).all()):
+        if (
+            0.5 * f.y_max < st.L < 2.0 * f.y_max
+            and (st.T > 0).all()
+            and (st.s < np.log(f.model.nu_max)).all()
+        ):
             return st
     return NewtonState.unpack(f.n, X)
 
@@ -159,8 +176,7 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
             q = _with_tangent(q, opts)
         return Trial(q.usable, q)
 
-    res = continue_to(solve, nb, 0.0, 1.0, StepRules(retry="subdivide",
-                                                     max_depth=opts.substeps))
+    res = continue_to(solve, nb, 0.0, 1.0, StepRules(retry="subdivide", max_depth=opts.substeps))
     # the answer is the last attempt at the target (a failed one carries the error)
     last = res.last_at(1.0)
     assert last is not None  # continue_to always attempts the target
@@ -189,9 +205,15 @@ def _anchor_order(n: int) -> list[int]:
     return order
 
 
-def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
-                 previous: list[_Point] | None = None, existing: list[_Point] | None = None,
-                 cold_starts: bool = True) -> list[_Point]:
+def continue_row(
+    theta: float,
+    nu0_values,
+    model: ChuteModel,
+    opts: Options,
+    previous: list[_Point] | None = None,
+    existing: list[_Point] | None = None,
+    cold_starts: bool = True,
+) -> list[_Point]:
     """Solve at every ν0 of a row (sorted ascending) by continuation.
 
     A point is started from a converged neighbour: the one below or above in ν0 (predicted
@@ -240,8 +262,11 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
                 walked = True
         if walked:
             continue
-        seeded = [(i, src) for i in order if not usable(i) and (src := prev[i]) is not None and src.usable
-                  and ttag not in tried[i]]
+        seeded = [
+            (i, src)
+            for i in order
+            if not usable(i) and (src := prev[i]) is not None and src.usable and ttag not in tried[i]
+        ]
         if seeded:
             i, seed = seeded[0]
             attempt(i, ttag, functools.partial(_continue, seed, theta, nus[i], model, opts))
@@ -254,17 +279,28 @@ def continue_row(theta: float, nu0_values, model: ChuteModel, opts: Options,
         if previous is None and not cand:
             # a family: points where continuation failed get a cold start too (the
             # isothermal start sometimes succeeds where a far neighbour's predictor does not)
-            cand = [i for i in order if not usable(i) and "cold" not in tried[i]
-                    and ((i > 0 and usable(i - 1)) or (i < N - 1 and usable(i + 1)))]
+            cand = [
+                i
+                for i in order
+                if not usable(i)
+                and "cold" not in tried[i]
+                and ((i > 0 and usable(i - 1)) or (i < N - 1 and usable(i + 1)))
+            ]
         if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
             break
         cold += 1
         attempt(cand[0], "cold", functools.partial(_cold, theta, nus[cand[0]], model, opts))
     out = []
     for pt, t in zip(pts, tried):
-        point = pt if pt is not None else _Point(
-            _UNREACHED, None, "not reached: no converged neighbour to continue "
-            "from and no cold start tried here")
+        point = (
+            pt
+            if pt is not None
+            else _Point(
+                _UNREACHED,
+                None,
+                "not reached: no converged neighbour to continue from and no cold start tried here",
+            )
+        )
         point.tried = frozenset(t)
         out.append(point)
     return out
@@ -282,8 +318,19 @@ def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
             continue
         f = p.flow
         assert f is not None  # status "ok" carries a flow
-        for k in ("h", "nu_mean", "rho_bar", "Q", "T_mean", "u_floor", "T_floor", "y_max",
-                  "y_peak", "nu_peak", "convergence"):
+        for k in (
+            "h",
+            "nu_mean",
+            "rho_bar",
+            "Q",
+            "T_mean",
+            "u_floor",
+            "T_floor",
+            "y_max",
+            "y_peak",
+            "nu_peak",
+            "convergence",
+        ):
             out[k][i] = getattr(f, k)
         out["monotonic"][i] = 1.0 if f.monotonic else 0.0
         out["n"][i] = f.n
@@ -296,8 +343,13 @@ def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
 
 def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
     attrs = dict(model.attrs())
-    attrs.update(nu_top=opts.nu_top, rtol=opts.rtol, min_thickness=opts.min_thickness,
-                 chuteflow_version=__version__, source="Mitarai & Nakanishi §3.2")
+    attrs.update(
+        nu_top=opts.nu_top,
+        rtol=opts.rtol,
+        min_thickness=opts.min_thickness,
+        chuteflow_version=__version__,
+        source="Mitarai & Nakanishi §3.2",
+    )
     return {k: (str(v) if isinstance(v, bool) else v) for k, v in attrs.items()}
 
 
@@ -306,16 +358,25 @@ def check_nu0(nu0_values, model) -> np.ndarray:
     if nus.ndim != 1 or len(nus) == 0:
         raise ParameterError("nu0_values: expected a non-empty 1-D sequence of floor densities")
     if len(nus) > 1 and not (np.all(np.diff(nus) > 0)):
-        raise ParameterError("nu0_values must be strictly increasing (continuation walks "
-                             "along them)")
+        raise ParameterError("nu0_values must be strictly increasing (continuation walks along them)")
     for v in nus:
         validate_point(20.0, v, model, min(1e-9, 1e-4 * nus.min()))
     return nus
 
 
-def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
-                  nu_top: float = 1e-9, n: int = 64, rtol: float = 1e-8, n_max: int = 384,
-                  min_thickness: float = 1.0, tangent: bool = True, return_flows: bool = False):
+def steady_family(
+    theta: float,
+    nu0_values,
+    model: ChuteModel | None = None,
+    *,
+    nu_top: float = 1e-9,
+    n: int = 64,
+    rtol: float = 1e-8,
+    n_max: int = 384,
+    min_thickness: float = 1.0,
+    tangent: bool = True,
+    return_flows: bool = False,
+):
     """Steady flows at inclination ``theta`` for each floor density in ``nu0_values``.
 
     Parameters
@@ -344,18 +405,19 @@ def steady_family(theta: float, nu0_values, model: ChuteModel | None = None, *,
         version.
     """
     import xarray as xr
+
     model = model or ChuteModel()
     theta = validate_point(theta, 0.5 * model.nu_max, model, 1e-9)[0]
     nus = check_nu0(nu0_values, model)
-    opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness,
-                   tangent=tangent)
+    opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=tangent)
     validate_point(theta, nus[0], model, nu_top)
     pts = continue_row(theta, nus, model, opts)
     arr = row_arrays(pts)
-    ds = xr.Dataset({k: ("nu0", v, variable_attrs(k)) for k, v in arr.items()},
-                    coords={"nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)",
-                                                 "units": "1"})},
-                    attrs={**dataset_attrs(model, opts), "theta": theta})
+    ds = xr.Dataset(
+        {k: ("nu0", v, variable_attrs(k)) for k, v in arr.items()},
+        coords={"nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"})},
+        attrs={**dataset_attrs(model, opts), "theta": theta},
+    )
     if return_flows:
         return ds, [p.flow if p.status == "ok" else None for p in pts]
     return ds
@@ -366,8 +428,15 @@ def variable_attrs(k):
     return {"long_name": name, "units": units}
 
 
-def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=None,
-                 nu_top: float = 1e-9, rtol: float = 1e-8, xtol: float = 1e-9):
+def flux_minimum(
+    theta: float,
+    model: ChuteModel | None = None,
+    *,
+    nu0_values=None,
+    nu_top: float = 1e-9,
+    rtol: float = 1e-8,
+    xtol: float = 1e-9,
+):
     """Minimum of Q0(ρ̄0) at fixed θ: the root of dQ0/dν0(0) along the family (eq. B 6).
 
     A family on ``nu0_values`` (default 30 values from 0.005 to 0.3, geometric) brackets a
@@ -382,11 +451,11 @@ def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=No
         family points around it) and ``family`` (the dataset).
     """
     from scipy.optimize import brentq
+
     model = model or ChuteModel()
     if nu0_values is None:
         nu0_values = np.geomspace(0.005, 0.3, 30)
-    fam, flows = steady_family(theta, nu0_values, model, nu_top=nu_top, rtol=rtol,
-                               return_flows=True)
+    fam, flows = steady_family(theta, nu0_values, model, nu_top=nu_top, rtol=rtol, return_flows=True)
     ok = np.nonzero(fam.status.values == "ok")[0]
     slope = fam.dQ_drho.values
     idx = [i for a, i in zip(ok[:-1], ok[1:]) if i == a + 1 and slope[a] < 0 < slope[i]]
@@ -395,28 +464,41 @@ def flux_minimum(theta: float, model: ChuteModel | None = None, *, nu0_values=No
     i = idx[0]
     opts = Options(nu_top=nu_top, rtol=rtol, min_thickness=0.0)
     cache: dict[float, _Point] = {}
-    seeds = [_with_tangent(_Point("ok", flows[i - 1]), opts),
-             _with_tangent(_Point("ok", flows[i]), opts)]
+    seeds = [_with_tangent(_Point("ok", flows[i - 1]), opts), _with_tangent(_Point("ok", flows[i]), opts)]
 
     def g(nu0):
         nb = min(seeds, key=lambda p: abs(p.flow.nu0 - nu0))
         p = _continue(nb, theta, nu0, model, opts)
         if not p.usable:
-            raise ConvergenceError(f"flux minimum at theta = {theta:g}: no converged flow at "
-                                   f"nu0 = {nu0:g} ({p.error})")
+            raise ConvergenceError(
+                f"flux minimum at theta = {theta:g}: no converged flow at nu0 = {nu0:g} ({p.error})"
+            )
         cache[nu0] = p
         return p.tangent["dQ_drho"]
 
     root = brentq(g, float(fam.nu0[i - 1]), float(fam.nu0[i]), xtol=xtol, rtol=1e-12)
     f = (cache.get(root) or _continue(seeds[0], theta, root, model, opts)).flow
     assert f is not None  # g(root) was evaluated, and g raises where no flow converged
-    return {"nu0": root, "rho_bar": f.rho_bar, "Q": f.Q, "h": f.h, "nu_mean": f.nu_mean,
-            "bracket": (float(fam.nu0[i - 1]), float(fam.nu0[i])), "family": fam}
+    return {
+        "nu0": root,
+        "rho_bar": f.rho_bar,
+        "Q": f.Q,
+        "h": f.h,
+        "nu_mean": f.nu_mean,
+        "bracket": (float(fam.nu0[i - 1]), float(fam.nu0[i])),
+        "family": fam,
+    }
 
 
-def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
-               nu0_small: float = 0.006, nu0_ref: float = 0.012, xtol: float = 0.01,
-               nu_top: float = 1e-9) -> dict:
+def separatrix(
+    model: ChuteModel | None = None,
+    *,
+    theta_range=(14.0, 15.0),
+    nu0_small: float = 0.006,
+    nu0_ref: float = 0.012,
+    xtol: float = 0.01,
+    nu_top: float = 1e-9,
+) -> dict:
     """Angle θ* separating contours of θ that collapse (h → 0) from those that diverge
     (h → ∞) as ν̄ decreases (§3.2, figure 2(a)).
 
@@ -438,8 +520,7 @@ def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
     i_small, i_ref = int(np.argmin(abs(nus - nu0_small))), int(np.argmin(abs(nus - nu0_ref)))
 
     def classify(theta):
-        ds = steady_family(theta, nus, model, nu_top=nu_top, min_thickness=0.0,
-                           tangent=False)
+        ds = steady_family(theta, nus, model, nu_top=nu_top, min_thickness=0.0, tangent=False)
         h = ds.h.values
         ok = ds.status.values == "ok"
         diverging = bool(ok[i_small] and ok[i_ref] and h[i_small] > h[i_ref])
@@ -452,7 +533,8 @@ def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
     if d_lo or not d_hi:
         raise ConvergenceError(
             f"separatrix: theta_range = {theta_range} does not bracket it (diverging at "
-            f"{lo:g}: {d_lo}, at {hi:g}: {d_hi})")
+            f"{lo:g}: {d_lo}, at {hi:g}: {d_hi})"
+        )
     while hi - lo > xtol:
         mid = 0.5 * (lo + hi)
         d, ds, last = classify(mid)
@@ -460,9 +542,13 @@ def separatrix(model: ChuteModel | None = None, *, theta_range=(14.0, 15.0),
             hi, ds_hi = mid, ds
         else:
             lo, last_lo = mid, last
-    return {"theta": 0.5 * (lo + hi), "bracket": (lo, hi),
-            "h": float(ds_hi.h.values[i_small]), "nu_mean": float(ds_hi.nu_mean.values[i_small]),
-            "h_lo_side": float(last_lo)}
+    return {
+        "theta": 0.5 * (lo + hi),
+        "bracket": (lo, hi),
+        "h": float(ds_hi.h.values[i_small]),
+        "nu_mean": float(ds_hi.nu_mean.values[i_small]),
+        "h_lo_side": float(last_lo),
+    }
 
 
 __all__ = ["steady_family", "flux_minimum", "separatrix", "SCALARS", "Options", "continue_row"]

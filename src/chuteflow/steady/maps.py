@@ -6,6 +6,7 @@ reaches the non-monotonic branches that a cold start misses. Rows are swept outw
 middle row in two directions, which are independent: with ``workers=2`` they run in two
 processes (one BLAS thread each).
 """
+
 from __future__ import annotations
 
 import os
@@ -61,8 +62,9 @@ def _sweep_back(thetas, nus, model, opts, rows, k):
     for i in list(range(len(rows) - 2, k - 1, -1)) + list(range(1, k)):
         j = i + 1 if i >= k else i - 1
         if any(p.usable for p in rows[j]):
-            rows[i] = continue_row(thetas[i], nus, model, opts, previous=rows[j],
-                                   existing=rows[i], cold_starts=False)
+            rows[i] = continue_row(
+                thetas[i], nus, model, opts, previous=rows[j], existing=rows[i], cold_starts=False
+            )
     return rows
 
 
@@ -72,10 +74,21 @@ def _sweep_worker(args):
     return _sweep(thetas, nus, model, opts, seed_row)
 
 
-def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
-               nu_top: float = 1e-9, n: int = 64, rtol: float = 1e-8, n_max: int = 384,
-               min_thickness: float = 1.0, tangent: bool = False, workers: int | None = 1,
-               start_theta: float | None = None, return_flows: bool = False):
+def steady_map(
+    theta_values,
+    nu0_values,
+    model: ChuteModel | None = None,
+    *,
+    nu_top: float = 1e-9,
+    n: int = 64,
+    rtol: float = 1e-8,
+    n_max: int = 384,
+    min_thickness: float = 1.0,
+    tangent: bool = False,
+    workers: int | None = 1,
+    start_theta: float | None = None,
+    return_flows: bool = False,
+):
     """Steady flows on a (θ, ν0(0)) grid.
 
     Parameters
@@ -108,11 +121,11 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
         (NaN and a status string where there is no physical steady flow).
     """
     import xarray as xr
+
     model = model or ChuteModel()
     ths = np.atleast_1d(np.asarray(theta_values, dtype=float))
     if ths.ndim != 1 or len(ths) == 0 or (len(ths) > 1 and not np.all(np.diff(ths) > 0)):
-        raise ParameterError("theta_values: expected a strictly increasing 1-D sequence of "
-                             "angles in degrees")
+        raise ParameterError("theta_values: expected a strictly increasing 1-D sequence of angles in degrees")
     for th in ths:
         validate_point(th, 0.5 * model.nu_max, model, 1e-9)
     nus = check_nu0(nu0_values, model)
@@ -123,10 +136,11 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
     # iterations from a continuation guess, 6 instead of 10 with 2 halvings instead of 4,
     # would save 30 % of the time but lose 6 % of the points, hard ones like θ = 17°,
     # ν0(0) = 0.12 among them: not done.)
-    opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness,
-                   tangent=tangent, substeps=0)
+    opts = Options(
+        nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=tangent, substeps=0
+    )
     k, first = _start_row(ths, nus, model, opts, start_theta)
-    up, down = list(ths[k + 1:]), list(ths[:k][::-1])
+    up, down = list(ths[k + 1 :]), list(ths[:k][::-1])
     if workers is None:
         workers = 2 if (os.cpu_count() or 1) >= 2 else 1
     if workers >= 2 and up and down:
@@ -150,17 +164,30 @@ def steady_map(theta_values, nu0_values, model: ChuteModel | None = None, *,
     data = {}
     for key in arrays[0]:
         data[key] = (("theta", "nu0"), np.stack([a[key] for a in arrays]), variable_attrs(key))
-    ds = xr.Dataset(data, coords={
-        "theta": ("theta", ths, {"long_name": "inclination θ", "units": "degree"}),
-        "nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"})},
-        attrs=dataset_attrs(model, opts))
+    ds = xr.Dataset(
+        data,
+        coords={
+            "theta": ("theta", ths, {"long_name": "inclination θ", "units": "degree"}),
+            "nu0": ("nu0", nus, {"long_name": "floor packing fraction ν0(0)", "units": "1"}),
+        },
+        attrs=dataset_attrs(model, opts),
+    )
     if return_flows:
         return ds, [[p.flow for p in row] for row in rows]
     return ds
 
 
-def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float = 1.0 / 64,
-                    margin: float = 8.0, rtol: float = 1e-6, n_max: int = 256) -> dict:
+def existence_limit(
+    flows,
+    ds,
+    side: str,
+    *,
+    columns: int = 1,
+    min_step: float = 1.0 / 64,
+    margin: float = 8.0,
+    rtol: float = 1e-6,
+    n_max: int = 256,
+) -> dict:
     """Refine the lowest (``side='low'``) or highest (``'high'``) angle with a steady flow.
 
     From the map's extreme converged points (in the ``columns`` ν0 columns that reach
@@ -188,8 +215,13 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
             i = rows[0] if side == "low" else rows[-1]
             per_col.append((ths[i], i, j))
     if not per_col:
-        return {"theta": float("nan"), "nu0": float("nan"), "h": float("nan"),
-                "map_theta": float("nan"), "ends": False}
+        return {
+            "theta": float("nan"),
+            "nu0": float("nan"),
+            "h": float("nan"),
+            "map_theta": float("nan"),
+            "ends": False,
+        }
     # the columns reaching furthest, and the densest (low end) or most dilute (high end)
     # column with a flow: the limit is usually reached at the extreme floor density
     extreme = per_col[-1] if side == "low" else per_col[0]
@@ -203,12 +235,12 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
         for _ in range(3):
             # along θ until the branch ends, then along ν0(0) towards the extreme floor
             # density (the end may move further there), and along θ again
-            g, reached = follow(g, theta=th + sign * margin, min_step=min_step, max_steps=40,
-                                rtol=rtol, n_max=n_max)
+            g, reached = follow(
+                g, theta=th + sign * margin, min_step=min_step, max_steps=40, rtol=rtol, n_max=n_max
+            )
             if reached:
                 break
-            g2, _ = follow(g, nu0=nu_end, min_step=0.01, max_steps=30, rtol=rtol,
-                           n_max=n_max)
+            g2, _ = follow(g, nu0=nu_end, min_step=0.01, max_steps=30, rtol=rtol, n_max=n_max)
             if abs(g2.nu0 - g.nu0) < 1e-12:
                 break
             g = g2
@@ -217,8 +249,13 @@ def existence_limit(flows, ds, side: str, *, columns: int = 1, min_step: float =
             best = (g, reached)
     assert best is not None  # cand holds at least one column, and each sets best once
     g, reached = best
-    return {"theta": float(g.theta), "nu0": float(g.nu0), "h": float(g.h),
-            "map_theta": float(per_col[0][0]), "ends": not reached}
+    return {
+        "theta": float(g.theta),
+        "nu0": float(g.nu0),
+        "h": float(g.h),
+        "map_theta": float(per_col[0][0]),
+        "ends": not reached,
+    }
 
 
 __all__ = ["steady_map", "existence_limit", "SCALARS"]

@@ -1,4 +1,5 @@
 """The steady-flow result object and its derived quantities (paper §3.2)."""
+
 from __future__ import annotations
 
 import math
@@ -108,40 +109,70 @@ class SteadyFlow:
         """ν0, u0, T0 interpolated spectrally at heights ``y`` (0 ≤ y ≤ y_max)."""
         g = self.grid
         y = np.asarray(y, dtype=float)
-        return {"nu": np.exp(g.interpolate(self.log_nu, y)), "u": g.interpolate(self.u, y),
-                "T": g.interpolate(self.T, y)}
+        return {
+            "nu": np.exp(g.interpolate(self.log_nu, y)),
+            "u": g.interpolate(self.u, y),
+            "T": g.interpolate(self.T, y),
+        }
 
     def derivatives(self) -> dict[str, np.ndarray]:
         """First and second y-derivatives of ν0, u0, T0 at the nodes."""
         g = self.grid
         nu = self.nu
         s1, s2 = g.D @ self.log_nu, g.D2 @ self.log_nu
-        return {"nu_y": nu * s1, "nu_yy": nu * (s2 + s1**2), "u_y": g.D @ self.u,
-                "u_yy": g.D2 @ self.u, "T_y": g.D @ self.T, "T_yy": g.D2 @ self.T}
+        return {
+            "nu_y": nu * s1,
+            "nu_yy": nu * (s2 + s1**2),
+            "u_y": g.D @ self.u,
+            "u_yy": g.D2 @ self.u,
+            "T_y": g.D @ self.T,
+            "T_yy": g.D2 @ self.T,
+        }
 
     def summary(self) -> dict:
         """Scalar quantities as a JSON-ready dict (keys used by the CLI)."""
         d = {"theta": self.theta, "nu0": self.nu0}
         d.update(self.model.to_dict())
-        for k in ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "T_mean", "monotonic",
-                  "y_peak", "nu_peak", "y_max", "nu_top", "n", "residual", "iterations",
-                  "convergence", "spectral_tail"):
+        for k in (
+            "u_floor",
+            "T_floor",
+            "h",
+            "nu_mean",
+            "rho_bar",
+            "Q",
+            "T_mean",
+            "monotonic",
+            "y_peak",
+            "nu_peak",
+            "y_max",
+            "nu_top",
+            "n",
+            "residual",
+            "iterations",
+            "convergence",
+            "spectral_tail",
+        ):
             v = getattr(self, k)
-            d[k] = bool(v) if isinstance(v, (bool, np.bool_)) else (
-                int(v) if isinstance(v, (int, np.integer)) else float(v))
+            d[k] = (
+                bool(v)
+                if isinstance(v, (bool, np.bool_))
+                else (int(v) if isinstance(v, (int, np.integer)) else float(v))
+            )
         return d
 
     def to_xarray(self):
         """Profiles as an :class:`xarray.Dataset` on the nodes, scalars as attributes."""
         import xarray as xr
+
         ds = xr.Dataset(
-            {"nu": ("y", self.nu, {"long_name": "packing fraction ν0", "units": "1"}),
-             "u": ("y", self.u, {"long_name": "velocity u0", "units": "sqrt(g sigma)"}),
-             "T": ("y", self.T, {"long_name": "granular temperature T0", "units": "g sigma"})},
-            coords={"y": ("y", self.y, {"long_name": "height above the floor",
-                                        "units": "sigma"})})
-        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v)
-                         for k, v in self.summary().items()})
+            {
+                "nu": ("y", self.nu, {"long_name": "packing fraction ν0", "units": "1"}),
+                "u": ("y", self.u, {"long_name": "velocity u0", "units": "sqrt(g sigma)"}),
+                "T": ("y", self.T, {"long_name": "granular temperature T0", "units": "g sigma"}),
+            },
+            coords={"y": ("y", self.y, {"long_name": "height above the floor", "units": "sigma"})},
+        )
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.summary().items()})
         ds.attrs.update(self.model.attrs())
         return ds
 
@@ -167,6 +198,7 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     # density maximum: sign of d ln ν/dy on a fine sampling, refined by root finding; the
     # Chebyshev coefficients are computed once (x ∈ [-1, 1] ↔ y ∈ [0, y_max])
     from numpy.polynomial.chebyshev import chebval
+
     L = grid.b - grid.a
     c_s = coefficients(log_nu)
     c_ds = coefficients(grid.D @ log_nu)
@@ -179,16 +211,27 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     else:
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
-        y_peak = brentq(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1],
-                        xtol=1e-13) if len(idx) else 0.0
+        y_peak = (
+            brentq(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
+            if len(idx)
+            else 0.0
+        )
     s_peak = float(chebval(to_x(y_peak), c_s))
     target = s_peak + math.log(0.01)
     sf = chebval(xf, c_s)
     above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
     j = above[0]
     h = brentq(lambda y: chebval(to_x(y), c_s) - target, yf[j - 1], yf[j], xtol=1e-14)
-    return {"h": h, "nu_mean": rho_bar / h, "rho_bar": rho_bar, "Q": Q, "T_mean": T_mean,
-            "monotonic": monotonic, "y_peak": y_peak, "nu_peak": math.exp(s_peak)}
+    return {
+        "h": h,
+        "nu_mean": rho_bar / h,
+        "rho_bar": rho_bar,
+        "Q": Q,
+        "T_mean": T_mean,
+        "monotonic": monotonic,
+        "y_peak": y_peak,
+        "nu_peak": math.exp(s_peak),
+    }
 
 
 def spectral_tail(log_nu, u, T) -> float:

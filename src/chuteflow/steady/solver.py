@@ -16,6 +16,7 @@ tune by hand. The cold start is an isothermal estimate of the layer (closed form
 polished on a coarse grid; continuation (families, maps, the θ fallback of
 :func:`~chuteflow.steady.solve_steady`) starts from neighbouring solutions instead.
 """
+
 from __future__ import annotations
 
 import math
@@ -52,7 +53,7 @@ class NewtonState:
     @classmethod
     def unpack(cls, n, X):
         m = n + 1
-        return cls(n, X[:m].copy(), X[m:2 * m].copy(), X[2 * m:3 * m].copy(), float(X[-1]))
+        return cls(n, X[:m].copy(), X[m : 2 * m].copy(), X[2 * m : 3 * m].copy(), float(X[-1]))
 
 
 def validate_point(theta, nu0, model, nu_top):
@@ -62,14 +63,20 @@ def validate_point(theta, nu0, model, nu_top):
     except (TypeError, ValueError):
         raise ParameterError("theta and nu0 must be numbers") from None
     if not (0.0 < theta < 90.0) or not math.isfinite(theta):
-        raise ParameterError(f"theta = {theta!r} is outside (0, 90) degrees: the slope "
-                             "angle must be positive for a flow down the incline")
+        raise ParameterError(
+            f"theta = {theta!r} is outside (0, 90) degrees: the slope "
+            "angle must be positive for a flow down the incline"
+        )
     if not (0.0 < nu0 < model.nu_max):
-        raise ParameterError(f"nu0 = {nu0!r} is outside (0, nu_max = {model.nu_max:g}): the "
-                             "floor packing fraction must be positive and below maximum packing")
+        raise ParameterError(
+            f"nu0 = {nu0!r} is outside (0, nu_max = {model.nu_max:g}): the "
+            "floor packing fraction must be positive and below maximum packing"
+        )
     if not (0.0 < nu_top < 1e-3 * nu0):
-        raise ParameterError(f"nu_top = {nu_top!r} must lie in (0, 1e-3·nu0): it is the "
-                             "density at which the domain ends (paper: 1e-9)")
+        raise ParameterError(
+            f"nu_top = {nu_top!r} must lie in (0, 1e-3·nu0): it is the "
+            "density at which the domain ends (paper: 1e-9)"
+        )
     return theta, nu0
 
 
@@ -123,12 +130,14 @@ class SteadyNewton:
         self.eqs = compiled_equations()
         m = n + 1
         # (equation, rows of the system, nodes it is imposed at, row-scaling kind)
-        self._layout = (("ymom", slice(1, m), slice(1, m), "nu"),
-                        ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
-                        ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
-                        ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
-                        # T0' = 0 on top (eq. 3.13)
-                        (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"))
+        self._layout = (
+            ("ymom", slice(1, m), slice(1, m), "nu"),
+            ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
+            ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
+            ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
+            # T0' = 0 on top (eq. 3.13)
+            (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"),
+        )
         if integrated:
             # x-momentum in its once-integrated form, eq. (3.7): Σxy = −tanθ Σyy, i.e.
             # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from
@@ -143,8 +152,10 @@ class SteadyNewton:
             # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
             # the cold start, where its residual does not favour the collapsed layer (the
             # integrated form's does: every term vanishes with T0)
-            self._layout += (("xmom", slice(m + 1, m + n), slice(1, n), "u"),
-                             (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"))
+            self._layout += (
+                ("xmom", slice(m + 1, m + n), slice(1, n), "u"),
+                (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
+            )
 
     def evaluate(self, st: NewtonState, jac=True):
         n, m, L = self.n, self.n + 1, st.L
@@ -152,8 +163,17 @@ class SteadyNewton:
         nu = np.exp(st.s)
         s1, s2 = D1 @ st.s, D2 @ st.s
         u1, u2, T1, T2 = D1 @ st.u, D2 @ st.u, D1 @ st.T, D2 @ st.T
-        base = {"nu": nu, "nu_y": nu * s1, "nu_yy": nu * (s2 + s1**2), "u": st.u,
-                "u_y": u1, "u_yy": u2, "T": st.T, "T_y": T1, "T_yy": T2}
+        base = {
+            "nu": nu,
+            "nu_y": nu * s1,
+            "nu_yy": nu * (s2 + s1**2),
+            "u": st.u,
+            "u_y": u1,
+            "u_yy": u2,
+            "T": st.T,
+            "T_y": T1,
+            "T_yy": T2,
+        }
         part = self.model.evaluate(nu, st.T)
         N = 3 * m + 1
         R = np.empty(N)
@@ -163,15 +183,17 @@ class SteadyNewton:
         jets = {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])}
         if jac:
             # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs
-            dnu = (None, nu[:, None] * (np.diag(s1) + D1),
-                   nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1))
+            dnu = (
+                None,
+                nu[:, None] * (np.diag(s1) + D1),
+                nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1),
+            )
             mats = (None, D1, D2)
         kap = part["kappa"]
         # rows are scaled pointwise (ν-rows by 1/ν, T-rows by 1/κ; x-momentum by the constant
         # 1/ν0(0): (μu0')' carries absolute round-off that 1/ν would amplify at the dilute
         # top). The scale's own derivative is kept so that J is the exact Jacobian.
-        scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)],
-                  "one": np.ones(m)}
+        scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)], "one": np.ones(m)}
         for name, rows, sl, kind in self._layout:
             ce = self.eqs[name]
             res, coefs = ce.evaluate(base, part, self.sin, self.cos)
@@ -189,7 +211,7 @@ class SteadyNewton:
                     continue
                 cf = np.broadcast_to(cf, (m,))[sl]
                 k = _FIELDS.index(t.field)
-                blk = Jr[:, k * m:(k + 1) * m]
+                blk = Jr[:, k * m : (k + 1) * m]
                 if t.c == 0:
                     # diagonal: ∂/∂X_i of a pointwise term (for ν via ν = e^s)
                     blk[np.arange(len(idx)), idx] += cf * (nu[sl] if t.field == "nu" else 1.0)
@@ -249,8 +271,7 @@ class SteadyNewton:
             # at large n the residual floor grows like eps·n⁴ (D2 near the ends): accept a
             # stalled residual when the Newton step is at noise level too; the accuracy of
             # the result is checked independently by the change between two resolutions
-            stalled = len(hist) > 2 and res > 0.5 * hist[-2] and (
-                res < 1e-7 or (step < 1e-7 and res < 1e-4))
+            stalled = len(hist) > 2 and res > 0.5 * hist[-2] and (res < 1e-7 or (step < 1e-7 and res < 1e-4))
             if ((step < 1e-11 and res < 1e-6) or stalled) and it >= min_iter:
                 return st, it, res, hist
             lam = 1.0
@@ -286,12 +307,12 @@ def _resample(st: NewtonState, n: int) -> NewtonState:
         return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L)
     old = ChebyshevGrid(st.n, 0.0, 1.0)
     new = ChebyshevGrid(n, 0.0, 1.0).y
-    return NewtonState(n, old.interpolate(st.s, new), old.interpolate(st.u, new),
-                  old.interpolate(st.T, new), st.L)
+    return NewtonState(
+        n, old.interpolate(st.s, new), old.interpolate(st.u, new), old.interpolate(st.T, new), st.L
+    )
 
 
-def solve_state(theta, nu0, model, nu_top, n, guess=None, tol=1e-11, maxiter=60,
-                lam_min=1e-6, min_iter=0):
+def solve_state(theta, nu0, model, nu_top, n, guess=None, tol=1e-11, maxiter=60, lam_min=1e-6, min_iter=0):
     """Solve the steady problem; returns (state, iterations, residual). Raises on failure.
 
     Without ``guess`` the cold start runs Newton on a coarse grid first (n = 32: its
@@ -306,8 +327,7 @@ def solve_state(theta, nu0, model, nu_top, n, guess=None, tol=1e-11, maxiter=60,
         guess = _resample(guess, n)
         guess.s = guess.s + (math.log(nu0) - guess.s[0])  # exact floor value, same shape
     try:
-        st, it, res, _ = newton.solve(guess, tol=tol, maxiter=maxiter, lam_min=lam_min,
-                                      min_iter=min_iter)
+        st, it, res, _ = newton.solve(guess, tol=tol, maxiter=maxiter, lam_min=lam_min, min_iter=min_iter)
     except _NewtonFailure as fail:
         raise _diagnose(theta, nu0, model, fail) from None
     return st, it0 + it, res
@@ -328,8 +348,12 @@ def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
     for m in levels:
         newton = SteadyNewton(m, theta, nu0, model, nu_top, integrated=False)
         try:
-            st, it, _, _ = newton.solve(isothermal_guess(theta, nu0, model, nu_top, newton.ref),
-                                        tol=1e-9, maxiter=maxiter, lam_min=2.0**-10)
+            st, it, _, _ = newton.solve(
+                isothermal_guess(theta, nu0, model, nu_top, newton.ref),
+                tol=1e-9,
+                maxiter=maxiter,
+                lam_min=2.0**-10,
+            )
             return st, it
         except _NewtonFailure as fail:
             first = first or fail
@@ -341,17 +365,22 @@ def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
 def _diagnose(theta, nu0, model, fail):
     """Turn a failed Newton solve into an error that says which case it is."""
     st = fail.state
-    where = (f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
-             f"wall_loss = {model.wall_loss:g}")
+    where = (
+        f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
+        f"wall_loss = {model.wall_loss:g}"
+    )
     if st.L > 2e3:
         return NoSteadyFlowError(
             f"no steady flow at {where}: the density decay length diverges (y_max grew past "
-            f"{st.L:.3g} diameters) — the angle is too large for this roughness")
+            f"{st.L:.3g} diameters) — the angle is too large for this roughness"
+        )
     if st.L < 2.0 or st.T.min() < 1e-3:
         return NoSteadyFlowError(
             f"no steady flow at {where}: the layer collapses (decay length {st.L:.2g} "
             "diameters, below one particle diameter) — the angle is too small for this "
-            "roughness, or the floor density too low")
+            "roughness, or the floor density too low"
+        )
     return ConvergenceError(
         f"steady solver did not converge at {where}: Newton stalled with residual "
-        f"{fail.history[-1]:.2e} after {len(fail.history)} iterations")
+        f"{fail.history[-1]:.2e} after {len(fail.history)} iterations"
+    )

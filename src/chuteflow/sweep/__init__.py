@@ -9,25 +9,49 @@
 - ``ds.chute`` (:class:`ChuteAccessor`): the same operations as Dataset methods, and
   ``ds.chute.model``, the model a Dataset was computed with.
 """
+
 from . import metrics  # noqa: F401  (registers the built-in stability metrics)
 from .accessor import ChuteAccessor
 from .classify import classify
 from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid, resolve_model
 from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep, write_dataset
 from .points import (
-                     Point,
-                     PointFunction,
-                     Variable,
-                     point_function,
-                     register_point_function,
-                     registered_point_functions,
+    Point,
+    PointFunction,
+    Variable,
+    point_function,
+    register_point_function,
+    registered_point_functions,
 )
 from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 
-__all__ = ["SweepConfig", "Task", "DEFAULT_RANGES", "markers", "default_ranges", "parse_grid",
-           "resolve_model", "Sweep",
-           "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "Point",
-           "PointFunction", "Variable", "point_function", "register_point_function",
-           "registered_point_functions", "STATUS", "TaskResult", "run_task",
-           "ConfigMismatchError", "PartStore", "parts_dir", "classify", "ChuteAccessor"]
+__all__ = [
+    "SweepConfig",
+    "Task",
+    "DEFAULT_RANGES",
+    "markers",
+    "default_ranges",
+    "parse_grid",
+    "resolve_model",
+    "Sweep",
+    "SweepStats",
+    "run_sweep",
+    "assemble",
+    "load_sweep",
+    "write_dataset",
+    "Point",
+    "PointFunction",
+    "Variable",
+    "point_function",
+    "register_point_function",
+    "registered_point_functions",
+    "STATUS",
+    "TaskResult",
+    "run_task",
+    "ConfigMismatchError",
+    "PartStore",
+    "parts_dir",
+    "classify",
+    "ChuteAccessor",
+]

@@ -13,6 +13,7 @@ Methods that need a higher layer are added by that layer with :meth:`ChuteAccess
 module imports nothing above :mod:`chuteflow.sweep`. The free functions
 (:func:`~chuteflow.sweep.classify`, :func:`~chuteflow.sweep.markers`, …) stay and do the same.
 """
+
 from __future__ import annotations
 
 import json
@@ -84,9 +85,11 @@ class ChuteAccessor:
         if all(k in a for k in _MODEL_FIELDS):
             # the attributes written by ChuteModel.attrs(): the parameters and the closures
             return ChuteModel.from_dict({k: a[k] for k in MODEL_FIELDS if k in a})
-        raise ParameterError("dataset: no model in its attributes (expected one of "
-                             f"{', '.join(MODEL_ATTRS)}, a sweep's config_json, or "
-                             f"{', '.join(_MODEL_FIELDS)})")
+        raise ParameterError(
+            "dataset: no model in its attributes (expected one of "
+            f"{', '.join(MODEL_ATTRS)}, a sweep's config_json, or "
+            f"{', '.join(_MODEL_FIELDS)})"
+        )
 
     # ------------------------------------------------------------------ sweep operations
     def classify(self) -> xr.Dataset:

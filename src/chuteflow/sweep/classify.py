@@ -11,6 +11,7 @@
   on the fixed-θ contours that end at h → 0 (small h), C at the dense end of the contours that
   end in B-type flows (large h, large ν̄); see :func:`regimes`.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,9 +29,12 @@ def _flag(arr_bool, valid):
 
 
 def _flag_attrs(long_name, source=""):
-    a = {"units": "1", "long_name": long_name,
-         "flag_values": np.array([-1, 0, 1], dtype=np.int8),
-         "flag_meanings": "missing false true"}
+    a = {
+        "units": "1",
+        "long_name": long_name,
+        "flag_values": np.array([-1, 0, 1], dtype=np.int8),
+        "flag_meanings": "missing false true",
+    }
     if source:
         a["source"] = source
     return a
@@ -51,8 +55,11 @@ def classify(ds):
             continue
         a2 = ds[prefix + "alpha2_re"].values
         valid = np.isfinite(a2)
-        ds[prefix + "unstable"] = (ds[prefix + "alpha2_re"].dims, _flag(a2 > 0, valid),
-                                   _flag_attrs("long-wave unstable, Re α2 > 0", "§4.2"))
+        ds[prefix + "unstable"] = (
+            ds[prefix + "alpha2_re"].dims,
+            _flag(a2 > 0, valid),
+            _flag_attrs("long-wave unstable, Re α2 > 0", "§4.2"),
+        )
         if "growth_max" in ds:
             g = ds[prefix + "growth_max"].values
             sampled = ds[prefix + "dispersion_sampled"].values == 1
@@ -62,18 +69,29 @@ def classify(ds):
             both = ok & valid
             dis[both] = ((g[both] > 0) != (a2[both] > 0)).astype(np.int8)
             dims = ds[prefix + "alpha2_re"].dims
-            ds[prefix + "finite_k_unstable"] = (dims, fk, _flag_attrs(
-                "some sampled k has Re α > 0 (dispersion relation of the α(0) = 0 branch)"))
-            ds[prefix + "finite_k_disagrees"] = (dims, dis, _flag_attrs(
-                "sampled dispersion relation and long-wave criterion disagree"))
+            ds[prefix + "finite_k_unstable"] = (
+                dims,
+                fk,
+                _flag_attrs("some sampled k has Re α > 0 (dispersion relation of the α(0) = 0 branch)"),
+            )
+            ds[prefix + "finite_k_disagrees"] = (
+                dims,
+                dis,
+                _flag_attrs("sampled dispersion relation and long-wave criterion disagree"),
+            )
     if "dU_drho" in ds:
-        reg = regimes(ds["unstable"].values, ds["dU_drho"].values, ds["h"].values,
-                      ds["nu_mean"].values)
-        ds["regime"] = (("theta", "nu0"), reg, {
-            "long_name": "unstable regime (§4.2): A small h & small ν̄, denser faster; B lighter "
-                         "faster; C large h & large ν̄, denser faster",
-            "flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8),
-            "flag_meanings": "unknown stable A B C", "source": "§4.2, figure 6"})
+        reg = regimes(ds["unstable"].values, ds["dU_drho"].values, ds["h"].values, ds["nu_mean"].values)
+        ds["regime"] = (
+            ("theta", "nu0"),
+            reg,
+            {
+                "long_name": "unstable regime (§4.2): A small h & small ν̄, denser faster; B lighter "
+                "faster; C large h & large ν̄, denser faster",
+                "flag_values": np.array([-1, 0, 1, 2, 3], dtype=np.int8),
+                "flag_meanings": "unknown stable A B C",
+                "source": "§4.2, figure 6",
+            },
+        )
         if "marker" in ds.dims:
             ds["marker_regime"] = ("marker", _marker_regimes(ds, reg), dict(ds["regime"].attrs))
     return ds
@@ -148,8 +166,7 @@ def _marker_regimes(ds, reg):
         cand = (reg == REGIMES["A"]) | (reg == REGIMES["C"])
         if not cand.any():
             continue
-        d = ((T - ds["marker_theta"].values[m]) / sth) ** 2 + \
-            ((N - ds["marker_nu0"].values[m]) / snu) ** 2
+        d = ((T - ds["marker_theta"].values[m]) / sth) ** 2 + ((N - ds["marker_nu0"].values[m]) / snu) ** 2
         d = np.where(cand, d, np.inf)
         out[m] = reg.ravel()[int(np.argmin(d))]
     return out
@@ -167,11 +184,14 @@ def regime_summary(ds) -> dict:
         if not sel.any():
             out[name] = {"points": 0}
             continue
-        out[name] = {"points": int(sel.sum()),
-                     "h_median": float(np.median(ds["h"].values[sel])),
-                     "nu_mean_median": float(np.median(ds["nu_mean"].values[sel])),
-                     "nu_mean_max": float(np.max(ds["nu_mean"].values[sel])),
-                     "theta_min": float(T[sel].min()), "theta_max": float(T[sel].max())}
+        out[name] = {
+            "points": int(sel.sum()),
+            "h_median": float(np.median(ds["h"].values[sel])),
+            "nu_mean_median": float(np.median(ds["nu_mean"].values[sel])),
+            "nu_mean_max": float(np.max(ds["nu_mean"].values[sel])),
+            "theta_min": float(T[sel].min()),
+            "theta_max": float(T[sel].max()),
+        }
         if "monotonic" in ds:
             out[name]["monotonic_fraction"] = float(np.mean(ds["monotonic"].values[sel] == 1))
     return out

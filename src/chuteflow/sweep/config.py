@@ -7,6 +7,7 @@
 function's version) names the results, so saved partial results are reused only by the very
 same configuration.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -160,14 +161,33 @@ class SweepConfig:
     chunk: int | None
     markers: tuple
 
-    def __init__(self, theta, nu0, model: ChuteModel | None = None, *, metrics=None,
-                 nu_top: float = 1e-9, steady_rtol: float = 1e-8, n_max: int = 384,
-                 min_thickness: float = 0.0, chunk: int | None = None, markers=(),
-                 **model_fields):
-        values = {"theta": theta, "nu0": nu0, "model": resolve_model(model, **model_fields),
-                  "metrics": metrics, "nu_top": nu_top, "steady_rtol": steady_rtol,
-                  "n_max": n_max, "min_thickness": min_thickness, "chunk": chunk,
-                  "markers": markers}
+    def __init__(
+        self,
+        theta,
+        nu0,
+        model: ChuteModel | None = None,
+        *,
+        metrics=None,
+        nu_top: float = 1e-9,
+        steady_rtol: float = 1e-8,
+        n_max: int = 384,
+        min_thickness: float = 0.0,
+        chunk: int | None = None,
+        markers=(),
+        **model_fields,
+    ):
+        values = {
+            "theta": theta,
+            "nu0": nu0,
+            "model": resolve_model(model, **model_fields),
+            "metrics": metrics,
+            "nu_top": nu_top,
+            "steady_rtol": steady_rtol,
+            "n_max": n_max,
+            "min_thickness": min_thickness,
+            "chunk": chunk,
+            "markers": markers,
+        }
         for name, value in values.items():
             object.__setattr__(self, name, value)
         self.__post_init__()
@@ -184,13 +204,16 @@ class SweepConfig:
                 raise ParameterError(f"{name}: values must be strictly increasing")
             object.__setattr__(self, name, tuple(float(x) for x in arr))
         if not (0.0 < self.theta[0] and self.theta[-1] < 90.0):
-            raise ParameterError(f"theta: values must lie in (0, 90) degrees, got "
-                                 f"[{self.theta[0]:g}, {self.theta[-1]:g}]")
+            raise ParameterError(
+                f"theta: values must lie in (0, 90) degrees, got [{self.theta[0]:g}, {self.theta[-1]:g}]"
+            )
         nu_max = self.model.nu_max
         if not (0.0 < self.nu0[0] and self.nu0[-1] < nu_max):
-            raise ParameterError(f"nu0: values must lie in (0, nu_max = {nu_max:g}) "
-                                 f"(floor packing fraction), got [{self.nu0[0]:g}, "
-                                 f"{self.nu0[-1]:g}]")
+            raise ParameterError(
+                f"nu0: values must lie in (0, nu_max = {nu_max:g}) "
+                f"(floor packing fraction), got [{self.nu0[0]:g}, "
+                f"{self.nu0[-1]:g}]"
+            )
         if self.chunk is not None:
             if int(self.chunk) < 1:
                 raise ParameterError(f"chunk = {self.chunk!r}: need at least 1 point per task")
@@ -203,8 +226,10 @@ class SweepConfig:
             except (TypeError, ValueError):
                 raise ParameterError(f"markers: {mk!r} is not (name, theta, nu0)") from None
             if not (0 < th < 90 and 0 < nu < nu_max):
-                raise ParameterError(f"markers: {name} = ({th:g}°, {nu:g}) is outside theta in "
-                                     f"(0, 90) degrees, nu0 in (0, nu_max)")
+                raise ParameterError(
+                    f"markers: {name} = ({th:g}°, {nu:g}) is outside theta in "
+                    f"(0, 90) degrees, nu0 in (0, nu_max)"
+                )
             marks.append((name, th, nu))
         if len({m[0] for m in marks}) != len(marks):
             raise ParameterError("markers: names must be unique")
@@ -216,8 +241,7 @@ class SweepConfig:
             specs = default_metrics()
         else:
             # the canonical form stored by a configuration is JSON text (dataclasses.replace)
-            specs = [json.loads(m) if isinstance(m, str) and m.startswith("{") else m
-                     for m in self.metrics]
+            specs = [json.loads(m) if isinstance(m, str) and m.startswith("{") else m for m in self.metrics]
         fns = [point_function(s) for s in specs]
         names = [f.name for f in fns]
         if len(set(names)) != len(names):
@@ -232,15 +256,20 @@ class SweepConfig:
         dup = {v for v in variables if variables.count(v) > 1}
         if dup:
             raise ParameterError(f"metrics: variables {sorted(dup)} are produced twice")
-        object.__setattr__(self, "metrics", tuple(json.dumps(f.spec(), sort_keys=True)
-                                                  for f in fns))
+        object.__setattr__(self, "metrics", tuple(json.dumps(f.spec(), sort_keys=True) for f in fns))
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def grid(cls, roughness: float | None = None, *, shape: tuple[int, int] = (60, 60),
-             theta_range: tuple[float, float] | None = None,
-             nu0_range: tuple[float, float] | None = None, model: ChuteModel | None = None,
-             **kw) -> SweepConfig:
+    def grid(
+        cls,
+        roughness: float | None = None,
+        *,
+        shape: tuple[int, int] = (60, 60),
+        theta_range: tuple[float, float] | None = None,
+        nu0_range: tuple[float, float] | None = None,
+        model: ChuteModel | None = None,
+        **kw,
+    ) -> SweepConfig:
         """Uniform grid of ``shape = (n_theta, n_nu0)`` over the given (or default) ranges.
 
         The model is ``model`` with ``roughness`` (and any other model field in ``kw``)
@@ -263,8 +292,7 @@ class SweepConfig:
         th = np.linspace(float(tr[0]), float(tr[1]), nt)
         nu = np.linspace(float(nr[0]), float(nr[1]), nn)
         # round to 12 digits so that the same command line always gives the same hash
-        return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)), model=model,
-                   **kw)
+        return cls(theta=tuple(np.round(th, 12)), nu0=tuple(np.round(nu, 12)), model=model, **kw)
 
     # ------------------------------------------------------------------ derived
     @property
@@ -302,13 +330,19 @@ class SweepConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Canonical JSON-ready form (what is hashed, and stored in the Dataset attrs)."""
-        return {"theta": list(self.theta), "nu0": list(self.nu0),
-                "model": self.model.to_dict(),
-                "metrics": [json.loads(s) for s in self.metrics], "nu_top": self.nu_top,
-                "steady_rtol": self.steady_rtol, "n_max": self.n_max,
-                "min_thickness": self.min_thickness, "chunk": self.chunk,
-                "markers": [list(m) for m in self.markers],
-                "chuteflow_version": __version__}
+        return {
+            "theta": list(self.theta),
+            "nu0": list(self.nu0),
+            "model": self.model.to_dict(),
+            "metrics": [json.loads(s) for s in self.metrics],
+            "nu_top": self.nu_top,
+            "steady_rtol": self.steady_rtol,
+            "n_max": self.n_max,
+            "min_thickness": self.min_thickness,
+            "chunk": self.chunk,
+            "markers": [list(m) for m in self.markers],
+            "chuteflow_version": __version__,
+        }
 
     def digest(self) -> str:
         """SHA-256 (hex) of the canonical configuration."""
@@ -323,9 +357,16 @@ class SweepConfig:
         model = d.pop("model", None)
         flat = {k: d.pop(k) for k in list(d) if k in MODEL_FIELDS}
         model = ChuteModel.from_dict({**flat, **(model or {})})
-        return cls(**{**d, "model": model, "theta": tuple(d["theta"]), "nu0": tuple(d["nu0"]),
-                      "metrics": tuple(d["metrics"]),
-                      "markers": tuple(tuple(m) for m in d.get("markers", ()))})
+        return cls(
+            **{
+                **d,
+                "model": model,
+                "theta": tuple(d["theta"]),
+                "nu0": tuple(d["nu0"]),
+                "metrics": tuple(d["metrics"]),
+                "markers": tuple(tuple(m) for m in d.get("markers", ())),
+            }
+        )
 
     @classmethod
     def from_dataset(cls, ds) -> SweepConfig:
@@ -333,8 +374,7 @@ class SweepConfig:
         try:
             text = ds.attrs["config_json"]
         except KeyError:
-            raise ParameterError("dataset: no config_json attribute (not a chuteflow "
-                                 "sweep)") from None
+            raise ParameterError("dataset: no config_json attribute (not a chuteflow sweep)") from None
         return cls.from_dict(json.loads(text))
 
 

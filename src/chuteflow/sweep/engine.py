@@ -7,6 +7,7 @@ are there they are assembled into the final NetCDF file (h5netcdf), again atomic
 same sweep again after Ctrl-C or SIGKILL and only the missing tasks are computed; the final
 file is the same as that of an uninterrupted run.
 """
+
 from __future__ import annotations
 
 import json
@@ -29,8 +30,7 @@ from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
 from .store import ConfigMismatchError, PartStore, atomic_target
 
-__all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset",
-           "markers"]
+__all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "markers"]
 
 
 @dataclass
@@ -92,8 +92,7 @@ class Sweep:
         Keep ``<out>.parts/`` after the final file is written.
     """
 
-    def __init__(self, config: SweepConfig, out=None, *, fresh: bool = False,
-                 keep_parts: bool = False):
+    def __init__(self, config: SweepConfig, out=None, *, fresh: bool = False, keep_parts: bool = False):
         if not isinstance(config, SweepConfig):
             raise ParameterError("config: expected a chuteflow.sweep.SweepConfig")
         self.config = config
@@ -103,8 +102,14 @@ class Sweep:
         self.stats = SweepStats()
 
     # ------------------------------------------------------------------ public
-    def run(self, *, workers: int | None = None, client=None, scheduler: str | None = None,
-            progress: bool | ProgressFn = False):
+    def run(
+        self,
+        *,
+        workers: int | None = None,
+        client=None,
+        scheduler: str | None = None,
+        progress: bool | ProgressFn = False,
+    ):
         """Compute (or resume) the sweep and return the assembled :class:`xarray.Dataset`.
 
         Parameters
@@ -127,8 +132,7 @@ class Sweep:
         if workers is not None and int(workers) < 1:
             raise ParameterError(f"workers = {workers!r}: need at least 1 worker process")
         if client is not None and scheduler is not None:
-            raise ParameterError("scheduler: give either a Dask client or a scheduler "
-                                 "address, not both")
+            raise ParameterError("scheduler: give either a Dask client or a scheduler address, not both")
         digest = cfg.digest()
         if self.out is not None:
             ds = self._existing_final(digest)
@@ -155,8 +159,9 @@ class Sweep:
             bar.advance(res.j1 - res.j0)
 
         npts_done = sum(t.size for t in tasks if t.key in done)
-        with _Progress(progress, total=cfg.npoints, completed=npts_done,
-                       label=f"sweep φ={cfg.model.roughness:g}") as bar:
+        with _Progress(
+            progress, total=cfg.npoints, completed=npts_done, label=f"sweep φ={cfg.model.roughness:g}"
+        ) as bar:
             if todo:
                 if client is not None or scheduler is not None:
                     self._run_dask(todo, finished, client, scheduler)
@@ -196,7 +201,8 @@ class Sweep:
             raise ConfigMismatchError(
                 f"out: {self.out} exists and holds a different sweep (digest "
                 f"{str(old)[:12]}, this one {digest[:12]}); use another output file, or "
-                "fresh=True (--fresh) to overwrite it")
+                "fresh=True (--fresh) to overwrite it"
+            )
         return None
 
     def _run_dask(self, todo, finished, client, scheduler):
@@ -205,22 +211,23 @@ class Sweep:
         except ImportError:
             raise ParameterError(
                 "scheduler: running on Dask needs dask.distributed, which is not installed; "
-                "install the extra with pip install 'chuteflow[dask]'") from None
+                "install the extra with pip install 'chuteflow[dask]'"
+            ) from None
         own = client is None
         if own:
             try:
                 client = Client(scheduler, timeout="20s")
             except OSError as exc:
-                raise ParameterError(f"scheduler: cannot connect to the Dask scheduler at "
-                                     f"{scheduler!r}: {exc}") from None
+                raise ParameterError(
+                    f"scheduler: cannot connect to the Dask scheduler at {scheduler!r}: {exc}"
+                ) from None
         try:
             st = self.stats
             st.backend = "dask"
             st.workers = sum(client.nthreads().values())
             cfg = self.config
             prefix = f"chuteflow-{cfg.digest()[:10]}"
-            futures = [client.submit(run_task, cfg, t, pure=False,
-                                     key=f"{prefix}-{t.key}") for t in todo]
+            futures = [client.submit(run_task, cfg, t, pure=False, key=f"{prefix}-{t.key}") for t in todo]
             try:
                 for fut in as_completed(futures):
                     finished(fut.result())
@@ -242,6 +249,7 @@ def _init_worker():
     limit_blas_threads(1)
     # Ctrl-C reaches the whole process group: the parent handles it, workers just stop
     import signal
+
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
@@ -282,13 +290,19 @@ class _Progress:
                 TimeElapsedColumn,
                 TimeRemainingColumn,
             )
-            self._rich = Progress(TextColumn("{task.description}"), BarColumn(),
-                                  MofNCompleteColumn(), TextColumn("points"),
-                                  TimeElapsedColumn(), TextColumn("ETA"),
-                                  TimeRemainingColumn(), transient=False)
+
+            self._rich = Progress(
+                TextColumn("{task.description}"),
+                BarColumn(),
+                MofNCompleteColumn(),
+                TextColumn("points"),
+                TimeElapsedColumn(),
+                TextColumn("ETA"),
+                TimeRemainingColumn(),
+                transient=False,
+            )
             self._rich.start()
-            self._task = self._rich.add_task(self.label, total=self.total,
-                                             completed=self.completed)
+            self._task = self._rich.add_task(self.label, total=self.total, completed=self.completed)
         elif callable(self.spec):
             self.spec(self.label, total=self.total, completed=self.completed)
         return self
@@ -322,50 +336,69 @@ def assemble(config: SweepConfig, parts: list[TaskResult]):
     for p in parts:
         if p.i < 0:
             for v in variables:
-                mdata[v.name][p.j0:p.j1] = p.values[v.name]
-            mstatus[p.j0:p.j1] = p.status
-            mmessage[p.j0:p.j1] = [str(s) for s in p.message]
+                mdata[v.name][p.j0 : p.j1] = p.values[v.name]
+            mstatus[p.j0 : p.j1] = p.status
+            mmessage[p.j0 : p.j1] = [str(s) for s in p.message]
             continue
         for v in variables:
-            data[v.name][p.i, p.j0:p.j1] = p.values[v.name]
-        status[p.i, p.j0:p.j1] = p.status
-        message[p.i, p.j0:p.j1] = [str(s) for s in p.message]
+            data[v.name][p.i, p.j0 : p.j1] = p.values[v.name]
+        status[p.i, p.j0 : p.j1] = p.status
+        message[p.i, p.j0 : p.j1] = [str(s) for s in p.message]
     if (status < 0).any() or (mstatus < 0).any():
         raise RuntimeError("assemble: some points have no result")
     dims = ("theta", "nu0")
     ds = xr.Dataset(
         {v.name: (dims, data[v.name], v.attrs()) for v in variables},
-        coords={"theta": ("theta", np.array(config.theta),
-                          {"units": "degree", "long_name": "inclination θ"}),
-                "nu0": ("nu0", np.array(config.nu0),
-                        {"units": "1", "long_name": "floor packing fraction ν0(0)"})})
+        coords={
+            "theta": ("theta", np.array(config.theta), {"units": "degree", "long_name": "inclination θ"}),
+            "nu0": ("nu0", np.array(config.nu0), {"units": "1", "long_name": "floor packing fraction ν0(0)"}),
+        },
+    )
     names = " ".join(STATUS)
-    ds["status"] = (dims, status, {"long_name": "point status",
-                                   "flag_values": np.array(list(STATUS.values()), np.int8),
-                                   "flag_meanings": names})
+    ds["status"] = (
+        dims,
+        status,
+        {
+            "long_name": "point status",
+            "flag_values": np.array(list(STATUS.values()), np.int8),
+            "flag_meanings": names,
+        },
+    )
     ds["message"] = (dims, message.astype(str), {"long_name": "why a point is not ok"})
     if nm:
         # marked points (paper's P1–P5, Q1–Q3): same variables on a 'marker' dimension
         ds = ds.assign_coords(
-            marker=("marker", np.array([m[0] for m in config.markers], dtype=str),
-                    {"long_name": "marked point"}),
-            marker_theta=("marker", np.array([m[1] for m in config.markers]),
-                          {"units": "degree", "long_name": "inclination θ of the marked point"}),
-            marker_nu0=("marker", np.array([m[2] for m in config.markers]),
-                        {"units": "1", "long_name": "ν0(0) of the marked point"}))
+            marker=(
+                "marker",
+                np.array([m[0] for m in config.markers], dtype=str),
+                {"long_name": "marked point"},
+            ),
+            marker_theta=(
+                "marker",
+                np.array([m[1] for m in config.markers]),
+                {"units": "degree", "long_name": "inclination θ of the marked point"},
+            ),
+            marker_nu0=(
+                "marker",
+                np.array([m[2] for m in config.markers]),
+                {"units": "1", "long_name": "ν0(0) of the marked point"},
+            ),
+        )
         for v in variables:
             ds["marker_" + v.name] = ("marker", mdata[v.name], v.attrs())
         ds["marker_status"] = ("marker", mstatus, dict(ds["status"].attrs))
         ds["marker_message"] = ("marker", mmessage.astype(str), dict(ds["message"].attrs))
     d = config.to_dict()
-    ds.attrs.update({
-        "title": f"chuteflow stability sweep, roughness φ = {config.model.roughness:g}",
-        "source": "chuteflow (Mitarai & Nakanishi, figures 6 / 12)",
-        "chuteflow_version": __version__,
-        "config_digest": config.digest(),
-        "config_json": json.dumps(d, sort_keys=True),
-        "metrics": " ".join(json.loads(s)["name"] for s in config.metrics),
-    })
+    ds.attrs.update(
+        {
+            "title": f"chuteflow stability sweep, roughness φ = {config.model.roughness:g}",
+            "source": "chuteflow (Mitarai & Nakanishi, figures 6 / 12)",
+            "chuteflow_version": __version__,
+            "config_digest": config.digest(),
+            "config_json": json.dumps(d, sort_keys=True),
+            "metrics": " ".join(json.loads(s)["name"] for s in config.metrics),
+        }
+    )
     ds.attrs.update(config.model.attrs())  # parameters and closure names (ChuteModel.to_dict)
     ds.attrs["model_key"] = config.model.key()
     for k in ("nu_top", "steady_rtol", "n_max", "min_thickness"):
@@ -391,6 +424,7 @@ def load_sweep(path):
     (with its closures) it was computed with.
     """
     import xarray as xr
+
     path = Path(path)
     if not path.exists():
         raise ParameterError(f"file: {path} does not exist")
@@ -404,17 +438,27 @@ def load_sweep(path):
 def markers(ds):
     """The marked points of a sweep Dataset as their own Dataset (dimension ``marker``)."""
     names = [v for v in ds.data_vars if v.startswith("marker_")]
-    out = ds[names].rename({v: v[len("marker_"):] for v in names})
-    return out.drop_vars([c for c in ds.coords if c not in ("marker", "marker_theta",
-                                                            "marker_nu0")], errors="ignore")
+    out = ds[names].rename({v: v[len("marker_") :] for v in names})
+    return out.drop_vars(
+        [c for c in ds.coords if c not in ("marker", "marker_theta", "marker_nu0")], errors="ignore"
+    )
 
 
-def run_sweep(config: SweepConfig, out=None, *, workers: int | None = None, client=None,
-              scheduler: str | None = None, progress: bool | ProgressFn = False,
-              fresh: bool = False, keep_parts: bool = False):
+def run_sweep(
+    config: SweepConfig,
+    out=None,
+    *,
+    workers: int | None = None,
+    client=None,
+    scheduler: str | None = None,
+    progress: bool | ProgressFn = False,
+    fresh: bool = False,
+    keep_parts: bool = False,
+):
     """Run (or resume) a sweep; see :class:`Sweep`. Returns the Dataset."""
     return Sweep(config, out, fresh=fresh, keep_parts=keep_parts).run(
-        workers=workers, client=client, scheduler=scheduler, progress=progress)
+        workers=workers, client=client, scheduler=scheduler, progress=progress
+    )
 
 
 __all__ += ["ConfigMismatchError"]

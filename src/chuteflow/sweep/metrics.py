@@ -11,6 +11,7 @@
 The stability layer is imported inside ``compute``, so registering these classes never depends
 on it.
 """
+
 from __future__ import annotations
 
 import math
@@ -46,34 +47,46 @@ class LongWaveMetric(PointFunction):
     name = "longwave"
     version = "3"
     requires = ("steady",)
-    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_n": 128, "refine_rtol": 0.1,
-                "refine_n_max": 480}
+    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_n": 128, "refine_rtol": 0.1, "refine_n_max": 480}
     variables = (
-        Variable("alpha1_im", "sqrt(g sigma)", "Im α1 = −dQ0/dρ̄0 (the long-wave phase velocity, "
-                 "positive down the slope, is −Im α1)",
-                 source="App. B, eq. (B 2)"),
-        Variable("alpha2_re", "sigma^(3/2) g^(1/2)", "Re α2, long-wave growth coefficient "
-                 "(> 0: long-wave unstable)", source="§4.2, §5.1.1"),
+        Variable(
+            "alpha1_im",
+            "sqrt(g sigma)",
+            "Im α1 = −dQ0/dρ̄0 (the long-wave phase velocity, positive down the slope, is −Im α1)",
+            source="App. B, eq. (B 2)",
+        ),
+        Variable(
+            "alpha2_re",
+            "sigma^(3/2) g^(1/2)",
+            "Re α2, long-wave growth coefficient (> 0: long-wave unstable)",
+            source="§4.2, §5.1.1",
+        ),
         Variable("alpha2_im", "sigma^(3/2) g^(1/2)", "Im α2"),
-        Variable("alpha2_convergence", "1",
-                 "relative change of α2 between the two finest resolutions"),
-        Variable("alpha2_eig_re", "sigma^(3/2) g^(1/2)",
-                 "Re (α(k) − α1 k)/k² from the eigenvalue at k = 1e-6 (cross-check of α2)"),
-        Variable("longwave_consistent", "1",
-                 "Re α2 and the eigenvalue estimate agree in sign", kind="flag"),
-        Variable("longwave_n", "1", "Chebyshev intervals of the long-wave computation",
-                 kind="int"),
+        Variable("alpha2_convergence", "1", "relative change of α2 between the two finest resolutions"),
+        Variable(
+            "alpha2_eig_re",
+            "sigma^(3/2) g^(1/2)",
+            "Re (α(k) − α1 k)/k² from the eigenvalue at k = 1e-6 (cross-check of α2)",
+        ),
+        Variable("longwave_consistent", "1", "Re α2 and the eigenvalue estimate agree in sign", kind="flag"),
+        Variable("longwave_n", "1", "Chebyshev intervals of the long-wave computation", kind="int"),
     )
 
     def validate(self):
         o = self.options
-        if not (24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])
-                and int(o["refine_n"]) <= int(o["refine_n_max"])):
-            raise ParameterError("longwave: need 24 <= n <= n_max <= refine_n_max and "
-                                 "refine_n <= refine_n_max (Chebyshev intervals)")
+        if not (
+            24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])
+            and int(o["refine_n"]) <= int(o["refine_n_max"])
+        ):
+            raise ParameterError(
+                "longwave: need 24 <= n <= n_max <= refine_n_max and "
+                "refine_n <= refine_n_max (Chebyshev intervals)"
+            )
         if not (0 < float(o["refine_rtol"]) <= float(o["rtol"]) < 1):
-            raise ParameterError("longwave: need 0 < refine_rtol <= rtol < 1: below 1 the two "
-                                 "finest resolutions agree on the sign of Re α2")
+            raise ParameterError(
+                "longwave: need 0 < refine_rtol <= rtol < 1: below 1 the two "
+                "finest resolutions agree on the sign of Re α2"
+            )
 
     @staticmethod
     def _consistent(lw) -> bool:
@@ -90,13 +103,22 @@ class LongWaveMetric(PointFunction):
             lw = None
         if lw is None or not self._consistent(lw):
             start = max(int(o["refine_n"]), lw.n if lw is not None else 0)
-            lw = longwave(flow, n=min(start, int(o["refine_n_max"])),
-                          rtol=float(o["refine_rtol"]), n_max=int(o["refine_n_max"]))
+            lw = longwave(
+                flow,
+                n=min(start, int(o["refine_n_max"])),
+                rtol=float(o["refine_rtol"]),
+                n_max=int(o["refine_n_max"]),
+            )
         eig = lw.alpha2_from_eigenvalue
-        return {"alpha1_im": lw.alpha1.imag, "alpha2_re": lw.alpha2.real,
-                "alpha2_im": lw.alpha2.imag, "alpha2_convergence": lw.convergence_alpha2,
-                "alpha2_eig_re": eig.real if math.isfinite(eig.real) else None,
-                "longwave_consistent": self._consistent(lw), "longwave_n": lw.n}
+        return {
+            "alpha1_im": lw.alpha1.imag,
+            "alpha2_re": lw.alpha2.real,
+            "alpha2_im": lw.alpha2.imag,
+            "alpha2_convergence": lw.convergence_alpha2,
+            "alpha2_eig_re": eig.real if math.isfinite(eig.real) else None,
+            "longwave_consistent": self._consistent(lw),
+            "longwave_n": lw.n,
+        }
 
 
 @register_point_function
@@ -118,18 +140,36 @@ class GrowthMetric(PointFunction):
     version = "2"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
-    defaults = {"k_min": 1e-4, "k_max": 0.05, "num": 16, "stride": 6, "n": 80,
-                "n_max": 160, "unstable_points": False}
+    defaults = {
+        "k_min": 1e-4,
+        "k_max": 0.05,
+        "num": 16,
+        "stride": 6,
+        "n": 80,
+        "n_max": 160,
+        "unstable_points": False,
+    }
     variables = (
-        Variable("growth_max", _RATE, "largest Re α of the α(0) = 0 branch on the k grid",
-                 source="figures 7, 9, 13"),
+        Variable(
+            "growth_max",
+            _RATE,
+            "largest Re α of the α(0) = 0 branch on the k grid",
+            source="figures 7, 9, 13",
+        ),
         Variable("k_growth_max", "1/sigma", "wavenumber of the largest Re α on the k grid"),
-        Variable("k_c", "1/sigma", "critical wavenumber: first sign change of Re α "
-                 "(upper edge of the unstable band 0 < k < k_c)", source="§4.2"),
+        Variable(
+            "k_c",
+            "1/sigma",
+            "critical wavenumber: first sign change of Re α (upper edge of the unstable band 0 < k < k_c)",
+            source="§4.2",
+        ),
         Variable("growth_n", "1", "largest Chebyshev N used along the branch", kind="int"),
-        Variable("dispersion_sampled", "1",
-                 "the dispersion relation was sampled here (unstable or check point)",
-                 kind="flag"),
+        Variable(
+            "dispersion_sampled",
+            "1",
+            "the dispersion relation was sampled here (unstable or check point)",
+            kind="flag",
+        ),
     )
 
     def validate(self):
@@ -169,15 +209,20 @@ class GrowthMetric(PointFunction):
                 m = bad[0]
                 raise ConvergenceError(
                     f"dispersion at k = {m.k:.3g} not converged at N = {m.n} (drift "
-                    f"{m.drift:.1e}, tail {m.tail:.1e})")
+                    f"{m.drift:.1e}, tail {m.tail:.1e})"
+                )
         except ConvergenceError as exc:
             # sampled, but no trustworthy branch: the values stay missing, the message says why
             point.note(f"growth: {exc}")
             return {"dispersion_sampled": True}
         re = np.array([m.alpha.real for m in modes])
         imax = int(np.argmax(re))
-        out = {"dispersion_sampled": True, "growth_max": float(re[imax]),
-               "k_growth_max": float(ks[imax]), "growth_n": max(m.n for m in modes)}
+        out = {
+            "dispersion_sampled": True,
+            "growth_max": float(re[imax]),
+            "k_growth_max": float(ks[imax]),
+            "growth_n": max(m.n for m in modes),
+        }
         for i in range(len(ks) - 1):
             if re[i] > 0 >= re[i + 1]:
                 out["k_c"] = self._refine(flow, modes[i], modes[i + 1])
@@ -189,7 +234,6 @@ class GrowthMetric(PointFunction):
         """Brent on Re α(k) of the mode nearest the linear prediction between two tracked
         modes (at the finer of their resolutions)."""
         from scipy.optimize import brentq
-
 
         ka, kb, aa, ab = ma.k, mb.k, ma.alpha, mb.alpha
         n = max(ma.n, mb.n)

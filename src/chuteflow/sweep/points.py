@@ -19,6 +19,7 @@ a new metric is a new small class and nothing else changes::
 Options given to the constructor (``FiniteKCheck(stride=3)``) are part of the configuration
 and of its hash, so a sweep with other options never reuses old results.
 """
+
 from __future__ import annotations
 
 import importlib
@@ -31,8 +32,16 @@ import numpy as np
 from ..errors import ParameterError
 from ..steady import steady_tangent
 
-__all__ = ["Variable", "Point", "PointFunction", "register_point_function", "point_function",
-           "registered_point_functions", "SteadyQuantities", "Kinematic"]
+__all__ = [
+    "Variable",
+    "Point",
+    "PointFunction",
+    "register_point_function",
+    "point_function",
+    "registered_point_functions",
+    "SteadyQuantities",
+    "Kinematic",
+]
 
 #: Variable kinds: 'float' (missing = NaN), 'flag' (int8: 1 true, 0 false, -1 missing),
 #: 'int' (int32, missing = -1).
@@ -80,8 +89,7 @@ class Variable:
         if self.source:
             a["source"] = self.source
         if self.kind == "flag":
-            a.update(flag_values=np.array([-1, 0, 1], dtype=np.int8),
-                     flag_meanings="missing false true")
+            a.update(flag_values=np.array([-1, 0, 1], dtype=np.int8), flag_meanings="missing false true")
         return a
 
 
@@ -137,8 +145,10 @@ class PointFunction:
     def __init__(self, **options):
         unknown = set(options) - set(self.defaults)
         if unknown:
-            raise ParameterError(f"point function {self.name!r}: unknown option(s) "
-                                 f"{sorted(unknown)}; allowed: {sorted(self.defaults)}")
+            raise ParameterError(
+                f"point function {self.name!r}: unknown option(s) "
+                f"{sorted(unknown)}; allowed: {sorted(self.defaults)}"
+            )
         self.options = {**self.defaults, **options}
         self.validate()
 
@@ -147,9 +157,12 @@ class PointFunction:
 
     def spec(self) -> dict:
         """JSON-ready description (name, version, options): what the configuration hashes."""
-        return {"name": self.name, "version": str(self.version),
-                "module": type(self).__module__,
-                "options": {k: _plain(v) for k, v in sorted(self.options.items())}}
+        return {
+            "name": self.name,
+            "version": str(self.version),
+            "module": type(self).__module__,
+            "options": {k: _plain(v) for k, v in sorted(self.options.items())},
+        }
 
     def compute(self, flow, point: Point) -> Mapping[str, Any]:
         """Values of (some of) :attr:`variables` for the steady ``flow`` at ``point``.
@@ -180,8 +193,7 @@ def register_point_function(cls: type[PointFunction]) -> type[PointFunction]:
     if not cls.name or not cls.name.isidentifier():
         raise ValueError(f"{cls.__name__}.name must be an identifier, got {cls.name!r}")
     old = _REGISTRY.get(cls.name)
-    if old is not None and (old.__module__, old.__qualname__) != (cls.__module__,
-                                                                  cls.__qualname__):
+    if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
         raise ValueError(f"point function {cls.name!r} is already registered by {old.__module__}")
     names = [v.name for v in cls.variables]
     if len(set(names)) != len(names):
@@ -214,10 +226,10 @@ def point_function(spec) -> PointFunction:
     try:
         cls = _REGISTRY[name]
     except KeyError:
-        raise ParameterError(f"metrics: unknown point function {name!r}; available: "
-                             f"{sorted(_REGISTRY)}") from None
+        raise ParameterError(
+            f"metrics: unknown point function {name!r}; available: {sorted(_REGISTRY)}"
+        ) from None
     return cls(**options)
-
 
 
 # --------------------------------------------------------------------------- built-ins
@@ -237,21 +249,34 @@ class SteadyQuantities(PointFunction):
         Variable("u_floor", "sqrt(g sigma)", "slip velocity u0(0)"),
         Variable("T_floor", "g sigma", "floor temperature T0(0)"),
         Variable("y_max", "sigma", "top of the domain, ν0(y_max) = nu_top"),
-        Variable("monotonic", "1", "ν0 decreases monotonically from the floor", kind="flag",
-                 source="figure 2"),
+        Variable(
+            "monotonic", "1", "ν0 decreases monotonically from the floor", kind="flag", source="figure 2"
+        ),
         Variable("y_peak", "sigma", "height of the density maximum"),
         Variable("nu_peak", "1", "density maximum"),
         Variable("steady_n", "1", "Chebyshev intervals of the steady solution", kind="int"),
-        Variable("steady_convergence", "1",
-                 "largest relative change of the steady scalars between resolutions"),
+        Variable(
+            "steady_convergence", "1", "largest relative change of the steady scalars between resolutions"
+        ),
     )
 
     def compute(self, flow, point):
-        return {"h": flow.h, "nu_mean": flow.nu_mean, "rho_bar": flow.rho_bar, "Q": flow.Q,
-                "U": flow.Q / flow.rho_bar, "T_mean": flow.T_mean, "u_floor": flow.u_floor,
-                "T_floor": flow.T_floor, "y_max": flow.y_max, "monotonic": bool(flow.monotonic),
-                "y_peak": flow.y_peak, "nu_peak": flow.nu_peak, "steady_n": int(flow.n),
-                "steady_convergence": flow.convergence}
+        return {
+            "h": flow.h,
+            "nu_mean": flow.nu_mean,
+            "rho_bar": flow.rho_bar,
+            "Q": flow.Q,
+            "U": flow.Q / flow.rho_bar,
+            "T_mean": flow.T_mean,
+            "u_floor": flow.u_floor,
+            "T_floor": flow.T_floor,
+            "y_max": flow.y_max,
+            "monotonic": bool(flow.monotonic),
+            "y_peak": flow.y_peak,
+            "nu_peak": flow.nu_peak,
+            "steady_n": int(flow.n),
+            "steady_convergence": flow.convergence,
+        }
 
 
 @register_point_function
@@ -267,10 +292,8 @@ class Kinematic(PointFunction):
     version = "1"
     requires = ("steady",)
     variables = (
-        Variable("dQ_drho", "sqrt(g sigma)", "dQ0/dρ̄0 at fixed θ (kinematic wave speed)",
-                 source="eq. (B 6)"),
-        Variable("dU_drho", "sqrt(g sigma)/sigma", "dU/dρ̄0 at fixed θ, U = Q0/ρ̄0",
-                 source="§4.2"),
+        Variable("dQ_drho", "sqrt(g sigma)", "dQ0/dρ̄0 at fixed θ (kinematic wave speed)", source="eq. (B 6)"),
+        Variable("dU_drho", "sqrt(g sigma)/sigma", "dU/dρ̄0 at fixed θ, U = Q0/ρ̄0", source="§4.2"),
         Variable("drho_dnu0", "sigma", "dρ̄0/dν0(0) at fixed θ"),
     )
 
@@ -279,6 +302,4 @@ class Kinematic(PointFunction):
         t = steady_tangent(flow)
         dq = float(t["dQ_drho"])
         U = flow.Q / flow.rho_bar
-        return {"dQ_drho": dq, "dU_drho": (dq - U) / flow.rho_bar,
-                "drho_dnu0": float(t["drho_bar"])}
-
+        return {"dQ_drho": dq, "dU_drho": (dq - U) / flow.rho_bar, "drho_dnu0": float(t["drho_bar"])}

@@ -4,6 +4,7 @@
 of (configuration, task): with one BLAS thread it gives bit-identical numbers wherever it runs,
 which is what makes resumed, local and Dask sweeps equal.
 """
+
 from __future__ import annotations
 
 import resource
@@ -75,7 +76,7 @@ def warm_up(config=None) -> None:
 
 def _clip(msg: str) -> str:
     msg = " ".join(str(msg).split())
-    return msg if len(msg) <= MAX_MESSAGE else msg[:MAX_MESSAGE - 1] + "…"
+    return msg if len(msg) <= MAX_MESSAGE else msg[: MAX_MESSAGE - 1] + "…"
 
 
 def _coerce(var, value):
@@ -90,8 +91,13 @@ def _coerce(var, value):
 
 
 #: steady_family status → sweep status
-_FAMILY_STATUS = {"ok": "ok", "no_steady_flow": "no_steady_flow", "thin": "no_steady_flow",
-                  "not_converged": "not_converged", "unreached": "not_converged"}
+_FAMILY_STATUS = {
+    "ok": "ok",
+    "no_steady_flow": "no_steady_flow",
+    "thin": "no_steady_flow",
+    "not_converged": "not_converged",
+    "unreached": "not_converged",
+}
 
 
 def _steady_chunk(config, theta: float, nus, model):
@@ -102,10 +108,17 @@ def _steady_chunk(config, theta: float, nus, model):
     Returns a list over the chunk of (flow or None, status name, message).
     """
 
-    fam, flows = steady_family(theta, list(nus), model, nu_top=config.nu_top,
-                               rtol=config.steady_rtol, n_max=config.n_max,
-                               min_thickness=config.min_thickness, tangent=False,
-                               return_flows=True)
+    fam, flows = steady_family(
+        theta,
+        list(nus),
+        model,
+        nu_top=config.nu_top,
+        rtol=config.steady_rtol,
+        n_max=config.n_max,
+        min_thickness=config.min_thickness,
+        tangent=False,
+        return_flows=True,
+    )
     out = []
     for k, flow in enumerate(flows):
         st = str(fam["status"].values[k])
@@ -141,8 +154,9 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
     model = config.model
     marker = task.i < 0
     msec = {"steady": 0.0}
-    kw = dict(nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max,
-              min_thickness=config.min_thickness)
+    kw = dict(
+        nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max, min_thickness=config.min_thickness
+    )
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         # overflow in trial Newton steps is expected and handled by the solvers
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -184,21 +198,21 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                     out = dict(f.compute(flow, point))
                     bad = [n for n in out if n not in byname or owner[n] != f.name]
                     if bad:
-                        raise ValueError(f"point function {f.name!r} returned undeclared "
-                                         f"variable(s) {bad}")
+                        raise ValueError(f"point function {f.name!r} returned undeclared variable(s) {bad}")
                     # all values of a metric or none: coerce first, then store
                     coerced = {n: _coerce(byname[n], v) for n, v in out.items()}
                     for name, val in coerced.items():
                         values[name][k] = val
                         point.values[name] = val
                 except Exception as exc:  # recorded for this point
-                    code = (STATUS["not_converged"] if isinstance(exc, ConvergenceError)
-                            else STATUS["error"])
+                    code = STATUS["not_converged"] if isinstance(exc, ConvergenceError) else STATUS["error"]
                     text = f"{f.name}: {exc}"
                     if not isinstance(exc, ChuteflowError):
                         tb = traceback.extract_tb(exc.__traceback__)[-1]
-                        text = (f"{f.name}: {type(exc).__name__}: {exc} "
-                                f"({tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})")
+                        text = (
+                            f"{f.name}: {type(exc).__name__}: {exc} "
+                            f"({tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})"
+                        )
                     messages[k] = _clip("; ".join(x for x in (messages[k], text) if x))
                     if f.critical:
                         status[k] = code
@@ -211,8 +225,17 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
                 messages[k] = _clip("; ".join([x for x in [messages[k]] if x] + point.notes))
             pt_seconds[k] += time.perf_counter() - t0
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    return TaskResult(key=task.key, digest=config.digest(), i=task.i, j0=task.j0, j1=task.j1,
-                      values=values, status=status, message=np.array(messages, dtype=str),
-                      seconds=time.perf_counter() - t_start, max_rss_kib=int(rss),
-                      point_seconds=pt_seconds, metric_seconds=msec)
-
+    return TaskResult(
+        key=task.key,
+        digest=config.digest(),
+        i=task.i,
+        j0=task.j0,
+        j1=task.j1,
+        values=values,
+        status=status,
+        message=np.array(messages, dtype=str),
+        seconds=time.perf_counter() - t_start,
+        max_rss_kib=int(rss),
+        point_seconds=pt_seconds,
+        metric_seconds=msec,
+    )

@@ -10,6 +10,7 @@ A part is written to a temporary file in the same folder and moved into place wi
 process (:func:`chuteflow._files.atomic_target`; the file gets the mode the umask implies).
 A folder made for another configuration is never reused silently.
 """
+
 from __future__ import annotations
 
 import json
@@ -76,11 +77,13 @@ class PartStore:
                         f"out: {self.dir} holds partial results of a different sweep "
                         f"configuration{why} (digest {str(old)[:12]}, this one "
                         f"{self.digest[:12]}); use another output file, or fresh=True "
-                        "(--fresh) to discard them")
+                        "(--fresh) to discard them"
+                    )
         if not self.dir.exists():
             self.dir.mkdir(parents=True)
-            text = json.dumps({"digest": self.digest, "model_key": config.model.key(),
-                               "config": config.to_dict()}, indent=1)
+            text = json.dumps(
+                {"digest": self.digest, "model_key": config.model.key(), "config": config.to_dict()}, indent=1
+            )
             atomic_write(manifest, lambda fh: fh.write(text.encode()))
 
     def path(self, key: str) -> Path:
@@ -102,17 +105,29 @@ class PartStore:
 
     def write(self, res: TaskResult) -> None:
         arrays: dict[str, Any] = {f"v_{k}": v for k, v in res.values.items()}
-        arrays.update(status=res.status, message=res.message, digest=np.array(res.digest),
-                      key=np.array(res.key), index=np.array([res.i, res.j0, res.j1]))
+        arrays.update(
+            status=res.status,
+            message=res.message,
+            digest=np.array(res.digest),
+            key=np.array(res.key),
+            index=np.array([res.i, res.j0, res.j1]),
+        )
         atomic_write(self.path(res.key), lambda fh: np.savez(fh, **arrays))
 
     def read(self, key: str) -> TaskResult:
         with np.load(self.path(key), allow_pickle=False) as z:
             i, j0, j1 = (int(x) for x in z["index"])
             values = {k[2:]: z[k].copy() for k in z.files if k.startswith("v_")}
-            return TaskResult(key=str(z["key"]), digest=str(z["digest"]), i=i, j0=j0, j1=j1,
-                              values=values, status=z["status"].copy(),
-                              message=z["message"].copy())
+            return TaskResult(
+                key=str(z["key"]),
+                digest=str(z["digest"]),
+                i=i,
+                j0=j0,
+                j1=j1,
+                values=values,
+                status=z["status"].copy(),
+                message=z["message"].copy(),
+            )
 
     def remove(self) -> None:
         shutil.rmtree(self.dir, ignore_errors=True)

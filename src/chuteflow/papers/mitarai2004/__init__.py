@@ -12,6 +12,7 @@ and density wave formation", J. Fluid Mech. (2004). What is specific to this pap
 Equation numbers cited in this package are the printed ones (docs/paper-labels.md); the
 misprints the code corrects are listed in docs/errata.md.
 """
+
 from .points import PAPER_UNSTABLE, POINTS, NamedPoint, markers, point
 
 __all__ = ["POINTS", "PAPER_UNSTABLE", "NamedPoint", "markers", "point"]

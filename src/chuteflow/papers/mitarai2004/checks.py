@@ -4,6 +4,7 @@ Each check returns a dict with ``id``, ``source``, ``statement``, ``computed``, 
 (the fields of :class:`chuteflow.report.Checkpoint`); :func:`paper_checks` runs those that
 apply to the Dataset's roughness.
 """
+
 from __future__ import annotations
 
 import math
@@ -13,8 +14,14 @@ import numpy as np
 from ...sweep.classify import REGIMES, regime_summary
 from .points import PAPER_UNSTABLE
 
-__all__ = ["paper_checks", "check_regimes_placed", "check_low_density_unstable",
-           "check_C_monotonicity", "check_markers", "check_finite_k"]
+__all__ = [
+    "paper_checks",
+    "check_regimes_placed",
+    "check_low_density_unstable",
+    "check_C_monotonicity",
+    "check_markers",
+    "check_finite_k",
+]
 
 #: Paper's stability of the marked points (:data:`~.points.PAPER_UNSTABLE`).
 MARKER_EXPECT = PAPER_UNSTABLE
@@ -29,20 +36,29 @@ def check_regimes_placed(ds) -> dict:
     C at the large-ν̄ end of the diagram, above A and B (largest ν̄ reached)."""
     s = regime_summary(ds)
     have = {k: s.get(k, {}).get("points", 0) for k in ("A", "B", "C")}
-    txt = ", ".join(f"{k}: {have[k]} pts" + (
-        f" (median h {s[k]['h_median']:.3g}, ν̄ up to {s[k]['nu_mean_max']:.3g})"
-        if have[k] else "") for k in ("A", "B", "C"))
+    txt = ", ".join(
+        f"{k}: {have[k]} pts"
+        + (f" (median h {s[k]['h_median']:.3g}, ν̄ up to {s[k]['nu_mean_max']:.3g})" if have[k] else "")
+        for k in ("A", "B", "C")
+    )
     ok = all(have.values())
     if ok:
         A, B, C = s["A"], s["B"], s["C"]
-        ok = (A["h_median"] < B["h_median"] and A["h_median"] < C["h_median"]
-              and C["nu_mean_max"] > A["nu_mean_max"] and C["nu_mean_max"] > B["nu_mean_max"])
-    return {"id": f"diagrams.phi{_phi(ds):g}.regimes", "source": "§4.2, figures 6/12",
-            "statement": "three unstable regimes: A (small h, small ν̄), B (large h, small ν̄), "
-                         "C (large h, large ν̄)",
-            "computed": txt + " — tested: median h of A below those of B and C, largest ν̄ "
-                              "of C above those of A and B",
-            "passed": ok}
+        ok = (
+            A["h_median"] < B["h_median"]
+            and A["h_median"] < C["h_median"]
+            and C["nu_mean_max"] > A["nu_mean_max"]
+            and C["nu_mean_max"] > B["nu_mean_max"]
+        )
+    return {
+        "id": f"diagrams.phi{_phi(ds):g}.regimes",
+        "source": "§4.2, figures 6/12",
+        "statement": "three unstable regimes: A (small h, small ν̄), B (large h, small ν̄), "
+        "C (large h, large ν̄)",
+        "computed": txt + " — tested: median h of A below those of B and C, largest ν̄ "
+        "of C above those of A and B",
+        "passed": ok,
+    }
 
 
 def check_low_density_unstable(ds, ends=None) -> dict:
@@ -63,47 +79,62 @@ def check_low_density_unstable(ds, ends=None) -> dict:
             ok = np.nonzero(st[i] == 0)[0]
             if len(ok):
                 j = ok[0]
-                ends.append({"theta": float(th), "nu0": float(ds["nu0"].values[j]),
-                             "h": float(ds["h"].values[i, j]),
-                             "alpha2_re": float(ds["alpha2_re"].values[i, j]),
-                             "kind": _regime_name(reg[i, j]),
-                             "consistent": bool(ds["longwave_consistent"].values[i, j] != 0)
-                             if "longwave_consistent" in ds else True})
-    stuck = [e for e in ends if e["kind"] == "stable"
-             and e.get("how") == "grid, no flow found below"]
-    judged = [e for e in ends if e.get("h", 0) >= 1 and e.get("consistent", True)
-              and e["kind"] != "error" and e not in stuck]
+                ends.append(
+                    {
+                        "theta": float(th),
+                        "nu0": float(ds["nu0"].values[j]),
+                        "h": float(ds["h"].values[i, j]),
+                        "alpha2_re": float(ds["alpha2_re"].values[i, j]),
+                        "kind": _regime_name(reg[i, j]),
+                        "consistent": bool(ds["longwave_consistent"].values[i, j] != 0)
+                        if "longwave_consistent" in ds
+                        else True,
+                    }
+                )
+    stuck = [e for e in ends if e["kind"] == "stable" and e.get("how") == "grid, no flow found below"]
+    judged = [
+        e
+        for e in ends
+        if e.get("h", 0) >= 1 and e.get("consistent", True) and e["kind"] != "error" and e not in stuck
+    ]
     thin = [e for e in ends if e.get("h", 0) < 1 and e["kind"] != "error"]
     unsure = [e for e in ends if e.get("h", 0) >= 1 and not e.get("consistent", True)]
     bad = [e for e in judged if e["kind"] not in ("A", "B")]
     errors = [e for e in ends if e["kind"] == "error"]
 
     def fmt(e):
-        return (f"θ={e['theta']:.3g}° (ν0={e['nu0']:.3g}, h={e['h']:.2g}, Re α2="
-                f"{e['alpha2_re']:.2g}: {e['kind']})")
+        return (
+            f"θ={e['theta']:.3g}° (ν0={e['nu0']:.3g}, h={e['h']:.2g}, Re α2="
+            f"{e['alpha2_re']:.2g}: {e['kind']})"
+        )
 
-    txt = (f"{len(judged) - len(bad)} of {len(judged)} θ rows with h ≥ 1 at their least dense "
-           f"flow end in A or B")
+    txt = (
+        f"{len(judged) - len(bad)} of {len(judged)} θ rows with h ≥ 1 at their least dense flow end in A or B"
+    )
     if bad:
         txt += "; not: " + ", ".join(fmt(e) for e in bad[:6])
     if thin:
         kinds = {k: sum(e["kind"] == k for e in thin) for k in ("A", "B", "stable")}
-        txt += (f"; {len(thin)} rows end at h < 1 (not judged, as in the paper): "
-                + ", ".join(f"{v} {k}" for k, v in kinds.items() if v))
+        txt += f"; {len(thin)} rows end at h < 1 (not judged, as in the paper): " + ", ".join(
+            f"{v} {k}" for k, v in kinds.items() if v
+        )
     if unsure:
-        txt += "; sign of Re α2 undetermined (estimates disagree) at " + \
-            ", ".join(fmt(e) for e in unsure[:4])
+        txt += "; sign of Re α2 undetermined (estimates disagree) at " + ", ".join(fmt(e) for e in unsure[:4])
     if stuck:
-        txt += ("; not followed below the grid (no steady flow found there by continuation, "
-                "stable down to the grid's lowest ν0): " + ", ".join(fmt(e) for e in stuck[:4]))
+        txt += (
+            "; not followed below the grid (no steady flow found there by continuation, "
+            "stable down to the grid's lowest ν0): " + ", ".join(fmt(e) for e in stuck[:4])
+        )
     if errors:
-        txt += f"; {len(errors)} rows failed: " + "; ".join(e.get("error", "")[:80]
-                                                          for e in errors[:2])
-    return {"id": f"diagrams.phi{_phi(ds):g}.low_density",
-            "source": "§4.2",
-            "statement": "lowering the density along a fixed-θ contour always reaches regime "
-                         "A or B (the flow with low enough density is always unstable)",
-            "computed": txt, "passed": len(judged) > 0 and not bad and not errors}
+        txt += f"; {len(errors)} rows failed: " + "; ".join(e.get("error", "")[:80] for e in errors[:2])
+    return {
+        "id": f"diagrams.phi{_phi(ds):g}.low_density",
+        "source": "§4.2",
+        "statement": "lowering the density along a fixed-θ contour always reaches regime "
+        "A or B (the flow with low enough density is always unstable)",
+        "computed": txt,
+        "passed": len(judged) > 0 and not bad and not errors,
+    }
 
 
 def _regime_name(code):
@@ -125,10 +156,13 @@ def check_C_monotonicity(ds) -> dict:
     else:
         statement = "regime C also covers part of the region of monotonic density profiles"
         passed = n > 0 and nm > 0
-    return {"id": f"diagrams.phi{phi:g}.C_monotonic", "source": "§4.2, §5 (discussion)",
-            "statement": statement,
-            "computed": f"{nm} of {n} grid points of C have a monotonic ν0(y)",
-            "passed": passed}
+    return {
+        "id": f"diagrams.phi{phi:g}.C_monotonic",
+        "source": "§4.2, §5 (discussion)",
+        "statement": statement,
+        "computed": f"{nm} of {n} grid points of C have a monotonic ν0(y)",
+        "passed": passed,
+    }
 
 
 def check_markers(ds) -> list[dict]:
@@ -147,15 +181,21 @@ def check_markers(ds) -> list[dict]:
         th, nu = float(ds["marker_theta"].values[m]), float(ds["marker_nu0"].values[m])
         extra = ""
         if "marker_growth_max" in ds and np.isfinite(ds["marker_growth_max"].values[m]):
-            extra = (f", max Re α on the k grid {ds['marker_growth_max'].values[m]:.3g} at "
-                     f"k = {ds['marker_k_growth_max'].values[m]:.3g}")
-        out.append({"id": f"diagrams.{name}", "source": "§4.2, figures 7, 9, 13",
-                    "statement": f"{name} (θ = {th:g}°, ν0(0) = {nu:g}) is "
-                                 f"{'unstable' if want else 'stable'}",
-                    "computed": (f"Re α2 = {a2:.4g} → {'unstable' if u == 1 else 'stable'}"
-                                 f" (regime {reg}){extra}") if u >= 0 else
-                                f"not computed: {ds['marker_message'].values[m]}",
-                    "passed": u >= 0 and (u == 1) == want})
+            extra = (
+                f", max Re α on the k grid {ds['marker_growth_max'].values[m]:.3g} at "
+                f"k = {ds['marker_k_growth_max'].values[m]:.3g}"
+            )
+        out.append(
+            {
+                "id": f"diagrams.{name}",
+                "source": "§4.2, figures 7, 9, 13",
+                "statement": f"{name} (θ = {th:g}°, ν0(0) = {nu:g}) is {'unstable' if want else 'stable'}",
+                "computed": (f"Re α2 = {a2:.4g} → {'unstable' if u == 1 else 'stable'} (regime {reg}){extra}")
+                if u >= 0
+                else f"not computed: {ds['marker_message'].values[m]}",
+                "passed": u >= 0 and (u == 1) == want,
+            }
+        )
     return out
 
 
@@ -197,17 +237,22 @@ def check_finite_k(ds) -> dict | None:
     if bad:
         txt += ": " + "; ".join(fmt(r) for r in bad[:8])
     if thin_bad:
-        txt += (f"; at h < 1 (not judged) {len(thin_bad)} of "
-                f"{len(rows) - len(judged)} disagree: " + "; ".join(fmt(r) for r in thin_bad[:4]))
+        txt += f"; at h < 1 (not judged) {len(thin_bad)} of {len(rows) - len(judged)} disagree: " + "; ".join(
+            fmt(r) for r in thin_bad[:4]
+        )
     if failed:
-        txt += (f"; {failed} sampled points where the branch could not be tracked (listed in "
-                "the file's message)")
-    return {"id": f"diagrams.phi{_phi(ds):g}.finite_k",
-            "source": "§4.2 (all unstable modes are long-wave), docs/errata.md, numerical notes",
-            "statement": "no finite-k instability missed by the sign of Re α2 (dispersion "
-                         "relation of the α(0) = 0 branch sampled on a k grid at a subset of "
-                         "grid points and at the marked points)",
-            "computed": txt, "passed": len(judged) > 0 and not bad}
+        txt += (
+            f"; {failed} sampled points where the branch could not be tracked (listed in the file's message)"
+        )
+    return {
+        "id": f"diagrams.phi{_phi(ds):g}.finite_k",
+        "source": "§4.2 (all unstable modes are long-wave), docs/errata.md, numerical notes",
+        "statement": "no finite-k instability missed by the sign of Re α2 (dispersion "
+        "relation of the α(0) = 0 branch sampled on a k grid at a subset of "
+        "grid points and at the marked points)",
+        "computed": txt,
+        "passed": len(judged) > 0 and not bad,
+    }
 
 
 def paper_checks(ds, ends=None) -> list[dict]:

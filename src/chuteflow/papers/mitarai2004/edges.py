@@ -8,6 +8,7 @@ each contour by continuation from the row's least dense grid flow: bisection tow
 failed density below it, or a family at ν0 halved repeatedly below the grid, and classifies the
 least dense flow reached with the sweep's own point functions.
 """
+
 from __future__ import annotations
 
 import json
@@ -34,8 +35,12 @@ def _classify_flow(flow, fns):
         kind = "B" if dU < 0 else "A"
     else:
         kind = "stable"
-    return {"alpha2_re": float(a2), "dU_drho": float(dU), "kind": kind,
-            "consistent": bool(v.get("longwave_consistent", True))}
+    return {
+        "alpha2_re": float(a2),
+        "dU_drho": float(dU),
+        "kind": kind,
+        "consistent": bool(v.get("longwave_consistent", True)),
+    }
 
 
 def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
@@ -65,8 +70,9 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     specs = {json.loads(s)["name"]: json.loads(s) for s in cfg.metrics}
     fns = [point_function(specs[name]) for name in ("steady", "kinematic", "longwave")]
     model = cfg.model
-    kw: dict[str, Any] = dict(nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max,
-                              min_thickness=cfg.min_thickness)
+    kw: dict[str, Any] = dict(
+        nu_top=cfg.nu_top, rtol=cfg.steady_rtol, n_max=cfg.n_max, min_thickness=cfg.min_thickness
+    )
     st = ds["status"].values
     nus = ds["nu0"].values
     out = []
@@ -81,13 +87,18 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
         reg = int(ds["regime"].values[i, j]) if "regime" in ds else -1
         if j == 0 and reg in (1, 2):
             # already unstable at the grid's lowest density: nothing to extend
-            rec.update(nu0=float(nus[0]), h=float(ds["h"].values[i, 0]),
-                       nu_mean=float(ds["nu_mean"].values[i, 0]),
-                       alpha2_re=float(ds["alpha2_re"].values[i, 0]),
-                       dU_drho=float(ds["dU_drho"].values[i, 0]),
-                       kind="A" if reg == 1 else "B",
-                       consistent=bool(ds["longwave_consistent"].values[i, 0] != 0)
-                       if "longwave_consistent" in ds else True, how="grid")
+            rec.update(
+                nu0=float(nus[0]),
+                h=float(ds["h"].values[i, 0]),
+                nu_mean=float(ds["nu_mean"].values[i, 0]),
+                alpha2_re=float(ds["alpha2_re"].values[i, 0]),
+                dU_drho=float(ds["dU_drho"].values[i, 0]),
+                kind="A" if reg == 1 else "B",
+                consistent=bool(ds["longwave_consistent"].values[i, 0] != 0)
+                if "longwave_consistent" in ds
+                else True,
+                how="grid",
+            )
             out.append(rec)
             continue
         try:
@@ -106,9 +117,10 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
             else:
                 # below the grid: the family at ν0 = ν0_min / 2^q, q = halvings … 1, by
                 # continuation down from the grid's least dense flow
-                below = [float(nus[0]) * 0.5 ** q for q in range(halvings, 0, -1)]
-                _, flows = steady_family(theta, below + [float(nus[0])], model,
-                                         tangent=False, return_flows=True, **kw)
+                below = [float(nus[0]) * 0.5**q for q in range(halvings, 0, -1)]
+                _, flows = steady_family(
+                    theta, below + [float(nus[0])], model, tangent=False, return_flows=True, **kw
+                )
                 lowest = next((f for f in flows if f is not None), None)
                 if lowest is not None and lowest.nu0 < flow.nu0:
                     flow, how = lowest, "below grid"

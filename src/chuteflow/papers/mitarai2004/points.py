@@ -5,13 +5,25 @@ section 4.2): P1–P5 for the roughness φ = 0.05 and Q1–Q3 for φ = 0.10. Eve
 :mod:`chuteflow.papers.mitarai2004` that needs them (the markers of the diagram sweeps, the
 dispersion-relation and eigenfunction figures, the checkpoints) takes them from here.
 """
+
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-__all__ = ["NamedPoint", "POINTS", "PAPER_UNSTABLE", "ROUGHNESSES", "DIAGRAM_RANGES",
-           "DIAGRAM_SHAPE", "REDUCED_SHAPE", "FIGURES", "figure", "markers", "point"]
+__all__ = [
+    "NamedPoint",
+    "POINTS",
+    "PAPER_UNSTABLE",
+    "ROUGHNESSES",
+    "DIAGRAM_RANGES",
+    "DIAGRAM_SHAPE",
+    "REDUCED_SHAPE",
+    "FIGURES",
+    "figure",
+    "markers",
+    "point",
+]
 
 
 @dataclass(frozen=True)
@@ -41,21 +53,23 @@ class NamedPoint:
 
 
 #: The paper's points (section 4.2; figures 6 and 12 mark them in the (h, ν̄) plane).
-POINTS: dict[str, NamedPoint] = {p.name: p for p in (
-    NamedPoint("P1", 16.0, 0.05, 0.05),
-    NamedPoint("P2", 16.0, 0.08, 0.05),
-    NamedPoint("P3", 16.0, 0.10, 0.05),
-    NamedPoint("P4", 14.0, 0.05, 0.05),
-    NamedPoint("P5", 17.0, 0.10, 0.05),
-    NamedPoint("Q1", 20.0, 0.10, 0.10),
-    NamedPoint("Q2", 20.0, 0.15, 0.10),
-    NamedPoint("Q3", 20.0, 0.17, 0.10),
-)}
+POINTS: dict[str, NamedPoint] = {
+    p.name: p
+    for p in (
+        NamedPoint("P1", 16.0, 0.05, 0.05),
+        NamedPoint("P2", 16.0, 0.08, 0.05),
+        NamedPoint("P3", 16.0, 0.10, 0.05),
+        NamedPoint("P4", 14.0, 0.05, 0.05),
+        NamedPoint("P5", 17.0, 0.10, 0.05),
+        NamedPoint("Q1", 20.0, 0.10, 0.10),
+        NamedPoint("Q2", 20.0, 0.15, 0.10),
+        NamedPoint("Q3", 20.0, 0.17, 0.10),
+    )
+}
 
 #: The paper's verdicts (section 4.2): unstable (True) or stable for all k (False). P1 lies
 #: in regime B, P4 in A, P5 in C; Q3 is unstable; Q1 and Q2 are not stated.
-PAPER_UNSTABLE: dict[str, bool] = {"P1": True, "P2": False, "P3": False, "P4": True,
-                                   "P5": True, "Q3": True}
+PAPER_UNSTABLE: dict[str, bool] = {"P1": True, "P2": False, "P3": False, "P4": True, "P5": True, "Q3": True}
 
 #: The two roughness values of the paper's diagrams (figures 6 and 12).
 ROUGHNESSES: tuple[float, ...] = (0.05, 0.10)
@@ -90,15 +104,28 @@ def point(name: str) -> NamedPoint:
 def markers(roughness: float) -> tuple[tuple[str, float, float], ...]:
     """The points of one roughness as sweep markers ``(name, theta, nu0)`` (none for a
     roughness the paper does not treat)."""
-    return tuple(p.marker() for p in POINTS.values()
-                 if math.isclose(float(roughness), p.roughness, rel_tol=1e-9))
+    return tuple(
+        p.marker() for p in POINTS.values() if math.isclose(float(roughness), p.roughness, rel_tol=1e-9)
+    )
 
 
 #: The paper's figures by LaTeX label → number as printed (docs/paper-labels.md).
 FIGURES: dict[str, int] = {
-    "slope": 1, "steadyphase005": 2, "steady": 3, "steadyphase010": 4, "steady01": 5,
-    "phase005": 6, "disp": 7, "dispmag": 8, "disp-AC": 9, "eigens": 10, "eigenu": 11,
-    "phase010": 12, "disp01": 13, "eigenu01": 14, "phaseoned": 15,
+    "slope": 1,
+    "steadyphase005": 2,
+    "steady": 3,
+    "steadyphase010": 4,
+    "steady01": 5,
+    "phase005": 6,
+    "disp": 7,
+    "dispmag": 8,
+    "disp-AC": 9,
+    "eigens": 10,
+    "eigenu": 11,
+    "phase010": 12,
+    "disp01": 13,
+    "eigenu01": 14,
+    "phaseoned": 15,
 }
 
 

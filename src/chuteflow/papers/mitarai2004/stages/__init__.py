@@ -6,6 +6,7 @@ imported. To add a stage, write ``stages/NAME.py`` and add ``"NAME"`` to
 error is kept in :data:`IMPORT_ERRORS` and ``chuteflow reproduce`` reports it as a
 failed checkpoint.
 """
+
 from __future__ import annotations
 
 from importlib import import_module
