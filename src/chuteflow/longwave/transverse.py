@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.optimize import brentq, minimize_scalar
 
 from ..closures import ChuteModel
 from ..errors import ConvergenceError
@@ -252,8 +253,8 @@ class TransverseResult:
     stationary : bool
         Im α = 0 at the maximum (to 1e-9 relative).
     kz_cutoff : float or None
-        The first k_z > 0 where the growth rate changes sign (upper edge of the unstable
-        band), None if none on the grid.
+        The first k_z > 0 where the growth rate changes sign from + to − (upper edge of the
+        unstable band), None if none on the grid.
     dispersion : TransverseDispersion
         The computed α(k_z) with convergence estimates.
     model : ChuteModel
@@ -308,8 +309,9 @@ def transverse(flow: SteadyFlow, *, kz_max: float = 3.0, num: int = 50, n: int =
     """Transverse analysis of one flow: α2z, the dispersion α(k_z) on (0, kz_max], k_z*.
 
     The grid is geometric from 1e-5 (the long-wave instability lives at k_z ~ 1e-3 for P1)
-    to ``kz_max``; the maximum of Re α is refined by a parabola through the best point and
-    its neighbours (in log k_z), and checked by an eigenvalue solve there.
+    to ``kz_max``; the maximum of Re α is refined by a bounded scalar search in log k_z
+    between the best grid point's neighbours (to 2 % in k_z), and the first sign change of
+    Re α (the cut-off of the unstable band) by Brent's method (to 0.1 %).
     """
     lw = transverse_longwave(flow, n)
     ks = np.geomspace(1e-5, kz_max, num)
@@ -322,21 +324,26 @@ def transverse(flow: SteadyFlow, *, kz_max: float = 3.0, num: int = 50, n: int =
     j = int(np.argmax(g))
     kz_best, growth, aim = float(ks[j]), float(g[j]), float(disp.alpha_im[j])
     if 0 < j < len(ks) - 1 and np.all(np.isfinite(g[j - 1:j + 2])):
-        x = np.log(ks[j - 1:j + 2])
-        c = np.polyfit(x, g[j - 1:j + 2], 2)
-        if c[0] < 0:
-            xs = -c[1] / (2 * c[0])
-            if x[0] < xs < x[2]:
-                m = transverse_mode(flow, float(np.exp(xs)), policy=policy)
-                if m.alpha.real > growth:
-                    kz_best, growth, aim = float(np.exp(xs)), float(m.alpha.real), \
-                        float(m.alpha.imag)
+        seen = {}
+
+        def minus_growth(x):
+            m = transverse_mode(flow, float(np.exp(x)), policy=policy)
+            seen[x] = m
+            return -m.alpha.real
+
+        opt = minimize_scalar(minus_growth, bounds=(math.log(ks[j - 1]), math.log(ks[j + 1])),
+                              method="bounded", options={"xatol": 0.02, "maxiter": 12})
+        m = seen.get(opt.x)
+        if m is not None and m.alpha.real > growth:
+            kz_best, growth, aim = float(np.exp(opt.x)), float(m.alpha.real), \
+                float(m.alpha.imag)
     stationary = abs(aim) <= 1e-9 * max(abs(growth), 1e-300) or abs(aim) < 1e-14
-    sign = np.sign(g)
     cut = None
-    for a, b, sa, sb in zip(ks[:-1], ks[1:], sign[:-1], sign[1:]):
-        if sa > 0 and sb <= 0:
-            cut = float(math.sqrt(a * b))
+    for a, b, ga, gb in zip(ks[:-1], ks[1:], g[:-1], g[1:]):
+        if ga > 0 and np.isfinite(gb) and gb <= 0:
+            # the upper edge of the unstable band, refined on the least-stable growth rate
+            cut = float(brentq(lambda k: transverse_mode(flow, k, policy=policy).alpha.real,
+                               float(a), float(b), rtol=1e-3, xtol=1e-12, maxiter=20))
             break
     return TransverseResult(
         flow.theta, flow.nu0, float(lw.alpha2_z.real), float(abs(lw.alpha1_z)),
