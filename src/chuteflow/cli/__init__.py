@@ -19,6 +19,7 @@ from . import steady  # noqa: E402,F401
 from . import diagram  # noqa: E402,F401
 from . import stability  # noqa: E402,F401
 from . import reduced  # noqa: E402,F401
+from . import transverse  # noqa: E402,F401
 
 __all__ = ["app", "main"]
 
