@@ -7,13 +7,18 @@ beyond k_z ≈ 4e-3.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import pytest
 
-from chuteflow.longwave.transverse import (TransverseResult, lateral_pressure,
-                                           lubrication_alpha2z, transverse,
-                                           transverse_longwave)
+from chuteflow.longwave.transverse import (
+    TransverseResult,
+    lateral_pressure,
+    lubrication_alpha2z,
+    transverse,
+    transverse_longwave,
+)
 from chuteflow.stability.transverse import transverse_dispersion, transverse_mode
 
 
@@ -73,8 +78,8 @@ def test_transverse_result_summary(p1_flow):
     assert s["unstable"] and s["stationary"]
     assert 1e-3 < s["kz_max"] < 3e-3
     assert s["growth_max"] == pytest.approx(6.18e-5, rel=2e-2)
-    with pytest.raises(Exception):
-        r.alpha2_z = 0.0  # frozen
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        r.alpha2_z = 0.0  # type: ignore[misc]
 
 
 def test_dispersion_dataset(p1_flow):

@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Optional
 
 import typer
 
@@ -71,7 +70,7 @@ def transverse_cmd(
     nu_top: float = typer.Option(1e-9, "--nu-top", help="Density where the domain ends."),
     n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    plot: Optional[Path] = typer.Option(None, "--plot", help="Save Re α(k_z) (PNG)."),
+    plot: Path | None = typer.Option(None, "--plot", help="Save Re α(k_z) (PNG)."),
 ) -> None:
     """Transverse (k_x = 0) stability: α2z, α(k_z), the most unstable k_z* and its growth."""
     from chuteflow.errors import ParameterError

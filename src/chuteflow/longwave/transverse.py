@@ -42,8 +42,7 @@ from ..errors import ConvergenceError
 from ..stability.modes import stability_operator
 from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
-from ..stability.transverse import (TransverseDispersion, growth_plane,
-                                    transverse_dispersion, transverse_mode)
+from ..stability.transverse import TransverseDispersion, growth_plane, transverse_dispersion, transverse_mode
 from ..steady import SteadyFlow, steady_tangent
 from .theory import null_vector
 

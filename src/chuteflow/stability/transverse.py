@@ -29,7 +29,7 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .modes import Mode, _make_mode, normalise, stability_operator
+from .modes import Mode, _make_mode, stability_operator
 from .operator import Pencil, _check_k
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
