@@ -99,3 +99,22 @@ def test_transverse_full_range_p1(p1_flow):
     assert s["all_physical"]
     assert s["kz_max"] == pytest.approx(1.9e-3, rel=0.1)
     assert 3.5e-3 < s["kz_cutoff"] < 5e-3
+
+
+@pytest.mark.slow
+def test_growth_plane_small(p1_flow):
+    """Re α over a 2 × 2 corner of the (k_x, k_z) plane at P1 (9 s): α(0, 0) = 0; the
+    transverse mode grows at 6.1655e-5 (k_z = 0.002), the longitudinal one 19 times faster,
+    1.178967e-3 at k_x = 0.002 — the dense 3D scan at k_z = 0 agrees with the 2D branch
+    solver (least_stable) — and the oblique one at 9.42e-4: the maximum is longitudinal."""
+    from chuteflow.stability import least_stable
+    from chuteflow.stability.transverse import growth_plane
+
+    ds = growth_plane(p1_flow, [0.0, 0.002], [0.0, 0.002])
+    assert float(ds.alpha_re.sel(kx=0.0, kz=0.0)) == 0.0
+    assert float(ds.alpha_re.sel(kx=0.0, kz=0.002)) == pytest.approx(6.1655e-5, rel=1e-4)
+    assert ds.attrs["direction"] == "longitudinal"
+    a2d = least_stable(p1_flow, 0.002).alpha
+    assert ds.attrs["growth_max"] == pytest.approx(a2d.real, rel=1e-7)
+    assert float(ds.alpha_im.sel(kx=0.002, kz=0.0)) == pytest.approx(a2d.imag, rel=1e-7)
+    assert bool(ds.physical.all())

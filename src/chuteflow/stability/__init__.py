@@ -50,6 +50,13 @@ Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     flow's parameters as attributes). ``critical_k(flow, k_max=0.05)`` → k_c (brentq on the
     tracked branch) or None; ``crossings(...)`` → all sign changes of Re α.
 
+Three dimensions (issue 10; :mod:`.transverse`)
+    ``least_stable_3d(flow, kx, kz)`` → the physical mode of largest Re α at any wavevector
+    by a dense scan (real QZ at k_x = 0) with the same drift/tail rejection;
+    ``transverse_mode``, ``transverse_dispersion(flow, kz)`` (k_x = 0) and
+    ``growth_plane(flow, kx, kz)`` → xarray Dataset of Re α over (k_x, k_z) with its maximum.
+    α2z and the transverse analysis are in :mod:`chuteflow.longwave.transverse`.
+
 Numerical notes (see also ERRATA.md): bulk rows are divided by μ0 or κ0, never by ν0
 (which would put 1e9 into the dilute top's rows and bury the dense layer's eigenvalues in
 round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) − 1e-8) passes the
@@ -63,6 +70,8 @@ from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_sta
                     nearest_eigenpair, operator, spectrum, stability_operator, tail)
 from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
+from .transverse import (TransverseDispersion, growth_plane, least_stable_3d,
+                         transverse_dispersion, transverse_mode)
 
 __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "operator",
            "ShiftInvert", "qz",
@@ -70,4 +79,6 @@ __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "ope
            "spectrum",
            "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
            "critical_k", "crossings", "dispersion", "first_order", "null_vectors",
-           "RejectionPolicy", "DEFAULT_POLICY", "OperatorCache", "OPERATORS"]
+           "RejectionPolicy", "DEFAULT_POLICY", "OperatorCache", "OPERATORS",
+           "TransverseDispersion", "growth_plane", "least_stable_3d", "transverse_dispersion",
+           "transverse_mode"]
