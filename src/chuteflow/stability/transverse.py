@@ -247,8 +247,8 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
                 arr[name][i, j] = v
             phys[i, j] = m.physical
     g = np.where(np.isfinite(arr["alpha_re"]), arr["alpha_re"], -np.inf)
-    i, j = np.unravel_index(int(np.argmax(g)), shape)
-    kxm, kzm = float(kxs[i]), float(kzs[j])
+    im, jm = (int(x) for x in np.unravel_index(int(np.argmax(g)), shape))
+    kxm, kzm = float(kxs[im]), float(kzs[jm])
     direction = ("longitudinal" if kzm == 0 else "transverse" if kxm == 0 else "oblique")
     u = RATE_UNITS
     return xr.Dataset(
@@ -260,6 +260,6 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
          "physical": (("kx", "kz"), phys)},
         coords={"kx": ("kx", kxs, {"units": WAVENUMBER_UNITS}),
                 "kz": ("kz", kzs, {"units": WAVENUMBER_UNITS})},
-        attrs={"theta": flow.theta, "nu0": flow.nu0, "growth_max": float(g[i, j]),
+        attrs={"theta": flow.theta, "nu0": flow.nu0, "growth_max": float(g[im, jm]),
                "kx_max": kxm, "kz_max": kzm, "direction": direction,
                **flow.model.attrs()})
