@@ -14,7 +14,7 @@ drifts by 1e-7 between N = 64 and 80 and is converged from N = 100 on).
 
 The tracked branch of :class:`~chuteflow.stability.BranchTracker` is no use here: at
 k_x = 0 the α(0) = 0 branch rises to α ~ 6e-5 at k_z ~ 2e-3 (P1), falls back through the
-continuum near k_z ~ 3.5e-3 and leaves it unresolved; the least-stable physical mode at
+continuum at k_z ≈ 3.25e-3 and leaves it unresolved; the least-stable physical mode at
 larger k_z is another one.
 """
 from __future__ import annotations
