@@ -5,6 +5,7 @@ Each command lives in its own module, which adds itself to :data:`app` with
 below. Modules should import numerics inside the command function, so that
 ``chuteflow --help`` stays fast.
 """
+
 from __future__ import annotations
 
 import os
@@ -18,6 +19,7 @@ from . import (
     reproduce,  # noqa: F401
     stability,  # noqa: F401
     steady,  # noqa: F401
+    transverse,  # noqa: F401
 )
 from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
 

@@ -50,44 +50,87 @@ Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     flow's parameters as attributes). ``critical_k(flow, k_max=0.05)`` → k_c (brentq on the
     tracked branch) or None; ``crossings(...)`` → all sign changes of Re α.
 
+Three dimensions (:mod:`.transverse`)
+    ``least_stable_3d(flow, kx, kz)`` → the physical mode of largest Re α at any wavevector
+    by a dense scan (real QZ at k_x = 0) with the same drift/tail rejection;
+    ``transverse_mode``, ``transverse_dispersion(flow, kz)`` (k_x = 0) and
+    ``growth_plane(flow, kx, kz)`` → xarray Dataset of Re α over (k_x, k_z) with its maximum.
+    α2z and the transverse analysis are in :mod:`chuteflow.longwave.transverse`.
+
 Numerical notes (see also docs/errata.md): bulk rows are divided by μ0 or κ0, never by ν0
 (which would put 1e9 into the dilute top's rows and bury the dense layer's eigenvalues in
 round-off); the near-neutral continuum of the dilute top (α ≈ −ik u0(y) − 1e-8) passes the
 drift test but fails the tail test, and shift-invert estimates near it carry round-off of
 ~1e-12 absolute.
 """
+
 from .dispersion import (
-                    BranchTracker,
-                    NullVectors,
-                    branch_mode,
-                    critical_k,
-                    crossings,
-                    dispersion,
-                    first_order,
-                    null_vectors,
+    BranchTracker,
+    NullVectors,
+    branch_mode,
+    critical_k,
+    crossings,
+    dispersion,
+    first_order,
+    null_vectors,
 )
 from .eigen import ShiftInvert, qz
 from .modes import (
-                    OPERATORS,
-                    Mode,
-                    OperatorCache,
-                    check_n,
-                    choose_n,
-                    least_stable,
-                    mode_near,
-                    nearest_eigenpair,
-                    operator,
-                    spectrum,
-                    stability_operator,
-                    tail,
+    OPERATORS,
+    Mode,
+    OperatorCache,
+    check_n,
+    choose_n,
+    least_stable,
+    mode_near,
+    nearest_eigenpair,
+    operator,
+    spectrum,
+    stability_operator,
+    tail,
 )
 from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
 from .policy import DEFAULT_POLICY, RejectionPolicy
+from .transverse import (
+    TransverseDispersion,
+    growth_plane,
+    least_stable_3d,
+    transverse_dispersion,
+    transverse_mode,
+)
 
-__all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "operator",
-           "ShiftInvert", "qz",
-           "Mode", "check_n", "choose_n", "least_stable", "mode_near", "nearest_eigenpair",
-           "spectrum",
-           "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
-           "critical_k", "crossings", "dispersion", "first_order", "null_vectors",
-           "RejectionPolicy", "DEFAULT_POLICY", "OperatorCache", "OPERATORS"]
+__all__ = [
+    "Pencil",
+    "StabilityOperator",
+    "base_on_grid",
+    "equation_terms",
+    "operator",
+    "ShiftInvert",
+    "qz",
+    "Mode",
+    "check_n",
+    "choose_n",
+    "least_stable",
+    "mode_near",
+    "nearest_eigenpair",
+    "spectrum",
+    "stability_operator",
+    "tail",
+    "BranchTracker",
+    "NullVectors",
+    "branch_mode",
+    "critical_k",
+    "crossings",
+    "dispersion",
+    "first_order",
+    "null_vectors",
+    "RejectionPolicy",
+    "DEFAULT_POLICY",
+    "OperatorCache",
+    "OPERATORS",
+    "TransverseDispersion",
+    "growth_plane",
+    "least_stable_3d",
+    "transverse_dispersion",
+    "transverse_mode",
+]

@@ -1,0 +1,412 @@
+"""Transverse perturbations (k_x = 0): long-wave coefficient α2z and the transverse analysis.
+
+Perturbations ∝ exp(αt + i k_z z) across the slope (issue 10; the paper's §5.3 question).
+At k = 0 the mass-conservation mode has α = 0 and eigenvector V0 = ∂X0/∂β (Appendix B,
+eq:last), whatever the direction of k. Along a ray k = s (k̂x, k̂z) the discrete operator is
+
+    A(s) = A0 + s P1 + s² P2,   P1 = i(k̂x A_{1,0} + k̂z A_{0,1}) + K,
+                                P2 = −(k̂x² A_{2,0} + k̂x k̂z A_{1,1} + k̂z² A_{0,2}),
+
+(:attr:`StabilityOperator.pieces`, K the |k| terms of the top rows), and the bordered
+perturbation theory of :mod:`chuteflow.longwave.theory` gives α = α1 s + α2 s² + O(s³).
+Across the slope (k̂ = (0, 1)) the base flow has no spanwise velocity, so α1z = 0 (up to
+the top truncation) and α(0, k_z) = α2z k_z² + O(k_z⁴), α2z real (at k_x = 0 the problem
+is real).
+
+Physical reading (lubrication limit of the z-momentum balance, derived here; the analogue
+of the paper's eq:omega2 for the lateral flux). At O(k_z) the spanwise velocity obeys
+(μ0 ŵ')' = i k_z p̂ with μ0 ŵ' = η*(0) ŵ at the floor (eq:bc1, z component) and no stress
+at the top, p̂ = ∂p0/∂β the lateral pressure perturbation of the neighbouring steady
+column; the depth-integrated mass balance α ∫ν̂ = −i k_z ∫ ν0 ŵ dy then gives
+
+    α2z = −[ ρ̄ Ŝ(0)/η*(0) + ∫ W0(y) Ŝ(y)/μ0(y) dy ] / (dρ̄/dβ),
+    Ŝ(y) = ∂/∂β ∫_y^∞ p0 dy',   W0(y) = ∫_y^∞ ν0 dy',
+
+:func:`lubrication_alpha2z`. Ŝ(0) = dP/dβ with P = ∫ p0 dy = Σ_zz integrated over the
+depth, the lateral pressure of a column (= cos θ ∫ y ν0 dy by the steady y-momentum
+balance, ~ ρ̄ T̄ for a dilute column). When the columns' lateral pressures Ŝ(y) fall as
+the mass rises (dP/dρ̄ < 0: denser columns are colder and push less), α2z > 0: mass flows
+towards the denser columns, the transverse long-wave instability (lateral clustering).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.linalg as sla
+from scipy.optimize import brentq, minimize_scalar
+
+from ..closures import ChuteModel
+from ..errors import ConvergenceError
+from ..stability.modes import stability_operator
+from ..stability.operator import StabilityOperator
+from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
+from ..stability.transverse import TransverseDispersion, growth_plane, transverse_dispersion, transverse_mode
+from ..steady import SteadyFlow, steady_tangent
+from .theory import null_vector
+
+__all__ = [
+    "TransverseLongWave",
+    "TransverseResult",
+    "directional_coefficients",
+    "lateral_pressure",
+    "lubrication_alpha2z",
+    "transverse",
+    "transverse_longwave",
+    "growth_plane",
+]
+
+
+def directional_coefficients(
+    op: StabilityOperator, tangent: dict, direction=(0.0, 1.0)
+) -> tuple[complex, complex]:
+    """(α1, α2) of α(s k̂) = α1 s + α2 s² + … on one discretised 3D operator.
+
+    Bordered perturbation theory at k = 0 (as :func:`chuteflow.longwave.theory.coefficients`)
+    along the unit direction k̂ = (k̂x, k̂z); ``op`` must be three-dimensional when k̂z ≠ 0.
+    """
+    cx, cz = (float(direction[0]), float(direction[1]))
+    norm = math.hypot(cx, cz)
+    cx, cz = cx / norm, cz / norm
+    M = op.size
+    z = np.zeros((M, M))
+    P = op.pieces
+    A0 = P[(0, 0)]
+    P1 = 1j * (cx * P.get((1, 0), z) + cz * P.get((0, 1), z)) + op.K
+    P2 = -(cx**2 * P.get((2, 0), z) + cx * cz * P.get((1, 1), z) + cz**2 * P.get((0, 2), z))
+    B = np.asarray(op.B, dtype=float)
+    V0 = null_vector(op, tangent)
+    c = np.zeros(M)
+    i = op.fields.index("nu") * (op.n + 1)
+    c[i : i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
+    V0 = V0 / (c @ V0)
+    bord = np.zeros((M + 1, M + 1))
+    bord[:M, :M] = A0
+    bord[:M, M] = -(B @ V0)
+    bord[M, :M] = c
+    rs = 1.0 / np.abs(bord).max(axis=1)
+    bord *= rs[:, None]
+    cs = 1.0 / np.abs(bord).max(axis=0)
+    bord *= cs[None, :]
+    lu = sla.lu_factor(bord, check_finite=False)
+
+    def solve(rhs):
+        r = np.concatenate([rhs, [0.0]]) * rs
+        x = sla.lu_solve(lu, r.real, check_finite=False) + 1j * sla.lu_solve(lu, r.imag, check_finite=False)
+        x *= cs
+        return x[:M], x[M]
+
+    V1, a1 = solve(-(P1 @ V0))
+    _, a2 = solve(a1 * (B @ V1) - P1 @ V1 - P2 @ V0)
+    return complex(a1), complex(a2)
+
+
+@dataclass(frozen=True)
+class TransverseLongWave:
+    """α(0, k_z) = α1z k_z + α2z k_z² + O(k_z³) at k = 0 (α1z = 0 up to the top truncation).
+
+    Attributes
+    ----------
+    alpha1_z, alpha2_z : complex
+        The coefficients (bordered perturbation theory, finer resolution ``n``).
+    n : int
+        Chebyshev intervals of the finer resolution.
+    convergence_alpha2 : float
+        Relative change of α2z between n and 4n/5.
+    """
+
+    alpha1_z: complex
+    alpha2_z: complex
+    n: int
+    convergence_alpha2: float
+
+
+def transverse_longwave(
+    flow: SteadyFlow, n: int = 100, *, rtol: float = 1e-3, n_max: int = 320
+) -> TransverseLongWave:
+    """α2z by bordered perturbation theory, n raised by 25 % until it changes < ``rtol``.
+
+    Raises
+    ------
+    ConvergenceError
+        If α2z has not converged to ``rtol`` by ``n_max``.
+    """
+    tangent = steady_tangent(flow)
+    ladder = RejectionPolicy(n_start=n, n_max=n_max)
+    n2 = max(24, (4 * n) // 5)
+    _, b2 = directional_coefficients(stability_operator(flow, n2, True), tangent)
+    while True:
+        a1, a2 = directional_coefficients(stability_operator(flow, n, True), tangent)
+        c2 = abs(a2 - b2) / max(abs(a2), 1e-300)
+        if c2 <= rtol or n >= n_max:
+            break
+        b2, n2, n = a2, n, ladder.next_n(n)
+    if not c2 <= rtol:
+        raise ConvergenceError(
+            f"transverse long-wave coefficient at theta = {flow.theta:g}, nu0 = {flow.nu0:g} "
+            f"changed by {c2:.1e} between n = {n2} and n = {n} (rtol = {rtol:g})"
+        )
+    return TransverseLongWave(a1, a2, n, float(c2))
+
+
+def lateral_pressure(flow: SteadyFlow) -> dict:
+    """Depth-integrated lateral pressure of the steady column and its change along the family.
+
+    Returns
+    -------
+    dict
+        ``P`` = ∫ p0 dy (Σ_zz = p0 at the base state), ``P_moment`` = cos θ ∫ y ν0 dy (equal
+        to P by the steady y-momentum balance, up to the weight above y_max), ``rho_T`` =
+        ∫ ν0 T0 dy, and their derivatives along the family with respect to the mass ρ̄
+        (``dP_drho``, ``drho_T_drho``; at fixed θ, from :func:`steady_tangent`).
+    """
+    tg = steady_tangent(flow)
+    g, L = flow.grid, flow.y_max
+    w = g.weights
+    nu, T = flow.nu, flow.T
+    part = flow.model.evaluate(nu, T)
+    p = part["p"]
+    # the tangent at fixed ξ = y/y_max: ∂/∂β ∫_0^L f dy = ∫ ∂f/∂β|_ξ dy + (dL/dβ) f̄ ξ-weighted
+    dnu = nu * tg["log_nu"]
+    dT = tg["T"]
+    dp = p[(1, 0)] * dnu + p[(0, 1)] * dT
+    dL = tg["y_max"]
+
+    # ∫_0^{L} f(ξL) dy = L ∫_0^1 f dξ  ⇒  d/dβ = (dL/dβ)/L ∫ f dy + ∫ ∂f/∂β|_ξ dy
+    def d_int(f, df):
+        return dL / L * (w @ f) + w @ df
+
+    th = math.radians(flow.theta)
+    P = float(w @ p[(0, 0)])
+    rhoT = float(w @ (nu * T))
+    drho = d_int(nu, dnu)
+    dP = d_int(p[(0, 0)], dp)
+    drhoT = d_int(nu * T, dnu * T + nu * dT)
+    y = g.y
+    Pm = math.cos(th) * float(w @ (y * nu))
+    dPm = math.cos(th) * d_int(y * nu, y * dnu + (g.y / L) * dL * nu)
+    return {
+        "P": P,
+        "P_moment": Pm,
+        "rho_T": rhoT,
+        "dP_drho": float(dP / drho),
+        "dP_moment_drho": float(dPm / drho),
+        "drho_T_drho": float(drhoT / drho),
+        "drho_bar": float(drho),
+    }
+
+
+def lubrication_alpha2z(flow: SteadyFlow, n: int = 160) -> float:
+    """α2z from the lubrication balance of the lateral flux (module docstring).
+
+    Uses V0 = ∂X0/∂β at fixed height on an N = ``n`` grid: p̂ = p_ν ν̂ + p_T T̂,
+    Ŝ(y) = ∫_y^∞ p̂, W0(y) = ∫_y^∞ ν0, η*(0) and μ0 from the flow's model.
+    """
+    op = stability_operator(flow, n, True)
+    tg = steady_tangent(flow)
+    V0 = op.pencil(0.0, 0.0).split(null_vector(op, tg))
+    g = op.grid
+    nu, T = op.base["nu"], op.base["T"]
+    part = flow.model.evaluate(nu, T)
+    p, mu, eta = part["p"], part["mu"][(0, 0)], part["eta_star"][(0, 0)]
+    dp = p[(1, 0)] * V0["nu"] + p[(0, 1)] * V0["T"]
+    # cumulative integrals from the top: ∫_y^L f = ∫_0^L f − ∫_0^y f
+    cum = _cumulative(g)
+    S = (g.weights @ dp) - cum @ dp
+    W = (g.weights @ nu) - cum @ nu
+    eta0 = float(np.broadcast_to(eta, nu.shape)[0])
+    drho = g.weights @ V0["nu"]
+    num = W[0] * S[0] / eta0 + g.weights @ (W * S / mu)
+    return float(-num / drho)
+
+
+def _cumulative(g) -> np.ndarray:
+    """Matrix Q with (Q f)_j = ∫_0^{y_j} f dy, spectrally (inverse of D with f(0) = 0)."""
+    m = g.n + 1
+    D = g.D.copy()
+    D[0, :] = 0.0
+    D[0, 0] = 1.0
+    rhs = np.eye(m)
+    rhs[0, :] = 0.0
+    return np.linalg.solve(D, rhs)
+
+
+@dataclass(frozen=True)
+class TransverseResult:
+    """Transverse (k_x = 0) stability of one steady flow (issue 10).
+
+    Attributes
+    ----------
+    theta, nu0 : float
+        The steady flow (degrees, floor density ν0(0)).
+    alpha2_z : float
+        α(0, k_z) = α2z k_z² + O(k_z⁴) (perturbation theory at k = 0); > 0: long-wave
+        transverse instability.
+    alpha1_z : float
+        |α1z|, zero up to the top truncation (a check).
+    convergence_alpha2 : float
+        Relative change of α2z between the two finest resolutions.
+    alpha2_z_eigen : float
+        Re α(0, k_check)/k_check² from the eigenvalue at the small ``k_check``.
+    k_check : float
+        The wavenumber of that check.
+    alpha2_z_lubrication : float
+        α2z from the lubrication formula (:func:`lubrication_alpha2z`).
+    dP_drho, drho_T_drho : float
+        Change of the depth-integrated lateral pressure ∫p0 dy, and of ρ̄T̄ = ∫ν0 T0 dy,
+        with the mass along the steady family at fixed θ.
+    kz_max : float or None
+        Wavenumber of the largest growth rate on the computed grid (refined); None when
+        every k_z decays.
+    growth_max : float
+        max Re α over the grid (the least negative when all decay).
+    kz_at_growth_max : float
+        Where that maximum lies (also when negative).
+    alpha_im_at_max : float
+        Im α of that mode.
+    stationary : bool
+        Im α = 0 at the maximum (to 1e-9 relative).
+    kz_cutoff : float or None
+        The first k_z > 0 where the growth rate changes sign from + to − (upper edge of the
+        unstable band), None if none on the grid.
+    dispersion : TransverseDispersion
+        The computed α(k_z) with convergence estimates.
+    model : ChuteModel
+        Parameters and closures of the flow.
+    """
+
+    theta: float
+    nu0: float
+    alpha2_z: float
+    alpha1_z: float
+    convergence_alpha2: float
+    alpha2_z_eigen: float
+    k_check: float
+    alpha2_z_lubrication: float
+    dP_drho: float
+    drho_T_drho: float
+    kz_max: float | None
+    growth_max: float
+    kz_at_growth_max: float
+    alpha_im_at_max: float
+    stationary: bool
+    kz_cutoff: float | None
+    dispersion: TransverseDispersion = field(repr=False)
+    model: ChuteModel | None = None
+
+    @property
+    def unstable(self) -> bool:
+        """Some k_z grows (on the grid, or α2z > 0)."""
+        return bool(self.growth_max > 0 or self.alpha2_z > 0)
+
+    def summary(self) -> dict:
+        """JSON-ready dict: alpha2_z, kz_max (None if all decay), growth_max, stationary,
+        unstable, and the convergence estimates and model parameters."""
+        d = self.dispersion
+        return {
+            "theta": self.theta,
+            "nu0": self.nu0,
+            "alpha2_z": self.alpha2_z,
+            "alpha1_z": self.alpha1_z,
+            "convergence_alpha2": self.convergence_alpha2,
+            "alpha2_z_eigen": self.alpha2_z_eigen,
+            "k_check": self.k_check,
+            "alpha2_z_lubrication": self.alpha2_z_lubrication,
+            "dP_drho": self.dP_drho,
+            "drho_T_drho": self.drho_T_drho,
+            "kz_max": self.kz_max,
+            "growth_max": self.growth_max,
+            "kz_at_growth_max": self.kz_at_growth_max,
+            "alpha_im_at_max": self.alpha_im_at_max,
+            "stationary": self.stationary,
+            "unstable": self.unstable,
+            "kz_cutoff": self.kz_cutoff,
+            "kz_points": int(len(d.kz)),
+            "drift_max": float(np.nanmax(d.drift)),
+            "tail_max": float(np.nanmax(d.tail)),
+            "all_physical": bool(d.physical.all()),
+            **(self.model.to_dict() if self.model is not None else {}),
+        }
+
+
+def transverse(
+    flow: SteadyFlow,
+    *,
+    kz_max: float = 3.0,
+    num: int = 50,
+    n: int = 100,
+    k_check: float = 1e-4,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+) -> TransverseResult:
+    """Transverse analysis of one flow: α2z, the dispersion α(k_z) on (0, kz_max], k_z*.
+
+    The grid is geometric from 1e-5 (the long-wave instability lives at k_z ~ 1e-3 for P1)
+    to ``kz_max``; the maximum of Re α is refined by a bounded scalar search in log k_z
+    between the best grid point's neighbours (to 2 % in k_z), and the first sign change of
+    Re α (the cut-off of the unstable band) by Brent's method (to 0.1 %).
+    """
+    lw = transverse_longwave(flow, n)
+    ks = np.geomspace(1e-5, kz_max, num)
+    disp = transverse_dispersion(flow, ks, policy=policy)
+    chk = transverse_mode(flow, k_check, policy=policy)
+    a2e = chk.alpha.real / k_check**2
+    lp = lateral_pressure(flow)
+    lub = lubrication_alpha2z(flow)
+    g = np.where(np.isfinite(disp.alpha_re), disp.alpha_re, -np.inf)
+    j = int(np.argmax(g))
+    kz_best, growth, aim = float(ks[j]), float(g[j]), float(disp.alpha_im[j])
+    if 0 < j < len(ks) - 1 and np.all(np.isfinite(g[j - 1 : j + 2])):
+        seen = {}
+
+        def minus_growth(x):
+            m = transverse_mode(flow, float(np.exp(x)), policy=policy)
+            seen[x] = m
+            return -m.alpha.real
+
+        opt = minimize_scalar(
+            minus_growth,
+            bounds=(math.log(ks[j - 1]), math.log(ks[j + 1])),
+            method="bounded",
+            options={"xatol": 0.02, "maxiter": 12},
+        )
+        m = seen.get(opt.x)
+        if m is not None and m.alpha.real > growth:
+            kz_best, growth, aim = float(np.exp(opt.x)), float(m.alpha.real), float(m.alpha.imag)
+    stationary = abs(aim) <= 1e-9 * max(abs(growth), 1e-300) or abs(aim) < 1e-14
+    cut = None
+    for a, b, ga, gb in zip(ks[:-1], ks[1:], g[:-1], g[1:]):
+        if ga > 0 and np.isfinite(gb) and gb <= 0:
+            # the upper edge of the unstable band, refined on the least-stable growth rate
+            cut = float(
+                brentq(
+                    lambda k: transverse_mode(flow, k, policy=policy).alpha.real,
+                    float(a),
+                    float(b),
+                    rtol=1e-3,
+                    xtol=1e-12,
+                    maxiter=20,
+                )
+            )
+            break
+    return TransverseResult(
+        flow.theta,
+        flow.nu0,
+        float(lw.alpha2_z.real),
+        float(abs(lw.alpha1_z)),
+        lw.convergence_alpha2,
+        float(a2e),
+        float(k_check),
+        lub,
+        lp["dP_drho"],
+        lp["drho_T_drho"],
+        kz_best if growth > 0 else None,
+        growth,
+        kz_best,
+        aim,
+        bool(stationary),
+        cut,
+        disp,
+        flow.model,
+    )
