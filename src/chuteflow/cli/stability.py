@@ -27,14 +27,16 @@ from ._app import MODEL_OPTIONS_HERE, app, with_model_options
 EIG_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "radial", "wall",
             "transport", "nu_top", "k",
             "alpha_re", "alpha_im", "drift", "tail", "convergence", "physical", "n", "n_check",
-            "wave_speed", "unstable", "method")
+            "wave_speed", "unstable", "method", "converged", "note")
 #: Keys of ``longwave --json``.
 LONGWAVE_KEYS = ("theta", "nu0", "roughness", "wall_loss", "restitution", "nu_max", "radial",
                  "wall", "transport", "nu_top",
                  "alpha1_re", "alpha1_im", "alpha2_re", "alpha2_im", "dQ_drho",
                  "convergence_alpha1", "convergence_alpha2", "n", "k_check",
                  "alpha2_from_eigenvalue_re", "alpha2_from_eigenvalue_im",
-                 "long_wave_unstable", "k_c", "k_max")
+                 "long_wave_unstable", "k_c", "k_max", "converged", "alpha2_eig_re",
+                 "eig_k", "eig_alpha2_re", "eig_convergence", "eig_n", "sign_consistent",
+                 "k_c_converged")
 
 
 def _opt_theta():
@@ -106,22 +108,43 @@ def _check_positive(name, value, allow_zero=False):
                              "inf): a wavenumber range of perturbations exp(ikx)")
 
 
+def _warn(message: str) -> None:
+    """One warning line on standard error (results that miss the paper's 1e-7 are still
+    printed, exit status 0)."""
+    typer.echo(f"warning: {message}", err=True)
+
+
+def _warn_mode(mode) -> None:
+    if not mode.physical:
+        _warn(f"k = {mode.k:g}: not converged to the paper's thresholds (drift "
+              f"{mode.drift:.1e}, tail {mode.tail:.1e} at N = {mode.n}, method {mode.method}); "
+              "the best estimate is shown")
+    elif mode.method != "branch" and mode.method != "shift":
+        _warn(f"k = {mode.k:g}: answered by {mode.method} (direct solve at k)"
+              + (f"; {mode.note}" if mode.note else ""))
+
+
 def _mode_summary(mode, flow, method) -> dict:
     s = mode.summary()
     out = _params(flow)
     out.update({k: s[k] for k in ("k", "alpha_re", "alpha_im", "drift", "tail", "physical",
                                   "n", "n_check")})
     out.update(convergence=s["drift"], wave_speed=mode.wave_speed,
-               unstable=bool(mode.alpha.real > 0), method=method)
+               unstable=bool(mode.alpha.real > 0),
+               method=getattr(mode, "method", method) if method == "branch" else method,
+               converged=bool(mode.physical), note=mode.note)
     out["steady"] = flow.summary()
     return out
 
 
 def _least_stable(console, flow, k, n, method, policy):
-    from chuteflow.stability import least_stable
+    from chuteflow.stability import check_hydrodynamic_k, least_stable
 
+    check_hydrodynamic_k(k)
     with console.status(f"least-stable mode at k = {k:g} ({method})"):
-        return least_stable(flow, k, n=n, method=method, policy=policy)
+        mode = least_stable(flow, k, n=n, method=method, policy=policy, strict=False)
+    _warn_mode(mode)
+    return mode
 
 
 def _mode_table(title, summary, caption):
@@ -186,9 +209,10 @@ def dispersion_cmd(
     model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
-    strict: bool = typer.Option(True, "--strict/--no-strict", help="Fail when a point does not "
-                                "pass the drift and tail tests by N = n_max (default), or keep "
-                                "it, flagged physical = false."),
+    strict: bool = typer.Option(False, "--strict/--no-strict", help="Fail when a point does "
+                                "not pass the drift and tail tests by N = n_max, or keep it, "
+                                "flagged physical = false, with a warning (default); where the "
+                                "branch is lost, points are solved directly at k."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Save the figure (PNG)."),
     out: Optional[Path] = typer.Option(None, "--out", "-o", help="Save the dispersion "
@@ -198,9 +222,10 @@ def dispersion_cmd(
     import numpy as np
 
     from chuteflow.errors import ConvergenceError, ParameterError
-    from chuteflow.stability import RejectionPolicy, crossings, dispersion
+    from chuteflow.stability import RejectionPolicy, check_hydrodynamic_k, crossings, dispersion
 
     _check_positive("k_max", k_max)
+    check_hydrodynamic_k(k_max)
     if num < 2:
         raise ParameterError(f"num = {num}: need at least 2 wavenumbers")
     console = _console()
@@ -212,8 +237,11 @@ def dispersion_cmd(
     kc_error = None
     with console.status("critical wavenumbers (sign changes of Re α, Brent)"):
         try:
-            found = crossings(flow, k_max=k_max, num=max(num, 12), policy=policy)
+            found = crossings(flow, k_max=k_max, num=max(num, 12), policy=policy,
+                              strict=strict)
             k_c = _k_c(flow, found, policy)
+            if not found.converged:
+                _warn(f"k_c: {found.message}")
         except ConvergenceError as exc:
             if strict:
                 raise
@@ -231,12 +259,22 @@ def dispersion_cmd(
         dispersion_figure([("", ds, k_c)], plot,
                           title=f"Least-stable branch α(k), {_caption(flow)}")
     v = {name: ds[name].values for name in ("k", "alpha_re", "alpha_im", "drift", "tail", "n",
-                                             "physical")}
+                                             "physical", "direct")}
+    if not v["physical"].all():
+        bad = v["k"][~v["physical"]]
+        _warn(f"{len(bad)} of {len(bad) + int(v['physical'].sum())} wavenumbers (k = "
+              f"{bad.min():g} … {bad.max():g}) miss the paper's thresholds by N = {n_max} "
+              f"(largest drift {np.nanmax(v['drift']):.1e}, tail {np.nanmax(v['tail']):.1e}); "
+              "their best estimates are shown")
+    if "branch_lost_at" in ds.attrs:
+        _warn(f"the branch was lost near k = {ds.attrs['branch_lost_at']:g}; from there on "
+              "the least-stable mode is solved directly at each k (dense QZ)")
     finite = np.isfinite(v["alpha_re"])  # --no-strict: NaN where the branch was lost
     i_max = int(np.argmax(np.where(finite, v["alpha_re"], -np.inf))) if finite.any() else 0
     summary = {**_params(flow), "k_max": k_max, "num": num, "k_c": k_c,
                "lambda_c": 2 * math.pi / k_c if k_c else None, "crossings": list(found),
-               "k_c_error": kc_error, "max_growth": float(v["alpha_re"][i_max]),
+               "k_c_error": kc_error, "k_c_converged": bool(getattr(found, "converged", True)),
+               "all_converged": bool(v["physical"].all()), "max_growth": float(v["alpha_re"][i_max]),
                "k_max_growth": float(v["k"][i_max]), "max_drift": float(v["drift"].max()),
                "max_tail": float(v["tail"].max()), "all_physical": bool(v["physical"].all()),
                "alpha1_im": ds.attrs.get("alpha1_im"),
@@ -270,7 +308,7 @@ def _k_c(flow, found, policy):
 
     if not found:
         return None
-    below = least_stable(flow, 0.5 * found[0], policy=policy)
+    below = least_stable(flow, 0.5 * found[0], policy=policy, strict=False)
     return float(found[0]) if below.alpha.real > 0 else None
 
 
@@ -301,7 +339,7 @@ def longwave_cmd(
     """Long-wave coefficients α1, α2 (α = α1 k + α2 k² + …) and k_c where unstable."""
     from chuteflow.errors import ParameterError
     from chuteflow.longwave import longwave
-    from chuteflow.stability import critical_k
+    from chuteflow.stability import crossings
 
     _check_positive("k_max", k_max)
     if not 0 < rtol < 1:
@@ -309,16 +347,27 @@ def longwave_cmd(
     console = _console()
     flow = _steady(console, theta, nu0, model, nu_top)
     with console.status("long-wave perturbation theory at k = 0"):
-        lw = longwave(flow, n=n, rtol=rtol, n_max=n_max)
-    k_c = None
+        lw = longwave(flow, n=n, rtol=rtol, n_max=n_max, strict=False)
+    if not lw.converged:
+        _warn(f"Taylor α2 did not reach rtol = {rtol:g} by N = {lw.n} (relative change "
+              f"{lw.convergence_alpha2:.1e}; it converges only algebraically, see ERRATA); the "
+              f"eigenvalue-based Re α/k² at k = 1e-5 ({lw.alpha2_eig:.6g}, relative change "
+              f"{lw.eig_convergence:.1e} at N = {lw.eig_n}) decides the sign")
+    if not lw.sign_consistent:
+        _warn(f"the signs of the Taylor Re α2 ({lw.alpha2.real:.4g}) and of Re α/k² at k = "
+              f"1e-5 ({lw.alpha2_eig:.4g}) differ; the latter decides")
+    k_c, kc_ok = None, True
     if lw.unstable:
         with console.status("critical wavenumber k_c (dispersion relation, Brent)"):
-            k_c = critical_k(flow, k_max=k_max)
+            found = crossings(flow, k_max=k_max, strict=False)
+            k_c, kc_ok = (found[0] if found else None), found.converged
+            if not kc_ok:
+                _warn(f"k_c: {found.message}")
     s = lw.summary()
     out = _params(flow)
     out.update({k: s[k] for k in LONGWAVE_KEYS if k in s})
     out.update(k_c=k_c, k_max=k_max, lambda_c=2 * math.pi / k_c if k_c else None,
-               steady=flow.summary())
+               k_c_converged=kc_ok, steady=flow.summary())
     if as_json:
         _echo_json(out)
         return
@@ -337,8 +386,11 @@ def longwave_cmd(
     eig = lw.alpha2_from_eigenvalue
     t.add_row(f"(α(k) − α1 k)/k² at k = {lw.k_check:g}", f"{eig.real:.6g} {eig.imag:+.6g}i")
     t.add_row("resolution N", str(lw.n))
-    t.add_row("long-wave stability", "unstable (Re α2 > 0)" if lw.unstable else
-              "stable (Re α2 < 0)")
+    for kk, val in zip(lw.eig_k, lw.eig_alpha2):
+        t.add_row(f"Re α/k² at k = {kk:g} (eigenvalue, N = {lw.eig_n})", f"{val:.8g}")
+    t.add_row("relative change of Re α/k² at k = 1e-5 (N → 4N/5)", f"{lw.eig_convergence:.1e}")
+    t.add_row("long-wave stability", "unstable (Re α/k² > 0)" if lw.unstable else
+              "stable (Re α/k² < 0)")
     t.add_row("k_c", "—" if k_c is None else f"{k_c:.6g} (λ_c = {2 * math.pi / k_c:.5g})")
     Console().print(t)
 

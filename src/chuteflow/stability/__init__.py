@@ -59,9 +59,10 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms, operator
 from .eigen import ShiftInvert, qz
 from .policy import DEFAULT_POLICY, RejectionPolicy
-from .modes import (OPERATORS, Mode, OperatorCache, check_n, choose_n, least_stable, mode_near,
+from .modes import (K_DIRECT, K_HYDRO_MAX, OPERATORS, Mode, OperatorCache, check_hydrodynamic_k,
+                    check_n, choose_n, direct_mode, least_stable, mode_near,
                     nearest_eigenpair, spectrum, stability_operator, tail)
-from .dispersion import (BranchTracker, NullVectors, branch_mode, critical_k, crossings,
+from .dispersion import (BranchTracker, Crossings, NullVectors, branch_mode, critical_k, crossings,
                          dispersion, first_order, null_vectors)
 
 __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "operator",
@@ -70,4 +71,5 @@ __all__ = ["Pencil", "StabilityOperator", "base_on_grid", "equation_terms", "ope
            "spectrum",
            "stability_operator", "tail", "BranchTracker", "NullVectors", "branch_mode",
            "critical_k", "crossings", "dispersion", "first_order", "null_vectors",
+           "Crossings", "K_DIRECT", "K_HYDRO_MAX", "check_hydrodynamic_k", "direct_mode",
            "RejectionPolicy", "DEFAULT_POLICY", "OperatorCache", "OPERATORS"]

@@ -22,8 +22,9 @@ from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
-from .modes import (Mode, OperatorCache, _interp_vector, _make_mode, drift_of,
-                    nearest_eigenpair, resolve_policy, stability_operator, tail)
+from .modes import (Mode, OperatorCache, _interp_vector, _make_mode, check_hydrodynamic_k,
+                    drift_of, least_stable, nearest_eigenpair, resolve_policy,
+                    stability_operator, tail)
 from .operator import StabilityOperator, _check_k, _check_n
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
@@ -349,13 +350,18 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
     strict : bool
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
-        ``physical = False`` (NaN from where the branch was lost).
+        ``physical = False``. Where the continuation loses the branch (non-strict), that
+        and every larger k are solved directly at k (least-stable physical mode by dense
+        QZ with the rejection tests, :func:`~chuteflow.stability.modes.least_stable` with
+        ``method="qz"``), flagged ``direct = True``; the attribute ``branch_lost_at`` is
+        the k where the branch was lost.
 
     Returns
     -------
     xarray.Dataset
         Over ``k``: ``alpha_re``, ``alpha_im``, ``drift`` (|α(N) − α(N')|), ``tail``, ``n``,
-        ``physical``; attributes: the flow's parameters, ``dQ_drho`` (dQ0/dρ̄0 of the
+        ``physical``, ``direct`` (solved directly at k, not on the tracked branch);
+        attributes: the flow's parameters, ``dQ_drho`` (dQ0/dρ̄0 of the
         steady family, eq:dqdh: the long-wave slope −Im α/k, figure 8) and ``alpha1_re``,
         ``alpha1_im`` (the continuation's first-order coefficient, α ≈ α1 k).
     """
@@ -366,6 +372,7 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
         raise ParameterError("k: expected a non-empty 1-D array of wavenumbers")
     for kk in ks:
         _check_k(kk, "k")
+        check_hydrodynamic_k(kk)
     order = np.argsort(ks, kind="stable")
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
     tr = BranchTracker(flow, n or None, policy=policy, cache=cache)
@@ -373,13 +380,21 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
            for name in ("alpha_re", "alpha_im", "drift", "tail")}
     nres = np.zeros(len(ks), dtype=int)
     phys = np.zeros(len(ks), dtype=bool)
+    direct = np.zeros(len(ks), dtype=bool)
+    lost_at = None
     for i in order:
-        try:
-            mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
-        except ConvergenceError:
-            if strict:
-                raise
-            break  # branch lost: this and the larger k stay NaN, physical = False
+        if lost_at is None:
+            try:
+                mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
+            except ConvergenceError:
+                if strict:
+                    raise
+                lost_at = float(ks[i])
+        if lost_at is not None:
+            # branch lost: this and the larger k are solved directly at k
+            mode = least_stable(flow, ks[i], method="qz", policy=policy.replace(
+                n_start=min(tr.n, policy.n_max)), cache=cache)
+            direct[i] = True
         if strict and not mode.physical:
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
@@ -395,6 +410,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
              "dQ_drho": float(steady_tangent(flow)["dQ_drho"]), "alpha1_re": tr.alpha1.real,
              "alpha1_im": tr.alpha1.imag, "drift_tol": policy.drift_tol,
              "tail_tol": policy.tail_tol}
+    if lost_at is not None:
+        attrs["branch_lost_at"] = lost_at
     attrs.update(flow.model.attrs())
     u = "1/sqrt(sigma/g)"
     ds = xr.Dataset(
@@ -404,7 +421,9 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
          "tail": ("k", out["tail"], {"long_name": "largest of the ten highest Chebyshev "
                                                   "coefficients", "units": "1"}),
          "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
-         "physical": ("k", phys, {"long_name": "passes drift and tail tests"})},
+         "physical": ("k", phys, {"long_name": "passes drift and tail tests"}),
+         "direct": ("k", direct, {"long_name": "solved directly at k (dense QZ), not on the "
+                                               "tracked branch"})},
         coords={"k": ("k", ks, {"long_name": "wavenumber", "units": "1/sigma"})},
         attrs=attrs)
     return ds
@@ -420,9 +439,43 @@ def _zero_mode(tr: BranchTracker) -> Mode:
 
 
 # -- critical wavenumber -----------------------------------------------------------------
+class Crossings(tuple):
+    """The wavenumbers where Re α of the tracked branch changes sign (a tuple of floats, in
+    increasing order), with the convergence of the scan that found them.
+
+    Attributes
+    ----------
+    converged : bool
+        Every grid point of the scan passed the drift and tail tests and the branch was
+        followed up to ``k_max``.
+    max_drift, max_tail : float
+        Largest drift and tail over the scanned points.
+    n : int
+        Largest resolution N used.
+    k_reached : float
+        Largest k of the scan (< ``k_max`` when the branch was lost).
+    message : str
+        Empty when converged; else what was not reached.
+    """
+
+    converged: bool = True
+    max_drift: float = 0.0
+    max_tail: float = 0.0
+    n: int = 0
+    k_reached: float = math.nan
+    message: str = ""
+
+    def __new__(cls, ks=(), **info):
+        obj = super().__new__(cls, tuple(ks))
+        for name, value in info.items():
+            setattr(obj, name, value)
+        return obj
+
+
 def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
                n_max: int | None = None, xtol: float = 1e-10,
-               policy: RejectionPolicy | None = None, cache: OperatorCache | None = None):
+               policy: RejectionPolicy | None = None, cache: OperatorCache | None = None,
+               strict: bool = False):
     """Critical wavenumber k_c where Re α of the α(0) = 0 branch changes sign (brentq).
 
     The branch is tracked on a grid of ``num`` points up to ``k_max`` (denser at small k);
@@ -433,36 +486,59 @@ def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int |
     float or None
         The smallest crossing k_c (the upper edge of the long-wave unstable band 0 < k < k_c
         when the flow is long-wave unstable); None when Re α does not change sign in
-        (0, k_max]. All crossings are in :func:`crossings`.
+        (0, k_max]. All crossings, with the convergence of the scan, are in
+        :func:`crossings` (``strict``: see there).
     """
     found = crossings(flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol, policy=policy,
-                      cache=cache)
+                      cache=cache, strict=strict)
     return found[0] if found else None
 
 
 def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
               n_max: int | None = None, xtol: float = 1e-10,
               policy: RejectionPolicy | None = None,
-              cache: OperatorCache | None = None) -> tuple[float, ...]:
+              cache: OperatorCache | None = None, strict: bool = False) -> Crossings:
     """All wavenumbers in (0, k_max] where Re α of the tracked branch changes sign
-    (each grid point judged by ``policy``; ``n_max`` overrides its largest N)."""
+    (each grid point judged by ``policy``; ``n_max`` overrides its largest N).
+
+    Returns a :class:`Crossings` (a tuple of floats with the scan's convergence). With
+    ``strict=False`` (default) points that miss the paper's thresholds by N = ``n_max`` are
+    used with their best estimate, and a lost branch ends the scan at the last point
+    reached; ``.converged`` is then False and ``.message`` says why. ``strict=True`` raises
+    :class:`ConvergenceError` instead.
+    """
     from scipy.optimize import brentq
 
     k_max = _check_k(k_max, "k_max")
     if k_max == 0 or num < 3:
         raise ParameterError("k_max must be > 0 and num ≥ 3")
+    check_hydrodynamic_k(k_max)
     # geometric start resolves the narrow quadratic regime, then uniform
     ks = np.unique(np.concatenate([np.geomspace(1e-5, k_max, num // 3),
                                    np.linspace(0, k_max, num - num // 3 + 1)[1:]]))
     tr = BranchTracker(flow, n or None, policy=policy, n_max=n_max, cache=cache)
     vals = []  # (k, α, eigenvector of the equilibrated pencil, N) per grid point
+    messages = []
+    max_drift = max_tail = 0.0
     for kk in ks:
-        mode = tr.mode(kk)
+        try:
+            mode = tr.mode(kk)
+        except ConvergenceError as exc:
+            if strict:
+                raise
+            messages.append(f"branch lost near k = {kk:g} ({exc}); scanned up to "
+                            f"k = {vals[-1][0] if vals else 0.0:g}")
+            break
+        max_drift, max_tail = max(max_drift, mode.drift), max(max_tail, mode.tail)
         if not mode.physical:
-            raise ConvergenceError(
-                f"critical k at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: the branch at "
-                f"k = {kk:g} is not converged at N = {mode.n} (drift {mode.drift:.1e}, tail "
-                f"{mode.tail:.1e}); lower k_max or raise n_max")
+            msg = (f"the branch at k = {kk:g} is not converged at N = {mode.n} (drift "
+                   f"{mode.drift:.1e}, tail {mode.tail:.1e})")
+            if strict:
+                raise ConvergenceError(
+                    f"critical k at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {msg}; lower "
+                    "k_max or raise n_max")
+            if not messages:
+                messages.append(msg)
         vals.append((kk, mode.alpha, tr.history[-1][2], tr.n))
     out = []
     for (ka, aa, wa, na), (kb, ab, _, nb) in zip(vals[:-1], vals[1:]):
@@ -475,5 +551,14 @@ def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | 
             pred = aa + (ab - aa) * (kk - ka) / (kb - ka)
             return nearest_eigenpair(op.pencil(kk), pred, v0=start)[0].real
 
-        out.append(float(brentq(f, ka, kb, xtol=xtol * kb, rtol=1e-12)))
-    return tuple(out)
+        try:
+            out.append(float(brentq(f, ka, kb, xtol=xtol * kb, rtol=1e-12)))
+        except (ConvergenceError, ValueError) as exc:
+            if strict:
+                raise
+            # the refinement left the branch: keep the bracket's linear estimate
+            out.append(float(ka - aa.real * (kb - ka) / (ab.real - aa.real)))
+            messages.append(f"crossing in [{ka:g}, {kb:g}] from linear interpolation ({exc})")
+    return Crossings(out, converged=not messages, max_drift=max_drift, max_tail=max_tail,
+                     n=max((v[3] for v in vals), default=tr.n),
+                     k_reached=vals[-1][0] if vals else 0.0, message="; ".join(messages))

@@ -19,6 +19,7 @@ Operators come from an :class:`OperatorCache` (``cache=``; default the shared
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections import OrderedDict
@@ -41,6 +42,24 @@ TAIL_TERMS = DEFAULT_POLICY.tail_terms
 #: Default and largest resolution of the adaptive choice of N.
 N_DEFAULT = DEFAULT_POLICY.n_start
 N_MAX = DEFAULT_POLICY.n_max
+#: Largest wavenumber (1/σ) the hydrodynamic description covers: k = 2π is a wavelength of one
+#: particle diameter σ. Beyond it a continuum (kinetic-theory) field varying over less than a
+#: grain has no meaning, and the solvers refuse the request instead of failing inside.
+K_HYDRO_MAX = 2 * math.pi
+#: Above this wavenumber the least-stable mode is solved directly at k (dense QZ with the
+#: paper's rejection tests), without continuation of the α(0) = 0 branch from k = 0.
+K_DIRECT = 1.0
+
+
+def check_hydrodynamic_k(k: float, kz: float = 0.0) -> None:
+    """Raise :class:`ParameterError` when |k| > :data:`K_HYDRO_MAX` (= 2π, wavelength below
+    one particle diameter), where the hydrodynamic equations of the paper (§2) do not apply."""
+    kk = math.hypot(k, kz)
+    if kk > K_HYDRO_MAX:
+        raise ParameterError(
+            f"k = {kk:g} is outside [0, 2π = {K_HYDRO_MAX:.4g}]: the wavelength 2π/k = "
+            f"{2 * math.pi / kk:.3g} σ is shorter than one particle diameter, where the "
+            "continuum (kinetic-theory) hydrodynamics does not apply")
 
 
 def resolve_policy(policy: RejectionPolicy | None = None, *, drift_tol: float | None = None,
@@ -156,6 +175,13 @@ class Mode:
         drift < ``drift_tol`` and tail < ``tail_tol``.
     model : ChuteModel or None
         Parameters and closures of the base flow the mode was computed with.
+    method : str
+        Which solver answered: ``"branch"`` (continuation of the α(0) = 0 branch),
+        ``"qz"`` (dense QZ at k), ``"shift"`` (shift-invert near a given σ), or
+        ``"qz (branch lost)"`` (direct solve after the continuation lost the branch).
+    note : str
+        What the solver wants the reader to know about this answer (e.g. where the branch
+        was lost, the largest Re α of the unresolved continuum); empty if nothing.
     """
 
     alpha: complex
@@ -173,6 +199,14 @@ class Mode:
     drift_tol: float = DRIFT_TOL
     tail_tol: float = TAIL_TOL
     model: ChuteModel | None = None
+    method: str = "branch"
+    note: str = ""
+
+    @property
+    def converged(self) -> bool:
+        """Both of the paper's tests pass (same as :attr:`physical`); when False the mode is
+        the best estimate found, with its :attr:`drift` and :attr:`tail`."""
+        return bool(self.physical)
 
     @property
     def growth_rate(self) -> float:
@@ -189,7 +223,8 @@ class Mode:
         return {"k": self.k, "kz": self.kz, "alpha_re": float(self.alpha.real),
                 "alpha_im": float(self.alpha.imag), "drift": float(self.drift),
                 "tail": float(self.tail), "n": int(self.n), "n_check": int(self.n_check),
-                "physical": bool(self.physical), "theta": self.theta, "nu0": self.nu0,
+                "physical": bool(self.physical), "converged": bool(self.physical),
+                "method": self.method, "note": self.note, "theta": self.theta, "nu0": self.nu0,
                 **(self.model.to_dict() if self.model is not None else {})}
 
     def to_xarray(self):
@@ -358,10 +393,52 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = Non
 
 
 # -- the least-stable mode ---------------------------------------------------------------
+def _score(mode: Mode, policy: RejectionPolicy) -> float:
+    """How far a mode is from passing both tests (≤ 1: passes)."""
+    return max(mode.drift / policy.drift_tol, mode.tail / policy.tail_tol)
+
+
+def _join(*parts: str) -> str:
+    return "; ".join(p for p in parts if p)
+
+
+def direct_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int,
+                policy: RejectionPolicy | None = None,
+                cache: OperatorCache | None = None) -> Mode | None:
+    """The least-stable mode at (k, kz) solved directly at that wavenumber (dense QZ at N
+    and N', no continuation from k = 0), judged by ``policy``.
+
+    Returns the physical mode of largest Re α; when none passes both tests, the candidate
+    nearest to passing (smallest max(drift/drift_tol, tail/tail_tol)) among the resolved
+    eigenvectors (tail below ``policy.track_tail_tol``, or all of them if none is), flagged
+    ``physical = False``; None when QZ gives no finite eigenvalue.
+    """
+    policy = resolve_policy(policy)
+    modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
+    phys = [m for m in modes if m.physical]
+    # the near-neutral continuum of the dilute top: eigenvalues that converge (drift) but
+    # whose eigenvectors are not resolved (tail); they are not modes, but bound Re α
+    cont = [m for m in modes if not m.physical and m.drift < 1e-4
+            and (not phys or m.alpha.real > phys[0].alpha.real)]
+    note = ""
+    if cont:
+        top = max(cont, key=lambda m: m.alpha.real)
+        note = (f"unresolved continuum (dilute top) up to Re α = {top.alpha.real:.2e} at "
+                f"Im α/k = {top.alpha.imag / k if k else math.nan:.4g}")
+    if phys:
+        return dataclasses.replace(phys[0], method="qz", note=note)
+    if not modes:
+        return None
+    resolved = [m for m in modes if m.tail < policy.track_tail_tol] or modes
+    return dataclasses.replace(min(resolved, key=lambda m: _score(m, policy)), method="qz",
+                               note=note)
+
+
 def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
                  sigma: complex | None = None, method: str = "branch",
                  policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-                 tail_tol: float | None = None, n_max: int | None = None) -> Mode:
+                 tail_tol: float | None = None, n_max: int | None = None,
+                 strict: bool = False, cache: OperatorCache | None = None) -> Mode:
     """The least-stable physical mode at wavenumber ``k``.
 
     Parameters
@@ -369,7 +446,8 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
     flow : SteadyFlow
         Base state.
     k, kz : float
-        Wavenumber(s).
+        Wavenumber(s); |k| ≤ :data:`K_HYDRO_MAX` = 2π (a wavelength of one particle
+        diameter: beyond it the hydrodynamics does not apply and ParameterError is raised).
     n : int, optional
         Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
         factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
@@ -379,45 +457,73 @@ def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None =
         Without ``sigma``: ``"branch"`` follows the branch with α(0) = 0 (the kinematic-wave
         mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
         continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
-        reference, seconds.
+        reference, seconds. With ``"branch"``, k > :data:`K_DIRECT` (= 1) is solved
+        directly (QZ at k), and where the continuation loses the branch the solver falls
+        back to the direct solve at k; :attr:`Mode.method` says which method answered.
     policy : RejectionPolicy, optional
         Thresholds of the drift and tail tests and the resolution ladder (default: the
         paper's, §4.1).
     drift_tol, tail_tol, n_max : optional
         Overrides of the policy's fields of the same names.
+    strict : bool
+        False (default): when no mode passes the tests by N = ``n_max``, return the best
+        candidate flagged ``physical = False`` (:attr:`Mode.converged`) with its drift and
+        tail. True: raise :class:`ConvergenceError` instead.
+    cache : OperatorCache, optional
+        Where the operators come from.
 
     Raises
     ------
     ConvergenceError
-        No physical mode reaches the thresholds by N = ``n_max``.
+        Only with ``strict=True``: no physical mode reaches the thresholds by N = ``n_max``.
     """
     # the branch solver lives in the module above this one (it tracks the modes judged here)
     from .dispersion import branch_mode
 
     k, kz = _check_k(k, "k"), _check_k(kz, "kz", signed=True)
+    check_hydrodynamic_k(k, kz)
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
     if method not in ("branch", "qz"):
         raise ParameterError(f"method = {method!r}: choose 'branch' (continuation from k = 0) "
                              "or 'qz' (dense scan of the whole spectrum)")
     ns = [_check_n(n)] if n is not None else policy.ladder()
-    last = None
+    how = "qz" if (method == "qz" or (sigma is None and math.hypot(k, kz) > K_DIRECT)) \
+        else method
+    best: Mode | None = None
+    lost = None
     for nn in ns:
         mode: Mode | None
         if sigma is not None:
-            mode = mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy)
-        elif method == "qz":
-            found = spectrum(flow, k, kz=kz, n=nn, policy=policy)
-            mode = found[0] if found else None
+            try:
+                mode = dataclasses.replace(
+                    mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy, cache=cache),
+                    method="shift")
+            except ConvergenceError:
+                mode = None
+        elif how == "qz":
+            mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            if mode is not None and lost is not None:
+                mode = dataclasses.replace(mode, method="qz (branch lost)",
+                                           note=_join(lost, mode.note))
         else:
-            mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy)
+            try:
+                mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            except ConvergenceError as exc:
+                # the continuation lost the branch: answer by a direct solve at k
+                lost, how = str(exc).split(" (theta")[0], "qz"
+                mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                if mode is not None:
+                    mode = dataclasses.replace(mode, method="qz (branch lost)",
+                                               note=_join(lost, mode.note))
         if mode is not None and mode.physical:
             return mode
-        last = mode
-        if n is not None:
-            break
-    what = ("no physical mode" if last is None else
-            f"best candidate α = {last.alpha:.6g} with drift {last.drift:.1e}, tail "
-            f"{last.tail:.1e}")
+        if mode is not None and (best is None or _score(mode, policy) <= _score(best, policy)):
+            best = mode
+    if best is not None and not strict:
+        return best
+    what = ("no physical mode" if best is None else
+            f"best candidate α = {best.alpha:.6g} with drift {best.drift:.1e}, tail "
+            f"{best.tail:.1e}")
     raise ConvergenceError(
         f"least-stable mode at theta = {flow.theta:g}, nu0 = {flow.nu0:g}, k = {k:g}: "
         f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
@@ -430,4 +536,4 @@ def choose_n(flow: SteadyFlow, k: float, *, kz: float = 0.0,
     """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
     (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
     return least_stable(flow, k, kz=kz, policy=policy, drift_tol=drift_tol,
-                        tail_tol=tail_tol, n_max=n_max).n
+                        tail_tol=tail_tol, n_max=n_max, strict=True).n
