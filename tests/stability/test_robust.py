@@ -59,21 +59,23 @@ def test_large_k_is_solved_directly(p1_flow):
     assert mode.method == "qz" and mode.physical and mode.alpha.real < 0
 
 
-@pytest.mark.parametrize("point", LOST[:1])
+@pytest.mark.parametrize("point", LOST[2:])
 def test_lost_branch_falls_back_to_direct_solve(point):
     theta, nu0, phi, wall_loss = point
     flow = _flow(theta, nu0, phi, wall_loss)
     mode = least_stable(flow, 0.005)
     assert mode.method == "qz (branch lost)"
     assert "lost the branch" in mode.note and "continuum" in mode.note
-    assert mode.physical and mode.alpha.real < 0
+    # the answer is the least-stable (nearly) resolved mode, not a far more stable one that
+    # passes the tests (measured: Re α ≈ −0.005 … −0.004 at the first and third point)
+    assert mode.drift < 1e-5 and mode.tail < 1e-5 and mode.alpha.real < 0
     # the CLI answers with exit 0 and one warning line
     result = runner.invoke(app, ["eig", "--theta", str(theta), "--nu0", str(nu0), "--roughness",
                                  str(phi), "--wall-loss", str(wall_loss), "--k", "0.005",
                                  "--json"])
     assert result.exit_code == 0, result.output
     out = json.loads(result.stdout)
-    assert out["method"] == "qz (branch lost)" and out["converged"] is True
+    assert out["method"] == "qz (branch lost)" and out["converged"] is mode.converged
     assert result.stderr.startswith("warning: ") and len(result.stderr.splitlines()) == 1
 
 
@@ -135,8 +137,9 @@ def test_cli_longwave_p2_p4_exit_zero(args):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("point", LOST[1:])
+@pytest.mark.parametrize("point", LOST[:2])
 def test_lost_branch_other_points(point):
+    """~40 s each: the direct solve climbs the QZ ladder to N = 256."""
     test_lost_branch_falls_back_to_direct_solve(point)
 
 

@@ -353,8 +353,9 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
         ``physical = False``. Where the continuation loses the branch (non-strict), that
         and every larger k are solved directly at k (least-stable physical mode by dense
         QZ with the rejection tests, :func:`~chuteflow.stability.modes.least_stable` with
-        ``method="qz"``), flagged ``direct = True``; the attribute ``branch_lost_at`` is
-        the k where the branch was lost.
+        ``method="qz"``), flagged ``direct = True`` and ``physical = False`` (a direct
+        solve is not known to lie on the branch); the attribute ``branch_lost_at`` is the
+        k where the branch was lost.
 
     Returns
     -------
@@ -403,7 +404,8 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
                 "strict=False")
         out["alpha_re"][i], out["alpha_im"][i] = mode.alpha.real, mode.alpha.imag
         out["drift"][i], out["tail"][i] = mode.drift, mode.tail
-        nres[i], phys[i] = mode.n, mode.physical
+        # a direct solve is not known to lie on the tracked branch: flagged, not physical
+        nres[i], phys[i] = mode.n, mode.physical and not direct[i]
     attrs = {"long_name": "dispersion relation of the alpha(0) = 0 branch",
              "source": "Mitarai & Nakanishi §4, eq:lin", "theta": flow.theta, "nu0": flow.nu0,
              "nu_top": flow.nu_top, "y_max": flow.y_max,

@@ -425,6 +425,19 @@ def direct_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int,
         top = max(cont, key=lambda m: m.alpha.real)
         note = (f"unresolved continuum (dilute top) up to Re α = {top.alpha.real:.2e} at "
                 f"Im α/k = {top.alpha.imag / k if k else math.nan:.4g}")
+    # an eigenvalue above the best physical one whose eigenvector is nearly resolved (tail
+    # below the tracking threshold, unlike the continuum's ~1e-4) is a physical mode that
+    # N does not yet resolve (e.g. the α(0) = 0 branch near the continuum): it is the
+    # least-stable estimate, flagged, rather than a more stable mode that passes
+    near = [m for m in modes if not m.physical and m.tail < policy.track_tail_tol
+            and m.drift < 1e-3 * max(1.0, abs(m.alpha))
+            and (not phys or m.alpha.real > phys[0].alpha.real)]
+    if near:
+        best = max(near, key=lambda m: m.alpha.real)
+        return dataclasses.replace(best, method="qz", note=_join(
+            note, f"least-stable candidate not resolved at N = {n} (drift {best.drift:.1e}, "
+            f"tail {best.tail:.1e})" + (f"; the least-stable resolved mode has Re α = "
+                                        f"{phys[0].alpha.real:.4g}" if phys else "")))
     if phys:
         return dataclasses.replace(phys[0], method="qz", note=note)
     if not modes:
