@@ -17,8 +17,7 @@ from chuteflow.closures import ChuteModel
 from chuteflow.errors import ConvergenceError, ParameterError
 from chuteflow.longwave import longwave
 from chuteflow.longwave.theory import K_EIG, eigen_coefficient
-from chuteflow.stability import (K_HYDRO_MAX, Crossings, critical_k, crossings, dispersion,
-                                 least_stable)
+from chuteflow.stability import K_HYDRO_MAX, Crossings, critical_k, crossings, dispersion, least_stable
 from chuteflow.steady import solve_steady
 
 runner = CliRunner()

@@ -281,10 +281,13 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
     Notes
     -----
     The eigenvalue at ``k_check`` (default 1e-6) is computed too, by shift-invert from
-    α1 k + α2 k² on the equilibrated pencil, and kept in the result (``alpha2_from_eigenvalue``). The two differ by a few
-    per cent for ν_top = 1e-9: at k → 0 the branch interacts with the near-neutral continuum of
-    the dilute top (gap ~1e-8), which the strict k² coefficient includes and eigenvalues at
-    k ≳ 1e-7 do not.
+    α1 k + α2 k² on the equilibrated pencil, and kept in the result
+    (``alpha2_from_eigenvalue``). The two differ by a few per cent for ν_top = 1e-9: at
+    k → 0 the branch interacts with the near-neutral continuum of the dilute top (gap
+    ~1e-8), which the strict k² coefficient includes and eigenvalues at k ≳ 1e-7 do not
+    (at P2 the Taylor Re α2 is −91 at N = 480, +841 at N = 100, while Re α/k² at
+    k = 1e-5 is −39.996 from N = 100 on). :attr:`LongWave.unstable` is therefore decided
+    by the eigenvalue-based coefficient (:func:`eigen_coefficient`).
     """
     tangent = steady_tangent(flow)
     n = int(n)
