@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 from chuteflow.errors import ConvergenceError, ParameterError
-from chuteflow.steady import solve_steady, steady_tangent
 from chuteflow.stability import (
     BranchTracker,
     critical_k,
@@ -19,6 +18,7 @@ from chuteflow.stability import (
     null_vectors,
     stability_operator,
 )
+from chuteflow.steady import solve_steady, steady_tangent
 
 from .conftest import P1
 

@@ -1,4 +1,4 @@
-"""Three-dimensional stability commands (issue 10): ``transverse`` and ``eig3d``.
+"""Three-dimensional stability commands: ``transverse`` and ``eig3d``.
 
 - ``chuteflow transverse``: perturbations across the slope (k_x = 0): the long-wave
   coefficient α2z, the dispersion α(k_z) on (0, kz_max], the most unstable k_z* and its

@@ -1,7 +1,7 @@
 """Long-wave expansion of the least-stable branch, α(k) = α1 k + α2 k² + O(k³) (§5.1.1, App. B).
 
 At k = 0 the mass-conservation mode has α = 0 and eigenvector V0 = ∂X0/∂β, the derivative of
-the steady flow along its family at fixed θ (Appendix B, eq:last), which the steady solver
+the steady flow along its family at fixed θ (Appendix B, eq. (B 18)), which the steady solver
 gives exactly (:func:`chuteflow.steady.steady_tangent`). Writing the discrete operator as
 A(k) = A0 + k P1 + k² P2 (P1 = i A1, P2 = −A2 of :meth:`StabilityOperator.series`) and
 expanding A V = α B V with V = V0 + k V1 + k² V2,
@@ -12,14 +12,15 @@ expanding A V = α B V with V = V0 + k V1 + k² V2,
 each solved for (V_j, α_j) together as one *bordered* system [[A0, −B V0], [c, 0]] with the
 normalisation c·V_j = ∫ ν̂_j dy = 0. Bordering replaces the solvability condition with the
 adjoint vector, which is ill-conditioned here: a continuum of slowly settling density modes of
-the dilute top (ERRATA, numerical notes) sits within ~1e-8 of α = 0. Rows and columns are
+the dilute top (docs/errata.md, numerical notes) sits within ~1e-8 of α = 0. Rows and columns are
 equilibrated before the LU for the same reason.
 
-Checks: α1 = −i dQ0/dρ̄0 (Appendix B, eq:vp0) and α2 = lim Re α/k² + i Im … of the eigenvalues
+Checks: α1 = −i dQ0/dρ̄0 (Appendix B, eq. (B 2)) and α2 = lim Re α/k² + i Im … of the eigenvalues
 at k ≲ 1e-6. Re α2 converges only algebraically in N (≈ N⁻⁴), hence the default N = 200 and the
 reported convergence. Re α2 > 0 means long-wave instability; never decide stability at finite k
 from α2 alone (the k² regime ends near k ~ 1e-5 … 1e-4 for P1).
 """
+
 from __future__ import annotations
 
 import math
@@ -31,10 +32,61 @@ import scipy.linalg as sla
 from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
+from ..stability.dispersion import BranchTracker
 from ..stability.modes import nearest_eigenpair, stability_operator
-from ..stability.policy import RejectionPolicy
 from ..stability.operator import StabilityOperator
+from ..stability.policy import RejectionPolicy
 from ..steady import SteadyFlow, steady_tangent
+
+#: Wavenumbers of the eigenvalue-based k² coefficient Re α/k² (the range over which the
+#: dispersion relation follows it, docs/errata.md "the k² regime is narrow").
+EIG_KS = (1e-6, 1e-5, 1e-4)
+#: The one that decides the long-wave sign: at 1e-6 the eigenvalue's round-off (~1e-12
+#: absolute near the continuum) is 1e-4 of Re α; at 1e-5 Re α/k² converges to ~1e-6 by N ≈ 100
+#: (P1, P2) and stays within a few per cent of its k → 0 limit.
+K_EIG = 1e-5
+
+
+def eigen_coefficient(flow: SteadyFlow, *, n: int = 100, n_max: int = 256, rtol: float = 1e-4, ks=EIG_KS):
+    """Re α(k)/k² of the α(0) = 0 branch at the wavenumbers ``ks`` (from eigenvalues).
+
+    The branch is followed from k = 0 by :class:`~chuteflow.stability.BranchTracker` at N
+    and at 4N/5; N grows by 25 % until Re α/k² at :data:`K_EIG` changes by less than
+    ``rtol`` (relative) or N reaches ``n_max``.
+
+    Returns
+    -------
+    (values, convergence, n)
+        ``values`` (tuple of float, one per k; NaN where the branch was not reached), the
+        relative change at :data:`K_EIG` and the resolution N.
+    """
+    ks = tuple(sorted(float(k) for k in ks))
+
+    def at(nn):
+        tr = BranchTracker(flow, nn, n_max=nn)
+        vals = []
+        for kk in ks:
+            try:
+                a, _ = tr.advance(kk)
+                vals.append(float(a.real / kk**2))
+            except ConvergenceError:
+                vals.extend([math.nan] * (len(ks) - len(vals)))
+                break
+        return vals
+
+    j = ks.index(K_EIG) if K_EIG in ks else len(ks) // 2
+    ladder = RejectionPolicy(n_start=int(n), n_max=int(n_max))
+    n2 = max(24, (4 * int(n)) // 5)
+    prev = at(n2)
+    nn = int(n)
+    while True:
+        cur = at(nn)
+        conv = abs(cur[j] - prev[j]) / max(abs(cur[j]), 1e-300)
+        if not math.isfinite(conv):
+            conv = math.inf
+        if conv <= rtol or nn >= ladder.n_max:
+            return tuple(cur), float(conv), nn
+        prev, nn = cur, ladder.next_n(nn)
 
 
 @dataclass(frozen=True)
@@ -46,9 +98,9 @@ class LongWave:
     theta, nu0 : float
         The steady flow (degrees, floor density).
     alpha1, alpha2 : complex
-        α(k) = α1 k + α2 k² + O(k³) for perturbations ∝ exp(αt + ikx) (eq:lin).
+        α(k) = α1 k + α2 k² + O(k³) for perturbations ∝ exp(αt + ikx) (eq. 4.4).
     dQ_drho : float
-        dQ0/dρ̄0 along the family at fixed θ (eq:dqdh); Appendix B: α1 = −i dQ0/dρ̄0.
+        dQ0/dρ̄0 along the family at fixed θ (eq. B 6); Appendix B: α1 = −i dQ0/dρ̄0.
     n : int
         Chebyshev intervals of the finer resolution.
     convergence_alpha1, convergence_alpha2 : float
@@ -57,6 +109,19 @@ class LongWave:
         A small wavenumber and the eigenvalue there (see :attr:`alpha2_from_eigenvalue`).
     model : ChuteModel or None
         Parameters and closures of the steady flow the coefficients were computed for.
+    converged : bool
+        The Taylor coefficients met ``rtol`` by ``n_max`` (else they are the estimate at
+        ``n``, with :attr:`convergence_alpha2` saying how far they are from it).
+    eig_k : tuple of float
+        Wavenumbers of the eigenvalue-based coefficient (default 1e-6, 1e-5, 1e-4).
+    eig_alpha2 : tuple of float
+        Re α(k)/k² of the tracked branch at ``eig_k``: the k² coefficient the dispersion
+        relation follows there (docs/errata.md: the strict Taylor α2 feels the dilute-top continuum
+        within ~1e-8 of α = 0, which eigenvalues at k ≳ 1e-6 do not).
+    eig_convergence : float
+        Relative change of Re α(k)/k² at k = :data:`K_EIG` between N_eig and 4N_eig/5.
+    eig_n : int
+        Resolution of the eigenvalue-based coefficient.
     """
 
     theta: float
@@ -70,6 +135,27 @@ class LongWave:
     k_check: float = float("nan")
     alpha_check: complex = complex("nan")
     model: ChuteModel | None = None
+    converged: bool = True
+    eig_k: tuple = ()
+    eig_alpha2: tuple = ()
+    eig_convergence: float = float("nan")
+    eig_n: int = 0
+
+    @property
+    def alpha2_eig(self) -> float:
+        """Re α/k² of the eigenvalue at k = :data:`K_EIG` (1e-5): the robust long-wave
+        coefficient (NaN when not computed)."""
+        for kk, v in zip(self.eig_k, self.eig_alpha2):
+            if kk == K_EIG:
+                return float(v)
+        return float("nan")
+
+    @property
+    def sign_consistent(self) -> bool:
+        """The Taylor Re α2 and the eigenvalue-based Re α/k² agree in sign (True when the
+        latter was not computed)."""
+        e = self.alpha2_eig
+        return not math.isfinite(e) or (e > 0) == (self.alpha2.real > 0)
 
     @property
     def alpha2_from_eigenvalue(self) -> complex:
@@ -85,20 +171,36 @@ class LongWave:
 
     @property
     def unstable(self) -> bool:
-        """Long-wave unstable: Re α2 > 0."""
-        return self.alpha2.real > 0
+        """Long-wave unstable: Re α/k² > 0 from the eigenvalue at k = 1e-5
+        (:attr:`alpha2_eig`, converged to ~1e-6 at N ≈ 100), else Re α2 > 0 (Taylor)."""
+        e = self.alpha2_eig
+        return bool(e > 0) if math.isfinite(e) else bool(self.alpha2.real > 0)
 
     def summary(self) -> dict:
-        return {"theta": self.theta, "nu0": self.nu0, "alpha1_re": self.alpha1.real,
-                "alpha1_im": self.alpha1.imag, "alpha2_re": self.alpha2.real,
-                "alpha2_im": self.alpha2.imag, "dQ_drho": self.dQ_drho, "n": self.n,
-                "convergence_alpha1": self.convergence_alpha1,
-                "convergence_alpha2": self.convergence_alpha2,
-                "k_check": self.k_check,
-                "alpha2_from_eigenvalue_re": self.alpha2_from_eigenvalue.real,
-                "alpha2_from_eigenvalue_im": self.alpha2_from_eigenvalue.imag,
-                "long_wave_unstable": bool(self.unstable),
-                **(self.model.to_dict() if self.model is not None else {})}
+        return {
+            "theta": self.theta,
+            "nu0": self.nu0,
+            "alpha1_re": self.alpha1.real,
+            "alpha1_im": self.alpha1.imag,
+            "alpha2_re": self.alpha2.real,
+            "alpha2_im": self.alpha2.imag,
+            "dQ_drho": self.dQ_drho,
+            "n": self.n,
+            "convergence_alpha1": self.convergence_alpha1,
+            "convergence_alpha2": self.convergence_alpha2,
+            "k_check": self.k_check,
+            "alpha2_from_eigenvalue_re": self.alpha2_from_eigenvalue.real,
+            "alpha2_from_eigenvalue_im": self.alpha2_from_eigenvalue.imag,
+            "long_wave_unstable": bool(self.unstable),
+            "converged": bool(self.converged),
+            "alpha2_eig_re": self.alpha2_eig,
+            "eig_k": list(self.eig_k),
+            "eig_alpha2_re": list(self.eig_alpha2),
+            "eig_convergence": self.eig_convergence,
+            "eig_n": self.eig_n,
+            "sign_consistent": bool(self.sign_consistent),
+            **(self.model.to_dict() if self.model is not None else {}),
+        }
 
 
 def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
@@ -110,12 +212,13 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
     flow = op.flow
     g, L, dL = flow.grid, flow.y_max, tangent["y_max"]
     shift = (g.y / L) * dL
-    fixed_y = {"nu": flow.nu * tangent["log_nu"] - shift * (g.D @ flow.nu),
-               "u": tangent["u"] - shift * (g.D @ flow.u),
-               "T": tangent["T"] - shift * (g.D @ flow.T)}
+    fixed_y = {
+        "nu": flow.nu * tangent["log_nu"] - shift * (g.D @ flow.nu),
+        "u": tangent["u"] - shift * (g.D @ flow.u),
+        "T": tangent["T"] - shift * (g.D @ flow.T),
+    }
     y = op.grid.y
-    parts = [g.interpolate(fixed_y[f], y) if f in fixed_y else np.zeros_like(y)
-             for f in op.fields]
+    parts = [g.interpolate(fixed_y[f], y) if f in fixed_y else np.zeros_like(y) for f in op.fields]
     return np.concatenate(parts)
 
 
@@ -128,7 +231,7 @@ def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex
     V0 = null_vector(op, tangent)
     c = np.zeros(M)
     i = op.fields.index("nu") * (op.n + 1)
-    c[i:i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
+    c[i : i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
     V0 = V0 / (c @ V0)
     bord = np.zeros((M + 1, M + 1))
     bord[:M, :M] = A0
@@ -142,8 +245,7 @@ def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex
 
     def solve(rhs):
         r = np.concatenate([rhs, [0.0]]) * rs
-        x = sla.lu_solve(lu, r.real, check_finite=False) \
-            + 1j * sla.lu_solve(lu, r.imag, check_finite=False)
+        x = sla.lu_solve(lu, r.real, check_finite=False) + 1j * sla.lu_solve(lu, r.imag, check_finite=False)
         x *= cs
         return x[:M], x[M]
 
@@ -152,8 +254,16 @@ def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex
     return complex(a1), complex(a2)
 
 
-def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
-             n_max: int = 480, k_check: float | None = 1e-6) -> LongWave:
+def longwave(
+    flow: SteadyFlow,
+    n: int = 200,
+    *,
+    rtol: float = 1e-2,
+    n_max: int = 480,
+    k_check: float | None = 1e-6,
+    strict: bool = True,
+    eig_ks=EIG_KS,
+) -> LongWave:
     """Long-wave coefficients α1, α2 of the least-stable branch (perturbation theory at k = 0).
 
     Parameters
@@ -172,19 +282,30 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
         Largest resolution tried.
     k_check : float or None
         Wavenumber of the eigenvalue cross-check; None skips it (sign-only sweeps).
+    strict : bool
+        True (default): raise when ``rtol`` is not met by ``n_max``. False: return the
+        estimate at ``n_max`` flagged ``converged = False`` (its relative change in
+        :attr:`LongWave.convergence_alpha2`).
+    eig_ks : tuple of float or None
+        Wavenumbers of the eigenvalue-based coefficient Re α/k² (:func:`eigen_coefficient`,
+        default 1e-6, 1e-5, 1e-4); it decides :attr:`LongWave.unstable`. Empty or None
+        skips it.
 
     Raises
     ------
     ConvergenceError
-        If the target is not reached by ``n_max``.
+        With ``strict=True``, if the target is not reached by ``n_max``.
 
     Notes
     -----
     The eigenvalue at ``k_check`` (default 1e-6) is computed too, by shift-invert from
-    α1 k + α2 k² on the equilibrated pencil, and kept in the result (``alpha2_from_eigenvalue``). The two differ by a few
-    per cent for ν_top = 1e-9: at k → 0 the branch interacts with the near-neutral continuum of
-    the dilute top (gap ~1e-8), which the strict k² coefficient includes and eigenvalues at
-    k ≳ 1e-7 do not.
+    α1 k + α2 k² on the equilibrated pencil, and kept in the result
+    (``alpha2_from_eigenvalue``). The two differ by a few per cent for ν_top = 1e-9: at
+    k → 0 the branch interacts with the near-neutral continuum of the dilute top (gap
+    ~1e-8), which the strict k² coefficient includes and eigenvalues at k ≳ 1e-7 do not
+    (at P2 the Taylor Re α2 is −91 at N = 480, +841 at N = 100, while Re α/k² at
+    k = 1e-5 is −39.996 from N = 100 on). :attr:`LongWave.unstable` is therefore decided
+    by the eigenvalue-based coefficient (:func:`eigen_coefficient`).
     """
     tangent = steady_tangent(flow)
     n = int(n)
@@ -201,13 +322,40 @@ def longwave(flow: SteadyFlow, n: int = 200, *, rtol: float = 1e-2,
         if ok or n >= n_max:
             break
         b1, b2, n2, n = a1, a2, n, ladder.next_n(n)
-    if not ok:
+    if not ok and strict:
         raise ConvergenceError(
             f"long-wave coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did not "
             f"converge: relative change of alpha1 {c1:.1e}, alpha2 {c2:.1e} between n = {n2} "
-            f"and n = {n} (rtol = {rtol:g}); raise n_max or rtol")
+            f"and n = {n} (rtol = {rtol:g}); raise n_max or rtol"
+        )
     check = complex("nan")
     if k_check:
-        check, _ = nearest_eigenpair(op.pencil(k_check), a1 * k_check + a2 * k_check**2)
-    return LongWave(flow.theta, flow.nu0, a1, a2, float(tangent["dQ_drho"]), n, float(c1),
-                    float(c2), float(k_check or float("nan")), check, model=flow.model)
+        try:
+            check, _ = nearest_eigenpair(op.pencil(k_check), a1 * k_check + a2 * k_check**2)
+        except ConvergenceError:
+            if strict:
+                raise
+    eig_k: tuple[float, ...] = ()
+    eig_vals: tuple = ()
+    eig_conv, eig_n = float("nan"), 0
+    if eig_ks:
+        eig_k = tuple(sorted(float(k) for k in eig_ks))
+        eig_vals, eig_conv, eig_n = eigen_coefficient(flow, ks=eig_k)
+    return LongWave(
+        flow.theta,
+        flow.nu0,
+        a1,
+        a2,
+        float(tangent["dQ_drho"]),
+        n,
+        float(c1),
+        float(c2),
+        float(k_check or float("nan")),
+        check,
+        model=flow.model,
+        converged=bool(ok),
+        eig_k=eig_k,
+        eig_alpha2=eig_vals,
+        eig_convergence=eig_conv,
+        eig_n=eig_n,
+    )

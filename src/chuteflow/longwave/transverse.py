@@ -1,8 +1,8 @@
 """Transverse perturbations (k_x = 0): long-wave coefficient α2z and the transverse analysis.
 
-Perturbations ∝ exp(αt + i k_z z) across the slope (issue 10; the paper's §5.3 question).
+Perturbations ∝ exp(αt + i k_z z) across the slope (the question of the paper's §5.3).
 At k = 0 the mass-conservation mode has α = 0 and eigenvector V0 = ∂X0/∂β (Appendix B,
-eq:last), whatever the direction of k. Along a ray k = s (k̂x, k̂z) the discrete operator is
+eq. (B 18)), whatever the direction of k. Along a ray k = s (k̂x, k̂z) the discrete operator is
 
     A(s) = A0 + s P1 + s² P2,   P1 = i(k̂x A_{1,0} + k̂z A_{0,1}) + K,
                                 P2 = −(k̂x² A_{2,0} + k̂x k̂z A_{1,1} + k̂z² A_{0,2}),
@@ -14,8 +14,8 @@ the top truncation) and α(0, k_z) = α2z k_z² + O(k_z⁴), α2z real (at k_x =
 is real).
 
 Physical reading (lubrication limit of the z-momentum balance, derived here; the analogue
-of the paper's eq:omega2 for the lateral flux). At O(k_z) the spanwise velocity obeys
-(μ0 ŵ')' = i k_z p̂ with μ0 ŵ' = η*(0) ŵ at the floor (eq:bc1, z component) and no stress
+of the paper's eq. (B 11) for the lateral flux). At O(k_z) the spanwise velocity obeys
+(μ0 ŵ')' = i k_z p̂ with μ0 ŵ' = η*(0) ŵ at the floor (eq. (2.9), z component) and no stress
 at the top, p̂ = ∂p0/∂β the lateral pressure perturbation of the neighbouring steady
 column; the depth-integrated mass balance α ∫ν̂ = −i k_z ∫ ν0 ŵ dy then gives
 
@@ -235,7 +235,7 @@ def _cumulative(g) -> np.ndarray:
 
 @dataclass(frozen=True)
 class TransverseResult:
-    """Transverse (k_x = 0) stability of one steady flow (issue 10).
+    """Transverse (k_x = 0) stability of one steady flow.
 
     Attributes
     ----------

@@ -66,25 +66,30 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 
 from .dispersion import (
     BranchTracker,
+    Crossings,
     NullVectors,
     branch_mode,
+    choose_n,
     critical_k,
     crossings,
     dispersion,
     first_order,
+    least_stable,
     null_vectors,
+    operator,
 )
 from .eigen import ShiftInvert, qz
 from .modes import (
+    K_DIRECT,
+    K_HYDRO_MAX,
     OPERATORS,
     Mode,
     OperatorCache,
+    check_hydrodynamic_k,
     check_n,
-    choose_n,
-    least_stable,
+    direct_mode,
     mode_near,
     nearest_eigenpair,
-    operator,
     spectrum,
     stability_operator,
     tail,
@@ -133,4 +138,9 @@ __all__ = [
     "least_stable_3d",
     "transverse_dispersion",
     "transverse_mode",
+    "Crossings",
+    "K_DIRECT",
+    "K_HYDRO_MAX",
+    "check_hydrodynamic_k",
+    "direct_mode",
 ]

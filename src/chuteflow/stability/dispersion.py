@@ -2,7 +2,7 @@
 
 At k = 0 the mass-conservation mode has α = 0 exactly: its right null vector is the
 tangent ∂X0/∂β of the steady family and its left null vector the total-mass functional
-(Appendix B). The mass balance then gives α ≈ α1 k (eq:omega2), which seeds the
+(Appendix B). The mass balance then gives α ≈ α1 k (eq. B 11), which seeds the
 continuation; every later step predicts α from the previous points (quadratic
 extrapolation) and takes the eigenvalue nearest the prediction by shift-invert. A step is
 accepted when the answer lies within a quarter of the step from the prediction and its
@@ -11,8 +11,10 @@ to the near-neutral continuum α ≈ −ik u0(y) of the dilute top, which crowds
 Each point is then checked at N' = round(0.8 N) (drift) and by the paper's tail test; N is
 raised along the branch when a point fails.
 """
+
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -23,9 +25,24 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow, steady_tangent
 from .eigen import ShiftInvert
-from .modes import (Mode, OperatorCache, _interp_vector, _make_mode, drift_of,
-                    nearest_eigenpair, resolve_policy, stability_operator, tail)
-from .operator import StabilityOperator, _check_k, _check_n
+from .modes import (
+    K_DIRECT,
+    Mode,
+    OperatorCache,
+    check_hydrodynamic_k,
+    direct_mode,
+    drift_of,
+    interp_vector,
+    join_notes,
+    make_mode,
+    mode_near,
+    mode_score,
+    nearest_eigenpair,
+    resolve_policy,
+    stability_operator,
+    tail,
+)
+from .operator import Pencil, StabilityOperator, validate_k, validate_n
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
 #: First continuation step from k = 0.
@@ -48,8 +65,7 @@ def _track_rules(max_halvings: int) -> StepRules:
     """Retry rules of the branch in k (:func:`chuteflow.continuation.continue_to`): steps
     grow by :func:`_growth`, at most ×3 in k (a step at most twice the k reached), halved
     when rejected, at most ``max_halvings`` times per step."""
-    return StepRules(grow=_growth, shrink=0.5, max_step_ratio=2.0,
-                     max_halvings=max_halvings)
+    return StepRules(grow=_growth, shrink=0.5, max_step_ratio=2.0, max_halvings=max_halvings)
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,12 +115,12 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
 def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) -> complex:
     """α1 = dα/ds at s = 0 along k = s·(k̂x, k̂z), from the mass balance (Appendix B).
 
-    Integrating the linearised continuity equation over the layer (eq:omega) with the k = 0
+    Integrating the linearised continuity equation over the layer (eq. B 8) with the k = 0
     eigenvector (ν̂0, û0, ŵ0) gives α1 = −i [k̂x ∫(ν0 û0 + u0 ν̂0) dy + k̂z ∫ ν0 ŵ0 dy] /
-    ∫ ν̂0 dy (eq:omega2): the continuous problem's left null vector is the total-mass
+    ∫ ν̂0 dy (eq. B 11): the continuous problem's left null vector is the total-mass
     functional. It is used instead of the discrete left null vector, which the continuum
     within ~1e-8 of α = 0 makes ill-conditioned. For k along x it equals −i dQ0/dρ̄0
-    (eq:vp0) up to the top truncation: measured 1.3e-5 (P1), 3e-7 (P5), 7e-8 (Q3) relative,
+    (eq. B 2) up to the top truncation: measured 1.3e-5 (P1), 3e-7 (P5), 7e-8 (Q3) relative,
     independent of N.
     """
     kx, kz = direction
@@ -138,22 +154,30 @@ class BranchTracker:
         Where the operators come from (default: the module's shared cache).
     """
 
-    def __init__(self, flow: SteadyFlow, n: int | None = None, *, direction=(1.0, 0.0),
-                 policy: RejectionPolicy | None = None, n_max: int | None = None,
-                 drift_tol: float | None = None, tail_tol: float | None = None,
-                 cache: OperatorCache | None = None):
+    def __init__(
+        self,
+        flow: SteadyFlow,
+        n: int | None = None,
+        *,
+        direction=(1.0, 0.0),
+        policy: RejectionPolicy | None = None,
+        n_max: int | None = None,
+        drift_tol: float | None = None,
+        tail_tol: float | None = None,
+        cache: OperatorCache | None = None,
+    ):
         kx, kz = (float(direction[0]), float(direction[1]))
         norm = math.hypot(kx, kz)
         if norm == 0 or kx < 0:
-            raise ParameterError(f"direction = {direction!r}: need a nonzero wavevector "
-                                 "direction with k̂x ≥ 0")
+            raise ParameterError(
+                f"direction = {direction!r}: need a nonzero wavevector direction with k̂x ≥ 0"
+            )
         self.direction = (kx / norm, kz / norm)
         self.three_d = self.direction[1] != 0.0
-        self.policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol,
-                                     n_max=n_max)
+        self.policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
         self.cache = cache
         self.flow = flow
-        self.n = _check_n(self.policy.n_start if n is None else n)
+        self.n = validate_n(self.policy.n_start if n is None else n)
         self.n_max = self.policy.n_max
         self._start(self.n)
 
@@ -195,9 +219,11 @@ class BranchTracker:
             return a0 + self.alpha1 * (s - s0) + c2 * (s - s0) ** 2
         (s0, a0, _), (s1, a1, _), (s2, a2, _) = h[-3:]
         # quadratic through the last three points (Lagrange)
-        return (a0 * (s - s1) * (s - s2) / ((s0 - s1) * (s0 - s2))
-                + a1 * (s - s0) * (s - s2) / ((s1 - s0) * (s1 - s2))
-                + a2 * (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1)))
+        return (
+            a0 * (s - s1) * (s - s2) / ((s0 - s1) * (s0 - s2))
+            + a1 * (s - s0) * (s - s2) / ((s1 - s0) * (s1 - s2))
+            + a2 * (s - s0) * (s - s1) / ((s2 - s0) * (s2 - s1))
+        )
 
     def _step(self, s):
         """Solve at s (> last s) from the prediction. Returns (alpha, w, ratio) with ratio =
@@ -218,8 +244,7 @@ class BranchTracker:
             ratio = min(ratio, 0.25)
         if ratio > 0.25:
             return None
-        if tail(pencil.unscale(w), len(pencil.fields),
-                self.policy.tail_terms) > self.policy.track_tail_tol:
+        if tail(pencil.unscale(w), len(pencil.fields), self.policy.tail_terms) > self.policy.track_tail_tol:
             return None
         return alpha, w, ratio
 
@@ -246,16 +271,18 @@ class BranchTracker:
             raise ParameterError("the branch is tracked in increasing k only")
         if s_target > s_last:
             # first step: α1 k predicts well while |α2| k² ≪ |α1| k; 1e-5 is inside the
-            # quadratic regime of every flow checked (ERRATA: it narrows to ~1e-5)
+            # quadratic regime of every flow checked (docs/errata.md: it narrows to ~1e-5)
             h = FIRST_STEP if s_last == 0.0 else self._h
-            res = continue_to(self._solve, s_last, s_last, s_target,
-                              _track_rules(max_halvings), h=h, origin=0.0)
+            res = continue_to(
+                self._solve, s_last, s_last, s_target, _track_rules(max_halvings), h=h, origin=0.0
+            )
             self._h = res.h
             if not res.reached:
                 raise ConvergenceError(
                     f"lost the branch near k = {res.steps[-1].s:.4g} (theta = "
                     f"{self.flow.theta:g}, nu0 = {self.flow.nu0:g}, N = {self.n}): the "
-                    "continuation step shrank below any useful size")
+                    "continuation step shrank below any useful size"
+                )
         return self.history[-1][1], self.history[-1][2]
 
     def mode(self, s: float) -> Mode:
@@ -270,9 +297,8 @@ class BranchTracker:
                 continue
             pencil = self._pencil(s)
             kx, kz = self.direction
-            drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d,
-                                 cache=self.cache)
-            mode = _make_mode(pencil, alpha, v, drift, n2, self.policy)
+            drift, n2 = drift_of(self.flow, alpha, v, self.n, s * kx, s * kz, self.three_d, cache=self.cache)
+            mode = make_mode(pencil, alpha, v, drift, n2, self.policy)
             if mode.physical or self.n >= self.n_max:
                 return mode
             self._raise_n()
@@ -287,13 +313,21 @@ class BranchTracker:
         self._start(n_new)
         for s, a, v in old:
             pencil = self._pencil(s)
-            alpha, v2 = nearest_eigenpair(pencil, a, v0=_interp_vector(v, nf, n_old, n_new))
+            alpha, v2 = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, n_old, n_new))
             self.history.append((s, complex(alpha), v2))
 
 
-def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
-                policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-                tail_tol: float | None = None, cache: OperatorCache | None = None) -> Mode:
+def branch_mode(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int | None = None,
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    cache: OperatorCache | None = None,
+) -> Mode:
     """The mode of the α(0) = 0 branch at (k, kz), tracked from k = 0, at resolution N.
 
     The continuation runs on a coarse grid (N_c = 48, an LU ~10× cheaper), whose eigenvalue
@@ -304,21 +338,21 @@ def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = 
     overrides of its thresholds).
     """
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
-    n = _check_n(policy.n_start if n is None else n)
+    n = validate_n(policy.n_start if n is None else n)
     kk = math.hypot(k, kz)
     direction = (k, kz) if kk else (1.0, 0.0)
     if kk > 0 and n > COARSE_N + 16:
         try:
-            coarse = BranchTracker(flow, COARSE_N, direction=direction, policy=policy,
-                                   n_max=COARSE_N, cache=cache)
+            coarse = BranchTracker(
+                flow, COARSE_N, direction=direction, policy=policy, n_max=COARSE_N, cache=cache
+            )
             a_c, w_c = coarse.advance(kk)
             op = stability_operator(flow, n, coarse.three_d, cache=cache)
             pencil = op.pencil(k, kz)
-            alpha, w = nearest_eigenpair(pencil, a_c, v0=_interp_vector(
-                w_c, len(op.fields), COARSE_N, n))
+            alpha, w = nearest_eigenpair(pencil, a_c, v0=interp_vector(w_c, len(op.fields), COARSE_N, n))
             if abs(alpha - a_c) < 1e-2 * abs(a_c):
                 drift, n2 = drift_of(flow, alpha, w, n, k, kz, coarse.three_d, cache=cache)
-                mode = _make_mode(pencil, alpha, w, drift, n2, policy)
+                mode = make_mode(pencil, alpha, w, drift, n2, policy)
                 if mode.physical:
                     return mode
         except ConvergenceError:
@@ -328,10 +362,18 @@ def branch_mode(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = 
 
 
 # -- dispersion relation -----------------------------------------------------------------
-def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
-               policy: RejectionPolicy | None = None, n_max: int | None = None,
-               drift_tol: float | None = None, tail_tol: float | None = None,
-               strict: bool = True, cache: OperatorCache | None = None):
+def dispersion(
+    flow: SteadyFlow,
+    k,
+    *,
+    n: int | None = None,
+    policy: RejectionPolicy | None = None,
+    n_max: int | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    strict: bool = True,
+    cache: OperatorCache | None = None,
+):
     """Dispersion relation α(k) of the α(0) = 0 branch (figures 7–9, 13).
 
     Parameters
@@ -350,14 +392,20 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
     strict : bool
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
-        ``physical = False`` (NaN from where the branch was lost).
+        ``physical = False``. Where the continuation loses the branch (non-strict), that
+        and every larger k are solved directly at k (least-stable physical mode by dense
+        QZ with the rejection tests, :func:`least_stable` with
+        ``method="qz"``), flagged ``direct = True`` and ``physical = False`` (a direct
+        solve is not known to lie on the branch); the attribute ``branch_lost_at`` is the
+        k where the branch was lost.
 
     Returns
     -------
     xarray.Dataset
         Over ``k``: ``alpha_re``, ``alpha_im``, ``drift`` (|α(N) − α(N')|), ``tail``, ``n``,
-        ``physical``; attributes: the flow's parameters, ``dQ_drho`` (dQ0/dρ̄0 of the
-        steady family, eq:dqdh: the long-wave slope −Im α/k, figure 8) and ``alpha1_re``,
+        ``physical``, ``direct`` (solved directly at k, not on the tracked branch);
+        attributes: the flow's parameters, ``dQ_drho`` (dQ0/dρ̄0 of the
+        steady family, eq. (B 6): the long-wave slope −Im α/k, figure 8) and ``alpha1_re``,
         ``alpha1_im`` (the continuation's first-order coefficient, α ≈ α1 k).
     """
     import xarray as xr
@@ -366,48 +414,79 @@ def dispersion(flow: SteadyFlow, k, *, n: int | None = None,
     if ks.ndim != 1 or len(ks) == 0:
         raise ParameterError("k: expected a non-empty 1-D array of wavenumbers")
     for kk in ks:
-        _check_k(kk, "k")
+        validate_k(kk, "k")
+        check_hydrodynamic_k(kk)
     order = np.argsort(ks, kind="stable")
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
     tr = BranchTracker(flow, n or None, policy=policy, cache=cache)
-    out = {name: np.full(len(ks), np.nan)
-           for name in ("alpha_re", "alpha_im", "drift", "tail")}
+    out = {name: np.full(len(ks), np.nan) for name in ("alpha_re", "alpha_im", "drift", "tail")}
     nres = np.zeros(len(ks), dtype=int)
     phys = np.zeros(len(ks), dtype=bool)
+    direct = np.zeros(len(ks), dtype=bool)
+    lost_at = None
     for i in order:
-        try:
-            mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
-        except ConvergenceError:
-            if strict:
-                raise
-            break  # branch lost: this and the larger k stay NaN, physical = False
+        if lost_at is None:
+            try:
+                mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
+            except ConvergenceError:
+                if strict:
+                    raise
+                lost_at = float(ks[i])
+        if lost_at is not None:
+            # branch lost: this and the larger k are solved directly at k
+            mode = least_stable(
+                flow, ks[i], method="qz", policy=policy.replace(n_start=min(tr.n, policy.n_max)), cache=cache
+            )
+            direct[i] = True
         if strict and not mode.physical:
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
                 f"converged at N = {mode.n} (drift {mode.drift:.1e}, tail {mode.tail:.1e}; "
                 f"thresholds {policy.drift_tol:g}, {policy.tail_tol:g}); raise n_max or pass "
-                "strict=False")
+                "strict=False"
+            )
         out["alpha_re"][i], out["alpha_im"][i] = mode.alpha.real, mode.alpha.imag
         out["drift"][i], out["tail"][i] = mode.drift, mode.tail
-        nres[i], phys[i] = mode.n, mode.physical
-    attrs = {"long_name": "dispersion relation of the alpha(0) = 0 branch",
-             "source": "Mitarai & Nakanishi §4, eq:lin", "theta": flow.theta, "nu0": flow.nu0,
-             "nu_top": flow.nu_top, "y_max": flow.y_max,
-             "dQ_drho": float(steady_tangent(flow)["dQ_drho"]), "alpha1_re": tr.alpha1.real,
-             "alpha1_im": tr.alpha1.imag, "drift_tol": policy.drift_tol,
-             "tail_tol": policy.tail_tol}
+        # a direct solve is not known to lie on the tracked branch: flagged, not physical
+        nres[i], phys[i] = mode.n, mode.physical and not direct[i]
+    attrs = {
+        "long_name": "dispersion relation of the alpha(0) = 0 branch",
+        "source": "Mitarai & Nakanishi §4, eq. (4.4)",
+        "theta": flow.theta,
+        "nu0": flow.nu0,
+        "nu_top": flow.nu_top,
+        "y_max": flow.y_max,
+        "dQ_drho": float(steady_tangent(flow)["dQ_drho"]),
+        "alpha1_re": tr.alpha1.real,
+        "alpha1_im": tr.alpha1.imag,
+        "drift_tol": policy.drift_tol,
+        "tail_tol": policy.tail_tol,
+    }
+    if lost_at is not None:
+        attrs["branch_lost_at"] = lost_at
     attrs.update(flow.model.attrs())
     u = RATE_UNITS
     ds = xr.Dataset(
-        {"alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),
-         "alpha_im": ("k", out["alpha_im"], {"long_name": "Im alpha", "units": u}),
-         "drift": ("k", out["drift"], {"long_name": "|alpha(N) - alpha(N')|", "units": u}),
-         "tail": ("k", out["tail"], {"long_name": "largest of the ten highest Chebyshev "
-                                                  "coefficients", "units": "1"}),
-         "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
-         "physical": ("k", phys, {"long_name": "passes drift and tail tests"})},
+        {
+            "alpha_re": ("k", out["alpha_re"], {"long_name": "growth rate Re alpha", "units": u}),
+            "alpha_im": ("k", out["alpha_im"], {"long_name": "Im alpha", "units": u}),
+            "drift": ("k", out["drift"], {"long_name": "|alpha(N) - alpha(N')|", "units": u}),
+            "tail": (
+                "k",
+                out["tail"],
+                {"long_name": "largest of the ten highest Chebyshev coefficients", "units": "1"},
+            ),
+            "n": ("k", nres, {"long_name": "Chebyshev intervals N"}),
+            "physical": ("k", phys, {"long_name": "passes drift and tail tests"}),
+            "direct": (
+                "k",
+                direct,
+                {"long_name": "solved directly at k (dense QZ), not on the tracked branch"},
+            ),
+        },
         coords={"k": ("k", ks, {"long_name": "wavenumber", "units": WAVENUMBER_UNITS})},
-        attrs=attrs)
+        attrs=attrs,
+    )
     return ds
 
 
@@ -417,13 +496,55 @@ def _zero_mode(tr: BranchTracker) -> Mode:
     v = tr.history[0][2]
     pencil = tr._pencil(0.0)
     drift, n2 = drift_of(tr.flow, a0, v, tr.n, 0.0, 0.0, tr.three_d, cache=tr.cache)
-    return _make_mode(pencil, a0, v, drift, n2, tr.policy)
+    return make_mode(pencil, a0, v, drift, n2, tr.policy)
 
 
 # -- critical wavenumber -----------------------------------------------------------------
-def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
-               n_max: int | None = None, xtol: float = 1e-10,
-               policy: RejectionPolicy | None = None, cache: OperatorCache | None = None):
+class Crossings(tuple):
+    """The wavenumbers where Re α of the tracked branch changes sign (a tuple of floats, in
+    increasing order), with the convergence of the scan that found them.
+
+    Attributes
+    ----------
+    converged : bool
+        Every grid point of the scan passed the drift and tail tests and the branch was
+        followed up to ``k_max``.
+    max_drift, max_tail : float
+        Largest drift and tail over the scanned points.
+    n : int
+        Largest resolution N used.
+    k_reached : float
+        Largest k of the scan (< ``k_max`` when the branch was lost).
+    message : str
+        Empty when converged; else what was not reached.
+    """
+
+    converged: bool = True
+    max_drift: float = 0.0
+    max_tail: float = 0.0
+    n: int = 0
+    k_reached: float = math.nan
+    message: str = ""
+
+    def __new__(cls, ks=(), **info):
+        obj = super().__new__(cls, tuple(ks))
+        for name, value in info.items():
+            setattr(obj, name, value)
+        return obj
+
+
+def critical_k(
+    flow: SteadyFlow,
+    *,
+    k_max: float = 0.05,
+    num: int = 40,
+    n: int | None = None,
+    n_max: int | None = None,
+    xtol: float = 1e-10,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    strict: bool = False,
+):
     """Critical wavenumber k_c where Re α of the α(0) = 0 branch changes sign (brentq).
 
     The branch is tracked on a grid of ``num`` points up to ``k_max`` (denser at small k);
@@ -434,47 +555,235 @@ def critical_k(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int |
     float or None
         The smallest crossing k_c (the upper edge of the long-wave unstable band 0 < k < k_c
         when the flow is long-wave unstable); None when Re α does not change sign in
-        (0, k_max]. All crossings are in :func:`crossings`.
+        (0, k_max]. All crossings, with the convergence of the scan, are in
+        :func:`crossings` (``strict``: see there).
     """
-    found = crossings(flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol, policy=policy,
-                      cache=cache)
+    found = crossings(
+        flow, k_max=k_max, num=num, n=n, n_max=n_max, xtol=xtol, policy=policy, cache=cache, strict=strict
+    )
     return found[0] if found else None
 
 
-def crossings(flow: SteadyFlow, *, k_max: float = 0.05, num: int = 40, n: int | None = None,
-              n_max: int | None = None, xtol: float = 1e-10,
-              policy: RejectionPolicy | None = None,
-              cache: OperatorCache | None = None) -> tuple[float, ...]:
+def crossings(
+    flow: SteadyFlow,
+    *,
+    k_max: float = 0.05,
+    num: int = 40,
+    n: int | None = None,
+    n_max: int | None = None,
+    xtol: float = 1e-10,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    strict: bool = False,
+) -> Crossings:
     """All wavenumbers in (0, k_max] where Re α of the tracked branch changes sign
-    (each grid point judged by ``policy``; ``n_max`` overrides its largest N)."""
+    (each grid point judged by ``policy``; ``n_max`` overrides its largest N).
+
+    Returns a :class:`Crossings` (a tuple of floats with the scan's convergence). With
+    ``strict=False`` (default) points that miss the paper's thresholds by N = ``n_max`` are
+    used with their best estimate, and a lost branch ends the scan at the last point
+    reached; ``.converged`` is then False and ``.message`` says why. ``strict=True`` raises
+    :class:`ConvergenceError` instead.
+    """
     from scipy.optimize import brentq
 
-    k_max = _check_k(k_max, "k_max")
+    k_max = validate_k(k_max, "k_max")
     if k_max == 0 or num < 3:
         raise ParameterError("k_max must be > 0 and num ≥ 3")
+    check_hydrodynamic_k(k_max)
     # geometric start resolves the narrow quadratic regime, then uniform
-    ks = np.unique(np.concatenate([np.geomspace(1e-5, k_max, num // 3),
-                                   np.linspace(0, k_max, num - num // 3 + 1)[1:]]))
+    ks = np.unique(
+        np.concatenate([np.geomspace(1e-5, k_max, num // 3), np.linspace(0, k_max, num - num // 3 + 1)[1:]])
+    )
     tr = BranchTracker(flow, n or None, policy=policy, n_max=n_max, cache=cache)
-    vals = []  # (k, α, eigenvector of the equilibrated pencil, N) per grid point
+    vals: list[tuple] = []  # (k, α, eigenvector of the equilibrated pencil, N) per grid point
+    messages = []
+    max_drift = max_tail = 0.0
     for kk in ks:
-        mode = tr.mode(kk)
+        try:
+            mode = tr.mode(kk)
+        except ConvergenceError as exc:
+            if strict:
+                raise
+            messages.append(
+                f"branch lost near k = {kk:g} ({exc}); scanned up to k = {vals[-1][0] if vals else 0.0:g}"
+            )
+            break
+        max_drift, max_tail = max(max_drift, mode.drift), max(max_tail, mode.tail)
         if not mode.physical:
-            raise ConvergenceError(
-                f"critical k at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: the branch at "
-                f"k = {kk:g} is not converged at N = {mode.n} (drift {mode.drift:.1e}, tail "
-                f"{mode.tail:.1e}); lower k_max or raise n_max")
+            msg = (
+                f"the branch at k = {kk:g} is not converged at N = {mode.n} (drift "
+                f"{mode.drift:.1e}, tail {mode.tail:.1e})"
+            )
+            if strict:
+                raise ConvergenceError(
+                    f"critical k at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {msg}; lower "
+                    "k_max or raise n_max"
+                )
+            if not messages:
+                messages.append(msg)
         vals.append((kk, mode.alpha, tr.history[-1][2], tr.n))
     out = []
     for (ka, aa, wa, na), (kb, ab, _, nb) in zip(vals[:-1], vals[1:]):
         if aa.real == 0 or np.sign(aa.real) == np.sign(ab.real):
             continue
         op = stability_operator(flow, nb, cache=cache)
-        start = wa if na == nb else _interp_vector(wa, len(op.fields), na, nb)
+        start = wa if na == nb else interp_vector(wa, len(op.fields), na, nb)
 
         def f(kk, ka=ka, kb=kb, aa=aa, ab=ab, start=start, op=op):
             pred = aa + (ab - aa) * (kk - ka) / (kb - ka)
             return nearest_eigenpair(op.pencil(kk), pred, v0=start)[0].real
 
-        out.append(float(brentq(f, ka, kb, xtol=xtol * kb, rtol=1e-12)))
-    return tuple(out)
+        try:
+            out.append(float(brentq(f, ka, kb, xtol=xtol * kb, rtol=1e-12)))
+        except (ConvergenceError, ValueError) as exc:
+            if strict:
+                raise
+            # the refinement left the branch: keep the bracket's linear estimate
+            out.append(float(ka - aa.real * (kb - ka) / (ab.real - aa.real)))
+            messages.append(f"crossing in [{ka:g}, {kb:g}] from linear interpolation ({exc})")
+    return Crossings(
+        out,
+        converged=not messages,
+        max_drift=max_drift,
+        max_tail=max_tail,
+        n=max((v[3] for v in vals), default=tr.n),
+        k_reached=vals[-1][0] if vals else 0.0,
+        message="; ".join(messages),
+    )
+
+
+def least_stable(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int | None = None,
+    sigma: complex | None = None,
+    method: str = "branch",
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    n_max: int | None = None,
+    strict: bool = False,
+    cache: OperatorCache | None = None,
+) -> Mode:
+    """The least-stable physical mode at wavenumber ``k``.
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    k, kz : float
+        Wavenumber(s); |k| ≤ :data:`K_HYDRO_MAX` = 2π (a wavelength of one particle
+        diameter: beyond it the hydrodynamics does not apply and ParameterError is raised).
+    n : int, optional
+        Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
+        factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
+    sigma : complex, optional
+        Shift: return the physical mode nearest σ (shift-invert Arnoldi at N, drift at N').
+    method : {"branch", "qz"}
+        Without ``sigma``: ``"branch"`` follows the branch with α(0) = 0 (the kinematic-wave
+        mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
+        continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
+        reference, seconds. With ``"branch"``, k > :data:`K_DIRECT` (= 1) is solved
+        directly (QZ at k), and where the continuation loses the branch the solver falls
+        back to the direct solve at k; :attr:`Mode.method` says which method answered.
+    policy : RejectionPolicy, optional
+        Thresholds of the drift and tail tests and the resolution ladder (default: the
+        paper's, §4.1).
+    drift_tol, tail_tol, n_max : optional
+        Overrides of the policy's fields of the same names.
+    strict : bool
+        False (default): when no mode passes the tests by N = ``n_max``, return the best
+        candidate flagged ``physical = False`` (:attr:`Mode.converged`) with its drift and
+        tail. True: raise :class:`ConvergenceError` instead.
+    cache : OperatorCache, optional
+        Where the operators come from.
+
+    Raises
+    ------
+    ConvergenceError
+        Only with ``strict=True``: no physical mode reaches the thresholds by N = ``n_max``.
+    """
+    # the branch solver lives in the module above this one (it tracks the modes judged here)
+    k, kz = validate_k(k, "k"), validate_k(kz, "kz", signed=True)
+    check_hydrodynamic_k(k, kz)
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
+    if method not in ("branch", "qz"):
+        raise ParameterError(
+            f"method = {method!r}: choose 'branch' (continuation from k = 0) "
+            "or 'qz' (dense scan of the whole spectrum)"
+        )
+    ns = [validate_n(n)] if n is not None else policy.ladder()
+    how = "qz" if (method == "qz" or (sigma is None and math.hypot(k, kz) > K_DIRECT)) else method
+    best: Mode | None = None
+    lost = None
+    for nn in ns:
+        mode: Mode | None
+        if sigma is not None:
+            try:
+                mode = dataclasses.replace(
+                    mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy, cache=cache), method="shift"
+                )
+            except ConvergenceError:
+                mode = None
+        elif how == "qz":
+            mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            if mode is not None and lost is not None:
+                mode = dataclasses.replace(mode, method="qz (branch lost)", note=join_notes(lost, mode.note))
+        else:
+            try:
+                mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            except ConvergenceError as exc:
+                # the continuation lost the branch: answer by a direct solve at k
+                lost, how = str(exc).split(" (theta")[0], "qz"
+                mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                if mode is not None:
+                    mode = dataclasses.replace(
+                        mode, method="qz (branch lost)", note=join_notes(lost, mode.note)
+                    )
+        if mode is not None and mode.physical:
+            return mode
+        if mode is not None and (best is None or mode_score(mode, policy) <= mode_score(best, policy)):
+            best = mode
+    if best is not None and not strict:
+        return best
+    what = (
+        "no physical mode"
+        if best is None
+        else f"best candidate α = {best.alpha:.6g} with drift {best.drift:.1e}, tail {best.tail:.1e}"
+    )
+    raise ConvergenceError(
+        f"least-stable mode at theta = {flow.theta:g}, nu0 = {flow.nu0:g}, k = {k:g}: "
+        f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
+        f"{ns[-1]}; raise n_max or relax the thresholds"
+    )
+
+
+def choose_n(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    n_max: int | None = None,
+) -> int:
+    """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
+    (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
+    return least_stable(
+        flow, k, kz=kz, policy=policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max, strict=True
+    ).n
+
+
+def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
+    """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
+
+    ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence
+    estimate of the least-stable mode).
+    """
+    if n is None:
+        n = choose_n(flow, k)
+    return StabilityOperator(flow, n, three_d=bool(kz)).pencil(k, kz)

@@ -11,6 +11,7 @@
 All eigenvectors are returned with unit 2-norm. One BLAS thread is expected (the caller
 parallelises over parameter points): see :func:`chuteflow._threads.limit_blas_threads`.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -57,22 +58,22 @@ class ShiftInvert:
         Whether B is diagonal (checked when not given).
     """
 
-    def __init__(self, A: np.ndarray, B: np.ndarray, sigma: complex, *,
-                 diagonal_B: bool | None = None):
+    def __init__(self, A: np.ndarray, B: np.ndarray, sigma: complex, *, diagonal_B: bool | None = None):
         self.A, self.B, self.sigma = A, B, complex(sigma)
         if diagonal_B is None:
             diagonal_B = _is_diagonal(B)
         self._bdiag = np.diag(B).copy() if diagonal_B else None
         if self._bdiag is not None:
             M = np.array(A, dtype=complex)
-            M.flat[::M.shape[0] + 1] -= self.sigma * self._bdiag
+            M.flat[:: M.shape[0] + 1] -= self.sigma * self._bdiag
         else:
             M = A - self.sigma * B
         self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
         piv = np.abs(np.diag(self.lu[0]))
         if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
-            raise ConvergenceError(f"shift {self.sigma:.6g} is an eigenvalue: A − σB is "
-                                   "singular; move the shift")
+            raise ConvergenceError(
+                f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift"
+            )
         self.size = A.shape[0]
 
     def Bx(self, x):
@@ -86,11 +87,12 @@ class ShiftInvert:
         """(A − σB)⁻¹ B x."""
         return self.solve(self.Bx(np.asarray(x, dtype=complex)))
 
-    def nearest(self, nev: int = 1, *, v0=None, tol: float = 1e-13, ncv: int | None = None,
-                maxiter: int = 300):
+    def nearest(
+        self, nev: int = 1, *, v0=None, tol: float = 1e-13, ncv: int | None = None, maxiter: int = 300
+    ):
         """The ``nev`` finite eigenvalues nearest σ by shift-invert Arnoldi (ARPACK).
 
-        Keep ``nev`` small: near the continuum of the dilute top (ERRATA) eigenvalues
+        Keep ``nev`` small: near the continuum of the dilute top (docs/errata.md) eigenvalues
         cluster within ~1e-9 of each other, and asking ARPACK to separate several of them
         to machine precision costs thousands of solves; the nearest one alone takes ~20.
 
@@ -113,18 +115,17 @@ class ShiftInvert:
         # inverse-iteration polish below, and a wider Krylov space is the fallback
         for tol_i, ncv_i in ((tol or 1e-13, ncv), (max(tol, 1e-11), min(M, 2 * ncv + 10))):
             try:
-                theta, V = eigs(op, k=nev, which="LM", v0=v0, tol=tol_i, ncv=ncv_i,
-                                maxiter=maxiter)
+                theta, V = eigs(op, k=nev, which="LM", v0=v0, tol=tol_i, ncv=ncv_i, maxiter=maxiter)
             except ArpackNoConvergence as exc:
                 theta, V = exc.eigenvalues, exc.eigenvectors
             except ArpackError as exc:  # pragma: no cover - ARPACK internal failure
-                raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} failed: "
-                                       f"{exc}") from None
+                raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} failed: {exc}") from None
             if len(theta):
                 break
         if len(theta) == 0:
-            raise ConvergenceError(f"shift-invert Arnoldi near {self.sigma:.6g} found no "
-                                   "converged eigenvalue")
+            raise ConvergenceError(
+                f"shift-invert Arnoldi near {self.sigma:.6g} found no converged eigenvalue"
+            )
         keep = np.abs(theta) > 0
         alpha, V = self.sigma + 1.0 / theta[keep], V[:, keep]
         alpha, V, res = self.polish(alpha, V)
@@ -155,8 +156,7 @@ class ShiftInvert:
                 return None
             alpha = self.sigma + 1.0 / vw
             v = w / nw
-            if prev is not None and abs(alpha - prev) <= (tol * abs(alpha - self.sigma)
-                                                          + 1e-14 * abs(alpha)):
+            if prev is not None and abs(alpha - prev) <= (tol * abs(alpha - self.sigma) + 1e-14 * abs(alpha)):
                 return alpha, v
             prev = alpha
         return None

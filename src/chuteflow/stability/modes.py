@@ -10,15 +10,17 @@ A computed eigenpair is *physical* when both of the paper's tests pass:
 
 Drift alone is not enough: the dilute top carries a continuum of near-neutral modes
 α ≈ −ik u0(y) − 1e-8 that barely move with N but whose eigenvectors are not resolved
-(tails ~1e-4; ERRATA). Every :class:`Mode` carries both numbers. The thresholds, the number
+(tails ~1e-4; docs/errata.md). Every :class:`Mode` carries both numbers. The thresholds, the number
 of tail coefficients and the ladder of resolutions N tried are one
 :class:`~chuteflow.stability.policy.RejectionPolicy`, passed as ``policy=``.
 
 Operators come from an :class:`OperatorCache` (``cache=``; default the shared
 :data:`OPERATORS`), which never hands one flow's operator to another flow.
 """
+
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 from collections import OrderedDict
@@ -32,7 +34,7 @@ from ..errors import ConvergenceError, ParameterError
 from ..spectral import ChebyshevGrid, coefficients
 from ..steady import SteadyFlow
 from .eigen import ShiftInvert, qz
-from .operator import Pencil, StabilityOperator, _check_k, _check_n
+from .operator import Pencil, StabilityOperator, validate_k, validate_n
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
 #: The paper's thresholds and ladder (fields of :data:`DEFAULT_POLICY`, kept as names).
@@ -42,10 +44,34 @@ TAIL_TERMS = DEFAULT_POLICY.tail_terms
 #: Default and largest resolution of the adaptive choice of N.
 N_DEFAULT = DEFAULT_POLICY.n_start
 N_MAX = DEFAULT_POLICY.n_max
+#: Largest wavenumber (1/σ) the hydrodynamic description covers: k = 2π is a wavelength of one
+#: particle diameter σ. Beyond it a continuum (kinetic-theory) field varying over less than a
+#: grain has no meaning, and the solvers refuse the request instead of failing inside.
+K_HYDRO_MAX = 2 * math.pi
+#: Above this wavenumber the least-stable mode is solved directly at k (dense QZ with the
+#: paper's rejection tests), without continuation of the α(0) = 0 branch from k = 0.
+K_DIRECT = 1.0
 
 
-def resolve_policy(policy: RejectionPolicy | None = None, *, drift_tol: float | None = None,
-                   tail_tol: float | None = None, n_max: int | None = None) -> RejectionPolicy:
+def check_hydrodynamic_k(k: float, kz: float = 0.0) -> None:
+    """Raise :class:`ParameterError` when |k| > :data:`K_HYDRO_MAX` (= 2π, wavelength below
+    one particle diameter), where the hydrodynamic equations of the paper (§2) do not apply."""
+    kk = math.hypot(k, kz)
+    if kk > K_HYDRO_MAX:
+        raise ParameterError(
+            f"k = {kk:g} is outside [0, 2π = {K_HYDRO_MAX:.4g}]: the wavelength 2π/k = "
+            f"{2 * math.pi / kk:.3g} σ is shorter than one particle diameter, where the "
+            "continuum (kinetic-theory) hydrodynamics does not apply"
+        )
+
+
+def resolve_policy(
+    policy: RejectionPolicy | None = None,
+    *,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    n_max: int | None = None,
+) -> RejectionPolicy:
     """``policy`` (default :data:`DEFAULT_POLICY`) with the given fields overridden.
 
     The keywords ``drift_tol``, ``tail_tol`` and ``n_max`` of the solvers are shorthands for
@@ -71,9 +97,17 @@ def check_n(n: int) -> int:
 # -- operator cache ----------------------------------------------------------------------
 def _fingerprint(flow: SteadyFlow) -> tuple:
     """What an operator depends on and could change in place: the profiles' bytes."""
-    return (flow.theta, flow.nu0, flow.nu_top, flow.n, flow.y_max, id(flow.model),
-            hash(np.asarray(flow.log_nu).tobytes()), hash(np.asarray(flow.u).tobytes()),
-            hash(np.asarray(flow.T).tobytes()))
+    return (
+        flow.theta,
+        flow.nu0,
+        flow.nu_top,
+        flow.n,
+        flow.y_max,
+        id(flow.model),
+        hash(np.asarray(flow.log_nu).tobytes()),
+        hash(np.asarray(flow.u).tobytes()),
+        hash(np.asarray(flow.T).tobytes()),
+    )
 
 
 class OperatorCache:
@@ -122,8 +156,9 @@ class OperatorCache:
 OPERATORS = OperatorCache(6)
 
 
-def stability_operator(flow: SteadyFlow, n: int, three_d: bool = False, *,
-                       cache: OperatorCache | None = None) -> StabilityOperator:
+def stability_operator(
+    flow: SteadyFlow, n: int, three_d: bool = False, *, cache: OperatorCache | None = None
+) -> StabilityOperator:
     """A :class:`StabilityOperator` of ``flow`` at N = ``n``, from ``cache`` (default
     :data:`OPERATORS`)."""
     return (OPERATORS if cache is None else cache).get(flow, n, three_d)
@@ -132,7 +167,7 @@ def stability_operator(flow: SteadyFlow, n: int, three_d: bool = False, *,
 # -- the mode object ---------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class Mode:
-    """One eigenmode (ν̂, û, v̂, T̂)(y) exp(αt + ikx) of a steady flow (label eq:lin).
+    """One eigenmode (ν̂, û, v̂, T̂)(y) exp(αt + ikx) of a steady flow (eq. (4.4)).
 
     Attributes
     ----------
@@ -157,6 +192,13 @@ class Mode:
         drift < ``drift_tol`` and tail < ``tail_tol``.
     model : ChuteModel or None
         Parameters and closures of the base flow the mode was computed with.
+    method : str
+        Which solver answered: ``"branch"`` (continuation of the α(0) = 0 branch),
+        ``"qz"`` (dense QZ at k), ``"shift"`` (shift-invert near a given σ), or
+        ``"qz (branch lost)"`` (direct solve after the continuation lost the branch).
+    note : str
+        What the solver wants the reader to know about this answer (e.g. where the branch
+        was lost, the largest Re α of the unresolved continuum); empty if nothing.
     """
 
     alpha: complex
@@ -174,6 +216,14 @@ class Mode:
     drift_tol: float = DRIFT_TOL
     tail_tol: float = TAIL_TOL
     model: ChuteModel | None = None
+    method: str = "branch"
+    note: str = ""
+
+    @property
+    def converged(self) -> bool:
+        """Both of the paper's tests pass (same as :attr:`physical`); when False the mode is
+        the best estimate found, with its :attr:`drift` and :attr:`tail`."""
+        return bool(self.physical)
 
     @property
     def growth_rate(self) -> float:
@@ -188,23 +238,40 @@ class Mode:
 
     def summary(self) -> dict:
         """JSON-ready scalars (keys used by the CLI)."""
-        return {"k": self.k, "kz": self.kz, "alpha_re": float(self.alpha.real),
-                "alpha_im": float(self.alpha.imag), "drift": float(self.drift),
-                "tail": float(self.tail), "n": int(self.n), "n_check": int(self.n_check),
-                "physical": bool(self.physical), "theta": self.theta, "nu0": self.nu0,
-                **(self.model.to_dict() if self.model is not None else {})}
+        return {
+            "k": self.k,
+            "kz": self.kz,
+            "alpha_re": float(self.alpha.real),
+            "alpha_im": float(self.alpha.imag),
+            "drift": float(self.drift),
+            "tail": float(self.tail),
+            "n": int(self.n),
+            "n_check": int(self.n_check),
+            "physical": bool(self.physical),
+            "converged": bool(self.physical),
+            "method": self.method,
+            "note": self.note,
+            "theta": self.theta,
+            "nu0": self.nu0,
+            **(self.model.to_dict() if self.model is not None else {}),
+        }
 
     def to_xarray(self):
         """Eigenfunctions as an :class:`xarray.Dataset` over y (complex), scalars as attrs."""
         import xarray as xr
-        names = {"nu": "density perturbation ν̂", "u": "velocity perturbation û",
-                 "v": "velocity perturbation v̂", "w": "velocity perturbation ŵ",
-                 "T": "temperature perturbation T̂"}
-        ds = xr.Dataset({f: ("y", v, {"long_name": names[f]}) for f, v in self.fields.items()},
-                        coords={"y": ("y", self.y, {"long_name": "height above the floor",
-                                                    "units": "sigma"})})
-        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v)
-                         for k, v in self.summary().items()})
+
+        names = {
+            "nu": "density perturbation ν̂",
+            "u": "velocity perturbation û",
+            "v": "velocity perturbation v̂",
+            "w": "velocity perturbation ŵ",
+            "T": "temperature perturbation T̂",
+        }
+        ds = xr.Dataset(
+            {f: ("y", v, {"long_name": names[f]}) for f, v in self.fields.items()},
+            coords={"y": ("y", self.y, {"long_name": "height above the floor", "units": "sigma"})},
+        )
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.summary().items()})
         if self.model is not None:
             ds.attrs.update(self.model.attrs())
         return ds
@@ -222,17 +289,27 @@ def tail(V: np.ndarray, nfields: int, m: int = TAIL_TERMS) -> float:
     return float(c[:, -m:].max())
 
 
-def _make_mode(pencil: Pencil, alpha, v, drift, n_check,
-               policy: RejectionPolicy = DEFAULT_POLICY) -> Mode:
+def make_mode(pencil: Pencil, alpha, v, drift, n_check, policy: RejectionPolicy = DEFAULT_POLICY) -> Mode:
     v = normalise(pencil.unscale(np.asarray(v)))
     t = tail(v, len(pencil.fields), policy.tail_terms)
     flow = pencil.flow
-    return Mode(alpha=complex(alpha), k=pencil.k, kz=pencil.kz, theta=flow.theta,
-                nu0=flow.nu0, n=pencil.n, y=pencil.grid.y,
-                fields={f: v[s].copy() for f, s in pencil.slices().items()},
-                drift=float(drift), tail=t, n_check=int(n_check),
-                physical=policy.accepts(drift, t),
-                drift_tol=policy.drift_tol, tail_tol=policy.tail_tol, model=flow.model)
+    return Mode(
+        alpha=complex(alpha),
+        k=pencil.k,
+        kz=pencil.kz,
+        theta=flow.theta,
+        nu0=flow.nu0,
+        n=pencil.n,
+        y=pencil.grid.y,
+        fields={f: v[s].copy() for f, s in pencil.slices().items()},
+        drift=float(drift),
+        tail=t,
+        n_check=int(n_check),
+        physical=policy.accepts(drift, t),
+        drift_tol=policy.drift_tol,
+        tail_tol=policy.tail_tol,
+        model=flow.model,
+    )
 
 
 @functools.lru_cache(maxsize=32)
@@ -243,7 +320,7 @@ def _interp_matrix(n_from: int, n_to: int) -> np.ndarray:
     return np.polynomial.chebyshev.chebvander(x, n_from) @ C.T
 
 
-def _interp_vector(v: np.ndarray, nfields: int, n_from: int, n_to: int) -> np.ndarray:
+def interp_vector(v: np.ndarray, nfields: int, n_from: int, n_to: int) -> np.ndarray:
     """Move an eigenvector between Chebyshev grids on the same interval (per field)."""
     M = _interp_matrix(n_from, n_to)
     return (v.reshape(nfields, n_from + 1) @ M.T).reshape(-1)
@@ -282,8 +359,7 @@ def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
     start = si.apply(v0)
     alpha, V = si.nearest(1, v0=start)
     if len(alpha) == 0:
-        raise ConvergenceError(f"no eigenvalue converged near {complex(sigma):.6g} at "
-                               f"N = {pencil.n}")
+        raise ConvergenceError(f"no eigenvalue converged near {complex(sigma):.6g} at N = {pencil.n}")
     return alpha[0], V[:, 0]
 
 
@@ -292,14 +368,23 @@ def drift_of(flow, alpha, v, n, kx, kz, three_d, *, cache: OperatorCache | None 
     n2 = check_n(n)
     p2 = stability_operator(flow, n2, three_d, cache=cache).pencil(kx, kz)
     nf = len(p2.fields)
-    a2, _ = nearest_eigenpair(p2, alpha, v0=_interp_vector(v, nf, n, n2))
+    a2, _ = nearest_eigenpair(p2, alpha, v0=interp_vector(v, nf, n, n2))
     return abs(a2 - alpha), n2
 
 
-def mode_near(flow: SteadyFlow, k: float, sigma: complex, *, kz: float = 0.0, n: int,
-              policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-              tail_tol: float | None = None, v0=None,
-              cache: OperatorCache | None = None) -> Mode:
+def mode_near(
+    flow: SteadyFlow,
+    k: float,
+    sigma: complex,
+    *,
+    kz: float = 0.0,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    v0=None,
+    cache: OperatorCache | None = None,
+) -> Mode:
     """The eigenmode nearest the shift σ at resolution N, with drift and tail judged by
     ``policy`` (``drift_tol``, ``tail_tol``: overrides of its thresholds)."""
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
@@ -307,14 +392,22 @@ def mode_near(flow: SteadyFlow, k: float, sigma: complex, *, kz: float = 0.0, n:
     pencil = stability_operator(flow, n, three_d, cache=cache).pencil(k, kz)
     alpha, v = nearest_eigenpair(pencil, sigma, v0=v0)
     drift, n2 = drift_of(flow, alpha, v, n, k, kz, three_d, cache=cache)
-    return _make_mode(pencil, alpha, v, drift, n2, policy)
+    return make_mode(pencil, alpha, v, drift, n2, policy)
 
 
 # -- whole spectrum (dense QZ) -----------------------------------------------------------
-def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
-             policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-             tail_tol: float | None = None, physical_only: bool = True,
-             cache: OperatorCache | None = None) -> list[Mode]:
+def spectrum(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int | None = None,
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    physical_only: bool = True,
+    cache: OperatorCache | None = None,
+) -> list[Mode]:
     """All eigenmodes at wavenumber ``k`` by dense QZ at N and N', best first.
 
     Parameters
@@ -341,9 +434,9 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = Non
         Sorted by decreasing Re α. This is the reference the targeted solvers are tested
         against; it costs two dense QZ decompositions (seconds at N ~ 100).
     """
-    k, kz = _check_k(k, "k"), _check_k(kz, "kz", signed=True)
+    k, kz = validate_k(k, "k"), validate_k(kz, "kz", signed=True)
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
-    n = _check_n(policy.n_start if n is None else n)
+    n = validate_n(policy.n_start if n is None else n)
     three_d = bool(kz)
     p1 = stability_operator(flow, n, three_d, cache=cache).pencil(k, kz)
     n2 = check_n(n)
@@ -353,94 +446,83 @@ def spectrum(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = Non
     modes = []
     for j, a in enumerate(w1):
         drift = float(np.abs(w2 - a).min()) if len(w2) else math.inf
-        mode = _make_mode(p1, a, V1[:, j], drift, n2, policy)
+        mode = make_mode(p1, a, V1[:, j], drift, n2, policy)
         if mode.physical or not physical_only:
             modes.append(mode)
     return modes
 
 
 # -- the least-stable mode ---------------------------------------------------------------
-def least_stable(flow: SteadyFlow, k: float, *, kz: float = 0.0, n: int | None = None,
-                 sigma: complex | None = None, method: str = "branch",
-                 policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-                 tail_tol: float | None = None, n_max: int | None = None) -> Mode:
-    """The least-stable physical mode at wavenumber ``k``.
+def mode_score(mode: Mode, policy: RejectionPolicy) -> float:
+    """How far a mode is from passing both tests (≤ 1: passes)."""
+    return max(mode.drift / policy.drift_tol, mode.tail / policy.tail_tol)
 
-    Parameters
-    ----------
-    flow : SteadyFlow
-        Base state.
-    k, kz : float
-        Wavenumber(s).
-    n : int, optional
-        Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
-        factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
-    sigma : complex, optional
-        Shift: return the physical mode nearest σ (shift-invert Arnoldi at N, drift at N').
-    method : {"branch", "qz"}
-        Without ``sigma``: ``"branch"`` follows the branch with α(0) = 0 (the kinematic-wave
-        mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
-        continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
-        reference, seconds.
-    policy : RejectionPolicy, optional
-        Thresholds of the drift and tail tests and the resolution ladder (default: the
-        paper's, §4.1).
-    drift_tol, tail_tol, n_max : optional
-        Overrides of the policy's fields of the same names.
 
-    Raises
-    ------
-    ConvergenceError
-        No physical mode reaches the thresholds by N = ``n_max``.
+def join_notes(*parts: str) -> str:
+    return "; ".join(p for p in parts if p)
+
+
+def direct_mode(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+) -> Mode | None:
+    """The least-stable mode at (k, kz) solved directly at that wavenumber (dense QZ at N
+    and N', no continuation from k = 0), judged by ``policy``.
+
+    Returns the physical mode of largest Re α; when none passes both tests, the candidate
+    nearest to passing (smallest max(drift/drift_tol, tail/tail_tol)) among the resolved
+    eigenvectors (tail below ``policy.track_tail_tol``, or all of them if none is), flagged
+    ``physical = False``; None when QZ gives no finite eigenvalue.
     """
-    # the branch solver lives in the module above this one (it tracks the modes judged here)
-    from .dispersion import branch_mode
-
-    k, kz = _check_k(k, "k"), _check_k(kz, "kz", signed=True)
-    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
-    if method not in ("branch", "qz"):
-        raise ParameterError(f"method = {method!r}: choose 'branch' (continuation from k = 0) "
-                             "or 'qz' (dense scan of the whole spectrum)")
-    ns = [_check_n(n)] if n is not None else policy.ladder()
-    last = None
-    for nn in ns:
-        mode: Mode | None
-        if sigma is not None:
-            mode = mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy)
-        elif method == "qz":
-            found = spectrum(flow, k, kz=kz, n=nn, policy=policy)
-            mode = found[0] if found else None
-        else:
-            mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy)
-        if mode is not None and mode.physical:
-            return mode
-        last = mode
-        if n is not None:
-            break
-    what = ("no physical mode" if last is None else
-            f"best candidate α = {last.alpha:.6g} with drift {last.drift:.1e}, tail "
-            f"{last.tail:.1e}")
-    raise ConvergenceError(
-        f"least-stable mode at theta = {flow.theta:g}, nu0 = {flow.nu0:g}, k = {k:g}: "
-        f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
-        f"{ns[-1]}; raise n_max or relax the thresholds")
-
-
-def choose_n(flow: SteadyFlow, k: float, *, kz: float = 0.0,
-             policy: RejectionPolicy | None = None, drift_tol: float | None = None,
-             tail_tol: float | None = None, n_max: int | None = None) -> int:
-    """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
-    (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
-    return least_stable(flow, k, kz=kz, policy=policy, drift_tol=drift_tol,
-                        tail_tol=tail_tol, n_max=n_max).n
-
-
-def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
-    """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
-
-    ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence
-    estimate of the least-stable mode).
-    """
-    if n is None:
-        n = choose_n(flow, k)
-    return StabilityOperator(flow, n, three_d=bool(kz)).pencil(k, kz)
+    policy = resolve_policy(policy)
+    modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
+    phys = [m for m in modes if m.physical]
+    # the near-neutral continuum of the dilute top: eigenvalues that converge (drift) but
+    # whose eigenvectors are not resolved (tail); they are not modes, but bound Re α
+    cont = [
+        m
+        for m in modes
+        if not m.physical and m.drift < 1e-4 and (not phys or m.alpha.real > phys[0].alpha.real)
+    ]
+    note = ""
+    if cont:
+        top = max(cont, key=lambda m: m.alpha.real)
+        note = (
+            f"unresolved continuum (dilute top) up to Re α = {top.alpha.real:.2e} at "
+            f"Im α/k = {top.alpha.imag / k if k else math.nan:.4g}"
+        )
+    # an eigenvalue above the best physical one whose eigenvector is nearly resolved (tail
+    # below the tracking threshold, unlike the continuum's ~1e-4) is a physical mode that
+    # N does not yet resolve (e.g. the α(0) = 0 branch near the continuum): it is the
+    # least-stable estimate, flagged, rather than a more stable mode that passes
+    near = [
+        m
+        for m in modes
+        if not m.physical
+        and m.tail < policy.track_tail_tol
+        and m.drift < 1e-3 * max(1.0, abs(m.alpha))
+        and (not phys or m.alpha.real > phys[0].alpha.real)
+    ]
+    if near:
+        best = max(near, key=lambda m: m.alpha.real)
+        return dataclasses.replace(
+            best,
+            method="qz",
+            note=join_notes(
+                note,
+                f"least-stable candidate not resolved at N = {n} (drift {best.drift:.1e}, "
+                f"tail {best.tail:.1e})"
+                + (f"; the least-stable resolved mode has Re α = {phys[0].alpha.real:.4g}" if phys else ""),
+            ),
+        )
+    if phys:
+        return dataclasses.replace(phys[0], method="qz", note=note)
+    if not modes:
+        return None
+    resolved = [m for m in modes if m.tail < policy.track_tail_tol] or modes
+    return dataclasses.replace(min(resolved, key=lambda m: mode_score(m, policy)), method="qz", note=note)

@@ -249,7 +249,7 @@ class StabilityOperator:
     def __init__(self, flow: SteadyFlow, n: int, *, three_d: bool = False):
         if not isinstance(flow, SteadyFlow):
             raise ParameterError(f"flow: expected a SteadyFlow, got {type(flow).__name__}")
-        n = _check_n(n)
+        n = validate_n(n)
         self.flow, self.n, self.three_d = flow, n, bool(three_d)
         self.fields = FIELDS_3D if three_d else FIELDS_2D
         self.grid = ChebyshevGrid(n, 0.0, flow.y_max)
@@ -352,7 +352,7 @@ class StabilityOperator:
     # -- evaluation ----------------------------------------------------------------------
     def matrix(self, kx: float, kz: float = 0.0, *, equilibrated: bool = False) -> np.ndarray:
         """A(k_x, k_z), complex (of the equilibrated pencil R A C if ``equilibrated``)."""
-        kx, kz = _check_k(kx, "k"), _check_k(kz, "kz", signed=True)
+        kx, kz = validate_k(kx, "k"), validate_k(kz, "kz", signed=True)
         if kz and not self.three_d:
             raise ParameterError("kz != 0 needs the three-dimensional operator (three_d=True)")
         pieces, K = (self._pieces_eq, self._K_eq) if equilibrated else (self.pieces, self._K_sparse)
@@ -380,7 +380,7 @@ class StabilityOperator:
 
     def pencil(self, kx: float, kz: float = 0.0) -> Pencil:
         """The pencil (A, B) at wavevector (k_x, k_z)."""
-        kx, kz = _check_k(kx, "k"), _check_k(kz, "kz", signed=True)
+        kx, kz = validate_k(kx, "k"), validate_k(kz, "kz", signed=True)
         if kz and not self.three_d:
             raise ParameterError("kz != 0 needs the three-dimensional operator (three_d=True)")
         return Pencil(kx, kz, self)
@@ -399,7 +399,7 @@ class StabilityOperator:
         return A0, A1, A2
 
 
-def _check_n(n) -> int:
+def validate_n(n) -> int:
     try:
         n = int(n)
     except (TypeError, ValueError):
@@ -414,7 +414,7 @@ def _check_n(n) -> int:
     return n
 
 
-def _check_k(k, name, signed=False) -> float:
+def validate_k(k, name, signed=False) -> float:
     try:
         k = float(k)
     except (TypeError, ValueError):

@@ -7,13 +7,14 @@ the ladder of resolutions N tried until a mode passes them. Every function of
 :mod:`chuteflow.stability` that judges modes takes it as ``policy=`` (default
 :data:`DEFAULT_POLICY`, the paper's values).
 """
+
 from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
 
 from ..errors import ParameterError
-from .operator import _check_n
+from .operator import validate_n
 
 __all__ = ["DEFAULT_POLICY", "RejectionPolicy"]
 
@@ -55,16 +56,19 @@ class RejectionPolicy:
         for name in ("drift_tol", "tail_tol", "track_tail_tol"):
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < 1):
-                raise ParameterError(f"{name} = {v!r} is outside (0, 1): it is a threshold on "
-                                     "an eigenvalue change or a normalised Chebyshev "
-                                     "coefficient")
+                raise ParameterError(
+                    f"{name} = {v!r} is outside (0, 1): it is a threshold on "
+                    "an eigenvalue change or a normalised Chebyshev "
+                    "coefficient"
+                )
             object.__setattr__(self, name, float(v))
-        if isinstance(self.tail_terms, bool) or not (isinstance(self.tail_terms, int)
-                                                      and self.tail_terms >= 1):
+        if isinstance(self.tail_terms, bool) or not (
+            isinstance(self.tail_terms, int) and self.tail_terms >= 1
+        ):
             raise ParameterError(f"tail_terms = {self.tail_terms!r}: need an integer >= 1")
         for name in ("n_start", "n_max"):
             try:
-                object.__setattr__(self, name, _check_n(getattr(self, name)))
+                object.__setattr__(self, name, validate_n(getattr(self, name)))
             except ParameterError as exc:
                 raise ParameterError(f"{name}: {exc}") from None
         if not (isinstance(self.n_growth, (int, float)) and self.n_growth > 1):

@@ -1,4 +1,4 @@
-"""The least-stable physical mode at any wavevector (k_x, k_z), by a dense scan (issue 10).
+"""The least-stable physical mode at any wavevector (k_x, k_z), by a dense scan.
 
 Across the slope (k_x = 0) the pencil is real after the diagonal similarity ŵ → i ŵ (every
 term odd in ∂_z couples ŵ to the other fields), so its eigenvalues are real or come in
@@ -30,8 +30,8 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .modes import Mode, _make_mode, stability_operator
-from .operator import Pencil, _check_k
+from .modes import Mode, make_mode, stability_operator
+from .operator import Pencil, validate_k
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
 __all__ = [
@@ -118,7 +118,7 @@ def least_stable_3d(
         Raise :class:`ConvergenceError` when no physical mode is found up to ``policy.n_max``;
         otherwise return the best candidate (``physical = False``).
     """
-    kx, kz = _check_k(kx, "kx"), _check_k(kz, "kz", signed=True)
+    kx, kz = validate_k(kx, "kx"), validate_k(kz, "kz", signed=True)
     best = accepted = None
     for nn in policy.ladder(n):
         n2 = max(8, round(0.8 * nn))
@@ -133,12 +133,12 @@ def least_stable_3d(
                 continue
             drift = float(np.abs(w2 - w1[j]).min()) if len(w2) else math.inf
             if policy.accepts(drift, tails[j]):
-                accepted = _make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
+                accepted = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
                 break
             if tails[j] < policy.tail_tol:
                 pending = True
             if best is None:
-                best = _make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
+                best = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
         if accepted is not None and not pending:
             return accepted
         best = None

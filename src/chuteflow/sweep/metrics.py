@@ -98,7 +98,9 @@ class LongWaveMetric(PointFunction):
         o = self.options
         lw = None
         try:
-            lw = longwave(flow, n=int(o["n"]), rtol=float(o["rtol"]), n_max=int(o["n_max"]))
+            # eig_ks=None: the sweep keeps its own cross-check (k_check) and its cost; the
+            # eigenvalue-based Re α/k² of LongWave (0.5–3 s a flow) is not computed here
+            lw = longwave(flow, n=int(o["n"]), rtol=float(o["rtol"]), n_max=int(o["n_max"]), eig_ks=None)
         except ConvergenceError:
             lw = None
         if lw is None or not self._consistent(lw):
@@ -108,6 +110,7 @@ class LongWaveMetric(PointFunction):
                 n=min(start, int(o["refine_n_max"])),
                 rtol=float(o["refine_rtol"]),
                 n_max=int(o["refine_n_max"]),
+                eig_ks=None,
             )
         eig = lw.alpha2_from_eigenvalue
         return {
