@@ -15,8 +15,8 @@ from chuteflow.papers.mitarai2004 import PAPER_UNSTABLE, POINTS, markers
 from chuteflow.papers.mitarai2004.points import FIGURES, figure
 from chuteflow.report import isolated_registry, load_stages, register_stage, registered_stages, select_stages
 
-SRC = Path(chuteflow.__file__).parent
-DOCS = SRC.parents[1] / "docs"
+SRC = Path(chuteflow.__file__).parent  # the installed package (site-packages in CI)
+DOCS = Path(__file__).resolve().parents[2] / "docs"  # the repository's docs/
 
 
 def test_points_are_the_papers():
