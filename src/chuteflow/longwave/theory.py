@@ -225,7 +225,18 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
 def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:
     """(α1, α2) of one discretised operator by bordered perturbation theory."""
     A0, A1, A2 = op.series()
-    P1, P2 = 1j * A1, -A2
+    return bordered_coefficients(op, tangent, A0, 1j * A1, -A2)
+
+
+def bordered_coefficients(
+    op: StabilityOperator, tangent: dict, A0: np.ndarray, P1: np.ndarray, P2: np.ndarray
+) -> tuple[complex, complex]:
+    """(α1, α2) of A(s) = A0 + s P1 + s² P2 + … (A(s)V = αBV, α = α1 s + α2 s² + …).
+
+    Bordered perturbation theory at s = 0: the null vector V0 = ∂X0/∂β normalised by
+    ∫ ν̂ dy = 1, one LU of the bordered (equilibrated) matrix [A0, −BV0; c, 0] and two
+    solves give (V1, α1) and α2.
+    """
     B = np.asarray(op.B, dtype=float)
     M = A0.shape[0]
     V0 = null_vector(op, tangent)

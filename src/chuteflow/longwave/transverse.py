@@ -35,7 +35,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.linalg as sla
 from scipy.optimize import brentq, minimize_scalar
 
 from ..closures import ChuteModel
@@ -45,7 +44,7 @@ from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
 from ..stability.transverse import TransverseDispersion, growth_plane, transverse_dispersion, transverse_mode
 from ..steady import SteadyFlow, steady_tangent
-from .theory import null_vector
+from .theory import bordered_coefficients, null_vector
 
 __all__ = [
     "TransverseLongWave",
@@ -76,31 +75,7 @@ def directional_coefficients(
     A0 = P[(0, 0)]
     P1 = 1j * (cx * P.get((1, 0), z) + cz * P.get((0, 1), z)) + op.K
     P2 = -(cx**2 * P.get((2, 0), z) + cx * cz * P.get((1, 1), z) + cz**2 * P.get((0, 2), z))
-    B = np.asarray(op.B, dtype=float)
-    V0 = null_vector(op, tangent)
-    c = np.zeros(M)
-    i = op.fields.index("nu") * (op.n + 1)
-    c[i : i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
-    V0 = V0 / (c @ V0)
-    bord = np.zeros((M + 1, M + 1))
-    bord[:M, :M] = A0
-    bord[:M, M] = -(B @ V0)
-    bord[M, :M] = c
-    rs = 1.0 / np.abs(bord).max(axis=1)
-    bord *= rs[:, None]
-    cs = 1.0 / np.abs(bord).max(axis=0)
-    bord *= cs[None, :]
-    lu = sla.lu_factor(bord, check_finite=False)
-
-    def solve(rhs):
-        r = np.concatenate([rhs, [0.0]]) * rs
-        x = sla.lu_solve(lu, r.real, check_finite=False) + 1j * sla.lu_solve(lu, r.imag, check_finite=False)
-        x *= cs
-        return x[:M], x[M]
-
-    V1, a1 = solve(-(P1 @ V0))
-    _, a2 = solve(a1 * (B @ V1) - P1 @ V1 - P2 @ V0)
-    return complex(a1), complex(a2)
+    return bordered_coefficients(op, tangent, A0, P1, P2)
 
 
 @dataclass(frozen=True)
