@@ -234,10 +234,10 @@ def follow(
 
 def _thin_message(theta, nu0, model, h, min_thickness):
     return (
-        f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
-        f"{model.roughness:g}: thickness h = {h:.3g} is below {min_thickness:g} "
-        "particle diameter — the angle is too small for this roughness (or the floor "
-        "density too low)"
+        f"no steady flow at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
+        f"{model.roughness:g}: the only solution has thickness h = {h:.3g}, below "
+        f"{min_thickness:g} particle diameter, which the hydrodynamics cannot describe — the "
+        "angle is too small for this roughness (or the floor density too low)"
     )
 
 

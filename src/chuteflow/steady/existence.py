@@ -488,9 +488,10 @@ def steady_existence(
         return done(
             "thin",
             (
-                f"no physical steady flow at {where}: the solution (u0(0) = {final.u_floor:.4g}) "
-                f"has thickness h = {h:.3g}, below {min_thickness:g} particle diameter — the "
-                "angle is too small for this roughness (or the floor density too low)"
+                f"no steady flow at {where}: the only solution (u0(0) = {final.u_floor:.4g}) "
+                f"has thickness h = {h:.3g}, below {min_thickness:g} particle diameter, which the "
+                "hydrodynamics cannot describe — the angle is too small for this roughness (or "
+                "the floor density too low)"
             ),
             **kw,
         )
