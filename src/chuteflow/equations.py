@@ -295,16 +295,23 @@ class CompiledEquation:
 
     def evaluate(self, base: dict, partials: dict, sin_theta: float, cos_theta: float):
         """Return (residual, [coefficient arrays in the order of ``terms``])."""
-        out = self._fun(*_args(base, partials, sin_theta, cos_theta))
+        return self.evaluate_arguments(arguments(base, partials, sin_theta, cos_theta))
+
+    def evaluate_arguments(self, args: list):
+        """:meth:`evaluate` from the argument list of :func:`arguments` (built once for
+        several equations at the same state)."""
+        out = self._fun(*args)
         return out[0], out[1:]
 
 
-def _args(base, partials, s, c):
+def arguments(base: dict, partials: dict, sin_theta: float, cos_theta: float) -> list:
+    """The argument list every compiled equation takes: the base-state jets (:data:`BASE`),
+    the closures' partials (:data:`FUNCTIONS` × :data:`ORDERS`), sin θ and cos θ."""
     args = [base[b] for b in BASE]
     for name in FUNCTIONS:
         for o in ORDERS:
             args.append(partials[name][o])
-    return args + [s, c]
+    return args + [sin_theta, cos_theta]
 
 
 @functools.cache

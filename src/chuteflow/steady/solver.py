@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg as sla
 
-from ..equations import TOP_OF, compiled_equations
+from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
 
@@ -194,9 +194,10 @@ class SteadyNewton:
         # 1/ν0(0): (μu0')' carries absolute round-off that 1/ν would amplify at the dilute
         # top). The scale's own derivative is kept so that J is the exact Jacobian.
         scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)], "one": np.ones(m)}
+        args = arguments(base, part, self.sin, self.cos)  # shared by every equation below
         for name, rows, sl, kind in self._layout:
             ce = self.eqs[name]
-            res, coefs = ce.evaluate(base, part, self.sin, self.cos)
+            res, coefs = ce.evaluate_arguments(args)
             res = np.broadcast_to(res, (m,))[sl]
             scale = scales[kind][sl]
             R[rows] = scale * res
