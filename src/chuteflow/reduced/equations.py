@@ -1,7 +1,7 @@
 """The depth-averaged equations of the 1D model (§5.1.2), stated once, and what follows from them.
 
 The 1D model for the one-dimensional density ρ̄(x, t) and the mean velocity ū(x, t) is a
-balance law in the conserved variables (ρ̄, m = ρ̄ū),
+balance law in the conserved variables (ρ̄, m = ρ̄ū)::
 
     ∂t ρ̄ + ∂x f_ρ = 0,                 f_ρ = ρ̄ ū,
     ∂t m + ∂x f_m = S,                 f_m = ρ̄ ū² + ρ̄ T̄(ρ̄) − μ̄(ρ̄) ∂x ū,

@@ -433,7 +433,7 @@ class ReducedModel:
         return math.sin(math.radians(self.theta))
 
     def closure(self, rho) -> eq.ClosureValues:
-        """T̄, a, μ̄ and their ρ̄-slopes at ``rho`` (values for :mod:`.equations`)."""
+        """T̄, a, μ̄ and their ρ̄-slopes at ``rho`` (values for :mod:`chuteflow.reduced.equations`)."""
         T, dT = self.Tbar(rho), self.Tbar(rho, 1)
         mu, dmu = eq.viscosity(T, dT, self.theta, self.f2_0)
         return eq.ClosureValues(Tbar=T, dTbar=dT, a=self.a(rho), da=self.a(rho, 1), mu_bar=mu, dmu_bar=dmu)

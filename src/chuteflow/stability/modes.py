@@ -290,6 +290,12 @@ def tail(V: np.ndarray, nfields: int, m: int = TAIL_TERMS) -> float:
 
 
 def make_mode(pencil: Pencil, alpha, v, drift, n_check, policy: RejectionPolicy = DEFAULT_POLICY) -> Mode:
+    """A :class:`Mode` from an eigenpair of the equilibrated ``pencil``.
+
+    The eigenvector ``v`` is unscaled to the physical (ν̂, û, v̂, T̂) and normalised (largest
+    component 1); its Chebyshev tail is measured, and ``physical`` is decided by ``policy``
+    from ``drift`` (|α(N) − α(N')|, N' = ``n_check``) and that tail.
+    """
     v = normalise(pencil.unscale(np.asarray(v)))
     t = tail(v, len(pencil.fields), policy.tail_terms)
     flow = pencil.flow
@@ -459,6 +465,7 @@ def mode_score(mode: Mode, policy: RejectionPolicy) -> float:
 
 
 def join_notes(*parts: str) -> str:
+    """The non-empty ``parts`` joined by ``"; "`` (the :attr:`Mode.note` of a combined answer)."""
     return "; ".join(p for p in parts if p)
 
 

@@ -400,6 +400,7 @@ class StabilityOperator:
 
 
 def validate_n(n) -> int:
+    """``n`` as an int, or a :class:`~chuteflow.errors.ParameterError` if outside ``N_RANGE``."""
     try:
         n = int(n)
     except (TypeError, ValueError):
@@ -415,6 +416,7 @@ def validate_n(n) -> int:
 
 
 def validate_k(k, name, signed=False) -> float:
+    """The wavenumber ``k`` (parameter ``name``) as a float: finite, and ≥ 0 unless ``signed``."""
     try:
         k = float(k)
     except (TypeError, ValueError):

@@ -307,6 +307,7 @@ def continue_row(
 
 
 def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
+    """Scalar results of solved family points as arrays (NaN where not ``ok``), by variable."""
     N = len(points)
     out = {k: np.full(N, np.nan) for k in SCALARS}
     out["monotonic"] = np.full(N, np.nan)
@@ -342,6 +343,7 @@ def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
 
 
 def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
+    """Attributes of a family or map Dataset: the model, the solver options and the version."""
     attrs = dict(model.attrs())
     attrs.update(
         nu_top=opts.nu_top,
@@ -354,6 +356,7 @@ def dataset_attrs(model: ChuteModel, opts: Options) -> dict:
 
 
 def check_nu0(nu0_values, model) -> np.ndarray:
+    """Validated floor densities: a non-empty, strictly increasing 1-D array in (0, ν_m)."""
     nus = np.atleast_1d(np.asarray(nu0_values, dtype=float))
     if nus.ndim != 1 or len(nus) == 0:
         raise ParameterError("nu0_values: expected a non-empty 1-D sequence of floor densities")
@@ -424,6 +427,7 @@ def steady_family(
 
 
 def variable_attrs(k):
+    """``long_name`` and ``units`` attributes of the family variable ``k``."""
     name, units = _ATTRS.get(k, (k, ""))
     return {"long_name": name, "units": units}
 

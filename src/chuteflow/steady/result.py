@@ -235,4 +235,5 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
 
 
 def spectral_tail(log_nu, u, T) -> float:
+    """Largest relative Chebyshev tail of ln ν0, u0 and T0 (:attr:`SteadyFlow.spectral_tail`)."""
     return max(tail(log_nu), tail(u), tail(T))

@@ -57,6 +57,10 @@ class NewtonState:
 
 
 def validate_point(theta, nu0, model, nu_top):
+    """(θ, ν0(0)) as floats after checking θ ∈ (0, 90)°, ν0(0) ∈ (0, ν_m), ``nu_top`` ∈ (0, 1e-3 ν0(0)).
+
+    Raises :class:`~chuteflow.errors.ParameterError` naming the parameter and its range.
+    """
     try:
         theta = float(theta)
         nu0 = float(nu0)

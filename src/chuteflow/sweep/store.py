@@ -32,6 +32,7 @@ class ConfigMismatchError(ParameterError):
 
 
 def parts_dir(out: str | Path) -> Path:
+    """The folder ``OUT.parts`` next to the sweep output ``out`` that holds finished tasks."""
     out = Path(out)
     return out.with_name(out.name + ".parts")
 
