@@ -30,6 +30,8 @@ except ImportError:  # building from a checkout without `pip install .`
     sys.path.insert(0, str(ROOT / "src"))
     import chuteflow
 
+sys.path.insert(0, str(DOCS / "_ext"))
+
 # Executed examples: one BLAS thread, no display.
 os.environ.setdefault("MPLBACKEND", "Agg")
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
@@ -108,7 +110,7 @@ sphinx_gallery_conf = {
     "examples_dirs": ["../examples/tutorial", "../examples/gallery"],
     "gallery_dirs": ["tutorial", "gallery"],
     "filename_pattern": r"/(plot|run)_",
-    "within_subsection_order": "FileNameSortKey",
+    "within_subsection_order": "gallery_order.GalleryOrder",  # docs/_ext/gallery_order.py
     "download_all_examples": False,
     "remove_config_comments": True,
     "matplotlib_animations": False,
@@ -117,6 +119,8 @@ sphinx_gallery_conf = {
     "abort_on_example_error": True,
     "show_memory": False,
     "plot_gallery": "True",
+    # no reprs of the last expression of a cell (Text(...), <Figure ...>): the scripts print
+    "capture_repr": (),
 }
 
 # ------------------------------------------------------------------ HTML
@@ -214,7 +218,26 @@ def _optional_pages(app, docname, source):
         source[0] = "\n".join(line for line in source[0].split("\n") if line.strip() not in missing)
 
 
+def _cli_signature(app, what, name, obj, options, signature, return_annotation):
+    """Command functions (typer): show each option's default, not typer's OptionInfo object."""
+    if what != "function" or not name.startswith("chuteflow.cli."):
+        return None
+    try:
+        sig = inspect.signature(obj)
+    except (TypeError, ValueError):
+        return None
+    params = []
+    for p in sig.parameters.values():
+        default = p.default
+        if type(default).__name__ in ("OptionInfo", "ArgumentInfo"):
+            value = getattr(default, "default", inspect.Parameter.empty)
+            default = inspect.Parameter.empty if value is ... else value
+        params.append(p.replace(default=default, annotation=inspect.Parameter.empty))
+    return str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty)), None
+
+
 def setup(app):
+    app.connect("autodoc-process-signature", _cli_signature)
     app.connect("source-read", _optional_pages)
     app.connect("autodoc-process-docstring", _plain_bars)
     app.connect("autodoc-process-docstring", _list_reexports)

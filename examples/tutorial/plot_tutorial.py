@@ -7,8 +7,6 @@ is unstable to long waves: perturbations with wavelengths longer than about 900 
 diameters grow (§4.2, figure 7). This tutorial computes that statement step by step.
 """
 
-# ruff: noqa: E402  (imports are introduced in the cell that first uses them)
-
 # %%
 # 1. The steady flow
 # ------------------
@@ -22,6 +20,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from chuteflow import ChuteModel, solve_steady
+from chuteflow.figures.stability import eigenfunction_figure
+from chuteflow.longwave import longwave
+from chuteflow.stability import critical_k, dispersion, least_stable
 
 model = ChuteModel(roughness=0.05)
 flow = solve_steady(theta=16, nu0=0.05, model=model)
@@ -45,8 +46,6 @@ fig.suptitle("P1: steady profiles (dotted: thickness h)")
 # follows the branch with α(0) = 0 (the kinematic-wave mode of Appendix B) in k and
 # returns an :class:`xarray.Dataset`; every point carries its convergence estimates
 # (``drift``, ``tail``) and whether it passed the paper's tests (``physical``).
-from chuteflow.stability import critical_k, dispersion
-
 ks = np.geomspace(1e-4, 2e-2, 14)
 ds = dispersion(flow, ks)
 print("all points physical:", bool(ds.physical.all()), " largest drift:", float(ds.drift.max()))
@@ -81,9 +80,6 @@ ax.set(xlabel="k", ylabel="Re α", xlim=(0, 0.012), ylim=(-0.002, 0.0025), title
 # :func:`~chuteflow.figures.stability.eigenfunction_figure` draws the density and
 # temperature perturbations over one wavelength, with the velocity perturbation as arrows
 # (figure 11 of the paper).
-from chuteflow.figures.stability import eigenfunction_figure
-from chuteflow.stability import least_stable
-
 mode = least_stable(flow, 0.002)
 print(f"alpha = {mode.alpha:.6g}, drift = {mode.drift:.1e}, tail = {mode.tail:.1e}")
 print(f"physical (passes both tests) = {mode.physical}, N = {mode.n}")
@@ -98,8 +94,6 @@ plt.figure(fig)  # chuteflow.figures returns a Figure: show it through pyplot
 # of Re α2 decides long-wave stability. Because the k² regime is narrow (docs: errata,
 # numerical note 4), the eigenvalue-based coefficient Re α/k² at k = 1e-5 is reported
 # beside the Taylor coefficient and decides the sign.
-from chuteflow.longwave import longwave
-
 lw = longwave(flow)
 print(f"alpha1 = {lw.alpha1:.6g}   -i dQ0/drho = {-1j * lw.dQ_drho:.6g}")
 print(f"alpha2 (Taylor) = {lw.alpha2:.6g}, Re alpha/k^2 at k = 1e-5: {lw.alpha2_eig:.6g}")
