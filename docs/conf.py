@@ -236,7 +236,13 @@ def _cli_signature(app, what, name, obj, options, signature, return_annotation):
     return str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty)), None
 
 
+def _reread_root(app, env, added, changed, removed):
+    """Re-read the entry page on every build: whether an optional page exists may change."""
+    return [root_doc]
+
+
 def setup(app):
+    app.connect("env-get-outdated", _reread_root)
     app.connect("autodoc-process-signature", _cli_signature)
     app.connect("source-read", _optional_pages)
     app.connect("autodoc-process-docstring", _plain_bars)
