@@ -39,7 +39,7 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .dispersion import null_vectors
+from .dispersion import branch_mode, null_vectors
 from .modes import (
     Mode,
     OperatorCache,
@@ -311,7 +311,8 @@ def transverse_dispersion(
     if method == "dense":
         for i, k in enumerate(ks):
             try:
-                modes[i] = dataclasses.replace(transverse_mode(flow, float(k), policy=policy, n=n), method="qz")
+                m = transverse_mode(flow, float(k), policy=policy, n=n)
+                modes[i] = dataclasses.replace(m, method="qz")
             except ConvergenceError:
                 continue
     else:
@@ -319,23 +320,23 @@ def transverse_dispersion(
         tr = tracker or TransverseTracker(flow, alpha2z=alpha2z, n=n, policy=policy, cache=cache)
         rest = []
         for i in order:
-            m = tr.mode(float(ks[i])) if lost_at is None else None
-            if m is not None and m.physical:
-                modes[i] = m
+            got = tr.mode(float(ks[i])) if lost_at is None else None
+            if got is not None and got.physical:
+                modes[i] = got
                 continue
             if lost_at is None:
                 lost_at = tr.lost_at if tr.lost_at is not None else float(ks[i])
             rest.append(i)
         if rest and beyond:
-            for i, m in zip(rest, _beyond_branch(flow, ks[rest], tr.n, policy, cache)):
-                modes[i] = m
+            for i, got in zip(rest, _beyond_branch(flow, ks[rest], tr.n, policy, cache)):
+                modes[i] = got
         else:
             how[rest] = "lost"
-    for i, m in enumerate(modes):
-        if m is None:
+    for i, mm in enumerate(modes):
+        if mm is None:
             continue
-        out[:, i] = m.alpha.real, m.alpha.imag, m.drift, m.tail
-        nres[i], phys[i], how[i] = m.n, m.physical, m.method
+        out[:, i] = mm.alpha.real, mm.alpha.imag, mm.drift, mm.tail
+        nres[i], phys[i], how[i] = mm.n, mm.physical, mm.method
     how[how == ""] = "none"
     return TransverseDispersion(
         ks,
@@ -353,8 +354,22 @@ def transverse_dispersion(
     )
 
 
-def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_POLICY, n: int | None = None):
+def growth_plane(
+    flow: SteadyFlow,
+    kx,
+    kz,
+    *,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+    n: int | None = None,
+    method: str = "dense",
+):
     """Growth rate Re α of the least-stable physical mode over the (k_x, k_z) plane.
+
+    ``method="dense"``: the dense scan at every wavevector (:func:`least_stable_3d`, ~1 s a
+    point); ``"branch"``: the α(0) = 0 branch continued along the ray through each
+    wavevector (:func:`chuteflow.stability.dispersion.branch_mode`, coarse continuation and
+    one solve at N), ~10× faster in the long-wave region; where the branch is lost (at
+    k_x = 0 past the transverse band, in the continuum) the point is left NaN.
 
     Returns
     -------
@@ -366,6 +381,8 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
     """
     import xarray as xr
 
+    if method not in ("dense", "branch"):
+        raise ParameterError(f"method = {method!r}: choose 'dense' or 'branch'")
     kxs = np.atleast_1d(np.asarray(kx, dtype=float))
     kzs = np.atleast_1d(np.asarray(kz, dtype=float))
     shape = (len(kxs), len(kzs))
@@ -378,7 +395,10 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
                 phys[i, j] = True
                 continue
             try:
-                m = least_stable_3d(flow, float(a), float(b), policy=policy, n=n)
+                if method == "branch":
+                    m = branch_mode(flow, float(a), kz=float(b), n=n, policy=policy)
+                else:
+                    m = least_stable_3d(flow, float(a), float(b), policy=policy, n=n)
             except ConvergenceError:
                 continue
             for name, v in (
@@ -413,6 +433,7 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
             "kx_max": kxm,
             "kz_max": kzm,
             "direction": direction,
+            "method": method,
             **flow.model.attrs(),
         },
     )
@@ -695,7 +716,8 @@ def dense_modes(
                 continue
             drift = float(np.abs(w2 - w1[j]).min()) if len(w2) else math.inf
             if policy.accepts(drift, tails[j]):
-                modes.append(dataclasses.replace(make_mode(p1, w1[j], V1[:, j], drift, n2, policy), method="qz"))
+                m = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
+                modes.append(dataclasses.replace(m, method="qz"))
                 vecs.append(V1[:, j])
             elif tails[j] < policy.tail_tol and not modes:
                 pending = True
@@ -754,10 +776,9 @@ def _beyond_branch(flow, ks, n, policy, cache):
                 if v is not None and abs(alpha - a) > 0.2 * max(abs(a), 1e-3):
                     continue  # jumped to another eigenvalue
                 alpha = complex(alpha)
-                if any(
-                    abs(alpha.real - f[0].real) + abs(abs(alpha.imag) - abs(f[0].imag)) <= 1e-8 * max(1.0, abs(alpha))
-                    for f in found
-                ):
+                tol = 1e-8 * max(1.0, abs(alpha))
+                near = [abs(alpha.real - f.real) + abs(abs(alpha.imag) - abs(f.imag)) for f, _, _ in found]
+                if near and min(near) <= tol:
                     continue  # the same eigenvalue or its conjugate
                 t = tail(pencil.unscale(w), len(pencil.fields), policy.tail_terms)
                 if t < policy.track_tail_tol:
