@@ -221,3 +221,32 @@ def eig3d(
         f"alpha = {m.alpha.real:.10g} {m.alpha.imag:+.10g}i  (N = {m.n}, drift "
         f"{m.drift:.1e}, tail {m.tail:.1e}, physical: {m.physical})"
     )
+
+
+@app.command("winner")
+def winner_cmd(
+    file: Path = typer.Argument(..., help="NetCDF file of chuteflow diagram --metrics ...,transverse."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Image file (default: FILE with -winner.png)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the counts per class as one JSON object."),
+) -> None:
+    """Draw which instability wins over (h, ν̄) from a sweep with the ``transverse`` metric:
+    stable / longitudinal only / transverse only / both."""
+    from chuteflow.errors import ParameterError
+    from chuteflow.figures.transverse import WINNER_CLASSES, winner_figure
+    from chuteflow.sweep import load_sweep
+
+    if not file.exists():
+        raise ParameterError(f"file = {str(file)!r}: no such sweep file")
+    ds = load_sweep(file)
+    if "winner" not in ds:
+        raise ParameterError(
+            f"file = {str(file)!r} has no 'winner': run chuteflow diagram with --metrics "
+            "steady,kinematic,longwave,transverse"
+        )
+    path = winner_figure(ds, out or file.with_name(file.stem + "-winner.png"))
+    w = ds["winner"].values
+    counts = {name: int((w == code).sum()) for code, name in WINNER_CLASSES.items()}
+    if as_json:
+        typer.echo(json.dumps({"plot": str(path), **counts}))
+        return
+    typer.echo(f"{counts}; wrote {path}")

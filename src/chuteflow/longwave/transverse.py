@@ -242,7 +242,8 @@ class TransverseResult:
         Wavenumber of the largest growth rate on the computed grid (refined); None when
         every k_z decays.
     growth_max : float
-        max Re α over the grid (the least negative when all decay).
+        max Re α over the grid (the least negative when all decay; NaN when the tracked
+        branch is inside the continuum from the first step, as where α2z < 0).
     kz_at_growth_max : float
         Where that maximum lies (also when negative).
     alpha_im_at_max : float
@@ -284,7 +285,7 @@ class TransverseResult:
     @property
     def unstable(self) -> bool:
         """Some k_z grows (on the grid, or α2z > 0)."""
-        return bool(self.growth_max > 0 or self.alpha2_z > 0)
+        return bool((math.isfinite(self.growth_max) and self.growth_max > 0) or self.alpha2_z > 0)
 
     def summary(self) -> dict:
         """JSON-ready dict: alpha2_z, kz_max (None if all decay), growth_max, stationary,
@@ -387,6 +388,10 @@ def transverse(
         got = seen.get(opt.x)
         if got is not None and got[0] > growth:
             kz_best, (growth, aim) = float(np.exp(opt.x)), (float(got[0]), float(got[1]))
+    if not math.isfinite(growth):
+        # no resolved point at all: the branch (α ≈ α2z k_z² < 0) is inside the continuum of
+        # the dilute top from the first step; it decays, at a rate the continuum hides
+        growth, aim, kz_best = math.nan, 0.0, math.nan
     stationary = abs(aim) <= 1e-9 * max(abs(growth), 1e-300) or abs(aim) < 1e-14
     cut = _cutoff(ks, g, tr, growth_at)
     return TransverseResult(
@@ -400,7 +405,7 @@ def transverse(
         lub,
         lp["dP_drho"],
         lp["drho_T_drho"],
-        kz_best if growth > 0 else None,
+        kz_best if growth > 0 else None,  # NaN > 0 is False
         growth,
         kz_best,
         aim,
