@@ -78,6 +78,7 @@ class TransverseMetric(PointFunction):
     )
 
     def validate(self):
+        """Check the grid and resolution options (ParameterError naming the option)."""
         o = self.options
         if not (float(o["kz_max"]) > 1e-5 and float(o["k_max"]) > 1e-4):
             raise ParameterError("transverse: need kz_max > 1e-5 and k_max > 1e-4 (wavenumbers, 1/sigma)")
@@ -121,6 +122,7 @@ class TransverseMetric(PointFunction):
         return best_g, best_k
 
     def compute(self, flow, point):
+        """The metric's variables at one steady flow (module docstring)."""
         o = self.options
         out: dict = {}
         a2z = float(transverse_longwave(flow, max(int(o["n"]), 80)).alpha2_z.real)
