@@ -15,6 +15,9 @@ under 2 s.
   50 points; the note gives the largest difference of Re α.
 - ``transverse_analysis``: the whole ``transverse(flow, num=25)`` (α2z, the dispersion on a
   geometric grid, k_z* refined, the cut-off of the unstable band), tracked against dense.
+- ``transverse_diagram_40x40``: a small sweep with the ``transverse`` metric (steady,
+  kinematic, longwave, transverse), its compute time per point × 1600 / 2 workers, against
+  the same sweep without the metric (target: the 3D diagram on 40 × 40 under 3 minutes).
 """
 
 from __future__ import annotations
@@ -114,6 +117,40 @@ def run(quick: bool = False) -> list[dict]:
             "note": f"target < 0.5 s; 25 k_z; track: kz_max = {s['kz_max']:.5g}, growth_max = "
             f"{s['growth_max']:.6g}, cut-off {s['kz_cutoff']:.5g}; dense: {sd['kz_max']:.5g}, "
             f"{sd['growth_max']:.6g}, {sd['kz_cutoff']:.5g}",
+        }
+    )
+    # 4. the 3D diagram: cost of the transverse metric per point, extrapolated to 40 x 40
+    from chuteflow.sweep import Sweep, SweepConfig
+
+    shape = (3, 4) if quick else (6, 6)
+    th = tuple(np.linspace(15.0, 17.0, shape[0]))
+    nu = tuple(np.geomspace(0.03, 0.15, shape[1]))
+    base_metrics = ("steady", "kinematic", "longwave")
+
+    def sweep(metrics):
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as d:
+            sw = Sweep(
+                SweepConfig(theta=th, nu0=nu, roughness=0.05, chunk=shape[1], metrics=metrics), f"{d}/s.nc"
+            )
+            sw.run(workers=1)
+            return sw.stats
+
+    st3 = sweep((*base_metrics, "transverse"))
+    st2 = sweep(base_metrics)
+    npts = shape[0] * shape[1]
+    per3, per2 = st3.task_seconds / npts, st2.task_seconds / npts
+    t_metric = st3.metric_seconds.get("transverse", 0.0) / npts
+    rows.append(
+        {
+            "name": "transverse_diagram_40x40",
+            "seconds": per3 * 1600 / 2,
+            "baseline_seconds": per2 * 1600 / 2,
+            "ratio": per2 / per3,
+            "note": f"target < 180 s on 2 cores: {npts} points (φ = 0.05, θ 15–17°, ν0 0.03–0.15) "
+            f"at {per3:.2f} s/point with the transverse metric ({t_metric:.2f} s of it) x 1600 / 2 "
+            f"workers; baseline: the same sweep without it ({per2:.2f} s/point)",
         }
     )
     return rows
