@@ -73,3 +73,20 @@ def test_method_is_checked(p1_flow):
         transverse_dispersion(p1_flow, [1e-3], method="fast")
     with pytest.raises(ParameterError, match="kz"):
         transverse_dispersion(p1_flow, [0.0])
+
+
+@pytest.mark.slow
+def test_beyond_the_branch_candidates_match_dense(p1_flow, a2z):
+    """Past the branch (``beyond=True``) candidate modes from a coarse dense scan, followed
+    by shift-invert: at k_z = 0.0104 and 0.383 the same least-stable modes as the dense scan
+    (≈ −0.2839 ± 0.518i at N = 100, −1.5946 real at N = 80). Tolerance 1e-7: the drift
+    threshold both pass (measured drifts ≤ 4e-9)."""
+    ks = [2e-3, 0.0104, 0.383]
+    d = transverse_dispersion(p1_flow, ks, alpha2z=a2z, beyond=True)
+    ref = transverse_dispersion(p1_flow, ks[1:], method="dense")
+    assert list(d.method) == ["branch", "shift", "shift"]
+    assert bool(d.physical.all()) and bool(ref.physical.all())
+    assert np.allclose(d.alpha_re[1:], ref.alpha_re, rtol=0, atol=1e-7)
+    assert np.allclose(np.abs(d.alpha_im[1:]), np.abs(ref.alpha_im), rtol=0, atol=1e-7)
+    assert d.alpha_re[1] == pytest.approx(-0.2839, abs=1e-3)
+    assert d.alpha_re[2] == pytest.approx(-1.5946, abs=1e-3)
