@@ -12,7 +12,8 @@ instability of Forterre & Pouliquen (2002) compete. At each point this metric gi
   geometric k_x grid, the maximum refined by a bounded search);
 - the classification ``winner``: 0 stable, 1 longitudinal only (the paper's A, B, C
   unstable regions), 2 transverse only, 3 both; and the largest growth rate of the two with
-  its wavevector (k_x, k_z) — ``fastest`` says which (1 longitudinal, 2 transverse).
+  its wavevector (k_x, k_z) — ``fastest`` says which (1 longitudinal, 2 transverse); missing
+  where the longitudinal branch could not be followed (noted in the point's message).
 
 The comparison is between the two axes of the (k_x, k_z) plane; at P1 the maximum over the
 plane lies on the k_x axis (:func:`chuteflow.stability.transverse.growth_plane`). A point
@@ -49,7 +50,7 @@ class TransverseMetric(PointFunction):
     """
 
     name = "transverse"
-    version = "1"
+    version = "2"
     requires = ("steady", "longwave")
     defaults = {"kz_max": 3.0, "num": 40, "k_max": 0.05, "k_num": 20, "n": 80, "n_max": 160}
     variables = (
@@ -138,16 +139,21 @@ class TransverseMetric(PointFunction):
                 out["transverse_kz_cutoff"] = r.kz_cutoff
         a2 = point.values.get("alpha2_re", np.nan)
         l_unstable = bool(np.isfinite(a2) and a2 > 0)
+        l_known = True
         if l_unstable:
             try:
                 g, k = self._longitudinal(flow)
                 out["longitudinal_growth_max"], out["longitudinal_kx_max"] = g, k
                 l_unstable = g > 0
             except ConvergenceError as exc:
+                # long-wave unstable (Re α2 > 0) but its growth unknown: no "fastest" claim
+                l_known = False
                 point.note(f"transverse: longitudinal branch not followed ({exc})")
         out["winner"] = int(l_unstable) + 2 * int(t_unstable)
         gl = out.get("longitudinal_growth_max", -math.inf) if l_unstable else -math.inf
         gt = out.get("transverse_growth_max", -math.inf) if t_unstable else -math.inf
+        if not l_known:
+            return out  # fastest and its wavevector stay missing
         if max(gl, gt) > 0:
             if gl >= gt:
                 out.update(
