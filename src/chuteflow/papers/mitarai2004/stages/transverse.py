@@ -33,7 +33,7 @@ OPERATOR_TOL = 1e-12
 A2Z_RTOL = 3e-4
 
 
-@register_stage("transverse", order=45, title="Three dimensions: transverse perturbations and §5.3")
+@register_stage("transverse", order=60, title="Three dimensions: transverse perturbations and §5.3")
 def transverse_stage(ctx: StageContext) -> None:
     """Verification of the 3D operator, α2z, the transverse band and which instability wins."""
     import warnings
@@ -187,20 +187,7 @@ def _run(ctx: StageContext) -> None:
         name: int((w == c).sum()) for c, name in {0: "stable", 1: "long.", 2: "trans.", 3: "both"}.items()
     }
     if both.any():
-        gl = np.asarray(ds.longitudinal_growth_max.values).ravel()[both]
-        gt = np.asarray(ds.transverse_growth_max.values).ravel()[both]
-        kx = np.asarray(ds.longitudinal_kx_max.values).ravel()[both]
-        kz = np.asarray(ds.transverse_kz_max.values).ravel()[both]
-        ratio = gl / gt
-        lx = 2 * math.pi / kx
-        lz = 2 * math.pi / kz
-        answer = (
-            f"where both occur ({int(both.sum())} points) the longitudinal one grows faster at "
-            f"{int((fast[both] == 1).sum())} of them, by a factor "
-            f"{np.nanmin(ratio):.3g}–{np.nanmax(ratio):.3g}, at λx = 2π/kx = "
-            f"{np.nanmin(lx):.4g}–{np.nanmax(lx):.4g} σ (the transverse maximum at λz = "
-            f"{np.nanmin(lz):.4g}–{np.nanmax(lz):.4g} σ)"
-        )
+        answer = _which_wins(ds, both, fast)
     else:
         answer = "no point of this grid is unstable in both directions"
     rep.add_note(
@@ -216,3 +203,33 @@ def _run(ctx: StageContext) -> None:
         computed=answer,
         passed=None,
     )
+
+
+def _which_wins(ds, both, fast) -> str:
+    """Where both directions are unstable: which grows faster, by how much, at what λ."""
+    import numpy as np
+
+    def col(name):
+        return np.asarray(ds[name].values, dtype=float).ravel()[both]
+
+    gl, gt = col("longitudinal_growth_max"), col("transverse_growth_max")
+    kx, kz, h = col("longitudinal_kx_max"), col("transverse_kz_max"), col("h")
+    f = fast[both]
+    parts = []
+    for code, name, num, den, k in ((1, "longitudinal", gl, gt, kx), (2, "transverse", gt, gl, kz)):
+        sel = f == code
+        if sel.any():
+            r = num[sel] / den[sel]
+            lam = 2 * math.pi / k[sel]
+
+            def rng(x, fmt):
+                return f"{format(np.nanmin(x), fmt)}–{format(np.nanmax(x), fmt)}"
+
+            parts.append(
+                f"the {name} one grows faster at {int(sel.sum())} (by {rng(r, '.3g')}×, "
+                f"λ = {rng(lam, '.4g')} σ, h = {rng(h[sel], '.3g')})"
+            )
+    unknown = int((f < 0).sum())
+    if unknown:
+        parts.append(f"{unknown} undecided (longitudinal branch not followed)")
+    return f"where both occur ({int(both.sum())} points) " + "; ".join(parts)
