@@ -158,7 +158,8 @@ def plane_figure(ds, path, *, dpi: int = 130) -> Path:
 def winner_figure(ds, path, *, x: str = "h", y: str = "nu_mean", dpi: int = 130) -> Path:
     """Save the "which instability wins" diagram of a sweep with the ``transverse`` metric:
     each computed point coloured by ``winner`` (:data:`WINNER_CLASSES`) over (``x``, ``y``)
-    (default the layer thickness h and mean density ν̄, the paper's figure 6 axes)."""
+    (default the layer thickness h and mean density ν̄, the paper's figure 6 axes); points
+    unstable both ways where the transverse instability grows faster are crossed."""
     from matplotlib.colors import ListedColormap
 
     fig = _figure(5.6, 4.4)
@@ -172,6 +173,10 @@ def winner_figure(ds, path, *, x: str = "h", y: str = "nu_mean", dpi: int = 130)
     ax.scatter(X[ok], Y[ok], c=C[ok], cmap=cmap, vmin=-0.5, vmax=3.5, s=18, marker="s")
     for code, name in WINNER_CLASSES.items():
         ax.scatter([], [], c=colors[code], marker="s", label=name)
+    if "fastest" in ds:
+        F = np.asarray(ds["fastest"].values, dtype=float).ravel()
+        t = ok & (F == 2) & (C == 3)
+        ax.scatter(X[t], Y[t], marker="x", c="k", s=14, label="both, transverse faster")
     ax.legend(fontsize=7, loc="best")
     ax.set_xlabel("h [σ]" if x == "h" else x)
     ax.set_ylabel("ν̄" if y == "nu_mean" else y)
