@@ -53,3 +53,42 @@ def test_transverse_json_and_plot(tmp_path):
 def test_transverse_bad_range_is_a_user_error():
     r = runner.invoke(app, ["transverse", "--theta", "16", "--nu0", "0.05", "--kz-max", "-1"])
     assert r.exit_code == 2
+
+
+def test_diagram_with_transverse_metric_and_winner_plot(tmp_path):
+    """``chuteflow diagram --metrics ...,transverse`` on P1 and ν0 = 0.06 next to it, then the
+    ``winner`` figure: P1 (θ = 16°, ν0 = 0.05) is unstable in both directions (class 3)."""
+    nc = tmp_path / "w.nc"
+    r = runner.invoke(
+        app,
+        [
+            "diagram",
+            "--grid",
+            "1x2",
+            "--theta-range",
+            "16",
+            "16",
+            "--nu0-range",
+            "0.05",
+            "0.06",
+            "--no-markers",
+            "--workers",
+            "1",
+            "--no-progress",
+            "--metrics",
+            "steady,kinematic,longwave,transverse",
+            "--out",
+            str(nc),
+        ],
+    )
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(app, ["winner", str(nc), "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert out["both"] >= 1
+    assert sum(out[k] for k in ("stable", "longitudinal only", "transverse only", "both")) == 2
+
+
+def test_winner_needs_the_metric(tmp_path):
+    r = runner.invoke(app, ["winner", str(tmp_path / "none.nc")])
+    assert r.exit_code == 2

@@ -95,7 +95,7 @@ def test_dispersion_dataset(p1_flow):
 def test_transverse_full_range_p1(p1_flow):
     """0 < k_z ≤ 3: every point resolved; only the long-wave band k_z < 3.25e-3 grows; beyond
     it the least-stable mode is an oscillatory pair (not stationary)."""
-    r = transverse(p1_flow, num=25)
+    r = transverse(p1_flow, num=25, method="dense")
     s = r.summary()
     assert s["all_physical"]
     assert s["kz_max"] == pytest.approx(1.9e-3, rel=0.1)

@@ -36,6 +36,8 @@ EIG_KEYS = (
     "transport",
     "nu_top",
     "k",
+    "kx",
+    "kz",
     "alpha_re",
     "alpha_im",
     "drift",
@@ -183,6 +185,10 @@ def _mode_summary(mode, flow, method) -> dict:
     s = mode.summary()
     out = _params(flow)
     out.update({k: s[k] for k in ("k", "alpha_re", "alpha_im", "drift", "tail", "physical", "n", "n_check")})
+    # k stays the wavenumber along the slope (the 2D commands' key); kx, kz the wavevector
+    # (3D callers set k = kx: a 3D mode's k is |k|)
+    stationary = abs(mode.alpha.imag) <= 1e-14 + 1e-9 * abs(mode.alpha)
+    out.update(kx=out["k"], kz=float(mode.kz), stationary=bool(stationary))
     out.update(
         convergence=s["drift"],
         wave_speed=mode.wave_speed,
@@ -235,12 +241,48 @@ _METHOD_HELP = (
 )
 
 
+def _wavevector(k, kx, kz):
+    """(k_x, k_z) from ``--k`` (k_x, with k_z = 0) or ``--kx``/``--kz``."""
+    from chuteflow.errors import ParameterError
+
+    if k is not None and kx is not None:
+        raise ParameterError("--k and --kx: give one (--k K is --kx K --kz 0)")
+    if k is None and kx is None:
+        if kz is None:
+            raise ParameterError("k: give --k K (along the slope) or --kx KX [--kz KZ]")
+        kx = 0.0
+    kx = k if k is not None else kx
+    kz = 0.0 if kz is None else kz
+    _check_positive("kx" if k is None else "k", kx, allow_zero=kz != 0)
+    if not math.isfinite(kz):
+        raise ParameterError(f"kz = {kz!r}: expected a finite wavenumber")
+    if kx == 0 and kz == 0:
+        raise ParameterError("k = 0: the mass mode α = 0; give a nonzero wavevector")
+    return float(kx), float(kz)
+
+
+def _mode_3d(console, flow, kx, kz, n, method, policy):
+    """The least-stable mode at (k_x, k_z ≠ 0): the α(0) = 0 branch along the ray (branch),
+    or the dense scan of the 3D spectrum (qz)."""
+    from chuteflow.stability import check_hydrodynamic_k, least_stable
+
+    check_hydrodynamic_k(kx, kz)
+    with console.status(f"least-stable mode at kx = {kx:g}, kz = {kz:g} ({method})"):
+        mode = least_stable(flow, kx, kz=kz, n=n, method=method, policy=policy, strict=False)
+    _warn_mode(mode)
+    return mode
+
+
 @app.command("eig")
 @with_model_options
 def eig(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
-    k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ) of exp(αt + ikx)."),
+    k: float | None = typer.Option(
+        None, "--k", help="Wavenumber k (1/σ) of exp(αt + ikx) (= --kx K --kz 0)."
+    ),
+    kx: float | None = typer.Option(None, "--kx", help="Wavenumber along the slope k_x (1/σ)."),
+    kz: float | None = typer.Option(None, "--kz", help="Wavenumber across the slope k_z (1/σ; default 0)."),
     model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
     n: int | None = typer.Option(
@@ -250,20 +292,27 @@ def eig(
     method: str = typer.Option("branch", "--method", help=_METHOD_HELP),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
-    """Least-stable eigenvalue α at one wavenumber, with its convergence estimate."""
+    """Least-stable eigenvalue α at one wavevector (k_x, k_z), with its convergence estimate."""
+    kx, kz = _wavevector(k, kx, kz)
     console = _console()
     flow = _steady(console, theta, nu0, model, nu_top)
     from chuteflow.stability import RejectionPolicy
 
-    mode = _least_stable(console, flow, k, n, method, RejectionPolicy(n_max=n_max))
+    policy = RejectionPolicy(n_max=n_max)
+    if kz == 0:
+        mode = _least_stable(console, flow, kx, n, method, policy)
+    else:
+        mode = _mode_3d(console, flow, kx, kz, n, method, policy)
     out = _mode_summary(mode, flow, method)
+    out.update(k=kx, kx=kx, kz=kz)
     if as_json:
         _echo_json(out)
         return
     from rich.console import Console
 
+    where = f"k = {kx:g}" if kz == 0 else f"kx = {kx:g}, kz = {kz:g}"
     Console().print(
-        _mode_table(f"Least-stable mode at θ = {theta:g}°, ν0(0) = {nu0:g}, k = {k:g}", out, _caption(flow))
+        _mode_table(f"Least-stable mode at θ = {theta:g}°, ν0(0) = {nu0:g}, {where}", out, _caption(flow))
     )
 
 
@@ -511,7 +560,11 @@ def longwave_cmd(
 def mode_cmd(
     theta: float = _opt_theta(),
     nu0: float = _opt_nu0(),
-    k: float = typer.Option(..., "--k", help="Wavenumber k (1/σ), > 0."),
+    k: float | None = typer.Option(None, "--k", help="Wavenumber k (1/σ), > 0 (= --kx K --kz 0)."),
+    kx: float | None = typer.Option(None, "--kx", help="Wavenumber along the slope k_x (1/σ)."),
+    kz: float | None = typer.Option(
+        None, "--kz", help="Wavenumber across the slope k_z (1/σ): ≠ 0 draws the (z, y) cross-section."
+    ),
     plot: Path = typer.Option(..., "--plot", help="Eigenfunction figure (PNG)."),
     model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
@@ -529,11 +582,13 @@ def mode_cmd(
     ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
-    """Eigenfunction of the least-stable mode over one wavelength (figs 10, 11, 14)."""
+    """Eigenfunction of the least-stable mode over one wavelength (figs 10, 11, 14); with
+    ``--kz`` the transverse/oblique mode in the (z, y) cross-section."""
     from chuteflow.errors import ParameterError
     from chuteflow.figures.stability import eigenfunction_diagnostics, eigenfunction_figure
+    from chuteflow.figures.transverse import cross_section_figure
 
-    _check_positive("k", k)
+    kx, kz = _wavevector(k, kx, kz)
     if y_top is not None and not (math.isfinite(y_top) and y_top > 0):
         raise ParameterError(f"y_top = {y_top!r} is outside (0, inf): a height in diameters")
     if magnify is not None:
@@ -545,6 +600,25 @@ def mode_cmd(
             )
     console = _console()
     flow = _steady(console, theta, nu0, model, nu_top)
+    if kz != 0:
+        mode = _mode_3d(console, flow, kx, kz, n, "branch", None)
+        with console.status("cross-section figure"):
+            path = cross_section_figure(mode, flow, plot, y_top=y_top)
+        out = _mode_summary(mode, flow, "branch")
+        out.update(k=kx, kx=kx, kz=kz, plot=str(path))
+        if as_json:
+            _echo_json(out)
+            return
+        from rich.console import Console
+
+        c = Console()
+        where = f"kx = {kx:g}, kz = {kz:g}"
+        c.print(
+            _mode_table(f"Least-stable mode at θ = {theta:g}°, ν0(0) = {nu0:g}, {where}", out, _caption(flow))
+        )
+        c.print(f"wrote {path}", highlight=False)
+        return
+    k = kx
     mode = _least_stable(console, flow, k, n, "branch", None)
     with console.status("eigenfunction figure"):
         path = eigenfunction_figure(mode, flow, plot, y_top=y_top, x_peak=x_peak, magnify=magnify)

@@ -3,9 +3,8 @@
 - ``chuteflow transverse``: perturbations across the slope (k_x = 0): the long-wave
   coefficient α2z, the dispersion α(k_z) on (0, kz_max], the most unstable k_z* and its
   growth rate, whether the mode is stationary;
-- ``chuteflow eig3d``: the least-stable physical mode at one wavevector (k_x, k_z) by a dense
-  scan (``eig --kx --kz`` of the issue; a separate command while ``cli/stability.py`` is
-  being reworked).
+- ``chuteflow eig3d`` (hidden, deprecated: use ``chuteflow eig --kx KX --kz KZ``): the
+  least-stable physical mode at one wavevector (k_x, k_z) by a dense scan.
 
 ``--json`` prints one JSON object (non-finite numbers as null) on standard output.
 """
@@ -86,6 +85,16 @@ def transverse_cmd(
     n_max: int = typer.Option(256, "--n-max", help="Largest Chebyshev resolution N."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
     plot: Path | None = typer.Option(None, "--plot", help="Save Re α(k_z) (PNG)."),
+    method: str = typer.Option(
+        "track", "--method", help="track: follow the α(0) = 0 branch in k_z (fast); dense: every eigenvalue."
+    ),
+    plane_plot: Path | None = typer.Option(
+        None, "--plane-plot", help="Save a map of Re α over (k_x, k_z) (PNG; the branch along each ray)."
+    ),
+    plane_max: float | None = typer.Option(
+        None, "--plane-max", help="Largest k_x and k_z of the map (default: 2.5 × the transverse cut-off)."
+    ),
+    plane_num: int = typer.Option(9, "--plane-num", help="Points per axis of the map."),
 ) -> None:
     """Transverse (k_x = 0) stability: α2z, α(k_z), the most unstable k_z* and its growth."""
     from chuteflow.errors import ParameterError
@@ -95,11 +104,29 @@ def transverse_cmd(
     _check_positive("kz_max", kz_max)
     if kz_max <= 1e-5 or num < 3:
         raise ParameterError("need kz_max > 1e-5 and num >= 3")
+    if method not in ("track", "dense"):
+        raise ParameterError(f"method = {method!r}: choose 'track' (fast) or 'dense' (every eigenvalue)")
+    if plane_max is not None:
+        _check_positive("plane_max", plane_max)
+    if plane_plot is not None and not 2 <= plane_num <= 40:
+        raise ParameterError(f"plane_num = {plane_num}: need 2 to 40 points per axis")
     flow = _flow(theta, nu0, model, nu_top)
-    res = transverse(flow, kz_max=kz_max, num=num, policy=RejectionPolicy(n_max=n_max))
+    policy = RejectionPolicy(n_max=n_max)
+    res = transverse(flow, kz_max=kz_max, num=num, policy=policy, method=method)
     out = {**res.summary(), "nu_top": flow.nu_top}
     if plot is not None:
         _plot(res, plot)
+    if plane_plot is not None:
+        import numpy as np
+
+        from chuteflow.figures.transverse import plane_figure
+        from chuteflow.stability.transverse import growth_plane
+
+        top = plane_max or 2.5 * (res.kz_cutoff or res.kz_at_growth_max or 0.01)
+        ks = np.linspace(0.0, top, plane_num)
+        ds = growth_plane(flow, ks, ks, policy=policy, method="branch")
+        plane_figure(ds, plane_plot)
+        out["plane"] = {k: ds.attrs[k] for k in ("growth_max", "kx_max", "kz_max", "direction")}
     if as_json:
         typer.echo(json.dumps(_plain(out), allow_nan=False))
         return
@@ -151,7 +178,7 @@ def _plot(res, path: Path) -> None:
     plt.close(fig)
 
 
-@app.command("eig3d")
+@app.command("eig3d", hidden=True, deprecated=True)
 @with_model_options
 def eig3d(
     theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
@@ -194,3 +221,32 @@ def eig3d(
         f"alpha = {m.alpha.real:.10g} {m.alpha.imag:+.10g}i  (N = {m.n}, drift "
         f"{m.drift:.1e}, tail {m.tail:.1e}, physical: {m.physical})"
     )
+
+
+@app.command("winner")
+def winner_cmd(
+    file: Path = typer.Argument(..., help="NetCDF file of chuteflow diagram --metrics ...,transverse."),
+    out: Path | None = typer.Option(None, "--out", "-o", help="Image file (default: FILE with -winner.png)."),
+    as_json: bool = typer.Option(False, "--json", help="Print the counts per class as one JSON object."),
+) -> None:
+    """Draw which instability wins over (h, ν̄) from a sweep with the ``transverse`` metric:
+    stable / longitudinal only / transverse only / both."""
+    from chuteflow.errors import ParameterError
+    from chuteflow.figures.transverse import WINNER_CLASSES, winner_figure
+    from chuteflow.sweep import load_sweep
+
+    if not file.exists():
+        raise ParameterError(f"file = {str(file)!r}: no such sweep file")
+    ds = load_sweep(file)
+    if "winner" not in ds:
+        raise ParameterError(
+            f"file = {str(file)!r} has no 'winner': run chuteflow diagram with --metrics "
+            "steady,kinematic,longwave,transverse"
+        )
+    path = winner_figure(ds, out or file.with_name(file.stem + "-winner.png"))
+    w = ds["winner"].values
+    counts = {name: int((w == code).sum()) for code, name in WINNER_CLASSES.items()}
+    if as_json:
+        typer.echo(json.dumps({"plot": str(path), **counts}))
+        return
+    typer.echo(f"{counts}; wrote {path}")

@@ -38,11 +38,17 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from ..closures import ChuteModel
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, ParameterError
 from ..stability.modes import stability_operator
 from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
-from ..stability.transverse import TransverseDispersion, growth_plane, transverse_dispersion, transverse_mode
+from ..stability.transverse import (
+    TransverseDispersion,
+    TransverseTracker,
+    growth_plane,
+    transverse_dispersion,
+    transverse_mode,
+)
 from ..steady import SteadyFlow, steady_tangent
 from .theory import bordered_coefficients, null_vector
 
@@ -236,7 +242,8 @@ class TransverseResult:
         Wavenumber of the largest growth rate on the computed grid (refined); None when
         every k_z decays.
     growth_max : float
-        max Re α over the grid (the least negative when all decay).
+        max Re α over the grid (the least negative when all decay; NaN when the tracked
+        branch is inside the continuum from the first step, as where α2z < 0).
     kz_at_growth_max : float
         Where that maximum lies (also when negative).
     alpha_im_at_max : float
@@ -250,6 +257,9 @@ class TransverseResult:
         The computed α(k_z) with convergence estimates.
     model : ChuteModel
         Parameters and closures of the flow.
+    method : str
+        ``"track"`` (the α(0) = 0 branch followed in k_z) or ``"dense"`` (every eigenvalue
+        at every k_z).
     """
 
     theta: float
@@ -270,11 +280,12 @@ class TransverseResult:
     kz_cutoff: float | None
     dispersion: TransverseDispersion = field(repr=False)
     model: ChuteModel | None = None
+    method: str = "track"
 
     @property
     def unstable(self) -> bool:
         """Some k_z grows (on the grid, or α2z > 0)."""
-        return bool(self.growth_max > 0 or self.alpha2_z > 0)
+        return bool((math.isfinite(self.growth_max) and self.growth_max > 0) or self.alpha2_z > 0)
 
     def summary(self) -> dict:
         """JSON-ready dict: alpha2_z, kz_max (None if all decay), growth_max, stationary,
@@ -299,9 +310,12 @@ class TransverseResult:
             "unstable": self.unstable,
             "kz_cutoff": self.kz_cutoff,
             "kz_points": int(len(d.kz)),
+            "kz_computed": int(np.isfinite(d.alpha_re).sum()),
+            "branch_lost_at": d.branch_lost_at,
+            "method": self.method,
             "drift_max": float(np.nanmax(d.drift)),
             "tail_max": float(np.nanmax(d.tail)),
-            "all_physical": bool(d.physical.all()),
+            "all_physical": bool(d.physical[np.isfinite(d.alpha_re)].all()),
             **(self.model.to_dict() if self.model is not None else {}),
         }
 
@@ -314,57 +328,72 @@ def transverse(
     n: int = 100,
     k_check: float = 1e-4,
     policy: RejectionPolicy = DEFAULT_POLICY,
+    method: str = "track",
 ) -> TransverseResult:
     """Transverse analysis of one flow: α2z, the dispersion α(k_z) on (0, kz_max], k_z*.
 
     The grid is geometric from 1e-5 (the long-wave instability lives at k_z ~ 1e-3 for P1)
-    to ``kz_max``; the maximum of Re α is refined by a bounded scalar search in log k_z
-    between the best grid point's neighbours (to 2 % in k_z), and the first sign change of
-    Re α (the cut-off of the unstable band) by Brent's method (to 0.1 %).
+    to ``kz_max``. ``method="track"`` (fast, ~0.3 s): the α(0) = 0 branch is followed from
+    k = 0 with the predictor α2z k_z² (:class:`~chuteflow.stability.TransverseTracker`) until
+    it enters the continuum of the dilute top; ``"dense"``: the dense scan of every
+    eigenvalue at every k_z (the reference, which also sees other modes, e.g.
+    finite-wavelength rolls; ~1 s per k_z). The maximum of Re α is refined by a bounded
+    scalar search in log k_z between the best grid point's neighbours (to 2 % in k_z), and
+    the first sign change of Re α (the cut-off of the unstable band) by Brent's method (to
+    0.1 %), both on the tracked branch (``"track"``) or on dense solves (``"dense"``).
     """
+    if method not in ("track", "dense"):
+        raise ParameterError(f"method = {method!r}: choose 'track' (fast) or 'dense' (reference scan)")
     lw = transverse_longwave(flow, n)
     ks = np.geomspace(1e-5, kz_max, num)
-    disp = transverse_dispersion(flow, ks, policy=policy)
-    chk = transverse_mode(flow, k_check, policy=policy)
-    a2e = chk.alpha.real / k_check**2
+    tr = None
+    if method == "track":
+        tr = TransverseTracker(flow, alpha2z=float(lw.alpha2_z.real), policy=policy)
+        disp = transverse_dispersion(flow, ks, policy=policy, tracker=tr)
+        k_check = min(k_check, float(ks[-1]))
+        tr.advance(k_check) if tr.lost_at is None or k_check < tr.lost_at else None
+        a_chk = tr.at(k_check)
+        a2e = a_chk.real / k_check**2 if a_chk is not None else math.nan
+
+        def growth_at(k):
+            a = tr.at(k)
+            return (a.real, a.imag) if a is not None else (-math.inf, 0.0)
+    else:
+        disp = transverse_dispersion(flow, ks, policy=policy, method="dense")
+        a2e = transverse_mode(flow, k_check, policy=policy).alpha.real / k_check**2
+
+        def growth_at(k):
+            m = transverse_mode(flow, k, policy=policy)
+            return m.alpha.real, m.alpha.imag
+
     lp = lateral_pressure(flow)
     lub = lubrication_alpha2z(flow)
     g = np.where(np.isfinite(disp.alpha_re), disp.alpha_re, -np.inf)
     j = int(np.argmax(g))
     kz_best, growth, aim = float(ks[j]), float(g[j]), float(disp.alpha_im[j])
-    if 0 < j < len(ks) - 1 and np.all(np.isfinite(g[j - 1 : j + 2])):
+    if 0 < j < len(ks) - 1 and np.isfinite(g[j - 1]):
+        hi = ks[j + 1] if np.isfinite(g[j + 1]) or tr is None else min(ks[j + 1], tr.history[-1].kz)
         seen = {}
 
         def minus_growth(x):
-            m = transverse_mode(flow, float(np.exp(x)), policy=policy)
-            seen[x] = m
-            return -m.alpha.real
+            seen[x] = growth_at(float(np.exp(x)))
+            return -seen[x][0]
 
         opt = minimize_scalar(
             minus_growth,
-            bounds=(math.log(ks[j - 1]), math.log(ks[j + 1])),
+            bounds=(math.log(ks[j - 1]), math.log(hi)),
             method="bounded",
             options={"xatol": 0.02, "maxiter": 12},
         )
-        m = seen.get(opt.x)
-        if m is not None and m.alpha.real > growth:
-            kz_best, growth, aim = float(np.exp(opt.x)), float(m.alpha.real), float(m.alpha.imag)
+        got = seen.get(opt.x)
+        if got is not None and got[0] > growth:
+            kz_best, (growth, aim) = float(np.exp(opt.x)), (float(got[0]), float(got[1]))
+    if not math.isfinite(growth):
+        # no resolved point at all: the branch (α ≈ α2z k_z² < 0) is inside the continuum of
+        # the dilute top from the first step; it decays, at a rate the continuum hides
+        growth, aim, kz_best = math.nan, 0.0, math.nan
     stationary = abs(aim) <= 1e-9 * max(abs(growth), 1e-300) or abs(aim) < 1e-14
-    cut = None
-    for a, b, ga, gb in zip(ks[:-1], ks[1:], g[:-1], g[1:]):
-        if ga > 0 and np.isfinite(gb) and gb <= 0:
-            # the upper edge of the unstable band, refined on the least-stable growth rate
-            cut = float(
-                brentq(
-                    lambda k: transverse_mode(flow, k, policy=policy).alpha.real,
-                    float(a),
-                    float(b),
-                    rtol=1e-3,
-                    xtol=1e-12,
-                    maxiter=20,
-                )
-            )
-            break
+    cut = _cutoff(ks, g, tr, growth_at)
     return TransverseResult(
         flow.theta,
         flow.nu0,
@@ -376,7 +405,7 @@ def transverse(
         lub,
         lp["dP_drho"],
         lp["drho_T_drho"],
-        kz_best if growth > 0 else None,
+        kz_best if growth > 0 else None,  # NaN > 0 is False
         growth,
         kz_best,
         aim,
@@ -384,4 +413,27 @@ def transverse(
         cut,
         disp,
         flow.model,
+        method=method,
     )
+
+
+def _cutoff(ks, g, tr, growth_at) -> float | None:
+    """Upper edge of the unstable band: the first + → − sign change of Re α, on the grid or
+    (tracked branch) on the tracker's own steps, refined by Brent's method."""
+    pts = list(zip(ks, g))
+    if tr is not None:
+        pts = sorted({(p.kz, p.alpha.real) for p in tr.history if p.kz > 0} | set(pts))
+    for (a, ga), (b, gb) in zip(pts[:-1], pts[1:]):
+        if ga > 0 and np.isfinite(gb) and gb <= 0:
+            return float(
+                brentq(lambda k: growth_at(k)[0], float(a), float(b), rtol=1e-3, xtol=1e-12, maxiter=20)
+            )
+    if tr is not None and tr.lost_at is not None and len(tr.history) >= 4 and tr.history[-1].alpha.real > 0:
+        # the branch enters the continuum (Re α ≈ −1e-8 at P1) as it crosses zero: the root
+        # of the quadratic through its last three points, if it lies before the loss
+        h = tr.history[-3:]
+        c = np.polyfit([p.kz for p in h], [p.alpha.real for p in h], 2)
+        roots = [r.real for r in np.roots(c) if abs(r.imag) == 0 and h[-1].kz < r.real <= 1.05 * tr.lost_at]
+        if roots:
+            return float(min(roots))
+    return None

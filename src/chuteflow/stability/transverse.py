@@ -12,16 +12,25 @@ eigenvalue passes, or when a resolved eigenvector (tail below the threshold) wit
 Re α than the accepted one fails only the drift test (P1, k_z = 0.005: α = −0.2719 + 0.5123i
 drifts by 1e-7 between N = 64 and 80 and is converged from N = 100 on).
 
-The tracked branch of :class:`~chuteflow.stability.BranchTracker` is no use here: at
-k_x = 0 the α(0) = 0 branch rises to α ~ 6e-5 at k_z ~ 2e-3 (P1), falls back through the
-continuum at k_z ≈ 3.25e-3 and leaves it unresolved; the least-stable physical mode at
-larger k_z is another one.
+The dense scan costs two QZ per k_z (about 1 s at N = 80–100). The fast path,
+:class:`TransverseTracker`, follows the α(0) = 0 branch in k_z instead: it starts from the
+k = 0 null vector ∂X0/∂β, predicts α ≈ α2z k_z² (the perturbation theory of
+:mod:`chuteflow.longwave.transverse`) for the first steps and by quadratic extrapolation of
+the last three points after that, and solves each step by real inverse iteration (one real
+LU of A' − σB' per k_z, the pencil made real by ŵ → iŵ). At P1 the branch rises to α ~ 6e-5
+at k_z ~ 2e-3, falls back through the near-neutral continuum of the dilute top at
+k_z ≈ 3.25e-3 and is lost in it (its eigenvector is no longer resolved); the least-stable
+physical mode at larger k_z is another one. :func:`transverse_dispersion` with
+``method="track"`` follows the branch while it is resolved and, beyond, a few candidate
+modes taken from one dense scan (each by shift-invert, re-seeded by a dense scan whenever a
+candidate is lost); ``method="dense"`` is the reference scan at every k_z.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -30,12 +39,24 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .modes import Mode, make_mode, stability_operator
+from .dispersion import branch_mode, null_vectors
+from .modes import (
+    Mode,
+    OperatorCache,
+    check_n,
+    interp_vector,
+    make_mode,
+    nearest_eigenpair,
+    stability_operator,
+    tail,
+)
 from .operator import Pencil, validate_k
 from .policy import DEFAULT_POLICY, RejectionPolicy
 
 __all__ = [
     "TransverseDispersion",
+    "TransverseTracker",
+    "dense_modes",
     "growth_plane",
     "least_stable_3d",
     "real_form",
@@ -175,6 +196,11 @@ class TransverseDispersion:
         The flow.
     attrs : dict
         The flow's model attributes.
+    method : ndarray of str, optional
+        Which solver answered at each k_z: ``"branch"`` (the tracked α(0) = 0 branch),
+        ``"shift"`` (a candidate followed by shift-invert past the branch), ``"qz"`` (dense).
+    branch_lost_at : float or None
+        Where the tracked branch entered the continuum (None: not lost, or dense scan).
     """
 
     kz: np.ndarray
@@ -187,6 +213,8 @@ class TransverseDispersion:
     theta: float
     nu0: float
     attrs: dict
+    method: np.ndarray | None = None
+    branch_lost_at: float | None = None
 
     def to_xarray(self):
         """An :class:`xarray.Dataset` over ``kz``."""
@@ -201,45 +229,147 @@ class TransverseDispersion:
                 "tail": ("kz", self.tail, {"long_name": "Chebyshev tail", "units": "1"}),
                 "n": ("kz", self.n, {"long_name": "Chebyshev intervals N"}),
                 "physical": ("kz", self.physical, {"long_name": "passes drift and tail tests"}),
+                **(
+                    {"method": ("kz", np.asarray(self.method, dtype=str), {"long_name": "solver"})}
+                    if self.method is not None
+                    else {}
+                ),
             },
             coords={"kz": ("kz", self.kz, {"long_name": "spanwise wavenumber", "units": WAVENUMBER_UNITS})},
             attrs={
                 "long_name": "transverse dispersion relation (kx = 0)",
                 "theta": self.theta,
                 "nu0": self.nu0,
+                **({"branch_lost_at": self.branch_lost_at} if self.branch_lost_at is not None else {}),
                 **self.attrs,
             },
         )
 
 
 def transverse_dispersion(
-    flow: SteadyFlow, kz, *, policy: RejectionPolicy = DEFAULT_POLICY, n: int | None = None
+    flow: SteadyFlow,
+    kz,
+    *,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+    n: int | None = None,
+    method: str = "track",
+    alpha2z: float | None = None,
+    beyond: bool = False,
+    cache: OperatorCache | None = None,
+    tracker: TransverseTracker | None = None,
 ) -> TransverseDispersion:
     """α(k_z) at k_x = 0 of the least-stable physical mode at each k_z (module docstring).
 
-    Points where no physical mode is found keep the best resolved candidate, flagged
-    ``physical = False``.
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    kz : array_like
+        Spanwise wavenumbers (> 0).
+    policy : RejectionPolicy
+        Drift and tail thresholds and the resolution ladder.
+    n : int, optional
+        First resolution (default ``policy.n_start``).
+    method : {"track", "dense"}
+        ``"track"`` (fast): the α(0) = 0 branch by :class:`TransverseTracker` while it is
+        resolved; the k_z past the point where it enters the continuum are left NaN
+        (``method = "lost"``) unless ``beyond``. ``"dense"``: the dense scan
+        (:func:`least_stable_3d`) at every k_z, the reference.
+    alpha2z : float, optional
+        Predictor of the tracked branch's first steps (``"track"``).
+    beyond : bool
+        ``"track"`` only: past the branch, follow candidate modes seeded by a coarse dense
+        scan (N = 48) by shift-invert at N ≤ 125. Approximate: the least-stable mode there
+        lies among modes that the drift and tail tests accept only at different N, and the
+        candidates and the dense scan can each miss one the other finds (P1, k_z = 0.038:
+        dense −0.052 at N = 156, candidates −0.347 at N = 100).
+    cache : OperatorCache, optional
+        Where the operators come from (``"track"``).
+    tracker : TransverseTracker, optional
+        A tracker to continue (``"track"``; its history is kept for later refinement).
+
+    Returns
+    -------
+    TransverseDispersion
+        Points where no physical mode is found keep the best resolved candidate, flagged
+        ``physical = False``; ``method`` says which solver answered at each k_z
+        (``"branch"``, ``"shift"`` past the branch, ``"qz"``).
     """
     ks = np.atleast_1d(np.asarray(kz, dtype=float))
     if ks.ndim != 1 or len(ks) == 0:
         raise ParameterError("kz: expected a non-empty 1-D array of wavenumbers")
+    if method not in ("track", "dense"):
+        raise ParameterError(f"method = {method!r}: choose 'track' (fast) or 'dense' (reference scan)")
+    if np.any(ks <= 0) or not np.all(np.isfinite(ks)):
+        raise ParameterError("kz: wavenumbers must be finite and > 0 (k_z = 0 is the mass mode)")
     out = np.full((4, len(ks)), np.nan)
     nres = np.zeros(len(ks), dtype=int)
     phys = np.zeros(len(ks), dtype=bool)
-    for i, k in enumerate(ks):
-        try:
-            m = transverse_mode(flow, float(k), policy=policy, n=n)
-        except ConvergenceError:
+    how = np.full(len(ks), "", dtype=object)
+    modes: list[Mode | None] = [None] * len(ks)
+    lost_at = None
+    if method == "dense":
+        for i, k in enumerate(ks):
+            try:
+                m = transverse_mode(flow, float(k), policy=policy, n=n)
+                modes[i] = dataclasses.replace(m, method="qz")
+            except ConvergenceError:
+                continue
+    else:
+        order = np.argsort(ks)
+        tr = tracker or TransverseTracker(flow, alpha2z=alpha2z, n=n, policy=policy, cache=cache)
+        rest = []
+        for i in order:
+            got = tr.mode(float(ks[i])) if lost_at is None else None
+            if got is not None and got.physical:
+                modes[i] = got
+                continue
+            if lost_at is None:
+                lost_at = tr.lost_at if tr.lost_at is not None else float(ks[i])
+            rest.append(i)
+        if rest and beyond:
+            for i, got in zip(rest, _beyond_branch(flow, ks[rest], tr.n, policy, cache)):
+                modes[i] = got
+        else:
+            how[rest] = "lost"
+    for i, mm in enumerate(modes):
+        if mm is None:
             continue
-        out[:, i] = m.alpha.real, m.alpha.imag, m.drift, m.tail
-        nres[i], phys[i] = m.n, m.physical
+        out[:, i] = mm.alpha.real, mm.alpha.imag, mm.drift, mm.tail
+        nres[i], phys[i], how[i] = mm.n, mm.physical, mm.method
+    how[how == ""] = "none"
     return TransverseDispersion(
-        ks, out[0], out[1], out[2], out[3], nres, phys, flow.theta, flow.nu0, flow.model.attrs()
+        ks,
+        out[0],
+        out[1],
+        out[2],
+        out[3],
+        nres,
+        phys,
+        flow.theta,
+        flow.nu0,
+        flow.model.attrs(),
+        method=how.astype(str),
+        branch_lost_at=lost_at,
     )
 
 
-def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_POLICY, n: int | None = None):
+def growth_plane(
+    flow: SteadyFlow,
+    kx,
+    kz,
+    *,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+    n: int | None = None,
+    method: str = "dense",
+):
     """Growth rate Re α of the least-stable physical mode over the (k_x, k_z) plane.
+
+    ``method="dense"``: the dense scan at every wavevector (:func:`least_stable_3d`, ~1 s a
+    point); ``"branch"``: the α(0) = 0 branch continued along the ray through each
+    wavevector (:func:`chuteflow.stability.dispersion.branch_mode`, coarse continuation and
+    one solve at N), ~10× faster in the long-wave region; where the branch is lost (at
+    k_x = 0 past the transverse band, in the continuum) the point is left NaN.
 
     Returns
     -------
@@ -251,6 +381,8 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
     """
     import xarray as xr
 
+    if method not in ("dense", "branch"):
+        raise ParameterError(f"method = {method!r}: choose 'dense' or 'branch'")
     kxs = np.atleast_1d(np.asarray(kx, dtype=float))
     kzs = np.atleast_1d(np.asarray(kz, dtype=float))
     shape = (len(kxs), len(kzs))
@@ -263,7 +395,10 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
                 phys[i, j] = True
                 continue
             try:
-                m = least_stable_3d(flow, float(a), float(b), policy=policy, n=n)
+                if method == "branch":
+                    m = branch_mode(flow, float(a), kz=float(b), n=n, policy=policy)
+                else:
+                    m = least_stable_3d(flow, float(a), float(b), policy=policy, n=n)
             except ConvergenceError:
                 continue
             for name, v in (
@@ -298,6 +433,389 @@ def growth_plane(flow: SteadyFlow, kx, kz, *, policy: RejectionPolicy = DEFAULT_
             "kx_max": kxm,
             "kz_max": kzm,
             "direction": direction,
+            "method": method,
             **flow.model.attrs(),
         },
     )
+
+
+# -- the fast path: the α(0) = 0 branch tracked in k_z -----------------------------------
+@dataclass(frozen=True, eq=False)
+class _Point:
+    """One tracked point: k_z, α, the real-form eigenvector at N and N."""
+
+    kz: float
+    alpha: complex
+    vec: np.ndarray = field(repr=False)
+    n: int
+
+
+def _real_lu(A: np.ndarray, bdiag: np.ndarray, sigma: float):
+    M = A.copy()
+    M.flat[:: M.shape[0] + 1] -= sigma * bdiag
+    return sla.lu_factor(M, overwrite_a=True, check_finite=False)
+
+
+def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-15):
+    """Real inverse iteration x ↦ (A' − σB')⁻¹ B' x from v0: (α, v) or None if unsettled.
+
+    Settled: |Δα| ≤ tol |α − σ| + 1e-13 |α| + ``floor``; the absolute floor is the
+    round-off of the solves (~1e-17 at P1 near α ~ 1e-8, where A' − σB' is nearly singular),
+    far below the drift threshold 1e-7."""
+    v = np.asarray(v0, dtype=float)
+    nv = np.linalg.norm(v)
+    if nv == 0 or not np.isfinite(nv):
+        return None
+    v = v / nv
+    prev = None
+    for _ in range(maxiter):
+        w = sla.lu_solve(lu, bdiag * v, check_finite=False)
+        vw = float(v @ w)
+        nw = float(np.linalg.norm(w))
+        if vw == 0 or not np.isfinite(nw) or nw == 0:
+            return None
+        alpha = sigma + 1.0 / vw
+        v = w / nw
+        if prev is not None and abs(alpha - prev) <= tol * abs(alpha - sigma) + 1e-13 * abs(alpha) + floor:
+            return alpha, v
+        prev = alpha
+    return None
+
+
+_REAL_PIECES: dict = {}
+
+
+def _real_pencil(op, kz: float):
+    """(pencil, A', diag B', s) at (0, k_z ≥ 0) from the real form's three pieces
+    A'(k_z) = R0 + k_z R1 + k_z² R2 (evaluated once per operator from :func:`real_form` at
+    k_z = 0, 1, 2), a few additions per k_z instead of a complex assembly."""
+    key = id(op)
+    hit = _REAL_PIECES.get(key)
+    if hit is None or hit[0] is not op:
+        M = [real_form(op.pencil(0.0, float(k)))[0] for k in (0.0, 1.0, 2.0)]
+        R2 = 0.5 * (M[2] - 2.0 * M[1] + M[0])
+        R1 = M[1] - M[0] - R2
+        p0 = op.pencil(0.0, 1.0)
+        s = np.ones(p0.size, dtype=complex)
+        s[p0.slices()["w"]] = 1j
+        hit = (op, M[0], R1, R2, np.diag(p0.equilibrated()[1]).copy(), s)
+        if len(_REAL_PIECES) > 8:
+            _REAL_PIECES.clear()
+        _REAL_PIECES[key] = hit
+    _, R0, R1, R2, bd, s = hit
+    kz = abs(float(kz))
+    A = R0 + kz * R1
+    if kz:
+        A += (kz * kz) * R2
+    return op.pencil(0.0, kz), A, bd, s
+
+
+class TransverseTracker:
+    """Continuation of the α(0) = 0 branch across the slope (k_x = 0) in k_z ≥ 0.
+
+    The fast path of the transverse analysis (module docstring): real arithmetic (the k_x = 0
+    pencil made real by ŵ → iŵ, :func:`real_form`), one real LU and a few solves per step.
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    alpha2z : float, optional
+        α2z of α(0, k_z) ≈ α2z k_z² (:func:`chuteflow.longwave.transverse_longwave`), the
+        predictor of the first steps; without it the first step takes the resolved eigenvalue
+        nearest 0.
+    n : int, optional
+        Resolution N (default ``policy.n_start``).
+    policy : RejectionPolicy
+        Drift and tail thresholds (the branch is lost when its eigenvector's tail exceeds
+        ``policy.track_tail_tol``) and the resolution ladder.
+    cache : OperatorCache, optional
+        Where the operators come from.
+    max_ratio : float
+        Largest step ratio k_z(next)/k_z(last) of the continuation.
+    """
+
+    def __init__(
+        self,
+        flow: SteadyFlow,
+        *,
+        alpha2z: float | None = None,
+        n: int | None = None,
+        policy: RejectionPolicy = DEFAULT_POLICY,
+        cache: OperatorCache | None = None,
+        max_ratio: float = 1.6,
+    ):
+        self.flow, self.policy, self.cache = flow, policy, cache
+        self.alpha2z = None if alpha2z is None else float(alpha2z)
+        self.n = int(policy.n_start if n is None else n)
+        self.max_ratio = float(max_ratio)
+        op = self._op(self.n)
+        nv = null_vectors(op)
+        w = nv.right / op.col_eq  # eigenvector of the equilibrated pencil at k = 0
+        w = w / w[np.argmax(np.abs(w))]
+        self.history: list[_Point] = [_Point(0.0, 0.0, np.ascontiguousarray(w.real), self.n)]
+        self.lost_at: float | None = None
+
+    def _op(self, n):
+        return stability_operator(self.flow, n, True, cache=self.cache)
+
+    def _real(self, n, kz):
+        return _real_pencil(self._op(n), kz)
+
+    def _predict(self, kz: float) -> float:
+        h = self.history
+        if len(h) == 1:
+            return self.alpha2z * kz**2 if self.alpha2z is not None else 0.0
+        if len(h) == 2 and self.alpha2z is None:
+            # α ∝ k_z² through the first point (no O(k_z) term across the slope)
+            return h[1].alpha.real * (kz / h[1].kz) ** 2
+        if len(h) == 2 and self.alpha2z is not None:
+            # α2z k² + c3 k³ through the first point (the next term is O(|k_z|³))
+            k1, a1 = h[1].kz, h[1].alpha.real
+            c3 = (a1 - self.alpha2z * k1**2) / k1**3
+            return self.alpha2z * kz**2 + c3 * kz**3
+        pts = h[-3:] if len(h) >= 3 else h
+        xs = [p.kz for p in pts]
+        ys = [p.alpha.real for p in pts]
+        out = 0.0
+        for i, (xi, yi) in enumerate(zip(xs, ys)):
+            li = 1.0
+            for j, xj in enumerate(xs):
+                if j != i:
+                    li *= (kz - xj) / (xi - xj)
+            out += yi * li
+        return out
+
+    def _solve(self, kz, sigma, v0, n=None):
+        """Eigenpair nearest σ at (0, k_z) by real inverse iteration from v0, with its tail:
+        (α, real-form vector, pencil, s, tail) or None."""
+        n = self.n if n is None else n
+        p, A, bd, s = self._real(n, kz)
+        try:
+            lu = _real_lu(A, bd, sigma)
+        except (ValueError, np.linalg.LinAlgError):  # pragma: no cover - exact hit
+            sigma = sigma * (1 + 1e-10) + 1e-14
+            lu = _real_lu(A, bd, sigma)
+        found = _inverse_iteration(lu, bd, sigma, v0)
+        if found is None:
+            return None
+        alpha, v = found
+        t = tail(p.unscale(s * v), len(p.fields), self.policy.tail_terms)
+        return alpha, v, p, s, t
+
+    def _step(self, kz) -> bool:
+        last = self.history[-1]
+        pred = self._predict(kz)
+        res = self._solve(kz, pred, last.vec)
+        if res is None:
+            return False
+        alpha, v, _, _, t = res
+        miss = abs(alpha - pred)
+        if len(self.history) > 1 or self.alpha2z is not None:
+            if miss > 0.25 * abs(pred - last.alpha.real) + 1e-3 * abs(pred) + 1e-14:
+                return False
+        if t > self.policy.track_tail_tol:
+            return False
+        self.history.append(_Point(float(kz), complex(alpha), v, self.n))
+        return True
+
+    def advance(self, kz: float, max_halvings: int = 6) -> _Point | None:
+        """Continue the branch to k_z (≥ the last point); None once it is lost (the reason:
+        :attr:`lost_at`, the k_z where the continuation could not step on)."""
+        if self.lost_at is not None and kz >= self.lost_at:
+            return None
+        while self.history[-1].kz < kz:
+            k0 = self.history[-1].kz
+            target = kz if k0 == 0 else min(kz, k0 * self.max_ratio)
+            if k0 == 0:
+                target = min(kz, 1e-5)
+            ok = False
+            for _ in range(max_halvings):
+                if self._step(target):
+                    ok = True
+                    break
+                target = math.sqrt(k0 * target) if k0 > 0 else 0.5 * target
+            if not ok:
+                self.lost_at = float(target)
+                return None
+        return self.history[-1] if self.history[-1].kz == kz else self._near(kz)
+
+    def _near(self, kz):
+        for p in reversed(self.history):
+            if p.kz == kz:
+                return p
+        return None  # pragma: no cover
+
+    def at(self, kz: float) -> complex | None:
+        """α of the branch at k_z inside the tracked range, solved from the nearest tracked
+        point (the history is not changed): for bracketed searches. None if it does not land
+        on a resolved eigenvector near the interpolated prediction."""
+        h = [p for p in self.history if p.kz > 0]
+        if not h or kz > h[-1].kz * self.max_ratio:
+            return None
+        i = int(np.argmin([abs(math.log(p.kz / kz)) for p in h]))
+        j = max(0, min(len(h) - 3, i - 1))
+        pts = h[j : j + 3]
+        xs, ys = [p.kz for p in pts], [p.alpha.real for p in pts]
+        pred = float(np.polyval(np.polyfit(xs, ys, len(xs) - 1), kz)) if len(xs) > 1 else ys[0]
+        res = self._solve(kz, pred, h[i].vec, n=h[i].n)
+        if res is None or res[4] > self.policy.track_tail_tol:
+            return None
+        return complex(res[0])
+
+    def mode(self, kz: float) -> Mode | None:
+        """The tracked mode at k_z with its drift (N' = 0.8 N) and tail, N raised along the
+        policy's ladder while it is not physical; None where the branch is lost."""
+        pt = self.advance(kz)
+        if pt is None:
+            return None
+        return self._judge(pt)
+
+    def _judge(self, pt: _Point) -> Mode:
+        nf = 5
+        alpha, v, n = pt.alpha.real, pt.vec, pt.n
+        mode = None
+        for nn in self.policy.ladder(n):
+            if nn != n:
+                res = self._solve(pt.kz, alpha, interp_vector(v, nf, n, nn), n=nn)
+                if res is None:
+                    break
+                alpha, v, n = res[0], res[1], nn
+            p, _, _, s = self._real(n, pt.kz)
+            n2 = check_n(n)
+            res2 = self._solve(pt.kz, alpha, interp_vector(v, nf, n, n2), n=n2)
+            drift = abs(res2[0] - alpha) if res2 is not None else math.inf
+            mode = dataclasses.replace(make_mode(p, alpha, s * v, drift, n2, self.policy), method="branch")
+            if mode.physical:
+                break
+        return mode  # type: ignore[return-value]
+
+
+def dense_modes(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    *,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+    n: int | None = None,
+) -> tuple[list[Mode], list[np.ndarray]]:
+    """All physical modes at (k_x, k_z) by the dense scan of :func:`least_stable_3d`, best
+    first, with their eigenvectors of the equilibrated pencil (start vectors for tracking);
+    empty lists when none passes up to ``policy.n_max``."""
+    kx, kz = validate_k(kx, "kx"), validate_k(kz, "kz", signed=True)
+    for nn in policy.ladder(n):
+        n2 = check_n(nn)
+        p1 = stability_operator(flow, nn, True).pencil(kx, kz)
+        p2 = stability_operator(flow, n2, True).pencil(kx, kz)
+        w1, V1 = _finite_spectrum(p1, True)
+        w2, _ = _finite_spectrum(p2, False)
+        tails = _tails(p1, V1, policy.tail_terms)
+        modes, vecs, pending = [], [], False
+        for j in range(len(w1)):
+            if tails[j] >= policy.track_tail_tol:
+                continue
+            drift = float(np.abs(w2 - w1[j]).min()) if len(w2) else math.inf
+            if policy.accepts(drift, tails[j]):
+                m = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
+                modes.append(dataclasses.replace(m, method="qz"))
+                vecs.append(V1[:, j])
+            elif tails[j] < policy.tail_tol and not modes:
+                pending = True
+        if modes and not pending:
+            return modes, vecs
+    return [], []
+
+
+#: Resolution of the coarse dense scan that seeds the candidate modes past the branch.
+SEED_N = 48
+#: How many candidate modes are followed past the branch.
+N_CANDIDATES = 2
+
+
+def _seed_candidates(flow, kz, policy, cache):
+    """Candidate eigenvalues at (0, k_z) from one coarse dense QZ (N = :data:`SEED_N`, real
+    form), best first, one of each conjugate pair: those whose eigenvectors are nearly
+    resolved there (tail < 1e-4; the continuum of the dilute top is dropped by |α| > 1e-5 and
+    by the tail test at N)."""
+    p = stability_operator(flow, SEED_N, True, cache=cache).pencil(0.0, kz)
+    w, V = _finite_spectrum(p, True)
+    t = _tails(p, V, policy.tail_terms)
+    keep = (t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5)
+    return [complex(a) for a in w[keep][: 2 * N_CANDIDATES]]
+
+
+#: Past the branch the candidates are re-seeded by a coarse dense scan every time k_z has
+#: grown by this factor (modes resolved only at larger k_z join the race).
+RESEED_RATIO = 2.0
+
+
+def _beyond_branch(flow, ks, n, policy, cache):
+    """Least-stable physical mode at each k_z of ``ks`` (increasing, past the tracked
+    branch): candidates seeded by a coarse dense scan (again whenever k_z has grown by
+    :data:`RESEED_RATIO` or every candidate is lost), followed by shift-invert at the
+    resolution where the last winner passed, N raised along the ladder while not physical."""
+    out: list[Mode | None] = []
+    cands: list[tuple[complex, np.ndarray | None]] = []
+    k_seed = None
+    n_cur = n
+    for k in ks:
+        k = float(k)
+        found: list = []
+        for attempt in range(2):
+            if not cands or attempt == 1 or (k_seed is not None and k >= RESEED_RATIO * k_seed):
+                old = [(a, None) for a, _ in cands]
+                cands = [(a, None) for a in _seed_candidates(flow, k, policy, cache)] + old
+                k_seed = k
+            pencil = stability_operator(flow, n_cur, True, cache=cache).pencil(0.0, k)
+            found = []
+            for a, v in cands:
+                try:
+                    alpha, w = nearest_eigenpair(pencil, a, v0=v)
+                except ConvergenceError:
+                    continue
+                if v is not None and abs(alpha - a) > 0.2 * max(abs(a), 1e-3):
+                    continue  # jumped to another eigenvalue
+                alpha = complex(alpha)
+                tol = 1e-8 * max(1.0, abs(alpha))
+                near = [abs(alpha.real - f.real) + abs(abs(alpha.imag) - abs(f.imag)) for f, _, _ in found]
+                if near and min(near) <= tol:
+                    continue  # the same eigenvalue or its conjugate
+                t = tail(pencil.unscale(w), len(pencil.fields), policy.tail_terms)
+                if t < policy.track_tail_tol:
+                    found.append((alpha, w, t))
+            found = sorted(found, key=lambda f: -f[0].real)[:N_CANDIDATES]
+            if found:
+                break
+        cands = [(a, w) for a, w, _ in found]
+        mode = None
+        for a, w, _ in found:
+            mode = _judge_complex(flow, k, a, w, n_cur, policy, cache)
+            if mode.physical:
+                break
+        out.append(mode)
+    return out
+
+
+def _judge_complex(flow, kz, alpha, w, n, policy, cache) -> Mode:
+    """Drift and tail of a shift-invert eigenpair at (0, k_z), N raised while not physical."""
+    nf = 5
+    mode = None
+    for nn in policy.ladder(n)[:3]:
+        p = stability_operator(flow, nn, True, cache=cache).pencil(0.0, kz)
+        if nn != n:
+            try:
+                alpha, w = nearest_eigenpair(p, alpha, v0=interp_vector(w, nf, n, nn))
+            except ConvergenceError:
+                break
+            n = nn
+        n2 = check_n(nn)
+        p2 = stability_operator(flow, n2, True, cache=cache).pencil(0.0, kz)
+        try:
+            a2, _ = nearest_eigenpair(p2, alpha, v0=interp_vector(w, nf, nn, n2))
+            drift = abs(a2 - alpha)
+        except ConvergenceError:
+            drift = math.inf
+        mode = dataclasses.replace(make_mode(p, alpha, w, drift, n2, policy), method="shift")
+        if mode.physical:
+            break
+    return mode  # type: ignore[return-value]

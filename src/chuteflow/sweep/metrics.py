@@ -22,6 +22,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave import longwave
 from ..stability import BranchTracker, RejectionPolicy, mode_near
+from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
 
 __all__ = ["LongWaveMetric", "GrowthMetric", "default_metrics"]

@@ -1,0 +1,82 @@
+"""Sweep metric ``transverse`` (issue 10): values at P1, resume, Dask, the winner figure.
+
+P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05): α2z = 75.844 (tests/stability/test_transverse.py),
+the transverse branch grows at most 6.18e-5 (k_z* = 1.93e-3); along the slope the branch
+grows at most 1.18e-3 near k_x = 0.002 (tests/stability: the 2D branch) — both unstable
+(winner 3) and the longitudinal one is ~19× faster (fastest 1).
+"""
+
+from __future__ import annotations
+
+import pytest
+import xarray as xr
+
+from chuteflow.sweep import Sweep, SweepConfig, run_sweep
+from chuteflow.sweep.transverse import WINNER_CODES, TransverseMetric
+
+METRICS = ("steady", "kinematic", "longwave", "transverse")
+
+
+def _cfg(nu0=(0.05,)):
+    return SweepConfig(theta=(16.0,), nu0=nu0, roughness=0.05, chunk=1, metrics=METRICS)
+
+
+@pytest.fixture(scope="module")
+def p1_sweep(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tr") / "p1.nc"
+    sw = Sweep(_cfg(), path)
+    return sw, sw.run(workers=1), path
+
+
+def test_p1_values_and_winner(p1_sweep):
+    _, ds, _ = p1_sweep
+    p = ds.isel(theta=0, nu0=0)
+    assert float(p.alpha2_z) == pytest.approx(75.844, abs=2e-3)
+    assert float(p.transverse_growth_max) == pytest.approx(6.180e-5, rel=1e-3)
+    assert float(p.transverse_kz_max) == pytest.approx(1.93e-3, rel=2e-2)
+    # the longitudinal maximum: the refined branch maximum is at least the grid value 1.179e-3
+    assert float(p.longitudinal_growth_max) == pytest.approx(1.18e-3, rel=2e-2)
+    assert int(p.winner) == 3 and WINNER_CODES[3] == "both"
+    assert int(p.fastest) == 1
+    assert float(p.fastest_kz) == 0.0
+    assert float(p.fastest_kx) == pytest.approx(float(p.longitudinal_kx_max))
+
+
+def test_resume_recomputes_nothing(p1_sweep):
+    sw0, ds, path = p1_sweep
+    sw = Sweep(_cfg(), path)
+    again = sw.run(workers=1)
+    assert sw.stats.computed == 0
+    xr.testing.assert_identical(again, ds)
+
+
+def test_options_are_checked():
+    from chuteflow.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="transverse"):
+        TransverseMetric(n=8)
+
+
+@pytest.mark.slow
+def test_dask_equals_local(tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    cfg = _cfg(nu0=(0.05, 0.06))
+    local = run_sweep(cfg, workers=1)
+    with (
+        distributed.LocalCluster(
+            n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        sw = Sweep(cfg, tmp_path / "dask.nc")
+        got = sw.run(client=client)
+    assert sw.stats.backend == "dask"
+    xr.testing.assert_identical(got, local)
+
+
+def test_winner_figure(p1_sweep, tmp_path):
+    from chuteflow.figures.transverse import winner_figure
+
+    _, ds, _ = p1_sweep
+    path = winner_figure(ds, tmp_path / "w.png")
+    assert path.stat().st_size > 5_000
