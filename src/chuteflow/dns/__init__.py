@@ -13,7 +13,7 @@ snapshots, measured growth rate and phase velocity against the eigenvalue of
 JSON scalars of ``chuteflow dns --json``.
 """
 
-from .api import INITS, DnsSetup, bdf2_eigenvalue, measure_mode, simulate, summary
+from .api import INITS, DnsSetup, bdf2_eigenvalue, measure_mode, relax_steady, simulate, summary
 from .discretisation import Discretisation
 from .residual import compiled_residuals, evaluate_residuals
 from .stepper import NewtonSettings, StepInfo, Stepper
@@ -29,6 +29,7 @@ __all__ = [
     "compiled_residuals",
     "evaluate_residuals",
     "measure_mode",
+    "relax_steady",
     "simulate",
     "summary",
 ]
