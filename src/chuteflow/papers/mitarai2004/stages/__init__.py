@@ -17,6 +17,7 @@ STAGE_MODULES: tuple[str, ...] = (
     "stability",
     "diagrams",
     "reduced",
+    "dns",
 )
 
 #: Module name -> exception raised while importing it.
