@@ -31,7 +31,8 @@ def row(label, s):
         f"{label:<22} growth {s['growth_rate']:.7e} ({s['growth_rate_error']:.2e})  "
         f"c {s['phase_velocity']:.6f} ({s['phase_velocity_error']:.2e})  "
         f"α_dns {s['alpha_dns_re']:.7e}{s['alpha_dns_im']:+.7e}i  "
-        f"mass {s['mass_drift']:.1e}  mean-flow {s['mean_flow_change']:.1e}  {1e3 * s['time_per_step']:.1f} ms/step",
+        f"mass {s['mass_drift']:.1e}  mean-flow {s['mean_flow_change']:.1e}  "
+        f"{1e3 * s['time_per_step']:.1f} ms/step",
         flush=True,
     )
 
@@ -57,10 +58,15 @@ def main():
             row(f"{name} ny={n}", s)
             print(f"{'':<22} eigenvalue at N={n}: {mn.alpha:.8e}")
         for M in (1, 4):
-            row(f"{name} nx={2 * M + 1}", summary(simulate(th, nu0, L, n=m.n, modes=M, dt=period / 100, **kw)))
+            row(
+                f"{name} nx={2 * M + 1}", summary(simulate(th, nu0, L, n=m.n, modes=M, dt=period / 100, **kw))
+            )
         if a.steady:
             s = summary(simulate(th, nu0, L, n=m.n, dt=period / 100, amplitude=0.0, **kw))
-            print(f"{name} steady (amplitude 0): mean-flow change {s['mean_flow_change']:.2e}, mass {s['mass_drift']:.1e}")
+            print(
+                f"{name} steady (amplitude 0): mean-flow change {s['mean_flow_change']:.2e}, "
+                f"mass {s['mass_drift']:.1e}"
+            )
 
 
 if __name__ == "__main__":

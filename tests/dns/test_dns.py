@@ -19,7 +19,15 @@ from typer.testing import CliRunner
 
 from chuteflow.cli import app
 from chuteflow.closures import ChuteModel
-from chuteflow.dns import Discretisation, Stepper, bdf2_eigenvalue, measure_mode, relax_steady, simulate, summary
+from chuteflow.dns import (
+    Discretisation,
+    Stepper,
+    bdf2_eigenvalue,
+    measure_mode,
+    relax_steady,
+    simulate,
+    summary,
+)
 from chuteflow.dns.residual import DNS_FIELDS, JETS, evaluate_residuals, jet_name
 from chuteflow.equations import compiled_equations
 from chuteflow.errors import ParameterError
@@ -70,7 +78,13 @@ def test_mass_residual_hand_written():
     rng = np.random.default_rng(1)
     st = _state(rng, (7,))
     res, _ = evaluate_residuals(st, MODEL, 16.0, names=("mass",))
-    hand = -st["nu_t"] - st["nu_x"] * st["u"] - st["nu"] * st["u_x"] - st["nu_y"] * st["v"] - st["nu"] * st["v_y"]
+    hand = (
+        -st["nu_t"]
+        - st["nu_x"] * st["u"]
+        - st["nu"] * st["u_x"]
+        - st["nu_y"] * st["v"]
+        - st["nu"] * st["v_y"]
+    )
     assert np.allclose(res["mass"], hand, rtol=1e-13, atol=1e-15)
 
 
@@ -86,7 +100,11 @@ def test_preconditioner_is_the_jacobian(p1):
     dt = 3.0
     blocks = d.linear_blocks(C)
     k = d.k[1]
-    J = blocks["K"] * k + blocks["Bt"] * (1.5 / dt) + sum((1j * k) ** b * P for b, P in blocks["pieces"].items())
+    J = (
+        blocks["K"] * k
+        + blocks["Bt"] * (1.5 / dt)
+        + sum((1j * k) ** b * P for b, P in blocks["pieces"].items())
+    )
     R0 = d.residual(C, hist, dt)[:, :, 1].ravel()
     m = d.n + 1
     h = 1e-7
@@ -198,7 +216,20 @@ def test_cli_json(tmp_path):
     out = tmp_path / "r.nc"
     res = CliRunner().invoke(
         app,
-        ["dns", "--theta", "16", "--nu0", "0.05", "--length", "2094.3951", "--time", "60", "--json", "--out", str(out)],
+        [
+            "dns",
+            "--theta",
+            "16",
+            "--nu0",
+            "0.05",
+            "--length",
+            "2094.3951",
+            "--time",
+            "60",
+            "--json",
+            "--out",
+            str(out),
+        ],
     )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout.strip().splitlines()[-1])

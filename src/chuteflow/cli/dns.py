@@ -28,17 +28,25 @@ def dns(
     model: ChuteModel = MODEL_OPTIONS_HERE,
     time: float | None = typer.Option(None, "--time", help="Simulated time (default: two wave periods)."),
     nx: int | None = typer.Option(
-        None, "--nx", help="Fourier unknowns per node, nx = 2M + 1 (default 5 from a mode, 2·max(8, L/30)+1 from noise)."
+        None,
+        "--nx",
+        help="Fourier unknowns per node, nx = 2M + 1 (default 5 from a mode, 2·max(8, L/30)+1 from noise).",
     ),
     ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
     dt: float | None = typer.Option(None, "--dt", help="Time step (default: wave period / 100)."),
     init: str = typer.Option("mode", "--init", help="mode (least-stable eigenmode at k = 2π/L) or noise."),
-    amplitude: float = typer.Option(1e-6, "--amplitude", help="Largest component of the initial perturbation."),
+    amplitude: float = typer.Option(
+        1e-6, "--amplitude", help="Largest component of the initial perturbation."
+    ),
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
     snapshots: int = typer.Option(6, "--snapshots", help="Full-field snapshots stored (equally spaced)."),
-    record_every: int = typer.Option(1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."),
+    record_every: int = typer.Option(
+        1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
+    ),
     out: Path | None = typer.Option(
-        None, "--out", help="NetCDF output; a killed run resumes from OUT.checkpoint.npz with the same command."
+        None,
+        "--out",
+        help="NetCDF output; a killed run resumes from OUT.checkpoint.npz with the same command.",
     ),
     plot: Path | None = typer.Option(None, "--plot", help="Save the space–time figure and a snapshot."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),

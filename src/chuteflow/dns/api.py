@@ -75,7 +75,10 @@ class DnsSetup:
 
     def key(self) -> str:
         """Content hash identifying the run (a checkpoint is reused only for the same key)."""
-        d = {k: getattr(self, k) for k in ("theta", "nu0", "length", "n", "modes", "dt", "init", "amplitude", "seed", "relax")}
+        d = {
+            k: getattr(self, k)
+            for k in ("theta", "nu0", "length", "n", "modes", "dt", "init", "amplitude", "seed", "relax")
+        }
         d["model"] = self.model.to_dict()
         d["format"] = _FORMAT
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
@@ -108,7 +111,9 @@ def measure_mode(t: np.ndarray, amplitude: np.ndarray, k: float) -> dict[str, fl
     return {"growth_rate": float(gr), "omega": float(om), "phase_velocity": float(-om / k) if k else math.nan}
 
 
-def relax_steady(disc: Discretisation, C: np.ndarray, *, steps: int = 30, tol: float = 1e-12) -> tuple[np.ndarray, float]:
+def relax_steady(
+    disc: Discretisation, C: np.ndarray, *, steps: int = 30, tol: float = 1e-12
+) -> tuple[np.ndarray, float]:
     """The discrete steady state of ``disc`` nearest the x-independent part of ``C``.
 
     Backward-Euler steps of growing Δt (10, 100, …, 1e6) on mode 0 alone: as Δt → ∞ a step
@@ -137,7 +142,9 @@ def relax_steady(disc: Discretisation, C: np.ndarray, *, steps: int = 30, tol: f
 
 def _check(setup: DnsSetup) -> None:
     if not (math.isfinite(setup.length) and setup.length > 0):
-        raise ParameterError(f"length = {setup.length!r}: the period L must be a positive number of diameters")
+        raise ParameterError(
+            f"length = {setup.length!r}: the period L must be a positive number of diameters"
+        )
     if not (math.isfinite(setup.time) and setup.time > 0):
         raise ParameterError(f"time = {setup.time!r}: the simulated time must be positive")
     if not (math.isfinite(setup.dt) and 0 < setup.dt <= setup.time):
@@ -145,14 +152,20 @@ def _check(setup: DnsSetup) -> None:
     if setup.init not in INITS:
         raise ParameterError(f"init = {setup.init!r}: choose one of {INITS}")
     if not 0 <= setup.modes <= 512:
-        raise ParameterError(f"nx: {2 * setup.modes + 1} is outside [1, 1025]: modes M = (nx − 1)/2 in [0, 512]")
+        raise ParameterError(
+            f"nx: {2 * setup.modes + 1} is outside [1, 1025]: modes M = (nx − 1)/2 in [0, 512]"
+        )
     if not 8 <= setup.n <= 400:
-        raise ParameterError(f"ny = {setup.n} is outside [8, 400]: Chebyshev intervals that resolve the layer")
+        raise ParameterError(
+            f"ny = {setup.n} is outside [8, 400]: Chebyshev intervals that resolve the layer"
+        )
     if not (math.isfinite(setup.amplitude) and 0 <= setup.amplitude < 0.5):
         raise ParameterError(f"amplitude = {setup.amplitude!r} is outside [0, 0.5): a small perturbation")
 
 
-def _initial(disc: Discretisation, flow: SteadyFlow, mode: Mode | None, setup: DnsSetup, dt: float, relax: bool):
+def _initial(
+    disc: Discretisation, flow: SteadyFlow, mode: Mode | None, setup: DnsSetup, dt: float, relax: bool
+):
     """Coefficients at t = 0, at t = −Δt (``None`` from noise) and the relaxation change."""
     p = flow.profiles(disc.grid.y)
     C = np.zeros(disc.shape, dtype=complex)
@@ -422,7 +435,9 @@ def simulate(
     wall = wall0 + _time.perf_counter() - start
     if snaps_t and snaps_t[-1] < t - 0.5 * setup.dt:
         snapshot(C)
-    ds = _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, C_init, status, wall, newton_its)
+    ds = _dataset(
+        disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, C_init, status, wall, newton_its
+    )
     ds.attrs["steady_relaxation"] = relax_change
     if out is not None:
         Path(out).parent.mkdir(parents=True, exist_ok=True)
@@ -540,14 +555,14 @@ def summary(ds: xr.Dataset) -> dict:
         "wall_time",
         "status",
     )
-    out = {}
+    out: dict = {}
     for k_ in keys:
         v = ds.attrs.get(k_)
         if isinstance(v, np.generic):
             v = v.item()
         out[k_] = v
-    ar, ai = out["alpha_re"], out["alpha_im"]
-    c_mode = -ai / out["k"]
+    ar, ai = float(out["alpha_re"]), float(out["alpha_im"])
+    c_mode = -ai / float(out["k"])
     out["growth_rate_error"] = abs(out["growth_rate"] - ar) / abs(ar) if ar else math.nan
     out["phase_velocity_error"] = abs(out["phase_velocity"] - c_mode) / abs(c_mode) if c_mode else math.nan
     return out

@@ -314,7 +314,12 @@ class Discretisation:
                 pieces.setdefault(t.b, np.zeros((M4, M4)))[rows, col[t.field]] += blk
 
         bulk_scale = {"mass": 1.0 / nu, "xmom": 1.0 / mu, "ymom": 1.0 / mu, "energy": 1.0 / kap}
-        floor_scale = {"ymom": 1.0 / mu[0], "floor_x": 1.0 / mu[0], "floor_v": 1.0, "floor_energy": 1.0 / kap[0]}
+        floor_scale = {
+            "ymom": 1.0 / mu[0],
+            "floor_x": 1.0 / mu[0],
+            "floor_v": 1.0,
+            "floor_energy": 1.0 / kap[0],
+        }
         inner = slice(1, m - 1)
         for i, f in enumerate(DNS_FIELDS):
             r0 = i * m
@@ -322,7 +327,13 @@ class Discretisation:
             add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
             name = FLOOR_OF[f]
             add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
-            add(TOP_OF[f], slice(m - 1, m), 1.0 / nu[-1] if f == "nu" else 1.0, slice(r0 + m - 1, r0 + m), False)
+            add(
+                TOP_OF[f],
+                slice(m - 1, m),
+                1.0 / nu[-1] if f == "nu" else 1.0,
+                slice(r0 + m - 1, r0 + m),
+                False,
+            )
         # the density top condition holds with the local T (a linear condition of the
         # linear problem with T0 frozen): its T derivative, by central differences of the
         # compiled condition, completes the Jacobian's top row of ŝ

@@ -24,7 +24,14 @@ from .. import equations as eqs
 from ..closures import ChuteModel
 from ..closures.model import FUNCTIONS, ORDERS
 
-__all__ = ["DNS_FIELDS", "DNS_EQUATIONS", "JETS", "CompiledResidual", "compiled_residuals", "evaluate_residuals"]
+__all__ = [
+    "DNS_FIELDS",
+    "DNS_EQUATIONS",
+    "JETS",
+    "CompiledResidual",
+    "compiled_residuals",
+    "evaluate_residuals",
+]
 
 #: Fields of the two-dimensional simulation (w ≡ 0).
 DNS_FIELDS = ("nu", "u", "v", "T")
@@ -64,7 +71,9 @@ class CompiledResidual:
     jets: tuple[str, ...]
     _fun: Callable
 
-    def __call__(self, state: Mapping[str, np.ndarray], partials: Mapping, sin_theta: float, cos_theta: float):
+    def __call__(
+        self, state: Mapping[str, np.ndarray], partials: Mapping, sin_theta: float, cos_theta: float
+    ):
         """Residual at every point of ``state`` (jet name → array)."""
         args = [state[j] for j in self.jets]
         for name in FUNCTIONS:

@@ -138,7 +138,7 @@ class Stepper:
             A = LinearOperator((n, n), matvec=lambda v: jv(prec(v)))
             count = [0]
 
-            def cb(_):
+            def cb(_, count=count):
                 count[0] += 1
 
             y, _info = gmres(
@@ -162,4 +162,6 @@ class Stepper:
         if rn < s.atol:
             return d.unpack(z), StepInfo(s.max_iter, krylov, rn)
         self._lus = None
-        raise ConvergenceError(f"implicit step (Δt = {dt:g}): Newton residual {rn:.2e} after {s.max_iter} iterations")
+        raise ConvergenceError(
+            f"implicit step (Δt = {dt:g}): Newton residual {rn:.2e} after {s.max_iter} iterations"
+        )

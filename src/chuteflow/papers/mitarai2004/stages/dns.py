@@ -70,7 +70,9 @@ def _linear(ctx: StageContext) -> None:
             )
             ctx.progress("DNS: unperturbed flow")
             st = summary(
-                simulate(p.theta, p.nu0, L, model=flow.model, flow=flow, amplitude=0.0, time=ds.attrs["time_end"])
+                simulate(
+                    p.theta, p.nu0, L, model=flow.model, flow=flow, amplitude=0.0, time=ds.attrs["time_end"]
+                )
             )
             ctx.report.check(
                 "dns.steady_and_mass",
@@ -80,7 +82,8 @@ def _linear(ctx: StageContext) -> None:
                 computed=f"unperturbed: largest change of the fields {st['mean_flow_change']:.1e}, "
                 f"mass drift {st['mass_drift']:.1e}; eigenmode run: mass drift {s['mass_drift']:.1e}",
                 passed=st["mean_flow_change"] < 1e-10 and s["mass_drift"] < 1e-12,
-                detail=f"the steady solver's flow is this grid's steady state to {st['steady_relaxation']:.1e}",
+                detail="the steady solver's flow is this grid's steady state to "
+                f"{st['steady_relaxation']:.1e}",
             )
 
 
