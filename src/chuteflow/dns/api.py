@@ -58,6 +58,8 @@ class DnsSetup:
         Closures and parameters.
     relax : bool
         Start from this grid's discrete steady state (:func:`relax_steady`).
+    frame : float
+        Speed of the frame ξ = x − ct of the unknowns (:class:`Discretisation`).
     """
 
     theta: float
@@ -72,12 +74,25 @@ class DnsSetup:
     seed: int
     model: ChuteModel
     relax: bool = True
+    frame: float = 0.0
 
     def key(self) -> str:
         """Content hash identifying the run (a checkpoint is reused only for the same key)."""
         d = {
             k: getattr(self, k)
-            for k in ("theta", "nu0", "length", "n", "modes", "dt", "init", "amplitude", "seed", "relax")
+            for k in (
+                "theta",
+                "nu0",
+                "length",
+                "n",
+                "modes",
+                "dt",
+                "init",
+                "amplitude",
+                "seed",
+                "relax",
+                "frame",
+            )
         }
         d["model"] = self.model.to_dict()
         d["format"] = _FORMAT
@@ -122,7 +137,7 @@ def relax_steady(
     coefficients with mode 0 replaced and the largest change max |ΔC| (the steady solver's
     flow interpolated to this grid differs from this grid's steady state by that much).
     """
-    d0 = Discretisation(disc.theta, disc.model, disc.length, disc.y_max, disc.n, 0)
+    d0 = Discretisation(disc.theta, disc.model, disc.length, disc.y_max, disc.n, 0, frame=disc.frame)
     st = Stepper(d0)
     c = C[:, :, :1].copy()
     c[..., 0] = c[..., 0].real
@@ -186,7 +201,9 @@ def _initial(
         V = V * (0.5 * setup.amplitude)
         C0, Cm = C.copy(), C.copy()
         C0[:, :, 1] += V
-        Cm[:, :, 1] += V * np.exp(-mode.alpha * dt)
+        # the mode in the frame ξ = x − ct: exp((α + ikc) t + ikξ)
+        alpha = mode.alpha + 1j * disc.k[1] * setup.frame
+        Cm[:, :, 1] += V * np.exp(-alpha * dt)
         return C0, Cm, change
     rng = np.random.default_rng(setup.seed)
     m_hi = max(1, setup.modes // 2)
@@ -235,6 +252,7 @@ def simulate(
     flow: SteadyFlow | None = None,
     min_dt_fraction: float = 1e-3,
     relax: bool = True,
+    frame_speed: float | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (issue 11, docs/dns.md).
 
@@ -285,6 +303,11 @@ def simulate(
         Start from the discrete steady state of this grid nearest the steady flow
         (:func:`relax_steady`), so that the unperturbed flow stays steady to the solver's
         tolerance; otherwise the interpolated steady flow drifts by its discretisation error.
+    frame_speed : float, optional
+        Speed c of the frame ξ = x − ct the fields are computed in (x coordinates of the
+        result are ξ; velocities are the lab's). Default 0 (lab) from a mode, the eigenmode's
+        phase velocity −Im α/k from noise, so that BDF2's damping of the travelling waves
+        (∝ (ωΔt)⁴ with ω the frequency seen in the frame) stays small at large Δt.
 
     Returns
     -------
@@ -317,9 +340,14 @@ def simulate(
         seed=int(seed),
         model=model,
         relax=bool(relax),
+        frame=float(frame_speed)
+        if frame_speed is not None
+        else (0.0 if init == "mode" else float(mode.wave_speed)),
     )
     _check(setup)
-    disc = Discretisation(setup.theta, model, setup.length, flow.y_max, setup.n, setup.modes)
+    disc = Discretisation(
+        setup.theta, model, setup.length, flow.y_max, setup.n, setup.modes, frame=setup.frame
+    )
     stepper = Stepper(disc, settings)
     ck_path = _checkpoint_path(out, checkpoint)
     key = setup.key()
@@ -463,6 +491,8 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         rel = np.abs(A) / (rho.mean(axis=-1) + 1e-300)
         lin = (t >= 0.2 * t[-1] if len(t) else np.zeros(0, bool)) & (rel < 1e-3)
     meas = measure_mode(t[lin], A[lin], k)
+    # back to the lab frame: a phase e^{ik(ξ − c' t)} with ξ = x − c t travels at c + c'
+    meas["phase_velocity"] += setup.frame
     alpha_dns = complex(math.nan, math.nan)
     if setup.init == "mode" and lin.sum() > 2 and np.all(np.abs(A[lin]) > 0):
         dts = np.diff(t[lin])
@@ -470,7 +500,7 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         same = np.abs(dts - setup.dt) < 1e-9 * setup.dt
         if same.any():
             gm = np.exp(np.mean(np.log(G[same])))
-            alpha_dns = bdf2_eigenvalue(gm, setup.dt)
+            alpha_dns = bdf2_eigenvalue(gm, setup.dt) - 1j * k * setup.frame
     mass_drift = float(np.max(np.abs(mass - mass[0])) / mass[0]) if mass.size else math.nan
     change = float(np.max(np.abs(C[:, :, 0] - C_init[:, :, 0])))
     sn = np.asarray(snaps) if snaps else np.zeros((0, 4, disc.n + 1, disc.nxp))
@@ -488,6 +518,7 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         "init": setup.init,
         "amplitude": setup.amplitude,
         "seed": setup.seed,
+        "frame_speed": setup.frame,
         "y_max": flow.y_max,
         "growth_rate": meas["growth_rate"],
         "phase_velocity": meas["phase_velocity"],
@@ -520,7 +551,12 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
             "v": (("snapshot_time", "y", "x"), sn[:, 2] if len(sn) else sn.reshape(0, disc.n + 1, disc.nxp)),
             "T": (("snapshot_time", "y", "x"), sn[:, 3] if len(sn) else sn.reshape(0, disc.n + 1, disc.nxp)),
         },
-        coords={"time": t, "x": x, "y": disc.grid.y, "snapshot_time": np.asarray(snaps_t, dtype=float)},
+        coords={
+            "time": t,
+            "x": ("x", x, {"long_name": f"ξ = x − {setup.frame:g} t (the frame of the run)"}),
+            "y": disc.grid.y,
+            "snapshot_time": np.asarray(snaps_t, dtype=float),
+        },
         attrs=attrs,
     )
     return ds
@@ -539,6 +575,7 @@ def summary(ds: xr.Dataset) -> dict:
         "time_end",
         "init",
         "amplitude",
+        "frame_speed",
         "growth_rate",
         "phase_velocity",
         "alpha_re",

@@ -63,6 +63,10 @@ class Discretisation:
         Highest Fourier mode M.
     nxp : int
         Points of the padded x grid (≥ 3M + 1).
+    frame : float
+        Speed c of the frame ξ = x − c t the unknowns move with (velocities stay those in
+        the floor's frame): ∂_t at fixed x is ∂_t − c ∂_ξ. With c near the wave speed the
+        waves are nearly steady in ξ and BDF2's damping of fast phases (∝ (ωΔt)⁴) is small.
     """
 
     theta: float
@@ -72,6 +76,7 @@ class Discretisation:
     n: int
     modes: int
     nxp: int = 0
+    frame: float = 0.0
     grid: ChebyshevGrid = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -176,7 +181,7 @@ class Discretisation:
             val = a0 * now[i] + a1 * history[0][i]
             if a2:
                 val = val + a2 * history[1][i]
-            st[f + "_t"] = val / dt
+            st[f + "_t"] = val / dt - self.frame * st[f + "_x"]
         res, part = evaluate_residuals(st, self.model, self.theta)
         mu, kap, nu = part["mu"][(0, 0)], part["kappa"][(0, 0)], st["nu"]
         R = np.empty((4,) + nu.shape)
@@ -347,7 +352,7 @@ class Discretisation:
         """LU factors of the Jacobian of each mode m = 0 … M (:meth:`linear_blocks`)."""
         out = []
         for km in self.k:
-            J = blocks["K"] * abs(km) + blocks["Bt"] * (a0 / dt)
+            J = blocks["K"] * abs(km) + blocks["Bt"] * (a0 / dt - self.frame * 1j * km)
             J = J.astype(complex)
             for b, P in blocks["pieces"].items():
                 J = J + (1j * km) ** b * P
