@@ -39,6 +39,11 @@ def dns(
         1e-6, "--amplitude", help="Largest component of the initial perturbation."
     ),
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
+    frame_speed: float | None = typer.Option(
+        None,
+        "--frame-speed",
+        help="Speed of the frame ξ = x − ct of the run (default 0 from a mode, the wave speed from noise).",
+    ),
     snapshots: int = typer.Option(6, "--snapshots", help="Full-field snapshots stored (equally spaced)."),
     record_every: int = typer.Option(
         1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
@@ -96,6 +101,7 @@ def dns(
                 init=init,
                 amplitude=amplitude,
                 seed=seed,
+                frame_speed=frame_speed,
                 snapshots=snapshots,
                 record_every=record_every,
                 out=out,
