@@ -43,7 +43,8 @@ def plot_dns(ds, *, snapshot: int = -1, y_top: float | None = None):
     lim = float(np.nanmax(np.abs(dev))) or 1e-300
     pm = ax.pcolormesh(x, t, dev, shading="auto", cmap="RdBu_r", vmin=-lim, vmax=lim, rasterized=True)
     fig.colorbar(pm, ax=ax, label="ρ̄ − ⟨ρ̄⟩ₓ")
-    ax.set_xlabel("x (down the slope, σ)")
+    c = float(a.get("frame_speed", 0.0))
+    ax.set_xlabel("x (down the slope, σ)" if c == 0 else f"ξ = x − {c:.4g} t (σ)")
     ax.set_ylabel("t (√(σ/g))")
     ax.set_title("ρ̄(x, t) = ∫ν dy", fontsize=10)
     ax = axs[1]
@@ -77,7 +78,7 @@ def plot_dns(ds, *, snapshot: int = -1, y_top: float | None = None):
         vi = np.array([np.interp(yi, y, v[:, j]) for j in xi]).T
         ax.quiver(x[xi], yi, ui, vi, color="w", scale_units="xy", angles="uv", width=0.003)
         ax.set_ylim(0, y_top)
-        ax.set_xlabel("x")
+        ax.set_xlabel("x" if c == 0 else "ξ")
         ax.set_ylabel("y")
         ts = float(ds["snapshot_time"].values[snapshot])
         ax.set_title(f"ν(x, y) at t = {ts:.4g}; arrows (u − ⟨u⟩ₓ, v)", fontsize=10)
