@@ -249,3 +249,14 @@ def test_cli_json(tmp_path):
         assert key in d
     assert d["status"] == "ok"
     assert out.exists()
+
+
+def test_figure(tmp_path, p1):
+    from chuteflow.figures.dns import plot_dns, save
+
+    ds = simulate(
+        16.0, 0.05, 1000.0, model=MODEL, flow=p1, time=24.0, dt=4.0, modes=3, init="noise", amplitude=1e-4
+    )
+    assert ds.attrs["frame_speed"] > 0  # from noise: the wave's frame
+    png = save(plot_dns(ds), tmp_path / "dns.png")
+    assert png.stat().st_size > 1000
