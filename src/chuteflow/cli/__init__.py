@@ -15,6 +15,7 @@ from collections.abc import Sequence
 # -- command modules: one line each ------------------------------------------------------
 from . import (
     diagram,  # noqa: F401
+    dns,  # noqa: F401
     reduced,  # noqa: F401
     reproduce,  # noqa: F401
     stability,  # noqa: F401

@@ -18,6 +18,7 @@ STAGE_MODULES: tuple[str, ...] = (
     "diagrams",
     "reduced",
     "transverse",
+    "dns",
 )
 
 #: Module name -> exception raised while importing it.

@@ -1,0 +1,81 @@
+"""Benchmark of the time-dependent simulation (issue 11, docs/dns.md), one BLAS thread.
+
+``run(quick)`` returns rows with keys name, seconds, baseline_seconds, ratio, note (the
+interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py [--quick]``.
+
+- ``dns_linear_P1``: the linear-phase verification at P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05,
+  L = 2π/0.003): steady flow, least-stable eigenmode and two wave periods at Δt = period/100.
+  Baseline: the issue's target of 5 minutes (ratio = target / measured, > 1 is within
+  target). The note has the time per step, the steps per growth time 1/Re α and the errors.
+- ``dns_step_L1000`` (full mode): time per step of the nonlinear run of the reproduce stage
+  (L = 1000, nx = 65, ny = 80, Δt = 4) over 200 steps from noise of amplitude 1e-3; no
+  baseline (no other solver of these equations here).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+import warnings
+from pathlib import Path
+
+if __package__ in (None, ""):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+
+
+def _timed(fn):
+    t0 = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - t0
+
+
+def run(quick: bool = False) -> list[dict]:
+    from chuteflow._threads import limit_blas_threads
+    from chuteflow.closures import ChuteModel
+    from chuteflow.dns import simulate, summary
+    from chuteflow.steady import solve_steady
+
+    limit_blas_threads(1)
+    warnings.simplefilter("ignore", RuntimeWarning)
+    model = ChuteModel(roughness=0.05)
+    solve_steady(16.0, 0.05, model)  # warm-up: compiled code loaded, not timed
+    L = 2 * math.pi / 0.003
+    ds, t_lin = _timed(lambda: simulate(16.0, 0.05, L, model=model))
+    s = summary(ds)
+    steps_growth = 1.0 / s["alpha_re"] / s["dt"]
+    rows = [
+        {
+            "name": "dns_linear_P1",
+            "seconds": t_lin,
+            "baseline_seconds": 300.0,
+            "ratio": 300.0 / t_lin,
+            "note": f"{s['steps']} steps, {1e3 * s['time_per_step']:.1f} ms/step, "
+            f"{steps_growth:.0f} steps per growth time; growth error {s['growth_rate_error']:.1e}, "
+            f"phase-velocity error {s['phase_velocity_error']:.1e}, mass drift {s['mass_drift']:.1e}; "
+            "baseline: the issue's 5-minute target",
+        }
+    ]
+    if not quick:
+        flow = solve_steady(16.0, 0.05, model)
+        kw = dict(model=model, flow=flow, time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
+        a, t_a = _timed(lambda: simulate(16.0, 0.05, 1000.0, **kw))
+        rows.append(
+            {
+                "name": "dns_step_L1000",
+                "seconds": t_a,
+                "baseline_seconds": math.nan,
+                "ratio": math.nan,
+                "note": f"{a.attrs['steps']} steps, {1e3 * a.attrs['time_per_step']:.1f} ms/step "
+                f"(Newton {a.attrs['newton_mean']:.2f}/step); no baseline",
+            }
+        )
+    return rows
+
+
+if __name__ == "__main__":
+    for r in run(quick="--quick" in sys.argv):
+        print(
+            f"{r['name']:<18} {r['seconds']:8.2f} s  baseline {r['baseline_seconds']:8.2f} s  "
+            f"ratio {r['ratio']:.2f}  {r['note']}"
+        )

@@ -1,0 +1,124 @@
+"""``chuteflow dns``: nonlinear time-dependent simulation of the chute flow (issue 11)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+
+
+def _num(v):
+    """JSON-safe value: non-finite floats as strings."""
+    if isinstance(v, float) and not math.isfinite(v):
+        return str(v)
+    return v
+
+
+@app.command("dns")
+@with_model_options
+def dns(
+    theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
+    nu0: float = typer.Option(..., "--nu0", help="Floor density ν0(0) of the steady flow."),
+    length: float = typer.Option(..., "--length", help="Period L along the slope (diameters)."),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    time: float | None = typer.Option(None, "--time", help="Simulated time (default: two wave periods)."),
+    nx: int | None = typer.Option(
+        None,
+        "--nx",
+        help="Fourier unknowns per node, nx = 2M + 1 (default 5 from a mode, 2·max(8, L/30)+1 from noise).",
+    ),
+    ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
+    dt: float | None = typer.Option(None, "--dt", help="Time step (default: wave period / 100)."),
+    init: str = typer.Option("mode", "--init", help="mode (least-stable eigenmode at k = 2π/L) or noise."),
+    amplitude: float = typer.Option(
+        1e-6, "--amplitude", help="Largest component of the initial perturbation."
+    ),
+    seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
+    frame_speed: float | None = typer.Option(
+        None,
+        "--frame-speed",
+        help="Speed of the frame ξ = x − ct of the run (default 0 from a mode, the wave speed from noise).",
+    ),
+    snapshots: int = typer.Option(6, "--snapshots", help="Full-field snapshots stored (equally spaced)."),
+    record_every: int = typer.Option(
+        1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
+    ),
+    out: Path | None = typer.Option(
+        None,
+        "--out",
+        help="NetCDF output; a killed run resumes from OUT.checkpoint.npz with the same command.",
+    ),
+    plot: Path | None = typer.Option(None, "--plot", help="Save the space–time figure and a snapshot."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Time-dependent simulation of eqs (2.1)–(2.3) with the Johnson–Jackson floor on a slope
+    periodic in x (docs/dns.md): growth rate and phase velocity of the k = 2π/L wave against
+    the linear eigenvalue, mass drift, and the nonlinear waves."""
+    import json
+    import warnings
+
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from chuteflow.dns import simulate, summary
+    from chuteflow.errors import ParameterError
+
+    if nx is not None and (nx < 1 or nx % 2 == 0):
+        raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
+    if init not in ("mode", "noise"):
+        raise ParameterError(f"init = {init!r}: choose mode or noise")
+    con = Console(stderr=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        with Progress(
+            TextColumn("dns"),
+            BarColumn(),
+            TextColumn("t = {task.fields[t]}"),
+            TimeElapsedColumn(),
+            console=con,
+            transient=True,
+            disable=as_json and not con.is_terminal,
+        ) as prog:
+            task = prog.add_task("run", total=1.0, t="0")
+
+            def progress(t, t_end):
+                prog.update(task, completed=t / t_end, t=f"{t:.5g} / {t_end:.5g}")
+
+            ds = simulate(
+                theta,
+                nu0,
+                length,
+                model=model,
+                time=time,
+                n=ny,
+                modes=None if nx is None else (nx - 1) // 2,
+                dt=dt,
+                init=init,
+                amplitude=amplitude,
+                seed=seed,
+                frame_speed=frame_speed,
+                snapshots=snapshots,
+                record_every=record_every,
+                out=out,
+                progress=progress,
+            )
+    if plot is not None:
+        from chuteflow.figures.dns import plot_dns, save
+
+        save(plot_dns(ds), plot)
+    s = {k: _num(v) for k, v in summary(ds).items()}
+    s.update({k: v for k, v in model.to_dict().items() if k not in s})
+    if as_json:
+        typer.echo(json.dumps(s))
+    else:
+        for k, v in s.items():
+            typer.echo(f"{k:22s} {v}")
+    if out is not None:
+        con.print(f"wrote {out}", highlight=False)
+    if plot is not None:
+        con.print(f"figure: {plot}", highlight=False)

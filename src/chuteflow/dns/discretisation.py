@@ -1,0 +1,381 @@
+"""Fourier (x) × Chebyshev (y) discretisation of the time-dependent equations.
+
+Unknowns: the Fourier coefficients C[f, j, m] (field f ∈ (s = ln ν, u, v, T), Chebyshev node
+y_j, mode m = 0 … M, k_m = 2π m / L) of the real fields
+f(x, y_j) = C[f, j, 0] + 2 Re Σ_{m ≥ 1} C[f, j, m] e^{i k_m x}.
+The residual is evaluated pointwise on a padded grid of ``nxp`` ≥ 3M + 1 points and projected
+back onto m ≤ M (3/2 rule). Rows (the stability operator's choice, :mod:`chuteflow.stability.operator`):
+
+========  ========================  ======================  ===============================
+block     interior nodes            floor (y = 0)           top (y = y_max)
+========  ========================  ======================  ===============================
+s         mass (2.1) ÷ ν            y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
+u         x-momentum ÷ μ            eq. (2.9) ÷ μ           û_y + |k| û = 0 per mode
+v         y-momentum ÷ μ            v = 0                   v̂_y + |k| v̂ = 0 per mode
+T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ = 0 per mode
+========  ========================  ======================  ===============================
+
+The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)); the
+density one is applied pointwise with the local temperature, the others mode by mode.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import scipy.linalg as sla
+
+from ..closures import ChuteModel
+from ..equations import TOP_OF, compiled_equations
+from ..spectral import ChebyshevGrid
+from .residual import DNS_FIELDS, evaluate_residuals
+
+#: Unknown of each block (s = ln ν).
+UNKNOWNS = ("s", "u", "v", "T")
+#: Bulk equation of each block, and its floor row.
+BULK_OF = {"nu": "mass", "u": "xmom", "v": "ymom", "T": "energy"}
+FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "T": "floor_energy"}
+#: BDF coefficients (a0, a1, a2): ∂_t X ≈ (a0 X^{n+1} + a1 X^n + a2 X^{n−1}) / Δt.
+BDF1 = (1.0, -1.0, 0.0)
+BDF2 = (1.5, -2.0, 0.5)
+
+
+@dataclass(frozen=True, eq=False)
+class Discretisation:
+    """Grid and operators of one simulation: length ``L``, modes ``M``, ``N`` Chebyshev intervals.
+
+    Attributes
+    ----------
+    theta : float
+        Inclination (degrees).
+    model : ChuteModel
+        Closures and parameters.
+    length : float
+        Period L along the slope.
+    y_max : float
+        Top of the domain.
+    n : int
+        Chebyshev intervals N (N + 1 nodes).
+    modes : int
+        Highest Fourier mode M.
+    nxp : int
+        Points of the padded x grid (≥ 3M + 1).
+    frame : float
+        Speed c of the frame ξ = x − c t the unknowns move with (velocities stay those in
+        the floor's frame): ∂_t at fixed x is ∂_t − c ∂_ξ. With c near the wave speed the
+        waves are nearly steady in ξ and BDF2's damping of fast phases (∝ (ωΔt)⁴) is small.
+    """
+
+    theta: float
+    model: ChuteModel
+    length: float
+    y_max: float
+    n: int
+    modes: int
+    nxp: int = 0
+    frame: float = 0.0
+    grid: ChebyshevGrid = field(init=False, repr=False)
+
+    def __post_init__(self):
+        if self.nxp < 3 * self.modes + 1:
+            object.__setattr__(self, "nxp", max(3 * self.modes + 1, 4 if self.modes else 1))
+        object.__setattr__(self, "grid", ChebyshevGrid(self.n, 0.0, self.y_max))
+
+    # -- sizes and packing --------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """Shape (4, N + 1, M + 1) of the coefficient array."""
+        return (4, self.n + 1, self.modes + 1)
+
+    @property
+    def size(self) -> int:
+        """Number of real unknowns."""
+        return 4 * (self.n + 1) * (2 * self.modes + 1)
+
+    @cached_property
+    def k(self) -> np.ndarray:
+        """Wavenumbers k_m = 2π m / L, m = 0 … M."""
+        return 2.0 * math.pi * np.arange(self.modes + 1) / self.length
+
+    @cached_property
+    def x(self) -> np.ndarray:
+        """Points of the padded x grid."""
+        return np.arange(self.nxp) * self.length / self.nxp
+
+    @cached_property
+    def sin_cos(self) -> tuple[float, float]:
+        """(sin θ, cos θ)."""
+        th = math.radians(self.theta)
+        return math.sin(th), math.cos(th)
+
+    def pack(self, C: np.ndarray) -> np.ndarray:
+        """Coefficients (4, N+1, M+1) → real vector (real parts, then imaginary parts of m ≥ 1)."""
+        return np.concatenate([C.real.ravel(), C[..., 1:].imag.ravel()])
+
+    def unpack(self, z: np.ndarray) -> np.ndarray:
+        """Inverse of :meth:`pack`."""
+        n_re = 4 * (self.n + 1) * (self.modes + 1)
+        C = z[:n_re].reshape(self.shape).astype(complex)
+        C[..., 1:] += 1j * z[n_re:].reshape(4, self.n + 1, self.modes)
+        return C
+
+    # -- transforms ---------------------------------------------------------------------
+    def to_physical(self, C: np.ndarray) -> np.ndarray:
+        """Values on the padded grid (…, nxp) of coefficients (…, M + 1)."""
+        full = np.zeros(C.shape[:-1] + (self.nxp // 2 + 1,), dtype=complex)
+        full[..., : self.modes + 1] = C
+        return np.fft.irfft(full * self.nxp, n=self.nxp, axis=-1)
+
+    def to_modes(self, f: np.ndarray) -> np.ndarray:
+        """Coefficients m ≤ M of values on the padded grid (projection)."""
+        return np.fft.rfft(f, axis=-1)[..., : self.modes + 1] / self.nxp
+
+    def coefficients_of(self, fields: dict[str, np.ndarray]) -> np.ndarray:
+        """Coefficients of physical fields {"s", "u", "v", "T"} given on the padded grid."""
+        return np.stack([self.to_modes(np.asarray(fields[f], dtype=float)) for f in UNKNOWNS])
+
+    # -- jets ---------------------------------------------------------------------------
+    def jets(self, C: np.ndarray) -> dict[str, np.ndarray]:
+        """Every jet of :data:`chuteflow.dns.residual.JETS` except ∂_t, on the padded grid."""
+        ik = 1j * self.k
+        D, D2 = self.grid.D, self.grid.D2
+        out = {}
+        for i, f in enumerate(UNKNOWNS):
+            c = C[i]
+            v0 = self.to_physical(c)
+            v1 = self.to_physical(c * ik)
+            v2 = self.to_physical(c * ik**2)
+            out[f] = v0
+            out[f + "_x"] = v1
+            out[f + "_xx"] = v2
+            out[f + "_y"] = D @ v0
+            out[f + "_yy"] = D2 @ v0
+            out[f + "_xy"] = D @ v1
+        s, sx, sy = out.pop("s"), out.pop("s_x"), out.pop("s_y")
+        sxx, sxy, syy = out.pop("s_xx"), out.pop("s_xy"), out.pop("s_yy")
+        nu = np.exp(s)
+        out.update(
+            nu=nu,
+            nu_x=nu * sx,
+            nu_y=nu * sy,
+            nu_xx=nu * (sxx + sx * sx),
+            nu_xy=nu * (sxy + sx * sy),
+            nu_yy=nu * (syy + sy * sy),
+        )
+        return out
+
+    # -- residual -----------------------------------------------------------------------
+    def residual(self, C: np.ndarray, history: tuple, dt: float, bdf=BDF2) -> np.ndarray:
+        """Scaled residual (4, N+1, M+1) of the implicit step to coefficients ``C``.
+
+        ``history`` holds the physical fields (ν, u, v, T) on the padded grid at the previous
+        one or two time levels (``(X^n, X^{n−1})``; X^{n−1} unused for BDF1).
+        """
+        st = self.jets(C)
+        a0, a1, a2 = bdf
+        now = (st["nu"], st["u"], st["v"], st["T"])
+        for i, f in enumerate(DNS_FIELDS):
+            val = a0 * now[i] + a1 * history[0][i]
+            if a2:
+                val = val + a2 * history[1][i]
+            st[f + "_t"] = val / dt - self.frame * st[f + "_x"]
+        res, part = evaluate_residuals(st, self.model, self.theta)
+        mu, kap, nu = part["mu"][(0, 0)], part["kappa"][(0, 0)], st["nu"]
+        R = np.empty((4,) + nu.shape)
+        R[0] = res["mass"] / nu
+        R[1] = res["xmom"] / mu
+        R[2] = res["ymom"] / mu
+        R[3] = res["energy"] / kap
+        R[0, 0] = res["ymom"][0] / mu[0]
+        R[1, 0] = res["floor_x"][0] / mu[0]
+        R[2, 0] = res["floor_v"][0]
+        R[3, 0] = res["floor_energy"][0] / kap[0]
+        R[0, -1] = self._top_nu(st)
+        out = self.to_modes(R)
+        ik = self.k
+        top = self._top_terms
+        for i, f in enumerate(UNKNOWNS[1:], start=1):
+            acc = np.zeros(self.modes + 1, dtype=complex)
+            for c, kpow, coef in top[f]:
+                d = C[i, -1] if c == 0 else self._Dtop[c] @ C[i]
+                acc += coef * ik**kpow * d
+            out[i, -1] = acc
+        return out
+
+    @cached_property
+    def _Dtop(self) -> dict[int, np.ndarray]:
+        return {1: self.grid.D[-1], 2: self.grid.D2[-1]}
+
+    @cached_property
+    def _top_terms(self) -> dict[str, list]:
+        """Terms (c, power of |k|, coefficient) of the top conditions on u, v, T (eq. 4.5)."""
+        comp = compiled_equations()
+        # the coefficients of these conditions are constants; any admissible state will do
+        base = {b: np.full(1, 1e-3) for b in ("nu", "nu_y", "nu_yy", "u", "u_y", "u_yy", "T", "T_y", "T_yy")}
+        part = self.model.evaluate(base["nu"], base["T"])
+        out = {}
+        for f in ("u", "v", "T"):
+            ce = comp[TOP_OF[f]]
+            _, coefs = ce.evaluate(base, part, *self.sin_cos)
+            terms = []
+            for t, cf in zip(ce.terms, coefs):
+                if t.field != f or t.a or t.b or t.d:
+                    raise NotImplementedError(f"top condition of {f}: unexpected term {t}")
+                terms.append((t.c, t.k, float(np.ravel(cf)[0])))
+            out[f] = terms
+        return out
+
+    def _top_nu(self, st: dict) -> np.ndarray:
+        """ν's top condition (eq. (4.5), density decay) at the local state, divided by ν."""
+        ce = compiled_equations()["top_nu"]
+        base = {
+            "nu": st["nu"][-1],
+            "nu_y": st["nu_y"][-1],
+            "nu_yy": st["nu_yy"][-1],
+            "u": st["u"][-1],
+            "u_y": st["u_y"][-1],
+            "u_yy": st["u_yy"][-1],
+            "T": st["T"][-1],
+            "T_y": st["T_y"][-1],
+            "T_yy": st["T_yy"][-1],
+        }
+        part = self.model.evaluate(base["nu"], base["T"])
+        _, coefs = ce.evaluate(base, part, *self.sin_cos)
+        acc = np.zeros_like(base["nu"])
+        jets = {0: base["nu"], 1: base["nu_y"], 2: base["nu_yy"]}
+        for t, cf in zip(ce.terms, coefs):
+            if t.field != "nu" or t.a or t.b or t.d or t.k:
+                raise NotImplementedError(f"top condition of ν: unexpected term {t}")
+            acc = acc + cf * jets[t.c]
+        return acc / base["nu"]
+
+    # -- preconditioner -----------------------------------------------------------------
+    def linear_blocks(self, C: np.ndarray) -> dict:
+        """The linearisation about the x-averaged state of ``C`` (mode 0), per power of ik.
+
+        Built from the compiled coefficients of :func:`chuteflow.equations.compiled_equations`
+        (those of the stability operator), in this discretisation's unknowns (ŝ = ν̂/ν̄) and
+        row scaling. Returns ``{"pieces": {b: matrix}, "K": matrix, "Bt": matrix}`` with the
+        Jacobian of mode m ``Σ_b (ik_m)^b pieces[b] + |k_m| K + (a0/Δt) Bt``.
+        """
+        g = self.grid
+        m = self.n + 1
+        # the x-independent state of mode 0; ν jets from s jets as in :meth:`jets`
+        sb, ub, Tb = (C[i, :, 0].real for i in (0, 1, 3))
+        nu = np.exp(sb)
+        sy, syy = g.D @ sb, g.D2 @ sb
+        base = {
+            "nu": nu,
+            "nu_y": nu * sy,
+            "nu_yy": nu * (syy + sy * sy),
+            "u": ub,
+            "u_y": g.D @ ub,
+            "u_yy": g.D2 @ ub,
+            "T": Tb,
+            "T_y": g.D @ Tb,
+            "T_yy": g.D2 @ Tb,
+        }
+        mean = {"T": Tb}
+        part = self.model.evaluate(nu, mean["T"])
+        mu, kap = part["mu"][(0, 0)], part["kappa"][(0, 0)]
+        eqs = compiled_equations()
+        eye = np.eye(m)
+        dmat = (eye, g.D, g.D2)
+        # ν̂ = ν̄ ŝ with ν̂_y = ν̄ (ŝ_y + s̄_y ŝ), ν̂_yy = ν̄ (ŝ_yy + 2 s̄_y ŝ_y + (s̄_yy + s̄_y²) ŝ)
+        dnu = (
+            nu[:, None] * eye,
+            nu[:, None] * (g.D + np.diag(sy)),
+            nu[:, None] * (g.D2 + 2 * sy[:, None] * g.D + np.diag(syy + sy * sy)),
+        )
+        M4 = 4 * m
+        col = {f: slice(i * m, (i + 1) * m) for i, f in enumerate(DNS_FIELDS)}
+        pieces: dict[int, np.ndarray] = {0: np.zeros((M4, M4))}
+        K = np.zeros((M4, M4))
+        Bt = np.zeros((M4, M4))
+        cache: dict[str, list] = {}
+
+        def coefs(name):
+            if name not in cache:
+                _, cs = eqs[name].evaluate(base, part, *self.sin_cos)
+                cache[name] = [np.broadcast_to(np.asarray(c, dtype=float), (m,)) for c in cs]
+            return cache[name]
+
+        def add(name, nodes, scale, rows, keep_t):
+            for t, cf in zip(eqs[name].terms, coefs(name)):
+                if t.field not in col or t.d:
+                    continue
+                op = dnu if t.field == "nu" else dmat
+                blk = (cf[nodes] * scale)[:, None] * op[t.c][nodes]
+                if t.a:
+                    if keep_t:
+                        Bt[rows, col[t.field]] += blk
+                    continue
+                if t.k:
+                    K[rows, col[t.field]] += blk
+                    continue
+                pieces.setdefault(t.b, np.zeros((M4, M4)))[rows, col[t.field]] += blk
+
+        bulk_scale = {"mass": 1.0 / nu, "xmom": 1.0 / mu, "ymom": 1.0 / mu, "energy": 1.0 / kap}
+        floor_scale = {
+            "ymom": 1.0 / mu[0],
+            "floor_x": 1.0 / mu[0],
+            "floor_v": 1.0,
+            "floor_energy": 1.0 / kap[0],
+        }
+        inner = slice(1, m - 1)
+        for i, f in enumerate(DNS_FIELDS):
+            r0 = i * m
+            name = BULK_OF[f]
+            add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
+            name = FLOOR_OF[f]
+            add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
+            add(
+                TOP_OF[f],
+                slice(m - 1, m),
+                1.0 / nu[-1] if f == "nu" else 1.0,
+                slice(r0 + m - 1, r0 + m),
+                False,
+            )
+        # the density top condition holds with the local T (a linear condition of the
+        # linear problem with T0 frozen): its T derivative, by central differences of the
+        # compiled condition, completes the Jacobian's top row of ŝ
+        h = 1e-6 * float(base["T"][-1])
+        hi = {**base, "T": base["T"] + h}
+        lo = {**base, "T": base["T"] - h}
+        pieces[0][m - 1, 3 * m + m - 1] += float(self._top_nu(hi) - self._top_nu(lo)) / (2 * h)
+        return {"pieces": pieces, "K": K, "Bt": Bt}
+
+    def factorise(self, blocks: dict, dt: float, a0: float) -> list:
+        """LU factors of the Jacobian of each mode m = 0 … M (:meth:`linear_blocks`)."""
+        out = []
+        for km in self.k:
+            J = blocks["K"] * abs(km) + blocks["Bt"] * (a0 / dt - self.frame * 1j * km)
+            J = J.astype(complex)
+            for b, P in blocks["pieces"].items():
+                J = J + (1j * km) ** b * P
+            out.append(sla.lu_factor(J, check_finite=False))
+        return out
+
+    def precondition(self, lus: list, R: np.ndarray) -> np.ndarray:
+        """Apply the block-diagonal inverse: mode by mode, (J_m)⁻¹ R_m."""
+        out = np.empty_like(R)
+        for i, lu in enumerate(lus):
+            sol = sla.lu_solve(lu, R[:, :, i].reshape(-1), check_finite=False)
+            out[:, :, i] = sol.reshape(4, self.n + 1)
+        out[:, :, 0] = out[:, :, 0].real
+        return out
+
+    # -- diagnostics --------------------------------------------------------------------
+    def depth_integrals(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """ρ̄(x) = ∫ν dy and Q(x) = ∫νu dy on the padded grid, with the isothermal tail above
+        y_max (ν(y_max) T(y_max)/cos θ, and u(y_max) times it)."""
+        s = self.to_physical(C[0])
+        u = self.to_physical(C[1])
+        T = self.to_physical(C[3])
+        nu = np.exp(s)
+        w = self.grid.weights
+        tail = nu[-1] * T[-1] / self.sin_cos[1]
+        return w @ nu + tail, w @ (nu * u) + tail * u[-1]
