@@ -260,7 +260,7 @@ def magnification_figure(
 # -- eigenfunctions -------------------------------------------------------------------------
 def _mode_grid(mode, flow):
 
-    g = ChebyshevGrid(mode.n, 0.0, flow.y_max)
+    g = getattr(mode, "grid", None) or ChebyshevGrid(mode.n, 0.0, flow.y_max)
     if len(mode.y) != len(g.y) or not np.allclose(mode.y, g.y, rtol=1e-10, atol=1e-10):
         raise ValueError(
             "mode and flow do not match: the mode's nodes are not the "
@@ -366,7 +366,7 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
     nu, u, T = f["nu"], f["u"], f["T"]
     compression = np.zeros(len(nu), complex)  # −ν0 ∇·û
     vertical = np.zeros(len(nu), complex)  # −ν0' v̂ (advection of the base density)
-    for t, term in equation_terms(flow, "mass", f, mode.k, mode.kz, mode.alpha):
+    for t, term in equation_terms(flow, "mass", f, mode.k, mode.kz, mode.alpha, grid=g):
         if t.field in ("u", "v", "w"):
             if t.b or t.c or t.d:
                 compression += term
