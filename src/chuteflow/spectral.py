@@ -158,26 +158,22 @@ class MappedChebyshevGrid(ChebyshevGrid):
         Width ε > 0 of the clustered region.
     """
 
-    def __init__(self, n: int, a: float, b: float, center: float, width: float):
+    def __init__(self, n: int, a: float, b: float, center: float, width: float, blend: float = 1.0):
         if n < 2:
             raise ValueError(f"n = {n}: need at least 2 intervals")
         if not (b > a):
             raise ValueError(f"[a, b] = [{a}, {b}]: need a < b")
         if not (width > 0 and np.isfinite(width)):
             raise ValueError(f"width = {width!r}: the map's width must be a positive number")
+        if not (0.0 < blend <= 1.0):
+            raise ValueError(f"blend = {blend!r}: the weight of the sinh map must be in (0, 1]")
         self.n, self.a, self.b = int(n), float(a), float(b)
         self.center = float(min(max(center, a), b))
         self.width = float(width)
+        self.blend = float(blend)
         x, Dx, w = _reference(self.n)
-        c, eps = self.center, self.width
-        s0, s1 = math.asinh((self.a - c) / eps), math.asinh((self.b - c) / eps)
-        self._s = (s0, s1)
-        ds = 0.5 * (s1 - s0)
-        s = s0 + ds * (x + 1.0)
-        y = c + eps * np.sinh(s)
+        y, y1, y2 = self._map(x)
         y[0], y[-1] = self.a, self.b
-        y1 = eps * np.cosh(s) * ds  # dy/dx
-        y2 = eps * np.sinh(s) * ds**2  # d²y/dx²
         self.x = x
         self.y = y
         self.jacobian = y1
@@ -185,23 +181,45 @@ class MappedChebyshevGrid(ChebyshevGrid):
         self._D2 = (Dx @ Dx) / (y1**2)[:, None] - (y2 / y1**3)[:, None] * Dx
         self.weights = w * y1
 
+    def _map(self, x):
+        """y(x), dy/dx, d²y/dx²: (1 − β) × linear + β × sinh map."""
+        c, eps, beta = self.center, self.width, self.blend
+        s0, s1 = math.asinh((self.a - c) / eps), math.asinh((self.b - c) / eps)
+        ds = 0.5 * (s1 - s0)
+        half = 0.5 * (self.b - self.a)
+        s = s0 + ds * (np.asarray(x, dtype=float) + 1.0)
+        y = (1 - beta) * (self.a + half * (x + 1.0)) + beta * (c + eps * np.sinh(s))
+        y1 = (1 - beta) * half + beta * eps * np.cosh(s) * ds
+        y2 = beta * eps * np.sinh(s) * ds**2
+        return y, y1, y2
+
     @property
     def D2(self) -> np.ndarray:  # type: ignore[override]
         """Second-derivative matrix d²/dy² (chain rule in x)."""
         return self._D2
 
     def to_computational(self, y) -> np.ndarray:
-        """The computational variable x ∈ [−1, 1] of heights ``y``."""
-        s0, s1 = self._s
-        s = np.arcsinh((np.asarray(y, dtype=float) - self.center) / self.width)
-        return 2.0 * (s - s0) / (s1 - s0) - 1.0
+        """The computational variable x ∈ [−1, 1] of heights ``y`` (Newton on the monotone
+        map, from the inverse of its sinh part)."""
+        y = np.asarray(y, dtype=float)
+        c, eps = self.center, self.width
+        s0, s1 = math.asinh((self.a - c) / eps), math.asinh((self.b - c) / eps)
+        x = 2.0 * (np.arcsinh((y - c) / eps) - s0) / (s1 - s0) - 1.0
+        if self.blend < 1.0:
+            for _ in range(50):
+                f, f1, _ = self._map(x)
+                dx = (f - y) / f1
+                x = np.clip(x - dx, -1.0, 1.0)
+                if np.all(np.abs(dx) < 1e-15):
+                    break
+        return x
 
     def _map_key(self) -> tuple:
-        return (self.a, self.b, self.center, self.width)
+        return (self.a, self.b, self.center, self.width, self.blend)
 
     def with_n(self, n: int) -> MappedChebyshevGrid:
         """The grid of the same map with ``n`` intervals."""
-        return MappedChebyshevGrid(n, self.a, self.b, self.center, self.width)
+        return MappedChebyshevGrid(n, self.a, self.b, self.center, self.width, self.blend)
 
 
 def coefficients(f: np.ndarray) -> np.ndarray:

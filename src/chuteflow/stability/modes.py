@@ -428,7 +428,7 @@ def spectrum(
     k, kz : float
         Wavenumbers (k ≥ 0; kz ≠ 0 for three-dimensional perturbations).
     n : int, optional
-        Resolution N (default ``policy.n_start``, 80); the drift is measured against
+        Resolution N (default ``policy.n_start``, 48); the drift is measured against
         N' = round(0.8 N).
     policy : RejectionPolicy, optional
         Thresholds of the physical-mode tests (default: the paper's, 1e-7 both).

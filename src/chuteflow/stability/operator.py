@@ -57,6 +57,8 @@ N_RANGE = (8, 1000)
 #: Width of the sinh map's clustered region in units of the density scale height
 #: T0(h)/cos θ at the layer's edge y = h (see :func:`layer_map`).
 MAP_WIDTH = 2.0
+#: Weight β of the sinh part of the map, y = (1 − β) y_linear + β y_sinh.
+MAP_BLEND = 1.0
 
 
 def layer_map(flow: SteadyFlow) -> tuple[float, float]:
@@ -110,7 +112,7 @@ def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGr
     plain Chebyshev grid (``mapped=False``, the paper's discretisation, kept for checks)."""
     if mapped:
         yc, eps = layer_map(flow)
-        return MappedChebyshevGrid(n, 0.0, flow.y_max, yc, eps)
+        return MappedChebyshevGrid(n, 0.0, flow.y_max, yc, eps, MAP_BLEND)
     return ChebyshevGrid(n, 0.0, flow.y_max)
 
 
