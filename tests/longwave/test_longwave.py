@@ -115,3 +115,30 @@ def test_alpha2_converges_and_p2_is_stable(p1):
     assert lw.convergence_alpha2 < 1e-2 and 1.1e4 < lw.alpha2.real < 1.3e4
     p2 = longwave(solve_steady(16, 0.08), rtol=0.05)
     assert not p2.unstable
+
+
+# measured Re α/k² at k = 1e-5 (eigen_sign, sinh-mapped grid; eigen_coefficient agrees to
+# ≤ 1.4 %, the convergence eigen_sign stops at): P1 1.23e4, P2 −40.0, P3 −551, P4 44.1,
+# P5 2263, Q1 −112, Q2 38.4, Q3 164
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["P1", "P2", "P3", "P4", "P5", "Q1", "Q2", "Q3"])
+def test_sweep_sign_agrees_with_longwave_unstable(name):
+    """The sweep's long-wave metric and :attr:`LongWave.unstable` decide the sign from the
+    same quantity, Re α/k² at k = 1e-5: they agree at every paper point, and with the
+    paper's verdicts where it states one (§4.2: P1, P4, P5, Q3 unstable; P2, P3 stable)."""
+    from chuteflow.longwave.theory import eigen_coefficient, eigen_sign
+    from chuteflow.papers.mitarai2004.points import PAPER_UNSTABLE, POINTS
+    from chuteflow.sweep.metrics import LongWaveMetric
+    from chuteflow.sweep.points import Point
+
+    p = POINTS[name]
+    flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
+    es = eigen_sign(flow)
+    vals, conv, _ = eigen_coefficient(flow)
+    assert es.converged and conv < 1e-3
+    assert es.coefficient == pytest.approx(vals[1], rel=0.05)  # eigen_sign stops at rtol 0.05
+    assert es.unstable == (vals[1] > 0)
+    if name in PAPER_UNSTABLE:
+        assert es.unstable == PAPER_UNSTABLE[name]
+    out = LongWaveMetric().compute(flow, Point(0, 0, p.theta, p.nu0))
+    assert (out["alpha2_re"] > 0) == es.unstable and out["longwave_consistent"]

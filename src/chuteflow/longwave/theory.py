@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -34,7 +34,14 @@ from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
 from ..stability.dispersion import BranchTracker
-from ..stability.modes import OperatorCache, check_n, nearest_eigenpair, stability_operator, tail
+from ..stability.modes import (
+    OperatorCache,
+    check_n,
+    interp_vector,
+    nearest_eigenpair,
+    stability_operator,
+    tail,
+)
 from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
 from ..steady import SteadyFlow, steady_tangent
@@ -166,8 +173,9 @@ def eigen_sign(
     N raised along the ladder N → round(1.25 N) (each rung's N' is the previous rung, so it
     is reused) until the two agree to ``rtol`` relative — with the default 0.05 the sign is
     decided with a margin of 20 — or N reaches ``n_max``. Measured N at the paper's points:
-    48–80 (``benchmarks/bench_longwave.py``). Where the perturbative solve misses the branch
-    the eigenvalue comes from :class:`~chuteflow.stability.BranchTracker`.
+    48–75 (``benchmarks/bench_longwave.py``). Where the perturbative solve misses the branch
+    (k = 1e-5 beyond the k² regime, e.g. ν0(0) ≲ 0.02), the shift is the branch on another
+    rung, or the eigenvalue comes from :class:`~chuteflow.stability.BranchTracker`.
     """
     tangent = steady_tangent(flow)
     ladder = RejectionPolicy(n_start=int(n), n_max=int(n_max))
@@ -175,13 +183,23 @@ def eigen_sign(
 
     def at(nn: int) -> BranchPoint:
         if nn not in memo:
-            bp = branch_point(stability_operator(flow, nn, cache=cache), tangent, k)
+            op = stability_operator(flow, nn, cache=cache)
+            bp = branch_point(op, tangent, k)
             if not math.isfinite(bp.coefficient):
-                try:
-                    a, _ = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
-                    bp = dataclasses.replace(bp, alpha=complex(a))
-                except ConvergenceError:
-                    pass
+                # beyond the k² regime at k (dilute flows): from the branch on another rung,
+                # else by continuation from k = 0 once
+                done = [q for q in memo.values() if q.vector is not None]
+                if done:
+                    q = done[-1]
+                    bp = branch_point(
+                        op, tangent, k, guess=q.alpha, v0=interp_vector(q.vector, len(op.fields), q.n, nn)
+                    )
+                if not math.isfinite(bp.coefficient):
+                    try:
+                        a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
+                        bp = dataclasses.replace(bp, alpha=complex(a), vector=w)
+                    except ConvergenceError:
+                        pass
             memo[nn] = bp
         return memo[nn]
 
@@ -406,6 +424,8 @@ class BranchPoint:
         Chebyshev tail of its eigenvector (the paper's statistic).
     n : int
         Resolution N.
+    vector : ndarray or None
+        The eigenvector (of the equilibrated pencil; None when ``alpha`` is NaN).
     """
 
     alpha1: complex
@@ -414,6 +434,7 @@ class BranchPoint:
     alpha: complex
     tail: float
     n: int
+    vector: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def coefficient(self) -> float:
@@ -421,7 +442,9 @@ class BranchPoint:
         return float(self.alpha.real / self.k**2)
 
 
-def branch_point(op: StabilityOperator, tangent: dict, k: float = 1e-5) -> BranchPoint:
+def branch_point(
+    op: StabilityOperator, tangent: dict, k: float = 1e-5, *, guess: complex | None = None, v0=None
+) -> BranchPoint:
     """α1, α2 and the branch's eigenvalue α(k) at a small k on the grid of ``op``.
 
     The eigenvalue is the one nearest α1 k by shift-invert on the equilibrated pencil,
@@ -430,23 +453,29 @@ def branch_point(op: StabilityOperator, tangent: dict, k: float = 1e-5) -> Branc
     :class:`~chuteflow.stability.BranchTracker`). α2 k² is not used in the shift: on coarse
     grids the Taylor α2 is dominated by the dilute top's continuum within ~1e-8 of α = 0
     (at P1, N = 48: 2.6e6 against Re α/k² ≈ 1.2e4). The answer is kept only when it lies
-    within a quarter of |α1 k| of the prediction and its eigenvector is resolved
-    (tail below :attr:`RejectionPolicy.track_tail_tol`, which the continuum of the dilute
-    top fails); otherwise ``alpha`` is NaN.
+    within a quarter of |α1 k| of the prediction in Im α (Re α is what is measured) and its
+    eigenvector is resolved (tail below :attr:`RejectionPolicy.track_tail_tol`, which the
+    continuum of the dilute top fails); otherwise ``alpha`` is NaN. With ``guess`` and
+    ``v0`` (the branch at k on another grid, ``v0`` on this one), the shift is ``guess``
+    and the answer must lie within 5 % of it.
     """
     A0, A1, A2 = op.series()
     a1, a2, V0, V1 = _bordered(op, tangent, A0, 1j * A1, -A2)
     pencil = op.pencil(k)
-    pred = a1 * k
-    alpha, t = complex("nan"), math.inf
+    if guess is None:
+        pred, start = a1 * k, (V0 + k * V1) / op.col_eq
+    else:
+        pred, start = complex(guess), v0
+    alpha, t, vec = complex("nan"), math.inf, None
     try:
-        a, w = nearest_eigenpair(pencil, pred, v0=(V0 + k * V1) / op.col_eq)
+        a, w = nearest_eigenpair(pencil, pred, v0=start)
         t = tail(pencil.unscale(w), len(op.fields))
-        if abs(a - pred) <= 0.25 * abs(a1 * k) and t <= DEFAULT_POLICY.track_tail_tol:
-            alpha = complex(a)
+        near = abs(a.imag - pred.imag) <= 0.25 * abs(pred) if guess is None else abs(a - pred) <= 0.05 * abs(pred)
+        if near and t <= DEFAULT_POLICY.track_tail_tol:
+            alpha, vec = complex(a), w
     except ConvergenceError:
         pass
-    return BranchPoint(a1, a2, float(k), alpha, float(t), op.n)
+    return BranchPoint(a1, a2, float(k), alpha, float(t), op.n, vec)
 
 
 def longwave(
