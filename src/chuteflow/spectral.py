@@ -194,7 +194,7 @@ class MappedChebyshevGrid(ChebyshevGrid):
         return y, y1, y2
 
     @property
-    def D2(self) -> np.ndarray:  # type: ignore[override]
+    def D2(self) -> np.ndarray:
         """Second-derivative matrix d²/dy² (chain rule in x)."""
         return self._D2
 

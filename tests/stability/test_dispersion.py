@@ -104,7 +104,9 @@ def test_dispersion_dataset(p1_flow):
     # α(0) on the default mapped grid at N = 48: 2e-11 (the k = 0 problem feels the dilute
     # top, which the map resolves more coarsely); on the plain grid from N = 80 below 1e-11
     assert abs(ds["alpha_re"].values[-1]) < 1e-10
-    ds = dispersion(p1_flow, ks[::-1], policy=RejectionPolicy(n_start=80), cache=OperatorCache(2, mapped=False))
+    ds = dispersion(
+        p1_flow, ks[::-1], policy=RejectionPolicy(n_start=80), cache=OperatorCache(2, mapped=False)
+    )
     assert np.allclose(ds["k"].values, ks[::-1])
     assert ds["physical"].values.all()
     # the paper's criterion: eigenvalues change by less than 1e-7 between resolutions

@@ -189,11 +189,10 @@ def eigen_sign(
                 # beyond the k² regime at k (dilute flows): from the branch on another rung,
                 # else by continuation from k = 0 once
                 done = [q for q in memo.values() if q.vector is not None]
-                if done:
+                if done and done[-1].vector is not None:
                     q = done[-1]
-                    bp = branch_point(
-                        op, tangent, k, guess=q.alpha, v0=interp_vector(q.vector, len(op.fields), q.n, nn)
-                    )
+                    v0 = interp_vector(q.vector, len(op.fields), q.n, nn)
+                    bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0)
                 if not math.isfinite(bp.coefficient):
                     try:
                         a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
@@ -470,7 +469,11 @@ def branch_point(
     try:
         a, w = nearest_eigenpair(pencil, pred, v0=start)
         t = tail(pencil.unscale(w), len(op.fields))
-        near = abs(a.imag - pred.imag) <= 0.25 * abs(pred) if guess is None else abs(a - pred) <= 0.05 * abs(pred)
+        near = (
+            abs(a.imag - pred.imag) <= 0.25 * abs(pred)
+            if guess is None
+            else abs(a - pred) <= 0.05 * abs(pred)
+        )
         if near and t <= DEFAULT_POLICY.track_tail_tol:
             alpha, vec = complex(a), w
     except ConvergenceError:

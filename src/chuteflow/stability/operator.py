@@ -163,8 +163,9 @@ def equation_terms(
     name : str
         An equation of :func:`chuteflow.equations.compiled_equations` ("mass", "xmom", …).
     fields : dict
-        Field name → complex nodal values f̂ on the N + 1 nodes of the grid (N = len − 1), e.g. :attr:`Mode.fields <chuteflow.stability.Mode>`. Terms acting on
-        a field that is absent (ŵ of a 2D mode) are left out.
+        Field name → complex nodal values f̂ on the N + 1 nodes of the grid (N = len − 1),
+        e.g. :attr:`Mode.fields <chuteflow.stability.Mode>`. Terms acting on a field that is
+        absent (ŵ of a 2D mode) are left out.
     kx, kz : float
         Wavevector of the mode exp(αt + i k_x x + i k_z z).
     alpha : complex
