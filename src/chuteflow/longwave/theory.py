@@ -188,10 +188,11 @@ def eigen_sign(
             if not math.isfinite(bp.coefficient):
                 # beyond the k² regime at k (dilute flows): from the branch on another rung,
                 # else by continuation from k = 0 once
-                done = [q for q in memo.values() if q.vector is not None]
-                if done and done[-1].vector is not None:
-                    q = done[-1]
-                    v0 = interp_vector(q.vector, len(op.fields), q.n, nn)
+                done = [(q, q.vector) for q in memo.values() if q.vector is not None]
+                if done:
+                    q, vec = done[-1]
+                    assert vec is not None
+                    v0 = interp_vector(vec, len(op.fields), q.n, nn)
                     bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0)
                 if not math.isfinite(bp.coefficient):
                     try:
