@@ -185,9 +185,10 @@ def eigen_sign(
         if nn not in memo:
             op = stability_operator(flow, nn, cache=cache)
             bp = branch_point(op, tangent, k)
-            if not math.isfinite(bp.coefficient):
+            unresolved = bp.tail > DEFAULT_POLICY.track_tail_tol and nn < ladder.n_max
+            if not math.isfinite(bp.coefficient) and not unresolved:
                 # beyond the k² regime at k (dilute flows): from the branch on another rung,
-                # else by continuation from k = 0 once
+                # else by continuation from k = 0 once (an unresolved rung is passed by)
                 done = [(q, q.vector) for q in memo.values() if q.vector is not None]
                 if done:
                     q, vec = done[-1]
