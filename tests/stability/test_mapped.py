@@ -21,14 +21,17 @@ from chuteflow.steady import solve_steady
 
 
 def test_operator_grid_is_mapped_at_the_layer_edge(p1_flow):
-    op = StabilityOperator(p1_flow, 48)
+    op = StabilityOperator(p1_flow, 48, mapped=True)
     g = op.grid
+    # what the solvers use: the operator cache builds 2D operators mapped, 3D ones plain
+    assert isinstance(OperatorCache(2).get(p1_flow, 48).grid, MappedChebyshevGrid)
+    assert type(OperatorCache(2).get(p1_flow, 48, True).grid) is ChebyshevGrid
     assert isinstance(g, MappedChebyshevGrid)
     yc, eps = layer_map(p1_flow)
     T_h = p1_flow.grid.interpolate(p1_flow.T, np.array([p1_flow.h]))[0]
     assert yc == p1_flow.h and eps == pytest.approx(MAP_WIDTH * T_h / math.cos(math.radians(16.0)))
     assert (g.y[0], g.y[-1]) == (0.0, p1_flow.y_max)
-    plain = StabilityOperator(p1_flow, 48, mapped=False).grid
+    plain = StabilityOperator(p1_flow, 48).grid
     assert type(plain) is ChebyshevGrid
     # denser than the plain grid at the layer's edge
     j = int(np.argmin(np.abs(g.y - yc)))

@@ -25,12 +25,10 @@ def test_default_policy_is_the_papers():
     # §4.1: drift and tail below 1e-7, ten highest Chebyshev coefficients
     p = DEFAULT_POLICY
     assert (p.drift_tol, p.tail_tol, p.tail_terms) == (1e-7, 1e-7, 10)
-    # the ladder starts at 48 on the sinh-mapped grid (issue 9; was 80 on the plain grid)
-    assert p.ladder() == [48, 60, 75, 94, 118, 148, 185, 231, 256]
-    assert RejectionPolicy(n_max=100).ladder() == [48, 60, 75, 94, 100]
-    assert RejectionPolicy(n_start=80).ladder() == [80, 100, 125, 156, 195, 244, 256]
-    assert RejectionPolicy(n_max=64).ladder() == [48, 60, 64]
-    assert RejectionPolicy(n_start=64, n_max=64).ladder() == [64]
+    assert p.ladder() == [80, 100, 125, 156, 195, 244, 256]
+    assert RejectionPolicy(n_max=100).ladder() == [80, 100]
+    assert RejectionPolicy(n_max=64).ladder() == [64]
+    assert RejectionPolicy(n_start=48).ladder() == [48, 60, 75, 94, 118, 148, 185, 231, 256]
     assert p.accepts(9e-8, 9e-8) and not p.accepts(1e-7, 0.0)
 
 

@@ -37,7 +37,7 @@ Modes (every one carries its convergence estimate)
     N' = round(0.8N)), ``tail`` (paper's Chebyshev-tail statistic), ``physical`` (both
     < 1e-7), ``summary()``, ``to_xarray()``.
     ``least_stable(flow, k, n=None, sigma=None, method="branch"|"qz")`` → Mode; N adaptive
-    (48, 60, 75, …, 256) unless given. ``spectrum(flow, k, n=80)`` → all physical modes
+    (80, 100, 125, …, 256) unless given. ``spectrum(flow, k, n=80)`` → all physical modes
     by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift;
     ``nearest_eigenpair(pencil, σ, v0=None)`` → (α, w) on the equilibrated pencil.
 

@@ -383,7 +383,7 @@ def dispersion(
     k : array_like
         Wavenumbers ≥ 0 (any order; computed in increasing order by continuation).
     n : int, optional
-        Starting resolution (default ``policy.n_start``, 48); raised along the policy's
+        Starting resolution (default ``policy.n_start``, 80); raised along the policy's
         ladder where a point fails.
     policy : RejectionPolicy, optional
         Drift and tail thresholds and the resolution ladder (default: the paper's, §4.1).
@@ -678,7 +678,7 @@ def least_stable(
         Wavenumber(s); |k| ≤ :data:`K_HYDRO_MAX` = 2π (a wavelength of one particle
         diameter: beyond it the hydrodynamics does not apply and ParameterError is raised).
     n : int, optional
-        Resolution N. Default: adaptive, along ``policy.ladder()`` (48, 60, 75, …, by
+        Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
         factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
     sigma : complex, optional
         Shift: return the physical mode nearest σ (shift-invert Arnoldi at N, drift at N').
@@ -771,7 +771,7 @@ def choose_n(
     tail_tol: float | None = None,
     n_max: int | None = None,
 ) -> int:
-    """Smallest N of the policy's ladder (48, 60, 75, …) at which the least-stable
+    """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
     (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
     return least_stable(
         flow, k, kz=kz, policy=policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max, strict=True

@@ -142,7 +142,7 @@ class OperatorCache:
         if entry is not None and entry[0].flow is flow and entry[1] == fp:
             self._entries.move_to_end(key)
             return entry[0]
-        op = StabilityOperator(flow, n, three_d=three_d, mapped=self.mapped)
+        op = StabilityOperator(flow, n, three_d=three_d, mapped=self.mapped and not three_d)
         self._entries[key] = (op, fp)
         self._entries.move_to_end(key)
         while len(self._entries) > self.maxsize:
@@ -428,7 +428,7 @@ def spectrum(
     k, kz : float
         Wavenumbers (k ≥ 0; kz ≠ 0 for three-dimensional perturbations).
     n : int, optional
-        Resolution N (default ``policy.n_start``, 48); the drift is measured against
+        Resolution N (default ``policy.n_start``, 80); the drift is measured against
         N' = round(0.8 N).
     policy : RejectionPolicy, optional
         Thresholds of the physical-mode tests (default: the paper's, 1e-7 both).
