@@ -254,11 +254,12 @@ def test_k_expansion_pieces_rebuild_the_operator(p1_flow):
 
 
 def test_three_dimensional_operator_reduces_at_kz_zero(p1_flow):
-    """With ŵ and z-momentum added, kz = 0 leaves the 2D eigenvalue unchanged; an oblique
+    """With ŵ and z-momentum added, kz = 0 leaves the 2D eigenvalue unchanged (same mapped
+    grid as the solvers' 2D operators); an oblique
     wavevector is accepted (3D perturbations need no rewrite)."""
     k = 2e-3
     two = least_stable(p1_flow, k, n=64)
-    op3 = StabilityOperator(p1_flow, 64, three_d=True)
+    op3 = StabilityOperator(p1_flow, 64, three_d=True, mapped=True)  # the grid of least_stable
     from chuteflow.stability.modes import nearest_eigenpair
 
     a3, _ = nearest_eigenpair(op3.pencil(k, 0.0), two.alpha)
