@@ -10,6 +10,10 @@ the best of a few repetitions after a warm-up (sympy compilation excluded).
   < 0.2 s.
 - ``longwave_1pct_<P>`` (full mode): the same to ``rtol=0.01`` (N raised until α2 changes by
   < 1 %).
+- ``eigen_sign_<P>`` (issue 9): ``eigen_sign`` — the sweep's long-wave metric, Re α/k² at
+  k = 1e-5 from one shift-invert solve at N and 0.8 N on the sinh-mapped grid — against the
+  sweep's previous metric in the same run: ``longwave(n=64, rtol=0.5, n_max=256,
+  eig_ks=None)`` (Taylor α2 on the plain grid, its first pass). Note: both values and N.
 - Baseline of both: what one does without perturbation theory — dense QZ
   (``scipy.linalg.eig(A, B)``, eigenvalues only, equilibrated pencil) at the same N at three
   small k (1e-6, 2e-6, 4e-6; the k² regime ends near 1e-5, ERRATA), the eigenvalue nearest
@@ -48,7 +52,7 @@ def _qz_fit(flow, n, dq, ks, quick):
 
     from chuteflow.stability import StabilityOperator
 
-    op = StabilityOperator(flow, n)
+    op = StabilityOperator(flow, n, mapped=False)  # longwave()'s Taylor grid
     t_qz, alphas = 0.0, []
     for i, k in enumerate(ks):
         A, B = op.pencil(k).equilibrated()
@@ -102,6 +106,28 @@ def run(quick: bool = False) -> list[dict]:
                 f"{t_steady * 1e3:.0f} ms; baseline: QZ at N = {lw.n}, k = 1e-6, 2e-6, "
                 f"4e-6{' (1 timed × 3)' if quick else ''}, fit a2 = {a2_fit:.5g} "
                 f"({err_fit:.1e} from α2)",
+            }
+        )
+        from chuteflow.longwave.theory import eigen_sign
+
+        t_es, es = _best(lambda flow=flow: eigen_sign(flow), rep)
+
+        def old_metric(flow=flow):
+            try:
+                return longwave(flow, n=64, rtol=0.5, n_max=256, eig_ks=None)
+            except Exception:  # the old first pass raised where it did not converge
+                return None
+
+        t_old, lw_old = _best(old_metric, 1)
+        rows.append(
+            {
+                "name": f"eigen_sign_{name}",
+                "seconds": t_es,
+                "baseline_seconds": t_old,
+                "ratio": t_old / t_es,
+                "note": f"Re α/k² = {es.coefficient:.6g} (N = {es.n}, change vs 0.8N "
+                f"{es.convergence:.1e}); old metric: Taylor Re α2 = "
+                + (f"{lw_old.alpha2.real:.4g} (N = {lw_old.n})" if lw_old is not None else "not converged"),
             }
         )
         if not quick:

@@ -14,7 +14,12 @@ best of a few repetitions after a warm-up (sympy compilation is excluded).
   for the same answer: QZ with eigenvectors at N (tail test) and QZ at N' (drift test).
 - ``dispersion_50``: ``solve_steady`` + ``dispersion`` at 50 wavenumbers on [0, 0.02]
   (adaptive N, drift and tail at every point). Target < 2 s. Baseline: the paper's method
-  on the same 50 points, two dense QZ per point, timed on one point and multiplied.
+  on the same 50 points, two dense QZ per point, timed on one point and multiplied (on the
+  paper's plain grid).
+- ``mapped_vs_plain_<P>_<k>`` (issue 9): ``least_stable`` with the adaptive N on the default
+  sinh-mapped grid (ladder from 48) against the same on the plain grid with the old ladder
+  (80, 100, 125, …), measured in the same run; ratio = plain / mapped time; the note gives
+  both N and |Δα|.
 """
 
 from __future__ import annotations
@@ -44,7 +49,14 @@ def run(quick: bool = False) -> list[dict]:
     import scipy.linalg as sla
 
     from chuteflow._threads import limit_blas_threads
-    from chuteflow.stability import dispersion, least_stable, qz, stability_operator
+    from chuteflow.stability import (
+        OperatorCache,
+        RejectionPolicy,
+        StabilityOperator,
+        dispersion,
+        least_stable,
+        qz,
+    )
     from chuteflow.stability.modes import check_n, nearest_eigenpair
     from chuteflow.steady import solve_steady
 
@@ -55,7 +67,7 @@ def run(quick: bool = False) -> list[dict]:
     rows = []
 
     # 1. one pencil: targeted vs QZ
-    op = stability_operator(flow, N)
+    op = StabilityOperator(flow, N, mapped=False)  # the paper's grid for the QZ baseline
     A, B = op.pencil(K).equilibrated()
     t_qz, w = _best(lambda: sla.eig(A, B, right=False, check_finite=False), max(1, rep // 2))
     ref = w[np.argmin(np.abs(w - ref_mode.alpha))]
@@ -77,7 +89,7 @@ def run(quick: bool = False) -> list[dict]:
 
     # 2. least-stable mode with its convergence estimate, end to end
     n2 = check_n(N)
-    A2, B2 = stability_operator(flow, n2).pencil(K).equilibrated()
+    A2, B2 = StabilityOperator(flow, n2, mapped=False).pencil(K).equilibrated()
 
     def paper():
         qz(A, B)  # with eigenvectors, for the tail test
@@ -118,6 +130,36 @@ def run(quick: bool = False) -> list[dict]:
             f"vectors at N={N}: {t_qz_vec:.2f} s, + QZ at N'={n2}, scaled)",
         }
     )
+
+    # 4. the sinh-mapped grid against the plain grid (adaptive N, same run)
+    cases = (
+        [("P1", 16.0, 0.05, 0.005)]
+        if quick
+        else [
+            ("P1", 16.0, 0.05, 0.005),
+            ("P1", 16.0, 0.05, 0.02),
+            ("P4", 14.0, 0.05, 0.005),
+            ("P5", 17.0, 0.10, 0.005),
+        ]
+    )
+    for name, th, nu0, k in cases:
+        f = solve_steady(th, nu0)
+        old = RejectionPolicy(n_start=80)
+        t_m, mm = _best(lambda f=f, k=k: least_stable(f, k, cache=OperatorCache(4)), rep)
+        t_p, mp = _best(
+            lambda f=f, k=k, old=old: least_stable(f, k, policy=old, cache=OperatorCache(4, mapped=False)),
+            rep,
+        )
+        rows.append(
+            {
+                "name": f"mapped_vs_plain_{name}_{k:g}",
+                "seconds": t_m,
+                "baseline_seconds": t_p,
+                "ratio": t_p / t_m,
+                "note": f"N mapped {mm.n} (drift {mm.drift:.0e}) vs plain {mp.n} (drift "
+                f"{mp.drift:.0e}); |Δα|/|α| = {abs(mm.alpha - mp.alpha) / abs(mp.alpha):.1e}",
+            }
+        )
     return rows
 
 

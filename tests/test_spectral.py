@@ -66,3 +66,42 @@ def test_chebyshev_derivative_of_polynomial_exact(n):
     p = np.polynomial.Polynomial([0.3, -1.0, 0.5, 0.25, -0.1])
     assert np.allclose(g.D @ p(g.y), p.deriv()(g.y), atol=1e-11)
     assert np.allclose(g.D2 @ p(g.y), p.deriv(2)(g.y), atol=1e-10)
+
+
+# -- the sinh-mapped grid ------------------------------------------------------------------
+@pytest.mark.parametrize("blend", [1.0, 0.5])
+def test_mapped_grid_calculus_is_exact_to_round_off(blend):
+    """d/dy, d²/dy², ∫, ∫_a^y and interpolation of a function resolved on the mapped grid
+    (analytic identities; a Gaussian layer of width 0.3 at y = 3 needs the clustering)."""
+    from chuteflow.spectral import MappedChebyshevGrid
+
+    g = MappedChebyshevGrid(120, 0.0, 10.0, 3.0, 0.6, blend)
+    f = lambda y: np.exp(-((y - 3.0) ** 2) / 0.18) + np.sin(y)  # noqa: E731
+    df = -2 * (g.y - 3.0) / 0.18 * np.exp(-((g.y - 3.0) ** 2) / 0.18) + np.cos(g.y)
+    d2f = ((2 * (g.y - 3.0) / 0.18) ** 2 - 2 / 0.18) * np.exp(-((g.y - 3.0) ** 2) / 0.18) - np.sin(g.y)
+    from math import erf, pi, sqrt
+
+    total = sqrt(pi * 0.18) / 2 * (erf(7 / sqrt(0.18)) + erf(3 / sqrt(0.18))) + 1 - np.cos(10.0)
+    assert g.y[0] == 0.0 and g.y[-1] == 10.0 and (np.diff(g.y) > 0).all()
+    assert np.abs(g.D @ f(g.y) - df).max() < 1e-9 * np.abs(df).max()
+    assert np.abs(g.D2 @ f(g.y) - d2f).max() < 1e-7 * np.abs(d2f).max()
+    assert abs(g.integrate(f(g.y)) - total) < 1e-12
+    assert abs(g.cumulative(f(g.y))[-1] - total) < 1e-12
+    yq = np.linspace(0.0, 10.0, 23)
+    assert np.abs(g.interpolate(f(g.y), yq) - f(yq)).max() < 1e-10
+    # the computational variable: its nodes are the Lobatto points, and it inverts the map
+    assert np.allclose(g.to_computational(g.y), g.x, atol=1e-13)
+
+
+def test_mapped_grid_clusters_at_the_centre_and_tends_to_the_plain_grid():
+    from chuteflow.spectral import MappedChebyshevGrid
+
+    g = MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 0.5)
+    h = np.diff(g.y)
+    j = int(np.argmin(np.abs(g.y[:-1] - 10.0)))
+    assert h[j] < 0.2 * np.diff(ChebyshevGrid(64, 0.0, 40.0).y)[j]
+    wide = MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 1e6)
+    assert np.allclose(wide.y, ChebyshevGrid(64, 0.0, 40.0).y, atol=1e-6)
+    assert wide.with_n(32).n == 32 and wide.with_n(32).width == 1e6
+    with pytest.raises(ValueError, match="width"):
+        MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 0.0)

@@ -2,12 +2,15 @@
 
 The lowest numerical layer; used by the steady solver and the stability operator alike.
 Nodes are Gauss–Lobatto points ordered from the left end (the floor, y = 0) to the right
-end (y = y_max).
+end (y = y_max), either linear in the computational variable x ∈ [−1, 1]
+(:class:`ChebyshevGrid`) or clustered around an interior layer by a sinh map
+(:class:`MappedChebyshevGrid`). Chebyshev coefficients and tails are always in x.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from functools import cached_property
 
 import numpy as np
@@ -51,16 +54,26 @@ def _clenshaw_curtis(n: int) -> np.ndarray:
 class ChebyshevGrid:
     """Chebyshev–Gauss–Lobatto grid of ``n + 1`` nodes on ``[a, b]``.
 
+    The nodes are y = y(x_j) for the Lobatto points x_j = −cos(πj/n) of the *computational
+    variable* x ∈ [−1, 1]; here y is linear in x. Chebyshev coefficients
+    (:func:`coefficients`, :func:`tail`) of nodal values are always those in x, which is
+    what a mapped grid (:class:`MappedChebyshevGrid`) changes.
+
     Attributes
     ----------
     y : ndarray
         Nodes, ascending from ``a`` to ``b``.
+    x : ndarray
+        The same nodes in the computational variable x ∈ [−1, 1].
     D : ndarray
         First-derivative matrix d/dy.
     D2 : ndarray
         Second-derivative matrix.
     weights : ndarray
-        Clenshaw–Curtis quadrature weights (exact for polynomials of degree ≤ n).
+        Clenshaw–Curtis quadrature weights (exact for polynomials in x of degree ≤ n, times
+        dy/dx).
+    jacobian : ndarray
+        dy/dx at the nodes.
     """
 
     def __init__(self, n: int, a: float = 0.0, b: float = 1.0):
@@ -69,9 +82,11 @@ class ChebyshevGrid:
         self.n, self.a, self.b = int(n), float(a), float(b)
         x, D, w = _reference(self.n)
         half = 0.5 * (self.b - self.a)
+        self.x = x
         self.y = self.a + half * (x + 1.0)
         self.D = D / half
         self.weights = w * half
+        self.jacobian = np.full(self.n + 1, half)
 
     @cached_property
     def D2(self) -> np.ndarray:
@@ -81,13 +96,17 @@ class ChebyshevGrid:
     def __len__(self):
         return self.n + 1
 
+    def to_computational(self, y) -> np.ndarray:
+        """The computational variable x ∈ [−1, 1] of heights ``y``."""
+        return (np.asarray(y, dtype=float) - self.a) / (0.5 * (self.b - self.a)) - 1.0
+
     def integrate(self, f: np.ndarray) -> np.ndarray:
         """∫_a^b f dy (along the last axis)."""
         return f @ self.weights
 
     def cumulative(self, f: np.ndarray) -> np.ndarray:
         """∫_a^y f dy' at the nodes (spectral antiderivative with value 0 at ``a``)."""
-        c = coefficients(f)
+        c = coefficients(np.asarray(f) * self.jacobian)
         n = self.n
         # antiderivative of Σ c_k T_k on [-1, 1]: standard recurrence
         C = np.zeros(n + 2, dtype=np.result_type(c, float))
@@ -96,15 +115,111 @@ class ChebyshevGrid:
         cc0[0] *= 2.0
         for k in range(1, n + 2):
             C[k] = (cc0[k - 1] - cc[k + 1]) / (2.0 * k)
-        x = (self.y - self.a) / (0.5 * (self.b - self.a)) - 1.0
-        vals = np.polynomial.chebyshev.chebval(x, C)
-        vals -= vals[0]
-        return vals * 0.5 * (self.b - self.a)
+        vals = np.polynomial.chebyshev.chebval(self.x, C)
+        return vals - vals[0]
 
     def interpolate(self, f: np.ndarray, y: np.ndarray) -> np.ndarray:
-        """Evaluate the interpolant of nodal values ``f`` at points ``y`` (Clenshaw)."""
-        x = (np.asarray(y) - self.a) / (0.5 * (self.b - self.a)) - 1.0
-        return np.polynomial.chebyshev.chebval(x, coefficients(f))
+        """Evaluate the interpolant (a polynomial in x) of nodal values ``f`` at heights
+        ``y`` (Clenshaw). ``f`` may stack several series along its leading axes (nodes on the
+        last); the result then has shape ``f.shape[:-1] + y.shape``."""
+        c = coefficients(f)
+        if c.ndim > 1:
+            c = np.moveaxis(c, -1, 0)
+        return np.polynomial.chebyshev.chebval(self.to_computational(y), c, tensor=True)
+
+    def _map_key(self) -> tuple:
+        return (self.a, self.b)
+
+    def with_n(self, n: int) -> ChebyshevGrid:
+        """The grid of the same map with ``n`` intervals."""
+        return ChebyshevGrid(n, self.a, self.b)
+
+
+class MappedChebyshevGrid(ChebyshevGrid):
+    """Chebyshev grid on ``[a, b]`` clustered around an interior height by a sinh map.
+
+    y = c + ε sinh(s), with s linear in the computational variable x ∈ [−1, 1]
+    (s(−1) = asinh((a − c)/ε), s(1) = asinh((b − c)/ε); Tee & Trefethen 2006, SIAM J. Sci.
+    Comput. 28, 1798). Near y = c the spacing is ε (s₁ − s₀)/2 times that in x, so a layer
+    of width ~ε at c is resolved by a fixed number of nodes whatever b − a; for ε ≫ b − a the
+    map tends to the plain (linear) grid. Same interface as :class:`ChebyshevGrid`:
+    derivative matrices d/dy, d²/dy² by the chain rule, quadrature weights w_x dy/dx,
+    interpolation and Chebyshev coefficients in x.
+
+    Parameters
+    ----------
+    n : int
+        Number of intervals (n + 1 nodes).
+    a, b : float
+        The interval, a < b.
+    center : float
+        Height c where the nodes cluster (clipped to [a, b]).
+    width : float
+        Width ε > 0 of the clustered region.
+    """
+
+    def __init__(self, n: int, a: float, b: float, center: float, width: float, blend: float = 1.0):
+        if n < 2:
+            raise ValueError(f"n = {n}: need at least 2 intervals")
+        if not (b > a):
+            raise ValueError(f"[a, b] = [{a}, {b}]: need a < b")
+        if not (width > 0 and np.isfinite(width)):
+            raise ValueError(f"width = {width!r}: the map's width must be a positive number")
+        if not (0.0 < blend <= 1.0):
+            raise ValueError(f"blend = {blend!r}: the weight of the sinh map must be in (0, 1]")
+        self.n, self.a, self.b = int(n), float(a), float(b)
+        self.center = float(min(max(center, a), b))
+        self.width = float(width)
+        self.blend = float(blend)
+        x, Dx, w = _reference(self.n)
+        y, y1, y2 = self._map(x)
+        y[0], y[-1] = self.a, self.b
+        self.x = x
+        self.y = y
+        self.jacobian = y1
+        self.D = Dx / y1[:, None]
+        self._D2 = (Dx @ Dx) / (y1**2)[:, None] - (y2 / y1**3)[:, None] * Dx
+        self.weights = w * y1
+
+    def _map(self, x):
+        """y(x), dy/dx, d²y/dx²: (1 − β) × linear + β × sinh map."""
+        c, eps, beta = self.center, self.width, self.blend
+        s0, s1 = math.asinh((self.a - c) / eps), math.asinh((self.b - c) / eps)
+        ds = 0.5 * (s1 - s0)
+        half = 0.5 * (self.b - self.a)
+        s = s0 + ds * (np.asarray(x, dtype=float) + 1.0)
+        y = (1 - beta) * (self.a + half * (x + 1.0)) + beta * (c + eps * np.sinh(s))
+        y1 = (1 - beta) * half + beta * eps * np.cosh(s) * ds
+        y2 = beta * eps * np.sinh(s) * ds**2
+        return y, y1, y2
+
+    @property
+    def D2(self) -> np.ndarray:
+        """Second-derivative matrix d²/dy² (chain rule in x)."""
+        return self._D2
+
+    def to_computational(self, y) -> np.ndarray:
+        """The computational variable x ∈ [−1, 1] of heights ``y`` (Newton on the monotone
+        map, from the inverse of its sinh part)."""
+        y = np.asarray(y, dtype=float)
+        c, eps = self.center, self.width
+        s0, s1 = math.asinh((self.a - c) / eps), math.asinh((self.b - c) / eps)
+        x = 2.0 * (np.arcsinh((y - c) / eps) - s0) / (s1 - s0) - 1.0
+        if self.blend < 1.0:
+            for _ in range(50):
+                f, f1, _ = self._map(x)
+                dx = (f - y) / f1
+                x = np.clip(x - dx, -1.0, 1.0)
+                if np.all(np.abs(dx) < 1e-15):
+                    break
+        return x
+
+    def _map_key(self) -> tuple:
+        return (self.a, self.b, self.center, self.width, self.blend)
+
+    def with_n(self, n: int) -> MappedChebyshevGrid:
+        """The grid of the same map with ``n`` intervals."""
+        return MappedChebyshevGrid(n, self.a, self.b, self.center, self.width, self.blend)
 
 
 def coefficients(f: np.ndarray) -> np.ndarray:

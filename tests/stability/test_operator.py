@@ -9,8 +9,8 @@ import pytest
 
 from chuteflow.equations import compiled_equations
 from chuteflow.errors import ParameterError
-from chuteflow.spectral import ChebyshevGrid
-from chuteflow.stability import StabilityOperator, base_on_grid, least_stable
+from chuteflow.spectral import ChebyshevGrid, MappedChebyshevGrid
+from chuteflow.stability import OperatorCache, StabilityOperator, base_on_grid, least_stable
 
 from .conftest import P1
 
@@ -195,14 +195,19 @@ def test_floor_conditions_agree_with_eq_bc0u_and_eq_bc0T(p1_flow):
         assert comb[key] == pytest.approx(want, rel=1e-8, abs=1e-10), key
 
 
-def test_pencil_solves_the_raw_linearised_equations(p1_flow):
+@pytest.mark.parametrize("mapped", [True, False])
+def test_pencil_solves_the_raw_linearised_equations(p1_flow, mapped):
     """An eigenvector of the assembled pencil satisfies the unscaled compiled equations at
     every interior node, and each boundary condition of §4.1, to round-off: this checks the
-    row scaling, the equilibration, the block layout and the boundary rows at once."""
+    row scaling, the equilibration, the block layout and the boundary rows at once, on the
+    default sinh-mapped grid and on the plain Chebyshev grid."""
     k = 2e-3
-    mode = least_stable(p1_flow, k, n=64)
+    mode = least_stable(p1_flow, k, n=64, cache=OperatorCache(2, mapped=mapped))
     y = mode.y
-    g = ChebyshevGrid(len(y) - 1, 0.0, p1_flow.y_max)
+    g = mode.grid
+    assert isinstance(g, MappedChebyshevGrid) == mapped
+    if not mapped:
+        assert np.allclose(g.y, ChebyshevGrid(len(y) - 1, 0.0, p1_flow.y_max).y, rtol=1e-15, atol=1e-13)
     b = base_on_grid(p1_flow, y)
     P = p1_flow.model.evaluate(b["nu"], b["T"])
     th = math.radians(p1_flow.theta)
@@ -249,11 +254,12 @@ def test_k_expansion_pieces_rebuild_the_operator(p1_flow):
 
 
 def test_three_dimensional_operator_reduces_at_kz_zero(p1_flow):
-    """With ŵ and z-momentum added, kz = 0 leaves the 2D eigenvalue unchanged; an oblique
+    """With ŵ and z-momentum added, kz = 0 leaves the 2D eigenvalue unchanged (same mapped
+    grid as the solvers' 2D operators); an oblique
     wavevector is accepted (3D perturbations need no rewrite)."""
     k = 2e-3
     two = least_stable(p1_flow, k, n=64)
-    op3 = StabilityOperator(p1_flow, 64, three_d=True)
+    op3 = StabilityOperator(p1_flow, 64, three_d=True, mapped=True)  # the grid of least_stable
     from chuteflow.stability.modes import nearest_eigenpair
 
     a3, _ = nearest_eigenpair(op3.pencil(k, 0.0), two.alpha)

@@ -28,6 +28,7 @@ def test_default_policy_is_the_papers():
     assert p.ladder() == [80, 100, 125, 156, 195, 244, 256]
     assert RejectionPolicy(n_max=100).ladder() == [80, 100]
     assert RejectionPolicy(n_max=64).ladder() == [64]
+    assert RejectionPolicy(n_start=48).ladder() == [48, 60, 75, 94, 118, 148, 185, 231, 256]
     assert p.accepts(9e-8, 9e-8) and not p.accepts(1e-7, 0.0)
 
 

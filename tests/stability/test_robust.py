@@ -104,7 +104,7 @@ def test_strict_still_raises(p1_flow):
     """strict=True keeps the old contract: no physical mode by N → ConvergenceError."""
     from chuteflow.stability import RejectionPolicy
 
-    tight = RejectionPolicy(drift_tol=1e-15, tail_tol=1e-15, n_max=80)
+    tight = RejectionPolicy(drift_tol=1e-15, tail_tol=1e-15, n_start=80, n_max=80)
     with pytest.raises(ConvergenceError, match="least-stable mode"):
         least_stable(p1_flow, 0.002, policy=tight, strict=True)
     mode = least_stable(p1_flow, 0.002, policy=tight)

@@ -396,7 +396,9 @@ def dispersion_cmd(
             f"the branch was lost near k = {ds.attrs['branch_lost_at']:g}; from there on "
             "the least-stable mode is solved directly at each k (dense QZ)"
         )
-    finite = np.isfinite(v["alpha_re"])  # --no-strict: NaN where the branch was lost
+    # --no-strict: NaN where the branch was lost; k = 0 is outside (0, k_max] (α(0) = 0 by
+    # mass conservation, Appendix B: the computed value is its discretisation error)
+    finite = np.isfinite(v["alpha_re"]) & (v["k"] > 0)
     i_max = int(np.argmax(np.where(finite, v["alpha_re"], -np.inf))) if finite.any() else 0
     summary = {
         **_params(flow),

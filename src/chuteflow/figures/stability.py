@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..spectral import ChebyshevGrid
-from ..stability.operator import equation_terms
+from ..spectral import ChebyshevGrid, MappedChebyshevGrid
+from ..stability.operator import equation_terms, stability_grid
 
 __all__ = [
     "dispersion_figure",
@@ -260,11 +260,13 @@ def magnification_figure(
 # -- eigenfunctions -------------------------------------------------------------------------
 def _mode_grid(mode, flow):
 
-    g = ChebyshevGrid(mode.n, 0.0, flow.y_max)
+    # the grid the mode was computed on (sinh-mapped by default), rebuilt from ``flow``
+    mapped = isinstance(getattr(mode, "grid", None), MappedChebyshevGrid)
+    g = stability_grid(flow, mode.n, mapped)
     if len(mode.y) != len(g.y) or not np.allclose(mode.y, g.y, rtol=1e-10, atol=1e-10):
         raise ValueError(
             "mode and flow do not match: the mode's nodes are not the "
-            "Chebyshev nodes of the flow's domain [0, y_max]"
+            "collocation nodes of the flow's domain [0, y_max]"
         )
     return g
 
@@ -366,7 +368,7 @@ def eigenfunction_diagnostics(mode, flow) -> dict:
     nu, u, T = f["nu"], f["u"], f["T"]
     compression = np.zeros(len(nu), complex)  # −ν0 ∇·û
     vertical = np.zeros(len(nu), complex)  # −ν0' v̂ (advection of the base density)
-    for t, term in equation_terms(flow, "mass", f, mode.k, mode.kz, mode.alpha):
+    for t, term in equation_terms(flow, "mass", f, mode.k, mode.kz, mode.alpha, grid=g):
         if t.field in ("u", "v", "w"):
             if t.b or t.c or t.d:
                 compression += term

@@ -23,8 +23,9 @@ from α2 alone (the k² regime ends near k ~ 1e-5 … 1e-4 for P1).
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
@@ -33,9 +34,16 @@ from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
 from ..stability.dispersion import BranchTracker
-from ..stability.modes import nearest_eigenpair, stability_operator
+from ..stability.modes import (
+    OperatorCache,
+    check_n,
+    interp_vector,
+    nearest_eigenpair,
+    stability_operator,
+    tail,
+)
 from ..stability.operator import StabilityOperator
-from ..stability.policy import RejectionPolicy
+from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
 from ..steady import SteadyFlow, steady_tangent
 
 #: Wavenumbers of the eigenvalue-based k² coefficient Re α/k² (the range over which the
@@ -47,12 +55,23 @@ EIG_KS = (1e-6, 1e-5, 1e-4)
 K_EIG = 1e-5
 
 
-def eigen_coefficient(flow: SteadyFlow, *, n: int = 100, n_max: int = 256, rtol: float = 1e-4, ks=EIG_KS):
+def eigen_coefficient(
+    flow: SteadyFlow,
+    *,
+    n: int = 100,
+    n_max: int = 256,
+    rtol: float = 1e-4,
+    ks=EIG_KS,
+    cache: OperatorCache | None = None,
+):
     """Re α(k)/k² of the α(0) = 0 branch at the wavenumbers ``ks`` (from eigenvalues).
 
-    The branch is followed from k = 0 by :class:`~chuteflow.stability.BranchTracker` at N
-    and at 4N/5; N grows by 25 % until Re α/k² at :data:`K_EIG` changes by less than
-    ``rtol`` (relative) or N reaches ``n_max``.
+    Each eigenvalue is one shift-invert solve from the perturbative prediction
+    (:func:`branch_point`); where that does not land on the branch (tested by distance and
+    eigenvector tail), the branch is followed from k = 0 by
+    :class:`~chuteflow.stability.BranchTracker` instead. Both at N and at 4N/5; N grows by
+    25 % until Re α/k² at :data:`K_EIG` changes by less than ``rtol`` (relative) or N
+    reaches ``n_max``.
 
     Returns
     -------
@@ -61,11 +80,19 @@ def eigen_coefficient(flow: SteadyFlow, *, n: int = 100, n_max: int = 256, rtol:
         relative change at :data:`K_EIG` and the resolution N.
     """
     ks = tuple(sorted(float(k) for k in ks))
+    tangent = steady_tangent(flow)
 
     def at(nn):
-        tr = BranchTracker(flow, nn, n_max=nn)
-        vals = []
+        op = stability_operator(flow, nn, cache=cache)
+        vals: list[float] = []
+        tr = None
         for kk in ks:
+            bp = branch_point(op, tangent, kk) if tr is None else None
+            if bp is not None and math.isfinite(bp.coefficient):
+                vals.append(bp.coefficient)
+                continue
+            if tr is None:
+                tr = BranchTracker(flow, nn, n_max=nn, cache=cache)
             try:
                 a, _ = tr.advance(kk)
                 vals.append(float(a.real / kk**2))
@@ -87,6 +114,116 @@ def eigen_coefficient(flow: SteadyFlow, *, n: int = 100, n_max: int = 256, rtol:
         if conv <= rtol or nn >= ladder.n_max:
             return tuple(cur), float(conv), nn
         prev, nn = cur, ladder.next_n(nn)
+
+
+@dataclass(frozen=True)
+class EigenSign:
+    """The long-wave coefficient from eigenvalues, resolved for its sign (sweeps).
+
+    Attributes
+    ----------
+    theta, nu0 : float
+        The steady flow.
+    alpha1 : complex
+        α1 = −i dQ0/dρ̄0 (bordered perturbation theory, Appendix B eq. (B 2)) at N.
+    coefficient : float
+        Re α(k)/k² of the branch's eigenvalue at k = :attr:`k` and N: the k² coefficient the
+        dispersion relation follows (> 0: long-wave unstable).
+    convergence : float
+        |coefficient(N) − coefficient(N')| / |coefficient(N)|, N' = round(0.8 N).
+    alpha2_taylor : complex
+        The strict Taylor α2 at N (dominated by the dilute top's continuum on coarse grids;
+        reported, not used for the sign).
+    k : float
+        Wavenumber of the eigenvalue (:data:`K_EIG`).
+    n : int
+        Resolution N.
+    converged : bool
+        ``convergence`` met the requested tolerance by ``n_max``.
+    """
+
+    theta: float
+    nu0: float
+    alpha1: complex
+    coefficient: float
+    convergence: float
+    alpha2_taylor: complex
+    k: float
+    n: int
+    converged: bool
+
+    @property
+    def unstable(self) -> bool:
+        """Long-wave unstable: Re α(k)/k² > 0 (same rule as :attr:`LongWave.unstable`)."""
+        return bool(self.coefficient > 0)
+
+
+def eigen_sign(
+    flow: SteadyFlow,
+    *,
+    n: int = 48,
+    n_max: int = 160,
+    rtol: float = 0.05,
+    k: float = K_EIG,
+    cache: OperatorCache | None = None,
+) -> EigenSign:
+    """Re α(k)/k² at k = :data:`K_EIG` with its convergence, cheaply (one flow of a sweep).
+
+    :func:`branch_point` at N and N' = round(0.8 N) on the (sinh-mapped) stability grid,
+    N raised along the ladder N → round(1.25 N) (each rung's N' is the previous rung, so it
+    is reused) until the two agree to ``rtol`` relative — with the default 0.05 the sign is
+    decided with a margin of 20 — or N reaches ``n_max``. Measured N at the paper's points:
+    48–75 (``benchmarks/bench_longwave.py``). Where the perturbative solve misses the branch
+    (k = 1e-5 beyond the k² regime, e.g. ν0(0) ≲ 0.02), the shift is the branch on another
+    rung, or the eigenvalue comes from :class:`~chuteflow.stability.BranchTracker`.
+    """
+    tangent = steady_tangent(flow)
+    ladder = RejectionPolicy(n_start=int(n), n_max=int(n_max))
+    memo: dict[int, BranchPoint] = {}
+
+    def at(nn: int) -> BranchPoint:
+        if nn not in memo:
+            op = stability_operator(flow, nn, cache=cache)
+            bp = branch_point(op, tangent, k)
+            unresolved = bp.tail > DEFAULT_POLICY.track_tail_tol and nn < ladder.n_max
+            if not math.isfinite(bp.coefficient) and not unresolved:
+                # beyond the k² regime at k (dilute flows): from the branch on another rung,
+                # else by continuation from k = 0 once (an unresolved rung is passed by)
+                done = [(q, q.vector) for q in memo.values() if q.vector is not None]
+                if done:
+                    q, vec = done[-1]
+                    assert vec is not None
+                    v0 = interp_vector(vec, len(op.fields), q.n, nn)
+                    bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0)
+                if not math.isfinite(bp.coefficient):
+                    try:
+                        a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
+                        bp = dataclasses.replace(bp, alpha=complex(a), vector=w)
+                    except ConvergenceError:
+                        pass
+            memo[nn] = bp
+        return memo[nn]
+
+    nn = ladder.n_start
+    while True:
+        cur, prev = at(nn), at(check_n(nn))
+        conv = abs(cur.coefficient - prev.coefficient) / max(abs(cur.coefficient), 1e-300)
+        if not math.isfinite(conv):
+            conv = math.inf
+        if conv <= rtol or nn >= ladder.n_max:
+            break
+        nn = ladder.next_n(nn)
+    return EigenSign(
+        flow.theta,
+        flow.nu0,
+        cur.alpha1,
+        cur.coefficient,
+        float(conv),
+        cur.alpha2,
+        float(k),
+        nn,
+        bool(conv <= rtol),
+    )
 
 
 @dataclass(frozen=True)
@@ -237,6 +374,12 @@ def bordered_coefficients(
     ∫ ν̂ dy = 1, one LU of the bordered (equilibrated) matrix [A0, −BV0; c, 0] and two
     solves give (V1, α1) and α2.
     """
+    a1, a2, _, _ = _bordered(op, tangent, A0, P1, P2)
+    return a1, a2
+
+
+def _bordered(op, tangent, A0, P1, P2):
+    """(α1, α2, V0, V1) of :func:`bordered_coefficients` (V0, V1 of (A, B), not equilibrated)."""
     B = np.asarray(op.B, dtype=float)
     M = A0.shape[0]
     V0 = null_vector(op, tangent)
@@ -252,7 +395,7 @@ def bordered_coefficients(
     bord *= rs[:, None]
     cs = 1.0 / np.abs(bord).max(axis=0)
     bord *= cs[None, :]
-    lu = sla.lu_factor(bord, check_finite=False)
+    lu = sla.lu_factor(bord, overwrite_a=True, check_finite=False)
 
     def solve(rhs):
         r = np.concatenate([rhs, [0.0]]) * rs
@@ -262,7 +405,82 @@ def bordered_coefficients(
 
     V1, a1 = solve(-(P1 @ V0))
     _, a2 = solve(a1 * (B @ V1) - P1 @ V1 - P2 @ V0)
-    return complex(a1), complex(a2)
+    return complex(a1), complex(a2), V0, V1
+
+
+@dataclass(frozen=True)
+class BranchPoint:
+    """The α(0) = 0 branch at one small k on one grid, from perturbation theory and one
+    eigenvalue solve (:func:`branch_point`).
+
+    Attributes
+    ----------
+    alpha1, alpha2 : complex
+        Taylor coefficients (bordered perturbation theory at k = 0) on this grid.
+    k : float
+        The wavenumber of the eigenvalue.
+    alpha : complex
+        The eigenvalue of the branch at k (NaN when the solve did not land on the branch).
+    tail : float
+        Chebyshev tail of its eigenvector (the paper's statistic).
+    n : int
+        Resolution N.
+    vector : ndarray or None
+        The eigenvector (of the equilibrated pencil; None when ``alpha`` is NaN).
+    """
+
+    alpha1: complex
+    alpha2: complex
+    k: float
+    alpha: complex
+    tail: float
+    n: int
+    vector: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def coefficient(self) -> float:
+        """Re α(k)/k² (NaN when the eigenvalue is missing)."""
+        return float(self.alpha.real / self.k**2)
+
+
+def branch_point(
+    op: StabilityOperator, tangent: dict, k: float = 1e-5, *, guess: complex | None = None, v0=None
+) -> BranchPoint:
+    """α1, α2 and the branch's eigenvalue α(k) at a small k on the grid of ``op``.
+
+    The eigenvalue is the one nearest α1 k by shift-invert on the equilibrated pencil,
+    started from the perturbative eigenvector V0 + k V1: one more LU than the Taylor
+    coefficients, and no continuation from k = 0 (the same first step as
+    :class:`~chuteflow.stability.BranchTracker`). α2 k² is not used in the shift: on coarse
+    grids the Taylor α2 is dominated by the dilute top's continuum within ~1e-8 of α = 0
+    (at P1, N = 48: 2.6e6 against Re α/k² ≈ 1.2e4). The answer is kept only when it lies
+    within a quarter of |α1 k| of the prediction in Im α (Re α is what is measured) and its
+    eigenvector is resolved (tail below :attr:`RejectionPolicy.track_tail_tol`, which the
+    continuum of the dilute top fails); otherwise ``alpha`` is NaN. With ``guess`` and
+    ``v0`` (the branch at k on another grid, ``v0`` on this one), the shift is ``guess``
+    and the answer must lie within 5 % of it.
+    """
+    A0, A1, A2 = op.series()
+    a1, a2, V0, V1 = _bordered(op, tangent, A0, 1j * A1, -A2)
+    pencil = op.pencil(k)
+    if guess is None:
+        pred, start = a1 * k, (V0 + k * V1) / op.col_eq
+    else:
+        pred, start = complex(guess), v0
+    alpha, t, vec = complex("nan"), math.inf, None
+    try:
+        a, w = nearest_eigenpair(pencil, pred, v0=start)
+        t = tail(pencil.unscale(w), len(op.fields))
+        near = (
+            abs(a.imag - pred.imag) <= 0.25 * abs(pred)
+            if guess is None
+            else abs(a - pred) <= 0.05 * abs(pred)
+        )
+        if near and t <= DEFAULT_POLICY.track_tail_tol:
+            alpha, vec = complex(a), w
+    except ConvergenceError:
+        pass
+    return BranchPoint(a1, a2, float(k), alpha, float(t), op.n, vec)
 
 
 def longwave(
@@ -323,9 +541,13 @@ def longwave(
     # the stability solvers' resolution ladder (N → round(1.25 N)), from n up to n_max
     ladder = RejectionPolicy(n_start=n, n_max=int(n_max))
     n2 = max(24, (4 * n) // 5)
-    b1, b2 = coefficients(stability_operator(flow, n2), tangent)
+    # the Taylor α2 on the plain Chebyshev grid: it converges there faster than on the
+    # sinh-mapped grid, which takes nodes from the dilute top whose continuum it feels (P2,
+    # N = 100: Re α2 = 846 plain, 1.2e4 mapped; both → −91 … −40 only algebraically)
+    plain = OperatorCache(2, mapped=False)
+    b1, b2 = coefficients(stability_operator(flow, n2, cache=plain), tangent)
     while True:
-        op = stability_operator(flow, n)
+        op = stability_operator(flow, n, cache=plain)
         a1, a2 = coefficients(op, tangent)
         c1 = abs(a1 - b1) / max(abs(a1), 1e-300)
         c2 = abs(a2 - b2) / max(abs(a2), 1e-300)

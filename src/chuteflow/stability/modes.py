@@ -121,12 +121,17 @@ class OperatorCache:
 
     The solvers take ``cache=`` (default: one cache shared by the module's functions,
     :data:`OPERATORS`); pass an own cache to keep a computation's operators apart.
+    ``mapped`` chooses the grid of every operator it builds: the sinh-mapped grid (default,
+    :func:`~chuteflow.stability.operator.layer_map`) or, with False, the paper's plain
+    Chebyshev grid — ``cache=OperatorCache(mapped=False)`` runs any solver on the plain
+    grid, as an independent check.
     """
 
-    def __init__(self, maxsize: int = 6):
+    def __init__(self, maxsize: int = 6, *, mapped: bool = True):
         if int(maxsize) < 1:
             raise ParameterError(f"maxsize = {maxsize!r}: an operator cache holds at least one")
         self.maxsize = int(maxsize)
+        self.mapped = bool(mapped)
         self._entries: OrderedDict = OrderedDict()
 
     def get(self, flow: SteadyFlow, n: int, three_d: bool = False) -> StabilityOperator:
@@ -137,7 +142,7 @@ class OperatorCache:
         if entry is not None and entry[0].flow is flow and entry[1] == fp:
             self._entries.move_to_end(key)
             return entry[0]
-        op = StabilityOperator(flow, n, three_d=three_d)
+        op = StabilityOperator(flow, n, three_d=three_d, mapped=self.mapped and not three_d)
         self._entries[key] = (op, fp)
         self._entries.move_to_end(key)
         while len(self._entries) > self.maxsize:
@@ -181,6 +186,9 @@ class Mode:
         Resolution N (Chebyshev intervals) the eigenpair was computed at.
     y : ndarray
         The N + 1 collocation nodes on [0, y_max].
+    grid : ChebyshevGrid
+        The collocation grid of :attr:`y` (sinh-mapped by default; derivatives,
+        quadrature and interpolation of the fields go through it).
     fields : dict
         ``"nu"``, ``"u"``, ``"v"``, ``"T"`` (and ``"w"``) → complex nodal values, divided by
         the largest component of the whole eigenvector (paper's normalisation).
@@ -218,6 +226,7 @@ class Mode:
     model: ChuteModel | None = None
     method: str = "branch"
     note: str = ""
+    grid: ChebyshevGrid | None = field(default=None, repr=False)
 
     @property
     def converged(self) -> bool:
@@ -307,6 +316,7 @@ def make_mode(pencil: Pencil, alpha, v, drift, n_check, policy: RejectionPolicy 
         nu0=flow.nu0,
         n=pencil.n,
         y=pencil.grid.y,
+        grid=pencil.grid,
         fields={f: v[s].copy() for f, s in pencil.slices().items()},
         drift=float(drift),
         tail=t,
@@ -327,7 +337,8 @@ def _interp_matrix(n_from: int, n_to: int) -> np.ndarray:
 
 
 def interp_vector(v: np.ndarray, nfields: int, n_from: int, n_to: int) -> np.ndarray:
-    """Move an eigenvector between Chebyshev grids on the same interval (per field)."""
+    """Move an eigenvector between two grids of the same map (per field; exact in the
+    computational variable, whatever the map)."""
     M = _interp_matrix(n_from, n_to)
     return (v.reshape(nfields, n_from + 1) @ M.T).reshape(-1)
 

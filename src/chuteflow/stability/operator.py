@@ -8,8 +8,11 @@ residuals are N(X) − B∂_tX) or to the piece A_{b,d} of
 
     A(k_x, k_z) = Σ_{b,d} (ik_x)^b (ik_z)^d A_{b,d} + |k| K,
 
-where K holds the |k| terms of the top decay conditions. Rows, for N + 1 Chebyshev–Lobatto
-nodes per field on [0, y_max]:
+where K holds the |k| terms of the top decay conditions. The N + 1 collocation nodes per field
+on [0, y_max] are Chebyshev–Lobatto nodes of a computational variable mapped by a sinh onto
+y, clustered at the edge of the dense layer (:func:`layer_map`, issue 9: ~2× fewer nodes
+than the plain grid for the paper's 1e-7 at k ≤ 0.02; ``mapped=True``, what the solvers'
+operator cache builds in 2D), or of the plain Chebyshev grid (the default). Rows:
 
 ========  =================  ===========================  =================================
 block     interior nodes     floor (y = 0)                top (y = y_max)
@@ -40,7 +43,7 @@ import numpy as np
 
 from ..equations import TOP_OF, Term, compiled_equations
 from ..errors import ParameterError
-from ..spectral import ChebyshevGrid
+from ..spectral import ChebyshevGrid, MappedChebyshevGrid
 from ..steady import SteadyFlow
 
 FIELDS_2D = ("nu", "u", "v", "T")
@@ -52,6 +55,67 @@ FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "w": "floor_z", "T": "
 
 N_RANGE = (8, 1000)
 
+#: Width of the sinh map's clustered region in units of the density scale height
+#: T0(h)/cos θ at the layer's edge y = h (see :func:`layer_map`).
+MAP_WIDTH = 2.0
+#: Weight β of the sinh part of the map, y = (1 − β) y_linear + β y_sinh.
+MAP_BLEND = 1.0
+
+
+def layer_map(flow: SteadyFlow) -> tuple[float, float]:
+    """Centre y_c and width ε of the sinh map of the stability grid (issue 9, item 2).
+
+    The large resolutions the plain Chebyshev grid needs (N ~ 200–480 for the paper's 1e-7)
+    come from an interior layer at the edge of the dense flow, y ≈ h (where ν0 has fallen
+    to 1 % of its peak, ν0 ~ 1e-3), across which the transport coefficients change from
+    their dense to their dilute form over a fraction of the density scale height
+    T0/cos θ of the dilute top (ν0 ∝ exp(−y cos θ/T0) there). The map
+    y = y_c + ε sinh(s), s linear in the Chebyshev variable, clusters the nodes there with
+
+        y_c = h,    ε = :data:`MAP_WIDTH` × T0(h)/cos θ    (MAP_WIDTH = 2),
+
+    and still reaches the floor and the top with Chebyshev clustering. The factor 2 is chosen
+    from the resolution N at which the least-stable mode passes the paper's tests (drift and
+    tail < 1e-7; ``benchmarks/probes/map_width.py``), N on the ladder 32, 40, 48, 56, 64, 80,
+    100, 125, … for the plain grid and factors 0.45, 1, 2:
+
+    ==========  =====  ====  ===  ===
+    point, k    plain  0.45  1    2
+    ==========  =====  ====  ===  ===
+    P1, 0.005   80     64    56   48
+    P4, 0.005   80     48    40   40
+    P5, 0.005   100    80    80   64
+    P1, 0.5     100    125   125  100
+    P4, 0.5     40     56    48   40
+    P1, 3       200    >256  256  256
+    P4, 3       48     64    56   56
+    ==========  =====  ====  ===  ===
+
+    A narrow map (0.45, the optimum for a 1e-9 branch eigenvalue at small k) starves the
+    dense layer of nodes at k ≳ 0.5; the factor 2 gains at small k and loses little beyond.
+    ε is capped at y_max (the map is then nearly linear).
+    """
+    th = math.radians(flow.theta)
+    y_max = float(flow.y_max)
+    h = float(flow.h)
+    if not (0.0 < h < y_max):
+        h = 0.5 * y_max
+    T_h = float(flow.grid.interpolate(flow.T, np.array([h]))[0])
+    width = MAP_WIDTH * abs(T_h) / math.cos(th)
+    if not (math.isfinite(width) and width > 0):
+        width = y_max
+    return h, float(min(width, y_max))
+
+
+def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGrid:
+    """The collocation grid of the stability problem of ``flow`` with N = ``n`` intervals on
+    [0, y_max]: sinh-mapped around the layer's edge (:func:`layer_map`, default) or the
+    plain Chebyshev grid (``mapped=False``, the paper's discretisation, kept for checks)."""
+    if mapped:
+        yc, eps = layer_map(flow)
+        return MappedChebyshevGrid(n, 0.0, flow.y_max, yc, eps, MAP_BLEND)
+    return ChebyshevGrid(n, 0.0, flow.y_max)
+
 
 def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
     """Jets ν0, ν0', ν0'', u0, …, T0'' (keys of :data:`chuteflow.equations.BASE`) at ``y``.
@@ -62,19 +126,22 @@ def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
     """
     g = flow.grid
     d = flow.derivatives()
-    s = g.interpolate(flow.log_nu, y)
+    ln = np.asarray(flow.log_nu)
+    # one Clenshaw evaluation of all nine series at once
+    stack = np.stack([ln, g.D @ ln, g.D2 @ ln, flow.u, d["u_y"], d["u_yy"], flow.T, d["T_y"], d["T_yy"]])
+    vals = g.interpolate(stack, np.asarray(y))
+    s, s1, s2 = vals[0], vals[1], vals[2]
     nu = np.exp(s)
-    s1, s2 = g.interpolate(g.D @ flow.log_nu, y), g.interpolate(g.D2 @ flow.log_nu, y)
     return {
         "nu": nu,
         "nu_y": nu * s1,
         "nu_yy": nu * (s2 + s1**2),
-        "u": g.interpolate(flow.u, y),
-        "u_y": g.interpolate(d["u_y"], y),
-        "u_yy": g.interpolate(d["u_yy"], y),
-        "T": g.interpolate(flow.T, y),
-        "T_y": g.interpolate(d["T_y"], y),
-        "T_yy": g.interpolate(d["T_yy"], y),
+        "u": vals[3],
+        "u_y": vals[4],
+        "u_yy": vals[5],
+        "T": vals[6],
+        "T_y": vals[7],
+        "T_yy": vals[8],
     }
 
 
@@ -85,6 +152,8 @@ def equation_terms(
     kx: float,
     kz: float = 0.0,
     alpha: complex = 0.0,
+    *,
+    grid: ChebyshevGrid | None = None,
 ) -> list[tuple[Term, np.ndarray]]:
     """Each term of one linearised equation, applied to a normal-mode perturbation.
 
@@ -95,13 +164,16 @@ def equation_terms(
     name : str
         An equation of :func:`chuteflow.equations.compiled_equations` ("mass", "xmom", …).
     fields : dict
-        Field name → complex nodal values f̂ on the N + 1 Chebyshev nodes of [0, y_max]
-        (N = len − 1), e.g. :attr:`Mode.fields <chuteflow.stability.Mode>`. Terms acting on
-        a field that is absent (ŵ of a 2D mode) are left out.
+        Field name → complex nodal values f̂ on the N + 1 nodes of the grid (N = len − 1),
+        e.g. :attr:`Mode.fields <chuteflow.stability.Mode>`. Terms acting on a field that is
+        absent (ŵ of a 2D mode) are left out.
     kx, kz : float
         Wavevector of the mode exp(αt + i k_x x + i k_z z).
     alpha : complex
         Its eigenvalue α (used by the terms with ∂_t).
+    grid : ChebyshevGrid, optional
+        The grid the nodal values live on (:attr:`Mode.grid <chuteflow.stability.Mode>`);
+        default the mapped stability grid :func:`stability_grid` of ``flow``.
 
     Returns
     -------
@@ -111,7 +183,9 @@ def equation_terms(
         the interior nodes for an eigenmode of a bulk equation.
     """
     first = next(iter(fields.values()))
-    g = ChebyshevGrid(len(first) - 1, 0.0, flow.y_max)
+    g = stability_grid(flow, len(first) - 1) if grid is None else grid
+    if len(g.y) != len(first):
+        raise ParameterError(f"grid: {len(g.y)} nodes, but the fields have {len(first)} values")
     base = base_on_grid(flow, g.y)
     part = flow.model.evaluate(base["nu"], base["T"])
     th = math.radians(flow.theta)
@@ -143,7 +217,8 @@ class Pencil:
     kx, kz : float
         Wavevector components; :attr:`k` = |k|.
     grid : ChebyshevGrid
-        Collocation grid on [0, y_max].
+        Collocation grid on [0, y_max] (a :class:`~chuteflow.spectral.MappedChebyshevGrid`
+        by default).
     fields : tuple of str
         Order of the field blocks of V: ("nu", "u", "v", "T"), or with "w" in 3D.
     flow : SteadyFlow
@@ -216,7 +291,7 @@ class Pencil:
 
 
 class StabilityOperator:
-    """The linear operator of one steady flow on one Chebyshev grid, for any wavevector.
+    """The linear operator of one steady flow on one collocation grid, for any wavevector.
 
     Built once (coefficients evaluated, rows assembled by pieces); :meth:`matrix` then
     costs a few matrix additions.
@@ -229,6 +304,16 @@ class StabilityOperator:
         Number of Chebyshev intervals N (N + 1 nodes per field).
     three_d : bool
         Include ŵ and the z-momentum balance (required for k_z ≠ 0).
+    mapped : bool
+        Collocate on the sinh-mapped grid clustered at the layer's edge (True; see
+        :func:`layer_map`) or on the plain Chebyshev grid of the paper (False, the
+        constructor's default, which the 3D code and its checks rely on). The solvers of
+        :mod:`chuteflow.stability` get their operators from an
+        :class:`~chuteflow.stability.OperatorCache`, which builds the two-dimensional ones
+        mapped by default. Three-dimensional operators stay on the plain grid: the
+        transverse long-wave coefficient α2z, a k → 0 quantity that feels the dilute top,
+        converges ~5× slower on the mapped grid (relative change N = 80 → 100: 4e-5 against
+        < 1e-5).
 
     Attributes
     ----------
@@ -246,13 +331,13 @@ class StabilityOperator:
         Steady residual of each equation on the grid (how well the base state solves it).
     """
 
-    def __init__(self, flow: SteadyFlow, n: int, *, three_d: bool = False):
+    def __init__(self, flow: SteadyFlow, n: int, *, three_d: bool = False, mapped: bool = False):
         if not isinstance(flow, SteadyFlow):
             raise ParameterError(f"flow: expected a SteadyFlow, got {type(flow).__name__}")
         n = validate_n(n)
-        self.flow, self.n, self.three_d = flow, n, bool(three_d)
+        self.flow, self.n, self.three_d, self.mapped = flow, n, bool(three_d), bool(mapped)
         self.fields = FIELDS_3D if three_d else FIELDS_2D
-        self.grid = ChebyshevGrid(n, 0.0, flow.y_max)
+        self.grid = stability_grid(flow, n, self.mapped)
         self._assemble()
 
     @property
@@ -318,7 +403,10 @@ class StabilityOperator:
                         raise NotImplementedError(f"|k| enters {name} as {t}: not linear")
                     K[rows, col[t.field]] += blk
                     continue
-                pieces.setdefault((t.b, t.d), np.zeros((M, M)))[rows, col[t.field]] += blk
+                key = (t.b, t.d)
+                if key not in pieces:
+                    pieces[key] = np.zeros((M, M))
+                pieces[key][rows, col[t.field]] += blk
 
         inner = slice(1, m - 1)
         for i, f in enumerate(self.fields):

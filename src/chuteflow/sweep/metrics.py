@@ -1,7 +1,8 @@
 """Stability metrics of a sweep: long-wave coefficients, k_c, maximum growth, finite-k check.
 
-- ``longwave``: α1, α2 of α(k) = α1 k + α2 k² + … (§5.1.1, Appendix B) from
-  :func:`chuteflow.longwave.longwave`; Re α2 > 0 is long-wave instability (§4.2).
+- ``longwave``: α1 and the long-wave growth coefficient Re α(k)/k² at k = 1e-5 (§5.1.1,
+  Appendix B) from :func:`chuteflow.longwave.theory.eigen_sign`; > 0 is long-wave
+  instability (§4.2), the rule of :attr:`chuteflow.longwave.LongWave.unstable`.
 - ``growth``: the dispersion relation of the α(0) = 0 branch tracked over a k grid: maximum
   growth rate, its k, and the critical k_c (first sign change of Re α, refined). Computed on a
   sample of the points (every ``stride``-th point in θ and ν0, and every marked point), which
@@ -20,8 +21,9 @@ import numpy as np
 
 from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
-from ..longwave import longwave
-from ..stability import BranchTracker, RejectionPolicy, mode_near
+from ..longwave.theory import eigen_sign
+from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
+from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
 
@@ -32,23 +34,23 @@ _RATE = RATE_UNITS
 
 @register_point_function
 class LongWaveMetric(PointFunction):
-    """Long-wave coefficients α1, α2, adaptively resolved for the sign of Re α2.
+    """Long-wave growth coefficient Re α/k² from the eigenvalue at k = 1e-5, resolved for its sign.
 
-    A diagram needs the sign of Re α2 at every point, and α2 converges slowly in N (docs/errata.md,
-    numerical notes; :func:`chuteflow.longwave.longwave`). First pass: ``longwave`` to the
-    relative accuracy ``rtol`` (default 0.5: the two finest resolutions then agree on the
-    sign) with ``n_max``. The result is accepted when its sign agrees with the independent
-    estimate from the eigenvalue at k = 1e-6, (α(k) − α1 k)/k², which converges much faster in
-    N; otherwise (or if the first pass does not converge) it is recomputed from N =
-    ``refine_n`` (the eigenvalue estimate itself can be wrong at N ≲ 64) to ``refine_rtol``
-    with ``refine_n_max``. ``alpha2_convergence`` records the accuracy reached at each point
-    and ``longwave_consistent`` whether the two estimates agree in sign.
+    The sign that classifies a point is that of Re α(k)/k² of the α(0) = 0 branch at
+    k = :data:`~chuteflow.longwave.theory.K_EIG` = 1e-5, the rule of
+    :attr:`chuteflow.longwave.LongWave.unstable`, so a diagram and ``chuteflow longwave``
+    agree. It is computed by :func:`chuteflow.longwave.theory.eigen_sign`: perturbation
+    theory at k = 0 and one shift-invert solve at k, at N and N' = round(0.8 N) on the
+    sinh-mapped stability grid, N raised from ``n`` by 25 % until the two agree to ``rtol``
+    (default 0.05: the sign has a margin of 20) or N = ``n_max``. The strict Taylor α2
+    (which feels the dilute top's continuum and converges only algebraically, docs/errata.md)
+    is reported as ``alpha2_taylor_re`` at the same N, not used.
     """
 
     name = "longwave"
-    version = "3"
+    version = "4"
     requires = ("steady",)
-    defaults = {"n": 64, "rtol": 0.5, "n_max": 256, "refine_n": 128, "refine_rtol": 0.1, "refine_n_max": 480}
+    defaults = {"n": 48, "rtol": 0.05, "n_max": 160}
     variables = (
         Variable(
             "alpha1_im",
@@ -59,69 +61,64 @@ class LongWaveMetric(PointFunction):
         Variable(
             "alpha2_re",
             "sigma^(3/2) g^(1/2)",
-            "Re α2, long-wave growth coefficient (> 0: long-wave unstable)",
+            "long-wave growth coefficient Re α(k)/k² of the branch's eigenvalue at k = 1e-5 "
+            "(> 0: long-wave unstable)",
             source="§4.2, §5.1.1",
         ),
-        Variable("alpha2_im", "sigma^(3/2) g^(1/2)", "Im α2"),
-        Variable("alpha2_convergence", "1", "relative change of α2 between the two finest resolutions"),
+        Variable(
+            "alpha2_convergence",
+            "1",
+            "relative change of Re α(k)/k² between N and round(0.8 N)",
+        ),
         Variable(
             "alpha2_eig_re",
             "sigma^(3/2) g^(1/2)",
-            "Re (α(k) − α1 k)/k² from the eigenvalue at k = 1e-6 (cross-check of α2)",
+            "Re α(k)/k² from the eigenvalue at k = 1e-5 (same as alpha2_re; kept for old readers)",
         ),
-        Variable("longwave_consistent", "1", "Re α2 and the eigenvalue estimate agree in sign", kind="flag"),
+        Variable(
+            "alpha2_taylor_re",
+            "sigma^(3/2) g^(1/2)",
+            "strict Taylor Re α2 at the same N (perturbation theory; converges only algebraically)",
+        ),
+        Variable(
+            "longwave_consistent",
+            "1",
+            "the sign of Re α(k)/k² is the same at N and round(0.8 N) (the sign is resolved)",
+            kind="flag",
+        ),
         Variable("longwave_n", "1", "Chebyshev intervals of the long-wave computation", kind="int"),
     )
 
     def validate(self):
         o = self.options
-        if not (
-            24 <= int(o["n"]) <= int(o["n_max"]) <= int(o["refine_n_max"])
-            and int(o["refine_n"]) <= int(o["refine_n_max"])
-        ):
+        if not (24 <= int(o["n"]) <= int(o["n_max"]) <= 1000):
+            raise ParameterError("longwave: need 24 <= n <= n_max <= 1000 (Chebyshev intervals)")
+        if not (0 < float(o["rtol"]) < 1):
             raise ParameterError(
-                "longwave: need 24 <= n <= n_max <= refine_n_max and "
-                "refine_n <= refine_n_max (Chebyshev intervals)"
+                "longwave: need 0 < rtol < 1: below 1 the resolutions N and 0.8 N agree on the "
+                "sign of Re α/k²"
             )
-        if not (0 < float(o["refine_rtol"]) <= float(o["rtol"]) < 1):
-            raise ParameterError(
-                "longwave: need 0 < refine_rtol <= rtol < 1: below 1 the two "
-                "finest resolutions agree on the sign of Re α2"
-            )
-
-    @staticmethod
-    def _consistent(lw) -> bool:
-        eig = lw.alpha2_from_eigenvalue.real
-        return math.isfinite(eig) and (eig > 0) == (lw.alpha2.real > 0)
 
     def compute(self, flow, point):
-
         o = self.options
-        lw = None
-        try:
-            # eig_ks=None: the sweep keeps its own cross-check (k_check) and its cost; the
-            # eigenvalue-based Re α/k² of LongWave (0.5–3 s a flow) is not computed here
-            lw = longwave(flow, n=int(o["n"]), rtol=float(o["rtol"]), n_max=int(o["n_max"]), eig_ks=None)
-        except ConvergenceError:
-            lw = None
-        if lw is None or not self._consistent(lw):
-            start = max(int(o["refine_n"]), lw.n if lw is not None else 0)
-            lw = longwave(
-                flow,
-                n=min(start, int(o["refine_n_max"])),
-                rtol=float(o["refine_rtol"]),
-                n_max=int(o["refine_n_max"]),
-                eig_ks=None,
+        # an own operator cache: the flow's operators are dropped when the point is done
+        es = eigen_sign(
+            flow, n=int(o["n"]), n_max=int(o["n_max"]), rtol=float(o["rtol"]), cache=OperatorCache(2)
+        )
+        if not es.converged:
+            point.note(
+                f"longwave: Re α/k² = {es.coefficient:.4g} changes by {es.convergence:.1e} "
+                f"(relative) between N = {es.n} and {check_n(es.n)}"
             )
-        eig = lw.alpha2_from_eigenvalue
+        e = es.coefficient if math.isfinite(es.coefficient) else None
         return {
-            "alpha1_im": lw.alpha1.imag,
-            "alpha2_re": lw.alpha2.real,
-            "alpha2_im": lw.alpha2.imag,
-            "alpha2_convergence": lw.convergence_alpha2,
-            "alpha2_eig_re": eig.real if math.isfinite(eig.real) else None,
-            "longwave_consistent": self._consistent(lw),
-            "longwave_n": lw.n,
+            "alpha1_im": es.alpha1.imag,
+            "alpha2_re": e,
+            "alpha2_convergence": es.convergence if math.isfinite(es.convergence) else None,
+            "alpha2_eig_re": e,
+            "alpha2_taylor_re": es.alpha2_taylor.real,
+            "longwave_consistent": bool(es.convergence < 1.0),
+            "longwave_n": es.n,
         }
 
 
@@ -149,7 +146,7 @@ class GrowthMetric(PointFunction):
         "k_max": 0.05,
         "num": 16,
         "stride": 6,
-        "n": 80,
+        "n": 48,
         "n_max": 160,
         "unstable_points": False,
     }
@@ -206,7 +203,9 @@ class GrowthMetric(PointFunction):
         o = self.options
         ks = self.k_grid()
         try:
-            tr = BranchTracker(flow, int(o["n"]), policy=RejectionPolicy(n_max=int(o["n_max"])))
+            # an own operator cache: the flow's operators are dropped when the point is done
+            cache = OperatorCache(4)
+            tr = BranchTracker(flow, int(o["n"]), policy=RejectionPolicy(n_max=int(o["n_max"])), cache=cache)
             modes = [tr.mode(k) for k in ks]
             bad = [m for m in modes if not m.physical]
             if bad:
@@ -229,12 +228,12 @@ class GrowthMetric(PointFunction):
         }
         for i in range(len(ks) - 1):
             if re[i] > 0 >= re[i + 1]:
-                out["k_c"] = self._refine(flow, modes[i], modes[i + 1])
+                out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
                 break
         return out
 
     @staticmethod
-    def _refine(flow, ma, mb):
+    def _refine(flow, ma, mb, cache=None):
         """Brent on Re α(k) of the mode nearest the linear prediction between two tracked
         modes (at the finer of their resolutions)."""
         from scipy.optimize import brentq
@@ -244,7 +243,7 @@ class GrowthMetric(PointFunction):
 
         def f(k):
             pred = aa + (ab - aa) * (k - ka) / (kb - ka)
-            return float(mode_near(flow, k, pred, n=n).alpha.real)
+            return float(mode_near(flow, k, pred, n=n, cache=cache).alpha.real)
 
         return float(brentq(f, ka, kb, xtol=1e-6 * kb, rtol=1e-6))
 

@@ -1,0 +1,54 @@
+"""Probe (issue 9, item 2): the smallest N at which the least-stable mode passes the paper's
+drift and tail tests (1e-7), on the plain grid and on sinh maps of several widths.
+
+    PYTHONPATH=src python benchmarks/probes/map_width.py P1,P4 0.005,0.5,3 plain,0.45,1,2
+
+Arguments: paper points, wavenumbers, grids ("plain" or a width factor of
+``chuteflow.stability.operator.MAP_WIDTH``). Prints N_needed (or ">256") per combination.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+import chuteflow.stability  # noqa: F401  (loads the operator module)
+from chuteflow.closures import ChuteModel
+from chuteflow.papers.mitarai2004.points import POINTS
+from chuteflow.stability import OperatorCache, least_stable
+from chuteflow.steady import solve_steady
+
+opmod = sys.modules["chuteflow.stability.operator"]
+
+LADDER = (32, 40, 48, 56, 64, 80, 100, 125, 160, 200, 256)
+
+
+def n_needed(flow, k, cache):
+    for n in LADDER:
+        m = least_stable(flow, k, n=n, cache=cache)
+        if m.physical:
+            return n, m
+    return None, m
+
+
+def main(argv):
+    names, ks, grids = (a.split(",") for a in argv[:3])
+    for name in names:
+        p = POINTS[name]
+        flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
+        for k in map(float, ks):
+            row = []
+            for g in grids:
+                if g == "plain":
+                    cache = OperatorCache(4, mapped=False)
+                else:
+                    opmod.MAP_WIDTH = float(g)
+                    cache = OperatorCache(4)
+                t0 = time.perf_counter()
+                n, m = n_needed(flow, k, cache)
+                row.append(f"{g}:N={n or '>256'} a={m.alpha:.10g} ({time.perf_counter() - t0:.1f}s)")
+            print(f"{name} k={k:g}  " + "  ".join(row), flush=True)
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
