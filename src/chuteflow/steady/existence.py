@@ -41,11 +41,11 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..closures import ChuteModel
 from ..equations import compiled_equations
 from ..spectral import ChebyshevGrid
+from ._roots import brent_root
 from .solver import NewtonState, validate_point
 
 #: Default admissible range of the floor slip velocity u0(0) (units of √(gσ)). At the
@@ -302,7 +302,7 @@ def _thickness(sol, y_max) -> float:
     if not len(below):
         return y_max
     j = i + int(below[0])
-    return float(brentq(lambda t: sol.sol(t)[0] - target, y[j - 1], y[j], xtol=1e-10))
+    return float(brent_root(lambda t: sol.sol(t)[0] - target, y[j - 1], y[j], xtol=1e-10))
 
 
 def steady_existence(
@@ -397,6 +397,10 @@ def steady_existence(
             if len(ends) > 14 and not any(sh.kind == "top" for sh in ends.values()):
                 raise _Separatrix
             return shot.miss
+
+        # the miss jumps at separatrices: scipy's brentq (imported with solve_ivp, which
+        # only a failed cold start needs) bisects those robustly
+        from scipy.optimize import brentq
 
         try:
             x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)
