@@ -60,8 +60,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         cli.app(args=args, prog_name="chuteflow")
     except SystemExit as exc:
-        code = exc.code
-        return code if isinstance(code, int) else (0 if code is None else 1)
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
     except cli.USER_ERRORS as exc:
         if os.environ.get("CHUTEFLOW_DEBUG"):
             raise

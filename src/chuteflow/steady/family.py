@@ -242,7 +242,7 @@ def _estimate(v: ExistenceVerdict) -> str:
     return f"u0(0) = {v.u_floor:.6g}, h = {v.h:.4g}, y_max = {v.y_max:.4g}"
 
 
-def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict]:
+def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict | None]:
     """The shooting scan's verdict at (θ, ν0(0)) (:func:`steady_existence`); where a flow
     exists, Newton from the shot profile at n, 2n, … ≤ n_max (a thin layer: once)."""
     try:
@@ -431,9 +431,10 @@ def continue_row(
         walk()
         if not opts.decide:
             break
-        i = _undecided_target(pts, settled, usable)
-        if i is None:
+        target = _undecided_target(pts, settled, usable)
+        if target is None:
             break
+        i = target
         cover = next((q for q in proofs if q.covers(theta, nus[i])), None)
         if cover is not None:
             tried[i].add("proof")
@@ -445,7 +446,9 @@ def continue_row(
             # failed (a sharp layer near the upper existence boundary): far cheaper than a scan
             tried[i].add("substeps")
             fine = dataclasses.replace(opts, substeps=max(opts.substeps, 2))
-            p = _continue(pts[nb[0]], theta, nus[i], model, fine)
+            seed = pts[nb[0]]
+            assert seed is not None  # usable
+            p = _continue(seed, theta, nus[i], model, fine)
             if p.usable:
                 pts[i] = p
                 continue

@@ -97,6 +97,7 @@ def steady_map(
     workers: int | None = 1,
     start_theta: float | None = None,
     return_flows: bool = False,
+    decide: bool = True,
 ):
     """Steady flows on a (θ, ν0(0)) grid.
 
@@ -122,6 +123,10 @@ def steady_map(
     start_theta : float, optional
         Row where the sweeps start (default: the middle row, or a row at 65 %, 35 %, 80 %,
         20 % of the range if fewer than a quarter of the middle row's points converge).
+    decide : bool
+        Decide every point that continuation does not reach by the shooting scan (or a
+        scan's verdict that covers it: :func:`~chuteflow.steady.family.continue_row`).
+        False: leave them 'unreached' (continuation only; for comparison).
 
     Returns
     -------
@@ -146,7 +151,14 @@ def steady_map(
     # would save 30 % of the time but lose 6 % of the points, hard ones like θ = 17°,
     # ν0(0) = 0.12 among them: not done.)
     opts = Options(
-        nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=tangent, substeps=0
+        nu_top=nu_top,
+        n=n,
+        rtol=rtol,
+        n_max=n_max,
+        min_thickness=min_thickness,
+        tangent=tangent,
+        substeps=0,
+        decide=decide,
     )
     proofs: list = []
     k, first = _start_row(ths, nus, model, opts, start_theta, proofs)
