@@ -43,7 +43,8 @@ from typing import Any
 import numpy as np
 
 from ..closures import ChuteModel
-from ..equations import compiled_equations
+from ..closures.model import FUNCTIONS, ORDERS, _compiled
+from ..equations import BASE, compiled_equations
 from ..spectral import ChebyshevGrid
 from ._roots import brent_root
 from .solver import NewtonState, validate_point
@@ -91,6 +92,15 @@ class SteadyODE:
         self._i_T_yy = _term_index(self._energy, "T", 2)
         self._i_floor_u = _term_index(self._floor_x, "u", 0)
         self._i_floor_T_y = _term_index(self._floor_energy, "T", 1)
+        # the scan calls rhs() ~10⁴ times per point with scalars: the compiled closures and
+        # equations are called directly with the flat argument list that
+        # ChuteModel.evaluate and equations.arguments would build (same functions, same
+        # numbers, without the per-call dictionaries: about twice as fast)
+        self._partials = _compiled(*model.closures)[0]
+        self._params = model._params
+        self._i_p = FUNCTIONS.index("p") * len(ORDERS) + ORDERS.index((0, 0))
+        self._i_mu = FUNCTIONS.index("mu") * len(ORDERS) + ORDERS.index((0, 0))
+        self._slot = {b: i for i, b in enumerate(BASE)}
 
     def _base(self, nu, u, T, T_y, part):
         u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq. (3.7)
@@ -111,16 +121,20 @@ class SteadyODE:
         integrator) the result is inf/nan, which makes the integrator shorten its step."""
         s, u, T, T_y = (np.float64(v) for v in z)
         nu = np.exp(s)
-        part = self.model.evaluate(nu, T)
-        base = self._base(nu, u, T, T_y, part)
+        flat = [np.float64(v) for v in self._partials(nu, T, *self._params)]
+        u_y = self.tan * flat[self._i_p] / flat[self._i_mu]  # eq. (3.7)
+        base = [np.float64(0.0)] * len(self._slot)
+        for name, value in (("nu", nu), ("u", u), ("u_y", u_y), ("T", T), ("T_y", T_y)):
+            base[self._slot[name]] = value
+        args = base + flat + [self.sin, self.cos]
         # y-momentum (eq. 3.5) is affine in ν0': R = R(ν0' = 0) + c ν0'
-        r, c = self._ymom.evaluate(base, part, self.sin, self.cos)
+        r, c = self._ymom.evaluate_arguments(args)
         nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
-        base["nu_y"] = nu_y
+        args[self._slot["nu_y"]] = nu_y
         # energy (eq. (3.6), docs/errata.md, item 1) is affine in T0''
-        r, c = self._energy.evaluate(base, part, self.sin, self.cos)
+        r, c = self._energy.evaluate_arguments(args)
         T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
-        return [float(nu_y / nu), float(base["u_y"]), float(T_y), float(T_yy)]
+        return [float(nu_y / nu), float(u_y), float(T_y), float(T_yy)]
 
     def floor_velocity(self, nu0: float, T0: float) -> float:
         """u0(0) from eq. (2.9) (floor_x is linear in u0) given ν0(0) and T0(0)."""
