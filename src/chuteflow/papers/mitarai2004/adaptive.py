@@ -11,7 +11,8 @@ settle the sign:
   boundary of an unstable region passes through it), or that has flows but no computed
   corner: at each of its fine points;
 * at the least dense flow of each θ row (the end of the contour that the checks of §4.2
-  follow beyond the grid).
+  follow beyond the grid), and where the dispersion relation was sampled
+  (:class:`StridedGrowth`, the finite-k cross-check).
 
 Elsewhere all computed corners of the cell agree, and Re α2 is interpolated between them
 (inverse-distance weights in index space: a convex combination, so the sign is that of
@@ -31,10 +32,10 @@ from ..._threads import limit_blas_threads
 from ...errors import ChuteflowError, ParameterError
 from ...steady import solve_steady
 from ...sweep.classify import classify
-from ...sweep.metrics import LongWaveMetric
+from ...sweep.metrics import GrowthMetric, LongWaveMetric
 from ...sweep.points import Point, PointFunction, register_point_function
 
-__all__ = ["StridedLongWave", "refine_longwave"]
+__all__ = ["StridedGrowth", "StridedLongWave", "refine_longwave"]
 
 
 @register_point_function
@@ -62,6 +63,16 @@ class StridedLongWave(PointFunction):
         if point.i >= 0 and (point.i % s or point.j % s):
             return {}
         return self.inner().compute(flow, point)
+
+
+@register_point_function
+class StridedGrowth(GrowthMetric):
+    """The ``growth`` metric (sampled dispersion relation, the finite-k cross-check) in a
+    diagram whose α2 comes from :class:`StridedLongWave`; :func:`refine_longwave` computes
+    α2 exactly at every sampled point."""
+
+    name = "growth_strided"
+    requires = ("steady", StridedLongWave.name)
 
 
 def _coarse(n: int, s: int) -> list[int]:
@@ -114,6 +125,9 @@ def refine_longwave(ds, config, *, workers: int = 2, progress=None) -> tuple[Any
     ni, nj = ok.shape
     I, J = _coarse(ni, s), _coarse(nj, s)
     todo: set[tuple[int, int]] = set()
+    if "dispersion_sampled" in ds:  # the finite-k cross-check compares with α2 there
+        sampled = (ds["dispersion_sampled"].values == 1) & ok & ~have
+        todo.update((int(i), int(j)) for i, j in zip(*np.nonzero(sampled)))
     for i in range(ni):  # the least dense flow of each row (checks of §4.2)
         js = np.nonzero(ok[i])[0]
         if len(js) and not have[i, js[0]]:

@@ -22,7 +22,7 @@ def stage_config(roughness: float, quick: bool):
         "steady",
         "kinematic",
         adaptive.StridedLongWave(stride=LONGWAVE_STRIDE[quick]),
-        {"name": "growth", "options": {"stride": 9 if quick else 12}},
+        adaptive.StridedGrowth(stride=10 if quick else 12),
     ]
     return SweepConfig.grid(
         roughness,
