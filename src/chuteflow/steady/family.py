@@ -262,6 +262,20 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
         m *= 2
     if not v.physical:
         return _Point("no_steady_flow", None, v.reason), v
+    if v.h < 1.0:
+        # accepted by min_thickness < 1, but thinner than a diameter: outside the
+        # hydrodynamics and not examined by the paper (§3.2, figure 6: h < 1)
+        return (
+            _Point(
+                "no_steady_flow",
+                None,
+                f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}: the shooting "
+                f"scan finds a layer thinner than one diameter ({_estimate(v)}), which Newton "
+                f"does not resolve with n_max = {opts.n_max} and the hydrodynamics cannot "
+                "describe (§3.2)",
+            ),
+            v,
+        )
     return (
         _Point(
             "not_converged",
