@@ -257,3 +257,38 @@ def test_warm_cli_imports_no_heavy_modules(argv, shared_cache):
         )
     out = json.loads(res.stdout.strip().splitlines()[-1])
     assert out == {"rc": 0, "heavy": []}
+
+
+_STEADY_LIGHT = textwrap.dedent("""
+    import io, json, sys, contextlib
+    from chuteflow.cli import main
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        rc = main(sys.argv[1:])
+    names = ("sympy", "matplotlib", "xarray", "typer", "rich", "pydantic", "scipy", "numpy.f2py")
+    print(json.dumps({"rc": rc, "heavy": sorted(m for m in names if m in sys.modules),
+                      "theta": json.loads(buf.getvalue())["theta"]}))
+""")
+
+
+def test_warm_steady_skips_typer_and_scipy(shared_cache):
+    """``chuteflow steady --json`` with a warm cache is answered by the plain parser of
+    cli/_fast.py: neither typer, rich and pydantic (0.3 s) nor any part of scipy (0.3 s)
+    nor numpy.f2py (``from numpy import *``) is imported (issue 9, item 5)."""
+    env = dict(
+        os.environ,
+        CHUTEFLOW_CACHE_DIR=str(shared_cache),
+        PYTHONPATH=os.pathsep.join([str(SRC), os.environ.get("PYTHONPATH", "")]),
+    )
+    argv = ["steady", "--theta", "16", "--nu0", "0.05", "--roughness", "0.05", "--json"]
+    for _ in range(2):  # the first run fills the cache if it is cold
+        res = subprocess.run(
+            [sys.executable, "-c", _STEADY_LIGHT, *argv],
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=600,
+            check=True,
+        )
+    out = json.loads(res.stdout.strip().splitlines()[-1])
+    assert out == {"rc": 0, "heavy": [], "theta": 16.0}

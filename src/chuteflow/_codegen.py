@@ -50,15 +50,21 @@ from ._files import atomic_write
 __all__ = ["GeneratedCode", "cached_lambdify", "cache_dir", "cache_key", "lazy_module", "FORMAT"]
 
 #: Version of the layout of the generated modules; part of every key.
-FORMAT = 1
+FORMAT = 2
 
 #: Namespace of the generated code: what ``sympy.lambdify(..., modules="numpy")`` provides
 #: (its ``MODULES["numpy"]`` import commands and defaults, plus ``builtins`` and ``range``).
+#: The public names numpy has already loaded stand in for ``from numpy import *``, which in
+#: numpy 2 also imports numpy.f2py, numpy.testing, numpy.ma, … (~0.25 s per process);
+#: :func:`_same_names` checks that every name the generated code uses means the same here.
 _PRELUDE = """\
 import builtins
 import numpy
-from numpy import *
-from numpy.linalg import *
+import numpy.linalg
+globals().update(
+    {_k: _v for _k, _v in vars(numpy).items() if not _k.startswith("_") and type(_v) is not type(numpy)}
+)
+globals().update({_k: getattr(numpy.linalg, _k) for _k in numpy.linalg.__all__})
 I = 1j
 Heaviside = numpy.heaviside
 """

@@ -179,3 +179,29 @@ def test_cli_model_defaults_are_the_model_defaults():
 
     m = ChuteModel()
     assert {k: v[0] for k, v in MODEL_OPTIONS.items()} == {k: getattr(m, k) for k in MODEL_OPTIONS}
+
+
+def test_fast_steady_path_matches_typer(capsys):
+    """The plain parser of ``chuteflow steady`` (cli/_fast.py) prints what the typer command
+    prints, and leaves what it does not know (help, bad values) to typer."""
+    from chuteflow.cli._fast import _parse_steady, fast_main
+
+    argv = [
+        "steady",
+        "--theta",
+        "16",
+        "--nu0=0.05",
+        "--wall-loss",
+        "0.39",
+        "--radial",
+        "lun_savage",
+        "--json",
+    ]
+    assert fast_main(argv) == 0
+    fast = capsys.readouterr().out
+    res = CliRunner().invoke(app, argv)
+    assert res.exit_code == 0 and res.stdout == fast
+    for bad in (["--theta", "abc", "--nu0", "0.05"], ["--theta", "16"], ["--help"], ["--radial", "nope"]):
+        assert _parse_steady(bad) is None
+    assert fast_main(["steady", "--theta", "95", "--nu0", "0.05"]) == 2
+    assert capsys.readouterr().err.startswith("error: theta = 95")

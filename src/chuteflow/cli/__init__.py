@@ -1,30 +1,49 @@
 """Command-line interface: ``chuteflow`` (also ``python -m chuteflow``).
 
 Each command lives in its own module, which adds itself to :data:`app` with
-``@app.command()``. To add commands, write ``cli/NAME.py`` and add one import line
-below. Modules should import numerics inside the command function, so that
+``@app.command()``. To add commands, write ``cli/NAME.py`` and add its name to
+:data:`COMMANDS`. Modules should import numerics inside the command function, so that
 ``chuteflow --help`` stays fast.
+
+The typer application is built on first use (``from chuteflow.cli import app`` or
+:func:`main`): a plain ``chuteflow steady`` call is answered without it
+(:mod:`chuteflow.cli._fast`), since typer and rich cost more to import than the solve.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 from collections.abc import Sequence
+from typing import Any
 
-# -- command modules: one line each ------------------------------------------------------
-from . import (
-    diagram,  # noqa: F401
-    dns,  # noqa: F401
-    reduced,  # noqa: F401
-    reproduce,  # noqa: F401
-    stability,  # noqa: F401
-    steady,  # noqa: F401
-    transverse,  # noqa: F401
+from ._fast import fast_main
+
+__all__ = ["COMMANDS", "app", "main"]
+
+#: The command modules, one name each (imported, in this order, when the app is built).
+COMMANDS = (
+    "diagram",
+    "dns",
+    "reduced",
+    "reproduce",
+    "stability",
+    "steady",
+    "transverse",
 )
-from ._app import EXIT_USER_ERROR, USER_ERRORS, app, report_user_error
 
-__all__ = ["app", "main"]
+
+def _application() -> Any:
+    for name in COMMANDS:
+        importlib.import_module(f"{__name__}.{name}")
+    return importlib.import_module(f"{__name__}._app")
+
+
+def __getattr__(name: str) -> Any:
+    if name == "app":
+        return _application().app
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -34,16 +53,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     parameter validation) print one ``error: ...`` line on standard error and give exit
     code 2, without a traceback (``CHUTEFLOW_DEBUG=1`` shows it).
     """
+    args = list(sys.argv[1:] if argv is None else argv)
+    code = fast_main(args)
+    if code is not None:
+        return code
+    cli = _application()
     try:
-        app(args=list(argv) if argv is not None else None, prog_name="chuteflow")
+        cli.app(args=args, prog_name="chuteflow")
     except SystemExit as exc:
-        code = exc.code
-        return code if isinstance(code, int) else (0 if code is None else 1)
-    except USER_ERRORS as exc:
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+    except cli.USER_ERRORS as exc:
         if os.environ.get("CHUTEFLOW_DEBUG"):
             raise
-        report_user_error(exc)
-        return EXIT_USER_ERROR
+        cli.report_user_error(exc)
+        return cli.EXIT_USER_ERROR
     return 0
 
 

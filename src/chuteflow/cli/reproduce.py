@@ -6,7 +6,6 @@ from pathlib import Path
 
 import typer
 
-from ..papers import DEFAULT_PAPERS, PAPERS
 from ._app import app
 
 
@@ -27,11 +26,14 @@ def reproduce(
         "--paper",
         "-p",
         metavar="NAME",
-        help="Reproduce this paper (repeatable; default: mitarai2004). Papers: " + ", ".join(PAPERS) + ".",
+        # the registry (chuteflow.report.papers) is imported by the command, not at start-up
+        help="Reproduce this paper (repeatable; default: mitarai2004, the papers of "
+        "chuteflow.report.papers.DEFAULT_PAPERS).",
     ),
 ) -> None:
     """Reproduce the papers' results; exit code 1 if any checkpoint fails."""
     from chuteflow.report import load_stages, registered_stages, run_reproduce
+    from chuteflow.report.papers import DEFAULT_PAPERS
 
     papers = tuple(paper) if paper else DEFAULT_PAPERS
     if list_stages:

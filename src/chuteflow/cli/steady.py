@@ -7,53 +7,9 @@ import typer
 from chuteflow.closures import ChuteModel
 
 from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from ._fast import JSON_KEYS, steady_command
 
-#: Keys of the JSON output, in order (the summary of :class:`~chuteflow.steady.SteadyFlow`).
-JSON_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
-    "u_floor",
-    "T_floor",
-    "h",
-    "nu_mean",
-    "rho_bar",
-    "Q",
-    "T_mean",
-    "monotonic",
-    "y_peak",
-    "nu_peak",
-    "y_max",
-    "nu_top",
-    "n",
-    "convergence",
-    "residual",
-    "iterations",
-    "spectral_tail",
-)
-
-_ROWS = (
-    ("u_floor", "slip velocity u0(0)", ".8g"),
-    ("T_floor", "floor temperature T0(0)", ".8g"),
-    ("h", "thickness h (σ)", ".8g"),
-    ("nu_mean", "mean density ν̄", ".8g"),
-    ("rho_bar", "one-dimensional density ρ̄0 (σ)", ".8g"),
-    ("Q", "flux Q0", ".8g"),
-    ("T_mean", "mean temperature T̄0", ".8g"),
-    ("monotonic", "ν0 monotonic", ""),
-    ("y_peak", "height of the density maximum (σ)", ".6g"),
-    ("nu_peak", "maximum density", ".6g"),
-    ("y_max", "top of the domain y_max (σ)", ".8g"),
-    ("n", "Chebyshev intervals", "d"),
-    ("convergence", "relative change n → 3n/2", ".1e"),
-    ("residual", "final scaled residual", ".1e"),
-)
+__all__ = ["JSON_KEYS", "steady"]
 
 
 @app.command("steady")
@@ -66,28 +22,4 @@ def steady(
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Solve for the steady flow at (θ, ν0(0)) and print its quantities."""
-    import json
-    import warnings
-
-    from chuteflow.steady import solve_steady
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top)
-    summary = flow.summary()
-    if as_json:
-        typer.echo(json.dumps({k: summary[k] for k in JSON_KEYS}))
-        return
-    from rich.console import Console
-    from rich.table import Table
-
-    table = Table(
-        title=f"Steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}",
-        caption=f"{model.describe()}, ν0(y_max) = {nu_top:g}",
-    )
-    table.add_column("quantity")
-    table.add_column("value", justify="right")
-    for key, label, fmt in _ROWS:
-        v = summary[key]
-        table.add_row(label, ("yes" if v else "no") if fmt == "" else format(v, fmt))
-    Console().print(table)
+    steady_command(theta, nu0, model, nu_top, as_json)

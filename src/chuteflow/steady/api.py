@@ -333,8 +333,6 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
     """Packed dX/dβ (β = ν0(0)) and, if ``theta``, dX/dθ (per degree), from one LU of the
     exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
-    import scipy.linalg as sla
-
     newton = SteadyNewton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
     st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
     _, J = newton.evaluate(st)
@@ -349,5 +347,5 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
             st, jac=False
         )[0]
         rhs[:, 1] = (Rp - Rm) / (2 * eps)
-    sol = -sla.lu_solve(sla.lu_factor(J, check_finite=False), rhs, check_finite=False)
+    sol = -np.linalg.solve(J, rhs)
     return sol[:, 0], (sol[:, 1] if theta else None)

@@ -10,6 +10,7 @@ checked at two resolutions exactly as :func:`~chuteflow.steady.solve_steady` doe
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 
@@ -20,6 +21,7 @@ from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from .api import ThinLayerError, solve_point, tangent_from, tangent_vectors
+from .existence import ExistenceVerdict, steady_existence
 from .result import SteadyFlow
 from .solver import NewtonState, validate_point
 
@@ -58,7 +60,7 @@ _ATTRS = {
     "dQ_dnu0": ("dQ0/dν0(0) along the family (exact tangent)", "sigma^2 sqrt(g/sigma)"),
     "monotonic": ("1 if ν0 decreases monotonically from the floor, 0 if its maximum is above the floor", "1"),
     "n": ("Chebyshev intervals of the accepted resolution", "1"),
-    "status": ("'ok', 'thin' (h < min_thickness), 'no_steady_flow', 'not_converged' or 'unreached'", ""),
+    "status": ("'ok', 'thin' (h < min_thickness), 'no_steady_flow' or 'not_converged'", ""),
     "error": ("message of the error for points without a steady flow", ""),
 }
 
@@ -83,6 +85,7 @@ class Options:
     max_cold_seeded: int = 1
     maxiter: int = _CONT_MAXITER
     lam_min: float = _CONT_LAM_MIN
+    decide: bool = True
 
 
 @dataclass
@@ -187,6 +190,130 @@ def _cold(theta, nu0, model, opts) -> _Point:
     return _with_tangent(_attempt(theta, nu0, model, opts, None, opts.n, cold=True), opts)
 
 
+#: Verdict kinds of :func:`~chuteflow.steady.existence.steady_existence` that extend to
+#: smaller θ and ν0(0) (the layer is too thin / heats up) and to larger θ and ν0(0) (it
+#: collapses or packs): the region with a steady flow lies between them.
+_LOW_KINDS = ("too_small", "thin")
+_HIGH_KINDS = ("too_large",)
+
+
+@dataclass(frozen=True)
+class Proof:
+    """A point where the shooting scan proves that no (physical) steady flow exists.
+
+    The scan's verdicts are ordered (tests/steady/test_existence_map.py checks this against
+    an independent shooting scan over the paper's ranges): a layer too thin or heating up
+    at (θ, ν0(0)) (kind ``too_small`` or ``thin``) is so at every smaller θ and ν0(0); one
+    that collapses or packs (``too_large``) is so at every larger θ and ν0(0). A proof
+    therefore decides a whole quadrant of a map without further scans.
+    """
+
+    theta: float
+    nu0: float
+    kind: str
+    reason: str
+
+    def covers(self, theta: float, nu0: float) -> bool:
+        """Whether the quadrant of this verdict contains (θ, ν0(0))."""
+        eps = 1e-12
+        if self.kind in _LOW_KINDS:
+            return theta <= self.theta + eps and nu0 <= self.nu0 * (1 + eps)
+        if self.kind in _HIGH_KINDS:
+            return theta >= self.theta - eps and nu0 >= self.nu0 * (1 - eps)
+        return abs(theta - self.theta) < eps and abs(nu0 - self.nu0) <= eps * self.nu0
+
+
+def _implied(theta, nu0, model, proof: Proof) -> _Point:
+    side = "smaller" if proof.kind in _LOW_KINDS else "larger"
+    where = (
+        f"theta = {theta:g} deg, nu0 = {nu0:g}, roughness = {model.roughness:g}, "
+        f"wall_loss = {model.wall_loss:g}"
+    )
+    return _Point(
+        "no_steady_flow",
+        None,
+        f"no steady flow at {where}: the shooting scan at theta = {proof.theta:g} deg, "
+        f"nu0 = {proof.nu0:g} finds none ({proof.kind.replace('_', ' ')}), and that verdict "
+        f"holds at every {side} angle and floor density — there: {proof.reason}",
+    )
+
+
+def _estimate(v: ExistenceVerdict) -> str:
+    return f"u0(0) = {v.u_floor:.6g}, h = {v.h:.4g}, y_max = {v.y_max:.4g}"
+
+
+def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict | None]:
+    """The shooting scan's verdict at (θ, ν0(0)) (:func:`steady_existence`); where a flow
+    exists, Newton from the shot profile at n, 2n, … ≤ n_max (a thin layer: once)."""
+    try:
+        v = steady_existence(theta, nu0, model, nu_top=opts.nu_top, min_thickness=opts.min_thickness)
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        return _Point("not_converged", None, f"the shooting scan failed: {type(exc).__name__}: {exc}"), None
+    if not v.exists:
+        return _Point("no_steady_flow", None, v.reason), v
+    m, errors = opts.n, []
+    while m <= (opts.n_max if v.physical else opts.n):
+        # the shot profile is accurate to ~1e-6: Newton converges in a few steps where the
+        # grid resolves the layer, so fail fast as from a continuation guess
+        p = _attempt(theta, nu0, model, opts, v.starting_state(m), m)
+        if p.usable:
+            return _with_tangent(p, opts), v
+        errors.append(f"n = {m}: {p.error}")
+        m *= 2
+    if not v.physical:
+        return _Point("no_steady_flow", None, v.reason), v
+    if v.h < 1.0:
+        # accepted by min_thickness < 1, but thinner than a diameter: outside the
+        # hydrodynamics and not examined by the paper (§3.2, figure 6: h < 1)
+        return (
+            _Point(
+                "no_steady_flow",
+                None,
+                f"no physical steady flow at theta = {theta:g} deg, nu0 = {nu0:g}: the shooting "
+                f"scan finds a layer thinner than one diameter ({_estimate(v)}), which Newton "
+                f"does not resolve with n_max = {opts.n_max} and the hydrodynamics cannot "
+                "describe (§3.2)",
+            ),
+            v,
+        )
+    return (
+        _Point(
+            "not_converged",
+            None,
+            f"a steady flow exists at theta = {theta:g} deg, nu0 = {nu0:g} (shooting scan: "
+            f"{_estimate(v)}) but is not resolved: Newton from the continuation neighbours, the "
+            f"isothermal start and the shooting profile did not converge to rtol = "
+            f"{opts.rtol:g} with n_max = {opts.n_max} ({'; '.join(errors)})",
+        ),
+        v,
+    )
+
+
+def _undecided_target(pts, settled, usable) -> int | None:
+    """Next point to decide by the shooting scan: in a run of undecided points, the end
+    next to a converged flow (the existence boundary is there), else the middle."""
+    N = len(pts)
+    runs, i = [], 0
+    while i < N:
+        if settled(i):
+            i += 1
+            continue
+        j = i
+        while j + 1 < N and not settled(j + 1):
+            j += 1
+        runs.append((i, j))
+        i = j + 1
+    for a, b in runs:
+        if b + 1 < N and usable(b + 1):
+            return b
+        if a > 0 and usable(a - 1):
+            return a
+    if runs:
+        a, b = runs[0]
+        return (a + b) // 2
+    return None
+
+
 def _anchor_order(n: int) -> list[int]:
     """Cold-start candidates spread over the row: middle, quartiles, eighths, …"""
     order: list[int] = []
@@ -213,6 +340,7 @@ def continue_row(
     previous: list[_Point] | None = None,
     existing: list[_Point] | None = None,
     cold_starts: bool = True,
+    proofs: list[Proof] | None = None,
 ) -> list[_Point]:
     """Solve at every ν0 of a row (sorted ascending) by continuation.
 
@@ -223,7 +351,15 @@ def continue_row(
     When nothing more can be reached, a cold start is tried at a spread-out point not yet
     attempted (at most ``opts.max_cold`` per row, ``opts.max_cold_seeded`` if ``previous``
     is given: in a map the existence region is reached from the neighbouring rows).
-    Points never attempted are marked 'unreached'.
+
+    Continuation is only the fast road. Every point it does not reach is decided
+    (``opts.decide``) by the shooting scan :func:`~chuteflow.steady.existence.steady_existence`
+    or by an earlier scan's verdict that covers it (:class:`Proof`; ``proofs`` collects
+    them and may be shared by the rows of a map): no flow (with the scan's reason), or a
+    flow, solved by Newton from the shot profile and then continued to its neighbours. A
+    run of undecided points is scanned at its end next to a converged flow, where the
+    existence boundary lies, so that one verdict usually settles the whole run. With
+    ``opts.decide = False`` the points continuation did not reach are 'unreached'.
     """
     nus = [float(v) for v in nu0_values]
     N = len(nus)
@@ -237,9 +373,21 @@ def continue_row(
     order = _anchor_order(N)
     # a θ source is identified by its angle, so that both neighbouring rows can be tried
     ttag = ("theta", next((p.flow.theta for p in prev if p is not None and p.flow is not None), None))
+    proofs = proofs if proofs is not None else []
 
     def usable(i):
         return pts[i] is not None and pts[i].usable
+
+    def proven(i):
+        # decided by the shooting scan (or a scan's covering verdict) to have no flow:
+        # continuation does not try it again
+        return not usable(i) and ("scan" in tried[i] or "proof" in tried[i])
+
+    def settled(i):
+        return usable(i) or "scan" in tried[i] or "proof" in tried[i]
+
+    def open_(i):
+        return not usable(i) and not proven(i)
 
     def attempt(i, tag, make):
         tried[i].add(tag)
@@ -247,49 +395,82 @@ def continue_row(
         if pts[i] is None or p.usable:
             pts[i] = p
 
-    cold = 0
-    while True:
-        walked = False
-        for i in range(1, N):
-            below = pts[i - 1]
-            if not usable(i) and below is not None and below.usable and "below" not in tried[i]:
-                attempt(i, "below", functools.partial(_continue, below, theta, nus[i], model, opts))
-                walked = True
-        for i in range(N - 2, -1, -1):
-            above = pts[i + 1]
-            if not usable(i) and above is not None and above.usable and "above" not in tried[i]:
-                attempt(i, "above", functools.partial(_continue, above, theta, nus[i], model, opts))
-                walked = True
-        if walked:
-            continue
-        seeded = [
-            (i, src)
-            for i in order
-            if not usable(i) and (src := prev[i]) is not None and src.usable and ttag not in tried[i]
-        ]
-        if seeded:
-            i, seed = seeded[0]
-            attempt(i, ttag, functools.partial(_continue, seed, theta, nus[i], model, opts))
-            continue
-        if not cold_starts:
-            break
-        # walks stalled: a cold start where nothing has been attempted yet (a separate
-        # piece of the branch, or no piece found so far)
-        cand = [i for i in order if not tried[i]]
-        if previous is None and not cand:
-            # a family: points where continuation failed get a cold start too (the
-            # isothermal start sometimes succeeds where a far neighbour's predictor does not)
-            cand = [
-                i
+    cold = [0]
+
+    def walk():
+        while True:
+            walked = False
+            for i in range(1, N):
+                below = pts[i - 1]
+                if open_(i) and below is not None and below.usable and "below" not in tried[i]:
+                    attempt(i, "below", functools.partial(_continue, below, theta, nus[i], model, opts))
+                    walked = True
+            for i in range(N - 2, -1, -1):
+                above = pts[i + 1]
+                if open_(i) and above is not None and above.usable and "above" not in tried[i]:
+                    attempt(i, "above", functools.partial(_continue, above, theta, nus[i], model, opts))
+                    walked = True
+            if walked:
+                continue
+            seeded = [
+                (i, src)
                 for i in order
-                if not usable(i)
-                and "cold" not in tried[i]
-                and ((i > 0 and usable(i - 1)) or (i < N - 1 and usable(i + 1)))
+                if open_(i) and (src := prev[i]) is not None and src.usable and ttag not in tried[i]
             ]
-        if not cand or cold >= (opts.max_cold if previous is None else opts.max_cold_seeded):
+            if seeded:
+                i, seed = seeded[0]
+                attempt(i, ttag, functools.partial(_continue, seed, theta, nus[i], model, opts))
+                continue
+            if not cold_starts:
+                return
+            # walks stalled: a cold start where nothing has been attempted yet (a separate
+            # piece of the branch, or no piece found so far)
+            cand = [i for i in order if not tried[i]]
+            if previous is None and not cand:
+                # a family: points where continuation failed get a cold start too (the
+                # isothermal start sometimes succeeds where a far neighbour's predictor does not)
+                cand = [
+                    i
+                    for i in order
+                    if open_(i)
+                    and "cold" not in tried[i]
+                    and ((i > 0 and usable(i - 1)) or (i < N - 1 and usable(i + 1)))
+                ]
+            if not cand or cold[0] >= (opts.max_cold if previous is None else opts.max_cold_seeded):
+                return
+            cold[0] += 1
+            attempt(cand[0], "cold", functools.partial(_cold, theta, nus[cand[0]], model, opts))
+
+    while True:
+        walk()
+        if not opts.decide:
             break
-        cold += 1
-        attempt(cand[0], "cold", functools.partial(_cold, theta, nus[cand[0]], model, opts))
+        target = _undecided_target(pts, settled, usable)
+        if target is None:
+            break
+        i = target
+        cover = next((q for q in proofs if q.covers(theta, nus[i])), None)
+        if cover is not None:
+            tried[i].add("proof")
+            pts[i] = _implied(theta, nus[i], model, cover)
+            continue
+        nb = [j for j in (i - 1, i + 1) if 0 <= j < N and usable(j)]
+        if nb and "substeps" not in tried[i]:
+            # next to a converged flow a shorter step often succeeds where the direct one
+            # failed (a sharp layer near the upper existence boundary): far cheaper than a scan
+            tried[i].add("substeps")
+            fine = dataclasses.replace(opts, substeps=max(opts.substeps, 2))
+            seed = pts[nb[0]]
+            assert seed is not None  # usable
+            p = _continue(seed, theta, nus[i], model, fine)
+            if p.usable:
+                pts[i] = p
+                continue
+        tried[i].add("scan")
+        p, v = _decide(theta, nus[i], model, opts)
+        pts[i] = p
+        if v is not None and (v.kind in _LOW_KINDS or v.kind in _HIGH_KINDS) and p.status != "ok":
+            proofs.append(Proof(theta, nus[i], v.kind, v.reason))
     out = []
     for pt, t in zip(pts, tried):
         point = (

@@ -22,12 +22,14 @@ from .family import SCALARS, Options, check_nu0, continue_row, dataset_attrs, ro
 from .solver import validate_point
 
 
-def _sweep(thetas, nus, model, opts, seed_row=None):
-    """Rows in the given θ order, each seeded by the previous one; returns list of rows."""
+def _sweep(thetas, nus, model, opts, seed_row=None, proofs=None):
+    """Rows in the given θ order, each seeded by the previous one; returns list of rows.
+    ``proofs`` (shared by the rows) collects the shooting scan's verdicts."""
     rows = []
     prev = seed_row
+    proofs = [] if proofs is None else proofs
     for th in thetas:
-        row = continue_row(th, nus, model, opts, previous=prev)
+        row = continue_row(th, nus, model, opts, previous=prev, proofs=proofs)
         rows.append(row)
         if any(p.usable for p in row):
             prev = row
@@ -35,19 +37,19 @@ def _sweep(thetas, nus, model, opts, seed_row=None):
     return rows
 
 
-def _start_row(ths, nus, model, opts, start_theta):
+def _start_row(ths, nus, model, opts, start_theta, proofs):
     """Row where both sweeps start: the first of a few candidates (middle of the range
     first) on which at least a quarter of the points converge, else the best of them."""
     if start_theta is not None:
         k = int(np.argmin(np.abs(ths - start_theta)))
-        return k, continue_row(ths[k], nus, model, opts)
+        return k, continue_row(ths[k], nus, model, opts, proofs=proofs)
     fracs = (0.5, 0.65, 0.35, 0.8, 0.2)
     best = None
     for f in fracs:
         k = int(round(f * (len(ths) - 1)))
         if best is not None and k == best[0]:
             continue
-        row = continue_row(ths[k], nus, model, opts)
+        row = continue_row(ths[k], nus, model, opts, proofs=proofs)
         good = sum(p.status == "ok" for p in row)
         if best is None or good > best[2]:
             best = (k, row, good)
@@ -56,22 +58,29 @@ def _start_row(ths, nus, model, opts, start_theta):
     return best[0], best[1]
 
 
-def _sweep_back(thetas, nus, model, opts, rows, k):
+def _sweep_back(thetas, nus, model, opts, rows, k, proofs):
     """Second pass towards the start row ``k``: each row also continues from the row on
     its outer side, which reaches pieces of the branch first found further out."""
     for i in list(range(len(rows) - 2, k - 1, -1)) + list(range(1, k)):
         j = i + 1 if i >= k else i - 1
         if any(p.usable for p in rows[j]):
             rows[i] = continue_row(
-                thetas[i], nus, model, opts, previous=rows[j], existing=rows[i], cold_starts=False
+                thetas[i],
+                nus,
+                model,
+                opts,
+                previous=rows[j],
+                existing=rows[i],
+                cold_starts=False,
+                proofs=proofs,
             )
     return rows
 
 
 def _sweep_worker(args):
     limit_blas_threads(1)
-    thetas, nus, model, opts, seed_row = args
-    return _sweep(thetas, nus, model, opts, seed_row)
+    thetas, nus, model, opts, seed_row, proofs = args
+    return _sweep(thetas, nus, model, opts, seed_row, proofs), proofs
 
 
 def steady_map(
@@ -88,6 +97,7 @@ def steady_map(
     workers: int | None = 1,
     start_theta: float | None = None,
     return_flows: bool = False,
+    decide: bool = True,
 ):
     """Steady flows on a (θ, ν0(0)) grid.
 
@@ -113,6 +123,10 @@ def steady_map(
     start_theta : float, optional
         Row where the sweeps start (default: the middle row, or a row at 65 %, 35 %, 80 %,
         20 % of the range if fewer than a quarter of the middle row's points converge).
+    decide : bool
+        Decide every point that continuation does not reach by the shooting scan (or a
+        scan's verdict that covers it: :func:`~chuteflow.steady.family.continue_row`).
+        False: leave them 'unreached' (continuation only; for comparison).
 
     Returns
     -------
@@ -137,9 +151,17 @@ def steady_map(
     # would save 30 % of the time but lose 6 % of the points, hard ones like θ = 17°,
     # ν0(0) = 0.12 among them: not done.)
     opts = Options(
-        nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=tangent, substeps=0
+        nu_top=nu_top,
+        n=n,
+        rtol=rtol,
+        n_max=n_max,
+        min_thickness=min_thickness,
+        tangent=tangent,
+        substeps=0,
+        decide=decide,
     )
-    k, first = _start_row(ths, nus, model, opts, start_theta)
+    proofs: list = []
+    k, first = _start_row(ths, nus, model, opts, start_theta, proofs)
     up, down = list(ths[k + 1 :]), list(ths[:k][::-1])
     if workers is None:
         workers = 2 if (os.cpu_count() or 1) >= 2 else 1
@@ -151,15 +173,20 @@ def steady_map(
         # the sympy-compiled closures and equations are already built (start row):
         # forked children inherit them
         with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
-            fu = pool.submit(_sweep_worker, (up, nus, model, opts, first))
-            fd = pool.submit(_sweep_worker, (down, nus, model, opts, first))
-            rows_up = [first] + fu.result()
-            rows_down = fd.result()
+            fu = pool.submit(_sweep_worker, (up, nus, model, opts, first, list(proofs)))
+            fd = pool.submit(_sweep_worker, (down, nus, model, opts, first, list(proofs)))
+            (r_up, p_up), (r_down, p_down) = fu.result(), fd.result()
+            rows_up = [first] + r_up
+            rows_down = r_down
+            proofs = p_up + [q for q in p_down if q not in p_up]
     else:
-        rows_up = [first] + _sweep(up, nus, model, opts, first)
-        rows_down = _sweep(down, nus, model, opts, first)
+        # the same order of work as with two processes (identical statuses and numbers)
+        p_up, p_down = list(proofs), list(proofs)
+        rows_up = [first] + _sweep(up, nus, model, opts, first, p_up)
+        rows_down = _sweep(down, nus, model, opts, first, p_down)
+        proofs = p_up + [q for q in p_down if q not in p_up]
     rows = rows_down[::-1] + rows_up
-    rows = _sweep_back(ths, nus, model, opts, rows, k)
+    rows = _sweep_back(ths, nus, model, opts, rows, k, proofs)
     arrays = [row_arrays(r) for r in rows]
     data = {}
     for key in arrays[0]:

@@ -6,10 +6,10 @@ import math
 from dataclasses import dataclass, field, fields
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..closures import ChuteModel
 from ..spectral import ChebyshevGrid, coefficients, tail
+from ._roots import brent_root
 
 
 @dataclass(frozen=True, eq=False)
@@ -212,7 +212,7 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
         y_peak = (
-            brentq(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
+            brent_root(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
             if len(idx)
             else 0.0
         )
@@ -221,7 +221,7 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     sf = chebval(xf, c_s)
     above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
     j = above[0]
-    h = brentq(lambda y: chebval(to_x(y), c_s) - target, yf[j - 1], yf[j], xtol=1e-14)
+    h = brent_root(lambda y: chebval(to_x(y), c_s) - target, yf[j - 1], yf[j], xtol=1e-14)
     return {
         "h": h,
         "nu_mean": rho_bar / h,

@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
@@ -268,7 +267,7 @@ class SteadyNewton:
             if res < tol and it >= min_iter:
                 return st, it, res, hist
             try:
-                dX = -sla.lu_solve(sla.lu_factor(J, check_finite=False), R, check_finite=False)
+                dX = -np.linalg.solve(J, R)
             except (ValueError, np.linalg.LinAlgError):
                 break
             X0 = st.pack()

@@ -18,6 +18,7 @@ __all__ = [
     "ROUGHNESSES",
     "DIAGRAM_RANGES",
     "DIAGRAM_SHAPE",
+    "LONGWAVE_STRIDE",
     "REDUCED_SHAPE",
     "FIGURES",
     "figure",
@@ -81,12 +82,16 @@ DIAGRAM_RANGES: dict[float, tuple[tuple[float, float], tuple[float, float]]] = {
     0.10: ((16.5, 22.5), (0.01, 0.30)),
 }
 
-#: (n_theta, n_nu0) of the stability diagrams, by quick mode: coarse in quick mode (the
-#: regimes are a few grid points each), the benchmark's 60 × 60 in full mode.
+#: (n_theta, n_nu0) of the stability diagrams, by quick mode: 40 × 40 in quick mode, 100 ×
+#: 100 in full mode (the long-wave coefficient on every third row and column, and exactly
+#: wherever those do not decide its sign: chuteflow.papers.mitarai2004.adaptive).
 DIAGRAM_SHAPE: dict[bool, dict[float, tuple[int, int]]] = {
-    True: {0.05: (11, 12), 0.10: (11, 12)},
-    False: {0.05: (60, 60), 0.10: (60, 60)},
+    True: {0.05: (40, 40), 0.10: (40, 40)},
+    False: {0.05: (100, 100), 0.10: (100, 100)},
 }
+
+#: Stride of the coarse grid on which the sweep computes the long-wave coefficient.
+LONGWAVE_STRIDE: dict[bool, int] = {True: 3, False: 3}
 
 #: (n_theta, n_nu0) of the 1D model's diagrams (figure 17) when the full model's diagram of
 #: the same run is not available (otherwise its grid is used, point by point).

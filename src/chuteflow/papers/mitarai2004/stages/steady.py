@@ -12,12 +12,13 @@ from ..points import figure
 if TYPE_CHECKING:
     from ....steady import SteadyFlow
 
-#: (θ grid, ν0 grid) of the maps. Quick: 1° × 14 floor densities; full: 0.25° × 40. The
-#: ends of the existence range are then refined by continuation beyond the map.
-_NU0 = {True: (0.005, 0.55, 14), False: (0.005, 0.55, 40)}
+#: (θ grid, ν0 grid) of the maps (issue 9: at least 40 × 40 in quick mode, 100 × 100 in
+#: full mode). Quick: 1/3° (0.4°) × 40 floor densities; full: 1/8° × 100. The ends of the
+#: existence range are then refined by continuation beyond the map.
+_NU0 = {True: (0.005, 0.55, 40), False: (0.005, 0.55, 100)}
 _THETA = {
-    0.05: {True: (8.0, 21.0, 1.0), False: (8.0, 21.0, 0.25)},
-    0.10: {True: (11.0, 27.0, 1.0), False: (11.0, 27.0, 0.25)},
+    0.05: {True: (8.0, 21.0, 1.0 / 3.0), False: (8.0, 21.0, 0.125)},
+    0.10: {True: (11.0, 27.0, 0.4), False: (11.0, 27.0, 0.125)},
 }
 #: Statements of §3.2: roughness → (θ range of existence, θ with monotonic Q0(ρ̄0), θ with a
 #: minimum, figure labels).
@@ -103,8 +104,9 @@ def _run(ctx: StageContext) -> None:
         )
         rep.add_figure(
             png,
-            f"(a) Contour lines of θ (one per grid row, {th_grid[0]:g}° … "
-            f"{th_grid[-1]:g}° in steps of {th_grid[1] - th_grid[0]:g}°) in the "
+            f"(a) Contour lines of θ (every {max(1, -(-len(th_grid) // 14))}th row of the "
+            f"{len(th_grid)}×{len(nu_grid)} map, {th_grid[0]:g}° … "
+            f"{th_grid[-1]:g}° in steps of {th_grid[1] - th_grid[0]:.3g}°) in the "
             f"(h, ν̄) plane, non-monotonic density profiles grey; (b) Q0 vs ρ̄0 "
             f"at θ = {th_mono:g}° (solid) and {th_min:g}° (dashed), minimum "
             f"marked. φ = {phi:g}.",
