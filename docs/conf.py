@@ -231,7 +231,10 @@ def _cli_signature(app, what, name, obj, options, signature, return_annotation):
         if type(default).__name__ in ("OptionInfo", "ArgumentInfo"):
             value = getattr(default, "default", inspect.Parameter.empty)
             default = inspect.Parameter.empty if value is ... else value
-        params.append(p.replace(default=default, annotation=inspect.Parameter.empty))
+        # options are named on the command line: keyword-only, so a required option may follow
+        # one with a default
+        kind = inspect.Parameter.KEYWORD_ONLY
+        params.append(p.replace(default=default, annotation=inspect.Parameter.empty, kind=kind))
     return str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty)), None
 
 
