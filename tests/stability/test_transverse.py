@@ -108,14 +108,16 @@ def test_growth_plane_small(p1_flow):
     transverse mode grows at 6.1655e-5 (k_z = 0.002), the longitudinal one 19 times faster,
     1.178967e-3 at k_x = 0.002 — the dense 3D scan at k_z = 0 agrees with the 2D branch
     solver (least_stable) — and the oblique one at 9.42e-4: the maximum is longitudinal."""
-    from chuteflow.stability import least_stable
+    from chuteflow.stability import OperatorCache, least_stable
     from chuteflow.stability.transverse import growth_plane
 
     ds = growth_plane(p1_flow, [0.0, 0.002], [0.0, 0.002])
     assert float(ds.alpha_re.sel(kx=0.0, kz=0.0)) == 0.0
     assert float(ds.alpha_re.sel(kx=0.0, kz=0.002)) == pytest.approx(6.1655e-5, rel=1e-4)
     assert ds.attrs["direction"] == "longitudinal"
-    a2d = least_stable(p1_flow, 0.002).alpha
+    # the 2D solver on the plain grid, as the 3D operators (the mapped 2D default differs by
+    # 1.3e-7 relative here, 1.5e-10 absolute: another discretisation)
+    a2d = least_stable(p1_flow, 0.002, cache=OperatorCache(mapped=False)).alpha
     assert ds.attrs["growth_max"] == pytest.approx(a2d.real, rel=1e-7)
     assert float(ds.alpha_im.sel(kx=0.002, kz=0.0)) == pytest.approx(a2d.imag, rel=1e-7)
     assert bool(ds.physical.all())
