@@ -11,7 +11,8 @@ import enum
 import functools
 import inspect
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import typer
@@ -156,3 +157,25 @@ def with_model_options(command: Callable[..., Any]) -> Callable[..., Any]:
     wrapper.__signature__ = sig.replace(parameters=new)  # type: ignore[attr-defined]
     wrapper.__annotations__ = {p.name: p.annotation for p in new}
     return wrapper
+
+
+@contextmanager
+def time_progress(label: str, console: Any, *, disable: bool, digits: int = 4) -> Iterator[Callable]:
+    """A transient progress bar over simulated time; yields ``progress(t, t_end)`` to update it."""
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    with Progress(
+        TextColumn(label),
+        BarColumn(),
+        TextColumn("t = {task.fields[t]}"),
+        TimeElapsedColumn(),
+        console=console,
+        transient=True,
+        disable=disable,
+    ) as prog:
+        task = prog.add_task("run", total=1.0, t="0")
+
+        def progress(t: float, t_end: float) -> None:
+            prog.update(task, completed=t / t_end, t=f"{t:.{digits}g} / {t_end:.{digits}g}")
+
+        yield progress

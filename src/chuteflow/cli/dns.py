@@ -9,7 +9,7 @@ import typer
 
 from chuteflow.closures import ChuteModel
 
-from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from ._app import MODEL_OPTIONS_HERE, app, time_progress, with_model_options
 
 
 def _num(v):
@@ -63,7 +63,6 @@ def dns(
     import warnings
 
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from chuteflow.dns import simulate, summary
     from chuteflow.errors import ParameterError
@@ -75,20 +74,7 @@ def dns(
     con = Console(stderr=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        with Progress(
-            TextColumn("dns"),
-            BarColumn(),
-            TextColumn("t = {task.fields[t]}"),
-            TimeElapsedColumn(),
-            console=con,
-            transient=True,
-            disable=as_json and not con.is_terminal,
-        ) as prog:
-            task = prog.add_task("run", total=1.0, t="0")
-
-            def progress(t, t_end):
-                prog.update(task, completed=t / t_end, t=f"{t:.5g} / {t_end:.5g}")
-
+        with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
             ds = simulate(
                 theta,
                 nu0,

@@ -9,7 +9,7 @@ import typer
 
 from chuteflow.closures import ChuteModel
 
-from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from ._app import MODEL_OPTIONS_HERE, app, time_progress, with_model_options
 
 #: Per-point keys of ``chuteflow reduced --json`` (``points``: the family's knots, exact).
 POINT_KEYS = (
@@ -175,7 +175,6 @@ def simulate(
     import warnings
 
     from rich.console import Console
-    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     from chuteflow.errors import ParameterError
     from chuteflow.reduced import reduced_model
@@ -196,20 +195,7 @@ def simulate(
                 style="yellow",
                 highlight=False,
             )
-        with Progress(
-            TextColumn("simulating"),
-            BarColumn(),
-            TextColumn("t = {task.fields[t]}"),
-            TimeElapsedColumn(),
-            console=con,
-            transient=True,
-            disable=as_json and not con.is_terminal,
-        ) as prog:
-            task = prog.add_task("run", total=1.0, t="0")
-
-            def progress(t, t_end):
-                prog.update(task, completed=t / t_end, t=f"{t:.4g} / {t_end:.4g}")
-
+        with time_progress("simulating", con, disable=as_json and not con.is_terminal, digits=4) as progress:
             ds = run(
                 rm,
                 length,
