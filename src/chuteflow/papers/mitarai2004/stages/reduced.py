@@ -49,19 +49,28 @@ def _diagrams(ctx: StageContext) -> None:
     reds, fulls, agrs = [], [], []
     for phi in (0.05, 0.10):
         full = _full_diagram(ctx, phi)
-        grid = None
-        if full is not None:
-            # the full model's own grid, point by point; at quick every other row and column
-            # of it (the 1D diagram costs a steady family per row: 40 x 40 took 11 minutes),
-            # which still leaves about a hundred unstable points for the fraction
-            if ctx.quick:
-                full = full.isel(theta=slice(None, None, QUICK_SUBGRID), nu0=slice(None, None, QUICK_SUBGRID))
-            grid = (full["theta"].values, full["nu0"].values)
-            shape = (len(grid[0]), len(grid[1]))
-        ctx.progress(f"1D diagram φ = {phi:g} ({shape[0]}×{shape[1]})")
-        ds = reduced_diagram(
-            phi, shape=shape, grid=grid, fresh=True, out=ctx.path(f"reduced_diagram_phi{phi:g}.nc")
-        )
+        if full is not None and "r1d_margin" in full:
+            # the diagram stage computed the 1D criterion at each of its flows
+            # (DiagramReduced1D): the 1D diagram on the full model's whole grid, free
+            ctx.progress(f"1D diagram φ = {phi:g}: from the full model's diagram")
+            ds = _from_full(full)
+            ds.to_netcdf(ctx.path(f"reduced_diagram_phi{phi:g}.nc"))
+        else:
+            grid = None
+            if full is not None:
+                # the full model's own grid, point by point; at quick every other row and
+                # column of it (the 1D diagram costs a steady family per row: 40 x 40 took
+                # 11 minutes), which still leaves about a hundred unstable points
+                if ctx.quick:
+                    full = full.isel(
+                        theta=slice(None, None, QUICK_SUBGRID), nu0=slice(None, None, QUICK_SUBGRID)
+                    )
+                grid = (full["theta"].values, full["nu0"].values)
+                shape = (len(grid[0]), len(grid[1]))
+            ctx.progress(f"1D diagram φ = {phi:g} ({shape[0]}×{shape[1]})")
+            ds = reduced_diagram(
+                phi, shape=shape, grid=grid, fresh=True, out=ctx.path(f"reduced_diagram_phi{phi:g}.nc")
+            )
         agr = None
         if full is not None and "unstable" in full:
             try:
@@ -125,6 +134,33 @@ def _diagrams(ctx: StageContext) -> None:
         "differently.",
         source="figure 15",
     )
+
+
+def _from_full(full):
+    """The 1D diagram from a full-model diagram that carries the ``r1d_*`` variables of
+    :class:`~chuteflow.papers.mitarai2004.stages.diagrams.DiagramReduced1D`: the steady
+    quantities and the 1D criterion, with ``status`` 0 where the 1D model was evaluated
+    (a steady flow exists, whatever the full model's stability solver did there)."""
+    import numpy as np
+
+    keep = [v for v in full.data_vars if v.startswith("r1d_")]
+    keep += [v for v in ("h", "nu_mean", "rho_bar", "Q", "T_mean", "monotonic") if v in full]
+    ds = full[keep].copy()
+    has = np.isfinite(full["r1d_margin"].values)
+    status = np.where(has, 0, np.where(full["status"].values == 0, 2, full["status"].values))
+    ds["status"] = (
+        ("theta", "nu0"),
+        status.astype(np.int8),
+        {
+            "long_name": "0: steady flow with the 1D criterion; otherwise the full diagram's "
+            "status (1 no steady flow, 2 not converged, 3 error)",
+            "flag_values": np.array([0, 1, 2, 3], dtype=np.int8),
+            "flag_meanings": "ok no_steady_flow not_converged error",
+        },
+    )
+    ds.attrs["title"] = "1D model stability diagram (Mitarai & Nakanishi figure 15)"
+    ds.attrs["engine"] = "from the full model's diagram sweep (metric reduced1d_diagram)"
+    return ds
 
 
 def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
