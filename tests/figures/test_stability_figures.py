@@ -171,3 +171,23 @@ def test_dispersion_figure_shows_where_the_branch_was_lost():
     fig = dispersion_figure([("X", _synthetic(k, a, physical=[True] * 4 + [False] * 2))])
     texts = [t.get_text() for t in fig.axes[0].texts]
     assert any("branch lost from k = 0.008" in t for t in texts)
+
+
+def test_refined_triangulation_is_bilinear():
+    """Sub-cells carry the bilinear interpolant of the grid data (exact for a bilinear
+    field), and a cell with a missing corner stays one triangle on its valid corners."""
+    from chuteflow.figures.diagram import refined_triangulation
+
+    i, j = np.meshgrid(np.arange(3.0), np.arange(4.0), indexing="ij")
+    X, Y = 2.0 * j + 0.3 * i, i + 0.1 * j  # an affine image of the grid
+    Z = (i - 0.7) * (j - 1.3)  # bilinear in (i, j)
+    valid = np.ones(i.shape, dtype=bool)
+    valid[2, 3] = False
+    tri, (z,) = refined_triangulation(X, Y, [Z], valid, n=4)
+    assert tri.triangles.shape[0] == 5 * 2 * 16 + 1
+    # every point of the triangulation carries the bilinear value at its (i, j)
+    A = np.array([[0.3, 2.0], [1.0, 0.1]])  # (x, y) = A @ (i, j)
+    ii, jj = np.linalg.solve(A, np.vstack([tri.x, tri.y]))
+    used = np.unique(tri.triangles)
+    np.testing.assert_allclose(z[used], ((ii - 0.7) * (jj - 1.3))[used], atol=1e-12)
+    assert len(np.unique(np.round(ii[used] * 4, 9))) == 9  # quarter steps in i

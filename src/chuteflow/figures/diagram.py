@@ -27,7 +27,7 @@ import numpy as np
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
 
-__all__ = ["grid_triangulation", "plot_diagram", "save_diagram"]
+__all__ = ["grid_triangulation", "plot_diagram", "refined_triangulation", "save_diagram"]
 
 _REGIME_COLOURS = {0: "white", 1: "0.55", 2: "0.7", 3: "0.4"}
 
@@ -74,6 +74,107 @@ def grid_triangulation(x, y, valid):
     if len(tris) == 0:
         return None
     return mtri.Triangulation(xf, yf, tris)
+
+
+def refined_triangulation(X, Y, fields, valid, n: int = 4):
+    """A triangulation of a structured grid's image (X, Y) with each cell subdivided.
+
+    Each cell with four valid corners becomes an ``n`` × ``n`` lattice of sub-cells in index
+    space, mapped to the plane by the bilinear interpolation of X and Y; ``fields`` are
+    interpolated bilinearly too. Cells with three valid corners stay one triangle. Contours
+    over it follow the bilinear interpolant of the grid data instead of zigzagging along
+    the diagonals of the cells, which are long and thin where the (θ, ν0(0)) → (h, ν̄) map
+    is stretched.
+
+    Parameters
+    ----------
+    X, Y : ndarray (ni, nj)
+        Coordinates of the grid points in the target plane.
+    fields : sequence of ndarray (ni, nj)
+        Data on the grid (NaN allowed where ``valid``: triangles touching it are masked).
+    valid : ndarray of bool (ni, nj)
+        Points that exist.
+    n : int
+        Subdivisions per cell side.
+
+    Returns
+    -------
+    (matplotlib.tri.Triangulation, list of ndarray) or (None, [])
+        The triangulation and each field at its points (NaN replaced by 0, masked).
+    """
+    import matplotlib.tri as mtri
+
+    valid = np.asarray(valid, dtype=bool)
+    quad = valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:] & valid[1:, 1:]
+    ci, cj = np.nonzero(quad)
+    t = np.arange(n + 1) / n
+    fi, fj = np.meshgrid(t, t, indexing="ij")
+    fi, fj = fi.ravel(), fj.ravel()
+
+    def bilinear(F):
+        c00, c01 = F[ci, cj][:, None], F[ci, cj + 1][:, None]
+        c10, c11 = F[ci + 1, cj][:, None], F[ci + 1, cj + 1][:, None]
+        return ((1 - fi) * ((1 - fj) * c00 + fj * c01) + fi * ((1 - fj) * c10 + fj * c11)).ravel()
+
+    xs, ys = [bilinear(X)], [bilinear(Y)]
+    zs = [[bilinear(np.asarray(F, dtype=float))] for F in fields]
+    loc = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b_, c, d = loc[:-1, :-1].ravel(), loc[1:, :-1].ravel(), loc[1:, 1:].ravel(), loc[:-1, 1:].ravel()
+    local = np.concatenate([np.c_[a, b_, c], np.c_[a, c, d]])
+    tris = [(np.arange(len(ci))[:, None, None] * (n + 1) ** 2 + local[None]).reshape(-1, 3)]
+    # cells with three valid corners: one triangle on the original points
+    base = len(ci) * (n + 1) ** 2
+    ni, nj = valid.shape
+    xs.append(np.asarray(X, dtype=float).ravel())
+    ys.append(np.asarray(Y, dtype=float).ravel())
+    for k, F in enumerate(fields):
+        zs[k].append(np.asarray(F, dtype=float).ravel())
+    idx = np.arange(ni * nj).reshape(ni, nj) + base
+    corners = np.stack([idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]], axis=-1)
+    ok = np.stack([valid[:-1, :-1], valid[1:, :-1], valid[1:, 1:], valid[:-1, 1:]], axis=-1)
+    three = ok.sum(axis=-1) == 3
+    if three.any():
+        cs, oks = corners[three], ok[three]
+        tris.append(np.array([c[o] for c, o in zip(cs, oks)]))
+    tri_arr = np.concatenate(tris) if tris else np.zeros((0, 3), dtype=int)
+    if len(tri_arr) == 0:
+        return None, []
+    x, y = np.concatenate(xs), np.concatenate(ys)
+    xf, yf = np.nan_to_num(x), np.nan_to_num(y)
+    area = 0.5 * (
+        (xf[tri_arr[:, 1]] - xf[tri_arr[:, 0]]) * (yf[tri_arr[:, 2]] - yf[tri_arr[:, 0]])
+        - (xf[tri_arr[:, 2]] - xf[tri_arr[:, 0]]) * (yf[tri_arr[:, 1]] - yf[tri_arr[:, 0]])
+    )
+    tri_arr = tri_arr[np.abs(area) > 1e-14 * (np.ptp(xf) * np.ptp(yf) + 1e-300)]
+    if len(tri_arr) == 0:
+        return None, []
+    z_out = [np.concatenate(z) for z in zs]
+    tri = mtri.Triangulation(xf, yf, tri_arr)
+    bad = np.zeros(len(tri_arr), dtype=bool)
+    for z in z_out:
+        bad |= np.isnan(z)[tri_arr].any(axis=1)
+    tri.set_mask(bad)
+    return tri, [np.nan_to_num(z) for z in z_out]
+
+
+def _unstable_field(ds):
+    """A continuous field whose sign is that of ``unstable`` (flattened; NaN: unknown).
+
+    The signed ``log10(1 + |Re α2|)`` where ``alpha2_re`` is known and agrees with the
+    flag (Re α2 spans 10–10⁴ over a diagram; compressed so that the zero level, linearly
+    interpolated between grid points of opposite sign, falls inside the cell rather than
+    on the corner of smaller magnitude), else ±1/2 from the flag: the filled region's
+    edge then runs through the cells instead of along a staircase of grid cells.
+    """
+    flag = ds["unstable"].values.astype(float)
+    flag = np.where(flag < 0, np.nan, flag)
+    u = flag - 0.5
+    if "alpha2_re" in ds:
+        a = ds["alpha2_re"].values.astype(float)
+        s = np.sign(a) * np.log10(1.0 + np.abs(a))
+        use = np.isfinite(s) & np.isfinite(flag) & ((s > 0) == (flag == 1)) & (s != 0)
+        u = np.where(use, s, u)
+    return u.ravel()
 
 
 def _boundary_segments(tri):
@@ -156,13 +257,11 @@ def plot_diagram(
     have_stab = "unstable" in ds
     if tri is not None:
         if have_stab:
-            u = ds["unstable"].values.astype(float)
-            u = np.where(u < 0, np.nan, u).ravel()
-            mask = np.isnan(u)[tri.triangles].any(axis=1)
-            tri.set_mask(mask)
-            ax.tricontourf(tri, np.nan_to_num(u), levels=[0.5, 1.5], colors=["0.72"])
+            u = _unstable_field(ds).reshape(h.shape)
+            ftri, (fu,) = refined_triangulation(h, nb, [u], ok)
+            if ftri is not None:
+                ax.tricontourf(ftri, fu, levels=[0.0, np.inf], colors=["0.72"])
             handles.append(Patch(facecolor="0.72", label="unstable (Re α₂ > 0)"))
-            tri.set_mask(None)
         if "monotonic" in ds:
             mono = ds["monotonic"].values.astype(float).ravel()
             if (mono[ok.ravel()] == 0).any() and (mono[ok.ravel()] == 1).any():
