@@ -108,8 +108,8 @@ def refined_triangulation(X, Y, fields, valid, n: int = 4):
     quad = valid[:-1, :-1] & valid[1:, :-1] & valid[:-1, 1:] & valid[1:, 1:]
     ci, cj = np.nonzero(quad)
     t = np.arange(n + 1) / n
-    fi, fj = np.meshgrid(t, t, indexing="ij")
-    fi, fj = fi.ravel(), fj.ravel()
+    gi, gj = np.meshgrid(t, t, indexing="ij")
+    fi, fj = gi.ravel(), gj.ravel()
 
     def bilinear(F):
         c00, c01 = F[ci, cj][:, None], F[ci, cj + 1][:, None]
