@@ -248,3 +248,20 @@ def test_near_continuum_branch_reaches_k_where_the_tracker_stalls():
     mode = near_continuum_branch(flow, 0.005, n=80)
     assert mode is not None and mode.method == "branch (relaxed)" and mode.n == 80
     assert mode.drift < 3e-4 and abs(mode.alpha - complex(-0.0028376, -0.0188980)) < 2 * mode.drift
+
+
+@pytest.mark.slow
+def test_dispersion_follows_a_lost_branch_with_the_relaxed_threshold():
+    """dispersion(strict=False) where the tracker loses the branch (N fixed at 80): the
+    point is the branch followed with the relaxed tail threshold (the value of
+    near_continuum_branch at N = 80, measured −0.0027679 − 0.0192902i), not a direct
+    solve; flagged by the paper's tests (drift 2.3e-4)."""
+    from chuteflow.stability import RejectionPolicy
+
+    flow = _flow(16.5, 0.13, 0.08, 0.30)
+    ds = dispersion(flow, [0.001, 0.005], strict=False, policy=RejectionPolicy(n_start=80, n_max=80))
+    assert ds.attrs["branch_lost_at"] == 0.005
+    assert not ds.direct.values.any() and not ds.physical.values[1]
+    alpha = complex(float(ds.alpha_re[1]), float(ds.alpha_im[1]))
+    assert abs(alpha - complex(-0.0027679, -0.0192902)) < 1e-6
+    assert float(ds.drift[1]) < 3e-4

@@ -460,11 +460,12 @@ def dispersion(
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
         ``physical = False``. Where the continuation loses the branch (non-strict), that
-        and every larger k are solved directly at k (least-stable physical mode by dense
-        QZ with the rejection tests, :func:`least_stable` with
-        ``method="qz"``), flagged ``direct = True`` and ``physical = False`` (a direct
-        solve is not known to lie on the branch); the attribute ``branch_lost_at`` is the
-        k where the branch was lost.
+        and every larger k are followed with the relaxed tail threshold
+        (:func:`near_continuum_branch`, judged by the paper's tests); where that does not
+        reach k either, solved directly at k (least-stable physical mode by dense QZ with
+        the rejection tests, :func:`least_stable` with ``method="qz"``), flagged
+        ``direct = True`` and ``physical = False`` (a direct solve is not known to lie on
+        the branch); the attribute ``branch_lost_at`` is the k where the branch was lost.
 
     Returns
     -------
@@ -500,11 +501,20 @@ def dispersion(
                     raise
                 lost_at = float(ks[i])
         if lost_at is not None:
-            # branch lost: this and the larger k are solved directly at k
-            mode = least_stable(
-                flow, ks[i], method="qz", policy=policy.replace(n_start=min(tr.n, policy.n_max)), cache=cache
-            )
-            direct[i] = True
+            # branch lost: this and the larger k followed with the relaxed tail threshold
+            # (on the branch, flagged by the paper's tests), else solved directly at k
+            relaxed = near_continuum_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
+            if relaxed is not None:
+                mode = relaxed
+            else:
+                mode = least_stable(
+                    flow,
+                    ks[i],
+                    method="qz",
+                    policy=policy.replace(n_start=min(tr.n, policy.n_max)),
+                    cache=cache,
+                )
+                direct[i] = True
         if strict and not mode.physical:
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
