@@ -42,7 +42,7 @@ from ..stability.modes import (
     stability_operator,
     tail,
 )
-from ..stability.operator import StabilityOperator, interpolate_on
+from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
 from ..steady import SteadyFlow, steady_tangent
 
@@ -368,8 +368,7 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
         "T": tangent["T"] - shift * (g.D @ flow.T),
     }
     y = op.grid.y
-    vals = dict(zip(fixed_y, interpolate_on(g, np.stack(list(fixed_y.values())), y)))
-    parts = [vals[f] if f in vals else np.zeros_like(y) for f in op.fields]
+    parts = [g.interpolate(fixed_y[f], y) if f in fixed_y else np.zeros_like(y) for f in op.fields]
     return np.concatenate(parts)
 
 

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..equations import TOP_OF, Term, compiled_equations
 from ..errors import ParameterError
-from ..spectral import ChebyshevGrid, MappedChebyshevGrid, coefficients
+from ..spectral import ChebyshevGrid, MappedChebyshevGrid
 from ..steady import SteadyFlow
 
 FIELDS_2D = ("nu", "u", "v", "T")
@@ -117,24 +117,6 @@ def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGr
     return ChebyshevGrid(n, 0.0, flow.y_max)
 
 
-def interpolate_on(grid: ChebyshevGrid, f: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The interpolant of nodal values ``f`` on ``grid`` at heights ``y`` (several series
-    stacked along the leading axes of ``f``; result ``f.shape[:-1] + y.shape``).
-
-    Same polynomial as :meth:`ChebyshevGrid.interpolate`, evaluated as one matrix product
-    with T_k(x) = cos(k arccos x) instead of Clenshaw's recurrence, which loops over the
-    degree in Python (measured 4–10× faster for the steady grid's 97 or 145 nodes onto a
-    stability grid; agreement to round-off, ~1e-14 of the largest value).
-    """
-    f = np.asarray(f)
-    y = np.asarray(y, dtype=float)
-    x = np.clip(grid.to_computational(y.ravel()), -1.0, 1.0)
-    n = f.shape[-1] - 1
-    T = np.cos(np.multiply.outer(np.arccos(x), np.arange(n + 1)))
-    out = coefficients(f) @ T.T
-    return out.reshape(f.shape[:-1] + y.shape)
-
-
 def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
     """Jets ν0, ν0', ν0'', u0, …, T0'' (keys of :data:`chuteflow.equations.BASE`) at ``y``.
 
@@ -145,9 +127,7 @@ def base_on_grid(flow: SteadyFlow, y: np.ndarray) -> dict[str, np.ndarray]:
     g = flow.grid
     d = flow.derivatives()
     ln = np.asarray(flow.log_nu)
-    # one Clenshaw evaluation of all nine series at once (interpolate_on would be ~3 ms
-    # faster, but its different round-off moves where the transverse tracker is lost in the
-    # continuum past P1's band, which tests/stability/test_transverse_track.py pins)
+    # one Clenshaw evaluation of all nine series at once
     stack = np.stack([ln, g.D @ ln, g.D2 @ ln, flow.u, d["u_y"], d["u_yy"], flow.T, d["T_y"], d["T_yy"]])
     vals = g.interpolate(stack, np.asarray(y))
     s, s1, s2 = vals[0], vals[1], vals[2]
