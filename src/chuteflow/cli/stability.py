@@ -174,7 +174,7 @@ def _warn_mode(mode) -> None:
             f"{mode.drift:.1e}, tail {mode.tail:.1e} at N = {mode.n}, method {mode.method}); "
             "the best estimate is shown"
         )
-    elif mode.method != "branch" and mode.method != "shift":
+    elif not mode.method.startswith("branch") and mode.method != "shift":
         _warn(
             f"k = {mode.k:g}: answered by {mode.method} (direct solve at k)"
             + (f"; {mode.note}" if mode.note else "")

@@ -361,6 +361,73 @@ def branch_mode(
     return tr.mode(kk)
 
 
+#: Largest eigenvector tail accepted by the continuation of :func:`near_continuum_branch`,
+#: the fallback after the branch was lost: where the branch's phase velocity −Im α/k enters
+#: the range of u0(y), its eigenvector has a critical layer and tails of 1e-6 … 1e-4, which
+#: the tracking threshold (1e-5) rejects although the eigenvalue is still the branch.
+RELAXED_TAIL = 1e-3
+#: Numbers of equal sub-targets of :func:`near_continuum_branch`'s attempts (a finer sequence
+#: of targets keeps the predictor's steps short where the branch turns sharply).
+RELAXED_SPLITS = (1, 8)
+#: Largest relative drift |α(N) − α(N')| / |α| of a relaxed branch value that is returned.
+RELAXED_DRIFT = 0.05
+
+
+def near_continuum_branch(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+) -> Mode | None:
+    """The α(0) = 0 branch at (k, kz) and N, tracked with the tail threshold relaxed to
+    :data:`RELAXED_TAIL`: the fallback where :class:`BranchTracker` lost the branch.
+
+    The tracker loses the branch where its phase velocity −Im α/k enters the range of the
+    base velocity u0(y) (e.g. θ = 16.5°, ν0(0) = 0.13, φ = 0.08, Φ = 0.30 at k ≈ 0.0036:
+    Im α/k ≈ −3.8 against u0 ∈ [2.92, 3.88]): the eigenvector develops a critical layer
+    whose Chebyshev tail (1e-6 … 1e-4) exceeds the tracking threshold, and the steps halve
+    until they stall. The continuation is redone from k = 0 with the threshold
+    :data:`RELAXED_TAIL`, to the targets k/m, 2k/m, …, k for m in :data:`RELAXED_SPLITS`
+    (the predictor still has to hit within a quarter of each step, so the answer is the
+    continuous continuation of the branch). The mode is judged by ``policy`` (the paper's
+    drift and tail tests: it is returned flagged when it fails them, with its drift
+    |α(N) − α(N')| as the convergence estimate) and ``method = "branch (relaxed)"``.
+
+    Returns None when no attempt reaches k, or the drift exceeds :data:`RELAXED_DRIFT`
+    |α| (no eigenvalue at N' continues it: not a trustworthy branch value).
+    """
+    policy = resolve_policy(policy)
+    kk = math.hypot(k, kz)
+    if kk == 0:
+        return None
+    direction = (k, kz)
+    relaxed = policy.replace(track_tail_tol=max(RELAXED_TAIL, policy.track_tail_tol), n_start=n, n_max=n)
+    for m in RELAXED_SPLITS:
+        tr = BranchTracker(flow, n, direction=direction, policy=relaxed, cache=cache)
+        try:
+            for target in np.linspace(0.0, kk, m + 1)[1:]:
+                alpha, w = tr.advance(float(target))
+            pencil = tr._pencil(kk)
+            drift, n2 = drift_of(flow, alpha, w, n, k, kz, tr.three_d, cache=cache)
+        except ConvergenceError:
+            continue
+        if not drift <= RELAXED_DRIFT * abs(alpha):
+            continue
+        mode = make_mode(pencil, alpha, w, drift, n2, policy)
+        u = tr._operator(n).base["u"]
+        c = -alpha.imag / kk
+        note = (
+            f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
+            f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = {c:.4g} "
+            f"against u0 in [{float(np.min(u)):.4g}, {float(np.max(u)):.4g}]"
+        )
+        return dataclasses.replace(mode, method="branch (relaxed)", note=note)
+    return None
+
+
 # -- dispersion relation -----------------------------------------------------------------
 def dispersion(
     flow: SteadyFlow,
@@ -393,11 +460,12 @@ def dispersion(
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
         ``physical = False``. Where the continuation loses the branch (non-strict), that
-        and every larger k are solved directly at k (least-stable physical mode by dense
-        QZ with the rejection tests, :func:`least_stable` with
-        ``method="qz"``), flagged ``direct = True`` and ``physical = False`` (a direct
-        solve is not known to lie on the branch); the attribute ``branch_lost_at`` is the
-        k where the branch was lost.
+        and every larger k are followed with the relaxed tail threshold
+        (:func:`near_continuum_branch`, judged by the paper's tests); where that does not
+        reach k either, solved directly at k (least-stable physical mode by dense QZ with
+        the rejection tests, :func:`least_stable` with ``method="qz"``), flagged
+        ``direct = True`` and ``physical = False`` (a direct solve is not known to lie on
+        the branch); the attribute ``branch_lost_at`` is the k where the branch was lost.
 
     Returns
     -------
@@ -433,11 +501,20 @@ def dispersion(
                     raise
                 lost_at = float(ks[i])
         if lost_at is not None:
-            # branch lost: this and the larger k are solved directly at k
-            mode = least_stable(
-                flow, ks[i], method="qz", policy=policy.replace(n_start=min(tr.n, policy.n_max)), cache=cache
-            )
-            direct[i] = True
+            # branch lost: this and the larger k followed with the relaxed tail threshold
+            # (on the branch, flagged by the paper's tests), else solved directly at k
+            relaxed = near_continuum_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
+            if relaxed is not None:
+                mode = relaxed
+            else:
+                mode = least_stable(
+                    flow,
+                    ks[i],
+                    method="qz",
+                    policy=policy.replace(n_start=min(tr.n, policy.n_max)),
+                    cache=cache,
+                )
+                direct[i] = True
         if strict and not mode.physical:
             raise ConvergenceError(
                 f"dispersion at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: k = {ks[i]:g} not "
@@ -687,8 +764,13 @@ def least_stable(
         mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
         continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
         reference, seconds. With ``"branch"``, k > :data:`K_DIRECT` (= 1) is solved
-        directly (QZ at k), and where the continuation loses the branch the solver falls
-        back to the direct solve at k; :attr:`Mode.method` says which method answered.
+        directly (QZ at k). Where the continuation loses the branch (its phase velocity
+        inside the range of u0, near the continuum of the dilute top), the branch is
+        followed again with the tail threshold relaxed (:func:`near_continuum_branch`,
+        ``method = "branch (relaxed)"``, at this and every further N of the ladder); only
+        where that does not reach k either, the solver falls back to the direct solve at
+        k. A value on the branch is preferred to a direct solve's candidate as the flagged
+        answer. :attr:`Mode.method` says which method answered.
     policy : RejectionPolicy, optional
         Thresholds of the drift and tail tests and the resolution ladder (default: the
         paper's, §4.1).
@@ -733,19 +815,29 @@ def least_stable(
             if mode is not None and lost is not None:
                 mode = dataclasses.replace(mode, method="qz (branch lost)", note=join_notes(lost, mode.note))
         else:
-            try:
-                mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
-            except ConvergenceError as exc:
-                # the continuation lost the branch: answer by a direct solve at k
-                lost, how = str(exc).split(" (theta")[0], "qz"
-                mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            mode = None
+            if how == "branch":
+                try:
+                    mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                except ConvergenceError as exc:
+                    # the continuation lost the branch: from now on followed with the tail
+                    # threshold relaxed (near_continuum_branch), at every rung
+                    lost, how = str(exc).split(" (theta")[0], "relaxed"
+            if mode is None:
+                mode = near_continuum_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
                 if mode is not None:
-                    mode = dataclasses.replace(
-                        mode, method="qz (branch lost)", note=join_notes(lost, mode.note)
-                    )
+                    mode = dataclasses.replace(mode, note=join_notes(lost or "", mode.note))
+                else:
+                    # not even the relaxed continuation reaches k: a direct solve at k
+                    how = "qz"
+                    mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                    if mode is not None:
+                        mode = dataclasses.replace(
+                            mode, method="qz (branch lost)", note=join_notes(lost or "", mode.note)
+                        )
         if mode is not None and mode.physical:
             return mode
-        if mode is not None and (best is None or mode_score(mode, policy) <= mode_score(best, policy)):
+        if mode is not None and _better(mode, best, policy):
             best = mode
     if best is not None and not strict:
         return best
@@ -759,6 +851,19 @@ def least_stable(
         f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
         f"{ns[-1]}; raise n_max or relax the thresholds"
     )
+
+
+def _better(mode: Mode, best: Mode | None, policy: RejectionPolicy) -> bool:
+    """Whether ``mode`` replaces ``best`` as the flagged answer of :func:`least_stable`: a
+    value on the branch (tracked, also with the relaxed tail threshold) beats a direct
+    solve's candidate, which is not known to be the branch; among equals, the smaller
+    :func:`mode_score` (nearer to passing the paper's tests; later N on ties)."""
+    if best is None:
+        return True
+    on_branch, best_on_branch = mode.method.startswith("branch"), best.method.startswith("branch")
+    if on_branch != best_on_branch:
+        return on_branch
+    return mode_score(mode, policy) <= mode_score(best, policy)
 
 
 def choose_n(

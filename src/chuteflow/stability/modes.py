@@ -202,8 +202,11 @@ class Mode:
         Parameters and closures of the base flow the mode was computed with.
     method : str
         Which solver answered: ``"branch"`` (continuation of the α(0) = 0 branch),
-        ``"qz"`` (dense QZ at k), ``"shift"`` (shift-invert near a given σ), or
-        ``"qz (branch lost)"`` (direct solve after the continuation lost the branch).
+        ``"qz"`` (dense QZ at k), ``"shift"`` (shift-invert near a given σ),
+        ``"branch (relaxed)"`` (the branch followed with the continuation's tail threshold
+        relaxed after it was lost near the continuum,
+        :func:`~chuteflow.stability.dispersion.near_continuum_branch`), or
+        ``"qz (branch lost)"`` (direct solve where even that did not reach k).
     note : str
         What the solver wants the reader to know about this answer (e.g. where the branch
         was lost, the largest Re α of the unresolved continuum); empty if nothing.

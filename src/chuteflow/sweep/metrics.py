@@ -23,6 +23,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
+from ..stability.dispersion import near_continuum_branch
 from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
@@ -44,18 +45,21 @@ class LongWaveMetric(PointFunction):
     sinh-mapped stability grid, N raised from ``n`` by 25 % until the two agree to ``rtol``
     (default 0.05: the sign has a margin of 20) or N = ``n_max``. The strict Taylor α2
     (which feels the dilute top's continuum and converges only algebraically, docs/errata.md)
-    is reported as ``alpha2_taylor_re`` at the same N, not used.
+    is reported as ``alpha2_taylor_re`` at the same N, not used. α1 = −i dQ0/dρ̄0 (eq. (B 2))
+    comes from the exact steady tangent (as accurate as the steady flow, ~1e-9), not from
+    perturbation theory on the stability grid, which converges to it only as N⁻⁴.
     """
 
     name = "longwave"
-    version = "4"
+    version = "5"
     requires = ("steady",)
     defaults = {"n": 48, "rtol": 0.05, "n_max": 160}
     variables = (
         Variable(
             "alpha1_im",
             "sqrt(g sigma)",
-            "Im α1 = −dQ0/dρ̄0 (the long-wave phase velocity, positive down the slope, is −Im α1)",
+            "Im α1 = −dQ0/dρ̄0 from the exact steady tangent (the long-wave phase velocity, "
+            "positive down the slope, is −Im α1)",
             source="App. B, eq. (B 2)",
         ),
         Variable(
@@ -130,15 +134,20 @@ class GrowthMetric(PointFunction):
     drift and tail checked at every k, N raised where needed) over ``num`` wavenumbers
     geometrically spaced in [k_min, k_max]. k_c, the first sign change of Re α from + to −,
     is refined by Brent's method on the mode nearest the linear prediction inside the bracket
-    (relative tolerance 1e-6). A failure (branch lost, N = ``n_max`` not enough) leaves the
-    values missing (``dispersion_sampled`` = 1) and is noted in the point's message.
+    (relative tolerance 1e-6). Points that miss the paper's drift and tail tests at
+    N = ``n_max`` are kept with their estimate (``growth_converged`` = 0, the largest drift
+    in ``growth_drift``, a note in the point's message); where the tracker loses the branch
+    near the continuum of the dilute top, the rest of the k grid is followed with the tail
+    threshold relaxed (:func:`chuteflow.stability.dispersion.near_continuum_branch`,
+    flagged the same way). Only where that fails too are the values missing
+    (``dispersion_sampled`` = 1, the reason in the message).
     Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
     Re α2 > 0 (about 5 s a point: off by default for diagrams).
     """
 
     name = "growth"
-    version = "2"
+    version = "3"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
     defaults = {
@@ -165,6 +174,17 @@ class GrowthMetric(PointFunction):
             source="§4.2",
         ),
         Variable("growth_n", "1", "largest Chebyshev N used along the branch", kind="int"),
+        Variable(
+            "growth_drift",
+            _RATE,
+            "largest |α(N) − α(round(0.8 N))| over the k grid (the convergence estimate)",
+        ),
+        Variable(
+            "growth_converged",
+            "1",
+            "every k of the grid passed the paper's drift and tail tests (§4.1)",
+            kind="flag",
+        ),
         Variable(
             "dispersion_sampled",
             "1",
@@ -202,22 +222,40 @@ class GrowthMetric(PointFunction):
             return {"dispersion_sampled": False}
         o = self.options
         ks = self.k_grid()
+        # an own operator cache: the flow's operators are dropped when the point is done
+        cache = OperatorCache(4)
+        policy = RejectionPolicy(n_max=int(o["n_max"]))
+        modes = []
         try:
-            # an own operator cache: the flow's operators are dropped when the point is done
-            cache = OperatorCache(4)
-            tr = BranchTracker(flow, int(o["n"]), policy=RejectionPolicy(n_max=int(o["n_max"])), cache=cache)
-            modes = [tr.mode(k) for k in ks]
-            bad = [m for m in modes if not m.physical]
-            if bad:
-                m = bad[0]
-                raise ConvergenceError(
-                    f"dispersion at k = {m.k:.3g} not converged at N = {m.n} (drift "
-                    f"{m.drift:.1e}, tail {m.tail:.1e})"
-                )
+            tr = BranchTracker(flow, int(o["n"]), policy=policy, cache=cache)
+            for k in ks:
+                try:
+                    modes.append(tr.mode(k))
+                except ConvergenceError as exc:
+                    # lost near the continuum: the rest of the grid with the relaxed tail
+                    # threshold, at the tracker's last N (None: not reached either)
+                    lost = str(exc).split(" (theta")[0]
+                    for kk in ks[len(modes) :]:
+                        m = near_continuum_branch(flow, float(kk), n=tr.n, policy=policy, cache=cache)
+                        if m is None:
+                            raise ConvergenceError(
+                                f"{lost}; not reached with the relaxed tail threshold either "
+                                f"(k = {kk:.3g}, N = {tr.n})"
+                            ) from None
+                        modes.append(m)
+                    point.note(f"growth: {lost}; followed with the relaxed tail threshold from there")
+                    break
         except ConvergenceError as exc:
             # sampled, but no trustworthy branch: the values stay missing, the message says why
             point.note(f"growth: {exc}")
             return {"dispersion_sampled": True}
+        bad = [m for m in modes if not m.physical]
+        if bad:
+            m = bad[0]
+            point.note(
+                f"growth: {len(bad)} of {len(modes)} k not converged to the paper's thresholds, "
+                f"first at k = {m.k:.3g}, N = {m.n} (drift {m.drift:.1e}, tail {m.tail:.1e})"
+            )
         re = np.array([m.alpha.real for m in modes])
         imax = int(np.argmax(re))
         out = {
@@ -225,10 +263,18 @@ class GrowthMetric(PointFunction):
             "growth_max": float(re[imax]),
             "k_growth_max": float(ks[imax]),
             "growth_n": max(m.n for m in modes),
+            "growth_drift": max(m.drift for m in modes),
+            "growth_converged": not bad,
         }
         for i in range(len(ks) - 1):
             if re[i] > 0 >= re[i + 1]:
-                out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
+                try:
+                    out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
+                except (ConvergenceError, ValueError) as exc:
+                    # the refinement left the branch: the bracket's linear estimate, noted
+                    ka, kb = float(ks[i]), float(ks[i + 1])
+                    out["k_c"] = ka - re[i] * (kb - ka) / (re[i + 1] - re[i])
+                    point.note(f"growth: k_c in [{ka:.3g}, {kb:.3g}] by linear interpolation ({exc})")
                 break
         return out
 

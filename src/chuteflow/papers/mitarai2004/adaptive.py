@@ -44,7 +44,7 @@ class StridedLongWave(PointFunction):
     points); elsewhere its variables stay missing for :func:`refine_longwave`."""
 
     name = "longwave_strided"
-    version = "1"
+    version = "2"  # 2: the inner longwave metric's version 5 (α1 from the steady tangent)
     requires = ("steady",)
     defaults = {"stride": 3, **LongWaveMetric.defaults}
     variables = LongWaveMetric.variables
