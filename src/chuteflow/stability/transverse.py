@@ -769,7 +769,8 @@ def _beyond_branch(flow, ks, n, policy, cache):
     """Least-stable physical mode at each k_z of ``ks`` (increasing, past the tracked
     branch): candidates seeded by a coarse dense scan (again whenever k_z has grown by
     :data:`RESEED_RATIO` or every candidate is lost), followed by shift-invert from their
-    last eigenvectors at N = ``n``, N raised along the ladder while not physical."""
+    last eigenvectors at the N where the last winner passed (``n`` again at each seeding),
+    N raised along the ladder while not physical."""
     nf = 5
     out: list[Mode | None] = []
     # candidates: (α, start vector, the N of that vector)
@@ -781,6 +782,7 @@ def _beyond_branch(flow, ks, n, policy, cache):
         found: list = []
         for attempt in range(2):
             if not cands or attempt == 1 or (k_seed is not None and k >= RESEED_RATIO * k_seed):
+                n_cur = n  # new candidates: from the first rung again
                 seeds = [(a, v, SEED_N) for a, v in _seed_candidates(flow, k, policy, cache)]
                 cands = cands + seeds  # the followed ones first: their vectors are at N
                 k_seed = k
@@ -815,6 +817,8 @@ def _beyond_branch(flow, ks, n, policy, cache):
             mode = _judge_complex(flow, k, a, w, n_cur, policy, cache)
             if mode.physical:
                 break
+        if mode is not None and mode.physical:
+            n_cur = mode.n  # the next k_z starts where this one passed (until the next seeding)
         out.append(mode)
     return out
 
