@@ -536,7 +536,11 @@ def _quad_log(ks, values, k):
 #: fails (θ = 15.43°, ν0(0) = 0.0443, φ = 0.05: lost at k = 1.6e-4 at N = 48–75, followed
 #: through 1.58e-4).
 NUDGE = 1.04
-#: Resolutions of the ladder tried by :func:`longitudinal_peak` before it gives up: where
+#: Step halvings of the continuation allowed per scan point (the tracker's default 16 costs
+#: tens of seconds where the branch is lost at k ~ 1e-5, and the scan's points are close).
+SCAN_HALVINGS = 8
+#: Resolutions of the ladder tried by :func:`longitudinal_peak` before it gives up (two where
+#: the branch is lost before the first scan point): where
 #: the branch is lost before its maximum at N = 48, 60 and 75 it is lost at every N of the
 #: old 20-point scan up to 160 too (thick dilute flows, θ = 17.5°, ν0(0) = 0.02 at φ = 0.05:
 #: Re α/k² ≈ 4e6 already at k = 2e-6 and the branch lost near k = 5e-6).
@@ -563,7 +567,8 @@ def longitudinal_peak(
     the scan is refined by parabolic interpolation in ln k (to 2 % in k), and only the mode
     there is judged (drift at N' = 0.8 N and tail), N raised along ``policy``'s ladder
     while it is not physical. If the branch is lost before its maximum the scan is redone
-    at the next N (at most :data:`LONGITUDINAL_RUNGS` resolutions).
+    at the next N (at most :data:`LONGITUDINAL_RUNGS` resolutions; two where it is lost
+    before k_min).
 
     Raises
     ------
@@ -572,7 +577,9 @@ def longitudinal_peak(
     """
     policy = policy or RejectionPolicy(n_start=n, n_max=160)
     last_exc: Exception | None = None
+    misses, tried = 0, []
     for n_t in policy.ladder(n)[:LONGITUDINAL_RUNGS]:
+        tried.append(n_t)
         tr = BranchTracker(flow, n_t, policy=policy, cache=cache)
         ks: list[float] = []
         alphas: list[complex] = []
@@ -583,13 +590,12 @@ def longitudinal_peak(
             # a step that ends where the branch meets a continuum eigenvalue fails (the
             # advected continuum Im α = −k u0(y) crosses it at isolated k): restart from
             # the last scan point with a nudged target, stepping over that k
-            for kk in (k, k * NUDGE):
+            for kk in (k, k * NUDGE) if ks else (k,):
                 try:
                     if kk != k:
                         tr = BranchTracker(flow, n_t, policy=policy, cache=cache)
-                        if ks:
-                            tr.advance(ks[-1])
-                    got = tr.advance(kk)
+                        tr.advance(ks[-1], max_halvings=SCAN_HALVINGS)
+                    got = tr.advance(kk, max_halvings=SCAN_HALVINGS)
                     k = kk
                     break
                 except ConvergenceError as exc:
@@ -609,9 +615,13 @@ def longitudinal_peak(
         g = np.array([a.real for a in alphas])
         if len(g) and not (lost and int(np.argmax(g)) == len(g) - 1):
             return _peak_2d(flow, tr, ks, alphas, vecs, policy, cache)
+        if not ks:
+            misses += 1
+            if misses == 2:
+                break  # lost before the first scan point twice: dilute thick flows (NUDGE)
     raise ConvergenceError(
         f"longitudinal branch at theta = {flow.theta:g}, nu0 = {flow.nu0:g} lost before its "
-        f"maximum at N = {policy.ladder(n)[:LONGITUDINAL_RUNGS]} ({last_exc})"
+        f"maximum at N = {tried} ({last_exc})"
     )
 
 
