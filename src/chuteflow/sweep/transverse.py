@@ -19,9 +19,12 @@ instability of Forterre & Pouliquen (2002) compete. At each point this metric gi
 
 The comparison is between the two axes of the (k_x, k_z) plane; at P1 the maximum over the
 plane lies on the k_x axis (:func:`chuteflow.stability.transverse.growth_plane`). A point
-that is stable in both directions costs one bordered solve (~0.1 s); each unstable direction
-~0.1–0.4 s more (version 2, which judged every point of fixed 40- and 20-point grids at
-N = 80, cost 1–4 s per unstable point; ``benchmarks/bench_transverse.py``).
+that is stable in both directions costs the bordered solve of α2z; an unstable one a scan per
+unstable direction. Measured on a heavily loaded 2-core machine, version 2 (every point of
+fixed 40- and 20-point grids judged at N = 80) and this version on the same flows in one
+process: 2–6× less per unstable flow (θ = 17.14°, ν0(0) = 0.044: 8.2 → 1.4 s; 16.29°, 0.181:
+5.8 → 1.7 s), the same on stable ones; in the 40 × 40 φ = 0.10 diagram the metric took 0.34 s
+per grid point against 1.42 s for the steady flows (``benchmarks/bench_transverse.py``).
 """
 
 from __future__ import annotations
