@@ -15,6 +15,15 @@ under 2 s.
   50 points; the note gives the largest difference of Re α.
 - ``transverse_analysis``: the whole ``transverse(flow, num=25)`` (α2z, the dispersion on a
   geometric grid, k_z* refined, the cut-off of the unstable band), tracked against dense.
+- ``transverse_peak``: the metric's transverse maximum (:func:`transverse_peak`: scan that
+  stops past the cut-off, Brent refinement, only the maximum judged, N from 48) against
+  ``transverse(flow, num=40)`` at N = 80 (every grid point judged: metric version 2).
+- ``longitudinal_peak``: the metric's longitudinal maximum (:func:`longitudinal_peak`, 2D
+  mapped grid from N = 48) against the version-2 scan, BranchTracker judged at 20 k_x on
+  [1e-4, 0.05] at N = 80 with a bounded refinement.
+- ``transverse_dispersion_beyond``: the 50-k_z dispersion on [1e-5, 3] including the points
+  past the branch (``beyond=True``), against the dense scan on three of those points scaled
+  to their number (target < 2 s).
 - ``transverse_diagram_40x40``: a small sweep with the ``transverse`` metric (steady,
   kinematic, longwave, transverse), its compute time per point × 1600 / 2 workers, against
   the same sweep without the metric (target: the 3D diagram on 40 × 40 under 3 minutes).
@@ -119,7 +128,56 @@ def run(quick: bool = False) -> list[dict]:
             f"{sd['growth_max']:.6g}, {sd['kz_cutoff']:.5g}",
         }
     )
-    # 4. the 3D diagram: cost of the transverse metric per point, extrapolated to 40 x 40
+    # 4. the metric's maxima along each axis against the version-2 scans
+    from chuteflow.longwave.transverse import longitudinal_peak, transverse_peak
+    from chuteflow.stability import BranchTracker, RejectionPolicy
+
+    def lon_scan():
+        tr = BranchTracker(flow, 80, policy=RejectionPolicy(n_max=160))
+        ks = np.geomspace(1e-4, 0.05, 20)
+        return max((tr.mode(float(k)).alpha.real, float(k)) for k in ks)
+
+    t_tp, tp = _best(lambda: transverse_peak(flow, alpha2z=a2, policy=RejectionPolicy(n_start=48)), rep)
+    t_tv, tv = _best(lambda: transverse(flow, num=40), 1)
+    rows.append(
+        {
+            "name": "transverse_peak",
+            "seconds": t_tp,
+            "baseline_seconds": t_tv,
+            "ratio": t_tv / t_tp,
+            "note": f"P1: {tp.growth:.6g} at k_z = {tp.k:.5g} ({tp.solves} solves, N = {tp.mode.n}); "
+            f"baseline transverse(num=40): {tv.growth_max:.6g} at {tv.kz_max:.5g}",
+        }
+    )
+    t_lp, lp = _best(lambda: longitudinal_peak(flow), rep)
+    t_ls, ls = _best(lon_scan, 1)
+    rows.append(
+        {
+            "name": "longitudinal_peak",
+            "seconds": t_lp,
+            "baseline_seconds": t_ls,
+            "ratio": t_ls / t_lp,
+            "note": f"P1: {lp.growth:.6g} at k_x = {lp.k:.5g} ({lp.solves} solves, N = {lp.mode.n}); "
+            f"baseline 20 judged k_x at N = 80 (grid maximum, unrefined): {ls[0]:.6g} at {ls[1]:.5g}",
+        }
+    )
+    t_by, dby = _best(lambda: transverse_dispersion(flow, kz, alpha2z=a2, beyond=True), 1)
+    past = np.nonzero(np.asarray(dby.method) == "shift")[0]
+    sample = kz[past[:: max(1, len(past) // 3)][:3]]
+    t_ds, _ = _best(lambda: transverse_dispersion(flow, sample, method="dense"), 1)
+    rows.append(
+        {
+            "name": "transverse_dispersion_beyond",
+            "seconds": t_by,
+            "baseline_seconds": t_ds * len(past) / len(sample) + t_tr,
+            "ratio": (t_ds * len(past) / len(sample) + t_tr) / t_by,
+            "note": f"target < 2 s; 50 k_z on [1e-5, 3] with the {len(past)} points past the branch; "
+            f"{int(dby.physical.sum())}/50 physical; baseline: the tracked part ({t_tr:.2f} s) + the "
+            f"dense scan on {len(sample)} of the {len(past)} points x {len(past)}/{len(sample)}",
+        }
+    )
+
+    # 5. the 3D diagram: cost of the transverse metric per point, extrapolated to 40 x 40
     from chuteflow.sweep import Sweep, SweepConfig
 
     shape = (3, 4) if quick else (6, 6)

@@ -29,3 +29,14 @@ def test_transverse_stage_quick(tmp_path):
     assert any("§5.3" in note for note in sec.notes)
     for fig in sec.figures:
         assert fig.path.stat().st_size > 5_000
+
+
+def test_recorded_40x40_answer():
+    """The §5.3 answer recorded from the 40 × 40 sweeps names the four classes for both
+    roughnesses of the paper."""
+    from chuteflow.papers.mitarai2004.stages.transverse import SWEEP_ANSWER_40x40
+
+    assert set(SWEEP_ANSWER_40x40) == {0.05, 0.10}
+    for text in SWEEP_ANSWER_40x40.values():
+        for word in ("stable", "longitudinal only", "transverse only", "both", "faster"):
+            assert word in text

@@ -650,6 +650,12 @@ class TransverseTracker:
         """α of the branch at k_z inside the tracked range, solved from the nearest tracked
         point (the history is not changed): for bracketed searches. None if it does not land
         on a resolved eigenvector near the interpolated prediction."""
+        pt = self.point_at(kz)
+        return None if pt is None else pt.alpha
+
+    def point_at(self, kz: float) -> _Point | None:
+        """The branch's point at k_z inside the tracked range (as :meth:`at`, with its
+        eigenvector, for :meth:`judge`); the history is not changed."""
         h = [p for p in self.history if p.kz > 0]
         if not h or kz > h[-1].kz * self.max_ratio:
             return None
@@ -661,7 +667,7 @@ class TransverseTracker:
         res = self._solve(kz, pred, h[i].vec, n=h[i].n)
         if res is None or res[4] > self.policy.track_tail_tol:
             return None
-        return complex(res[0])
+        return _Point(float(kz), complex(res[0]), res[1], h[i].n)
 
     def mode(self, kz: float) -> Mode | None:
         """The tracked mode at k_z with its drift (N' = 0.8 N) and tail, N raised along the
@@ -669,9 +675,12 @@ class TransverseTracker:
         pt = self.advance(kz)
         if pt is None:
             return None
-        return self._judge(pt)
+        return self.judge(pt)
 
-    def _judge(self, pt: _Point) -> Mode:
+    def judge(self, pt: _Point) -> Mode:
+        """The mode of a tracked point (from :meth:`advance` or :meth:`point_at`) with its
+        drift |α(N) − α(N')| (N' = 0.8 N) and tail, N raised along the policy's ladder while
+        it is not physical."""
         nf = 5
         alpha, v, n = pt.alpha.real, pt.vec, pt.n
         mode = None
@@ -730,18 +739,25 @@ def dense_modes(
 SEED_N = 48
 #: How many candidate modes are followed past the branch.
 N_CANDIDATES = 2
+#: A seed (N = :data:`SEED_N`) within this relative distance of an eigenvalue already
+#: followed at N is taken to be that eigenvalue and is not solved again (P1, k_z = 0.01–3:
+#: resolved seeds differ from their N = 80 eigenvalues by 6e-8 to 1.1e-3 relative; two
+#: distinct eigenvalues that close would rank the same to that accuracy).
+SEED_MATCH = 2e-3
 
 
 def _seed_candidates(flow, kz, policy, cache):
-    """Candidate eigenvalues at (0, k_z) from one coarse dense QZ (N = :data:`SEED_N`, real
+    """Candidate eigenpairs at (0, k_z) from one coarse dense QZ (N = :data:`SEED_N`, real
     form), best first, one of each conjugate pair: those whose eigenvectors are nearly
     resolved there (tail < 1e-4; the continuum of the dilute top is dropped by |α| > 1e-5 and
-    by the tail test at N)."""
+    by the tail test at N). Returns [(α, eigenvector of the equilibrated pencil at N =
+    :data:`SEED_N`)]: the vector starts the shift-invert at N (without it the inverse
+    iteration starts from a random vector and often falls back on Arnoldi)."""
     p = stability_operator(flow, SEED_N, True, cache=cache).pencil(0.0, kz)
     w, V = _finite_spectrum(p, True)
     t = _tails(p, V, policy.tail_terms)
-    keep = (t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5)
-    return [complex(a) for a in w[keep][: 2 * N_CANDIDATES]]
+    keep = np.nonzero((t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5))[0][: 2 * N_CANDIDATES]
+    return [(complex(w[i]), V[:, i]) for i in keep]
 
 
 #: Past the branch the candidates are re-seeded by a coarse dense scan every time k_z has
@@ -752,10 +768,13 @@ RESEED_RATIO = 2.0
 def _beyond_branch(flow, ks, n, policy, cache):
     """Least-stable physical mode at each k_z of ``ks`` (increasing, past the tracked
     branch): candidates seeded by a coarse dense scan (again whenever k_z has grown by
-    :data:`RESEED_RATIO` or every candidate is lost), followed by shift-invert at the
-    resolution where the last winner passed, N raised along the ladder while not physical."""
+    :data:`RESEED_RATIO` or every candidate is lost), followed by shift-invert from their
+    last eigenvectors at the N where the last winner passed (``n`` again at each seeding),
+    N raised along the ladder while not physical."""
+    nf = 5
     out: list[Mode | None] = []
-    cands: list[tuple[complex, np.ndarray | None]] = []
+    # candidates: (α, start vector, the N of that vector)
+    cands: list[tuple[complex, np.ndarray, int]] = []
     k_seed = None
     n_cur = n
     for k in ks:
@@ -763,17 +782,23 @@ def _beyond_branch(flow, ks, n, policy, cache):
         found: list = []
         for attempt in range(2):
             if not cands or attempt == 1 or (k_seed is not None and k >= RESEED_RATIO * k_seed):
-                old = [(a, None) for a, _ in cands]
-                cands = [(a, None) for a in _seed_candidates(flow, k, policy, cache)] + old
+                n_cur = n  # new candidates: from the first rung again
+                seeds = [(a, v, SEED_N) for a, v in _seed_candidates(flow, k, policy, cache)]
+                cands = cands + seeds  # the followed ones first: their vectors are at N
                 k_seed = k
             pencil = stability_operator(flow, n_cur, True, cache=cache).pencil(0.0, k)
             found = []
-            for a, v in cands:
+            for a, v, nv in cands:
+                if nv == SEED_N and any(
+                    abs(a.real - f.real) + abs(abs(a.imag) - abs(f.imag)) <= SEED_MATCH * max(abs(a), 1e-3)
+                    for f, _, _ in found
+                ):
+                    continue  # a seed of an eigenvalue already followed
                 try:
-                    alpha, w = nearest_eigenpair(pencil, a, v0=v)
+                    alpha, w = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, nv, n_cur))
                 except ConvergenceError:
                     continue
-                if v is not None and abs(alpha - a) > 0.2 * max(abs(a), 1e-3):
+                if abs(alpha - a) > 0.2 * max(abs(a), 1e-3):
                     continue  # jumped to another eigenvalue
                 alpha = complex(alpha)
                 tol = 1e-8 * max(1.0, abs(alpha))
@@ -786,12 +811,14 @@ def _beyond_branch(flow, ks, n, policy, cache):
             found = sorted(found, key=lambda f: -f[0].real)[:N_CANDIDATES]
             if found:
                 break
-        cands = [(a, w) for a, w, _ in found]
+        cands = [(a, w, n_cur) for a, w, _ in found]
         mode = None
         for a, w, _ in found:
             mode = _judge_complex(flow, k, a, w, n_cur, policy, cache)
             if mode.physical:
                 break
+        if mode is not None and mode.physical:
+            n_cur = mode.n  # the next k_z starts where this one passed (until the next seeding)
         out.append(mode)
     return out
 

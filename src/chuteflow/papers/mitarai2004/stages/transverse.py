@@ -26,6 +26,28 @@ WINNER_GRID = {
         (0.02, 0.03, 0.04, 0.05, 0.06, 0.08, 0.1, 0.12, 0.15),
     ),
 }
+#: The answer to §5.3 on the 40 × 40 diagrams over the paper's ranges (DIAGRAM_RANGES), from
+#: ``chuteflow diagram --roughness PHI --grid 40x40 --theta-range … --nu0-range …
+#: --metrics steady,longwave,transverse`` (metric ``transverse`` version 3); recorded here,
+#: not recomputed by this stage (18 and 27 min on 2 heavily loaded cores). Counts are of the
+#: grid points with a steady flow.
+SWEEP_ANSWER_40x40 = {
+    0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1118 flows): stable 681, longitudinal only 249, "
+    "transverse only 10, both 178. Where both occur the longitudinal instability grows faster "
+    "at 100 points (median 14×, 1.1× to ~1e8×; λx = 2750–32000 σ, 80–1800 h; h = 12–54) and the "
+    "transverse one at 23 thick dilute flows (θ = 16.9–18°, ν̄ = 0.012–0.025, h = 21–54; by "
+    "1.02–44×, median 2.5×, growth 1.6e-4–4.0e-3, λz = 750–1510 σ ≈ 17–71 h); at 55 points "
+    "(ν0(0) ≤ 0.028, h = 24–159) the longitudinal branch is lost at k ~ 1e-5 and no winner "
+    "is named. The 10 transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 "
+    "(h = 19–31) just outside the longitudinal unstable region (Re α2 < 0, α2z > 0).",
+    0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 990 flows): stable 711, longitudinal only 217, "
+    "transverse only 2, both 60. Where both occur the longitudinal instability grows faster at "
+    "39 points (median 15×, 1.06× to 4e4×; λx = 5800–33000 σ, 105–1700 h; h = 19–69) and the "
+    "transverse one at 6 thick dilute flows (θ = 22.0–22.5°, ν̄ = 0.007–0.011, h = 37–64; by "
+    "1.01–395×, median 2.4×, growth 1.4e-4–1.1e-3, λz = 1200–1900 σ ≈ 23–51 h); 15 points "
+    "(ν0(0) ≤ 0.017, h = 42–142) have no verdict. The 2 transverse-only points: θ = 22.3–22.5°, "
+    "ν0(0) = 0.040 (h = 42–44).",
+}
 #: Round-off of the assembled operator, relative to its largest entry.
 OPERATOR_TOL = 1e-12
 #: α2z from eigenvalues at k_z = 1e-5, 3e-5 extrapolated to 0: 9e-5 relative measured
@@ -199,6 +221,12 @@ def _run(ctx: StageContext) -> None:
         "where the depth-integrated lateral pressure falls with the mass (α2z > 0), not "
         f"finite-wavelength rolls; {answer}. Counts on the grid: {counts}."
     )
+    recorded = [txt for txt in SWEEP_ANSWER_40x40.values() if txt]
+    if recorded:
+        rep.add_note(
+            "§5.3 on the 40 × 40 diagrams (recorded from the sweep metric 'transverse', version 3, "
+            "not recomputed here): " + " ".join(recorded)
+        )
     rep.check(
         "transverse.which_wins",
         source="§5.3",
