@@ -9,7 +9,7 @@ back onto m ≤ M (3/2 rule). Rows (the stability operator's choice, :mod:`chute
 ========  ========================  ======================  ===============================
 block     interior nodes            floor (y = 0)           top (y = y_max)
 ========  ========================  ======================  ===============================
-s         mass (2.1) ÷ ν            y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
+s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
 u         x-momentum ÷ μ            eq. (2.9) ÷ μ           û_y + |k| û = 0 per mode
 v         y-momentum ÷ μ            v = 0                   v̂_y + |k| v̂ = 0 per mode
 T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ = 0 per mode
@@ -17,6 +17,10 @@ T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ 
 
 The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)); the
 density one is applied pointwise with the local temperature, the others mode by mode.
+
+(a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(ŝ_0(y_j)),
+plus a uniform source λ in mode 0 (:meth:`Discretisation.mass_source`), so that the total
+mass is conserved at any amplitude (docs/dns.md, *Mass*).
 """
 
 from __future__ import annotations

@@ -4,8 +4,11 @@ Each step solves F(C^{n+1}) = 0 (:meth:`Discretisation.residual`). Newton's line
 are solved by GMRES on finite-difference Jacobian–vector products, right-preconditioned by
 the block-diagonal (per Fourier mode) linearisation about the x-averaged state
 (:meth:`Discretisation.linear_blocks`): in the linear phase the preconditioner is the
-Jacobian and one Newton iteration converges. The factorisation is reused while Newton
-converges in at most ``refresh_after`` iterations, and rebuilt otherwise.
+Jacobian and one chord iteration converges. The block inverses are reused across steps while
+Newton converges in at most ``refresh_after`` iterations and GMRES in at most
+``refresh_krylov``, and rebuilt from the current state's x-mean otherwise. Newton starts from
+the caller's extrapolation in time and asks GMRES only for the reduction that reaches the
+tolerance (inexact Newton); docs/dns.md, *Solver*.
 """
 
 from __future__ import annotations
