@@ -42,7 +42,9 @@ class NewtonSettings:
     refresh_after : int
         Rebuild the preconditioner when a step needed more Newton iterations than this.
     refresh_krylov : int
-        … or when one GMRES solve needed more iterations than this.
+        … or when one GMRES solve needed more iterations than this,
+    refresh_every : int
+        … but then at most once in this many steps.
     chord_ratio : float
         A chord step (preconditioner as Jacobian, no GMRES) is kept when it reduces the
         residual by at least this factor; otherwise GMRES is used.
@@ -55,6 +57,7 @@ class NewtonSettings:
     gmres_maxiter: int = 4
     refresh_after: int = 3
     refresh_krylov: int = 30
+    refresh_every: int = 20
     chord_ratio: float = 0.2
 
 
@@ -84,6 +87,7 @@ class Stepper:
         self._lus: np.ndarray | None = None
         self._lu_key: tuple | None = None
         self.factorisations = 0
+        self._age = 0
 
     def reset(self) -> None:
         """Forget the preconditioner (it is rebuilt at the next step)."""
@@ -98,6 +102,7 @@ class Stepper:
         self._lus = self.disc.factorise(self.disc.linear_blocks(C), dt, a0)
         self._lu_key = (dt, a0)
         self.factorisations += 1
+        self._age = 0
 
     def step(
         self,
@@ -129,6 +134,7 @@ class Stepper:
             bdf = BDF2
         if self._lus is None or self._lu_key is None or not _close(self._lu_key, (dt, bdf[0])):
             self._factor(C_now, dt, bdf[0])
+        self._age += 1
         C = (C_now if guess is None else guess).copy()
         z = d.pack(C)
 
@@ -199,7 +205,9 @@ class Stepper:
             r, rn_old = F(z), rn
             if not np.all(np.isfinite(r)):
                 break
-            if it > s.refresh_after or count[0] > s.refresh_krylov:
+            # a refresh for GMRES's sake at most every `refresh_every` steps: at large
+            # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
+            if it > s.refresh_after or (count[0] > s.refresh_krylov and self._age >= s.refresh_every):
                 self._factor(d.unpack(z), dt, bdf[0])
         rn = float(np.max(np.abs(r)))
         if rn < s.atol:
