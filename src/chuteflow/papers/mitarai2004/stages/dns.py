@@ -84,7 +84,11 @@ def _linear(ctx: StageContext) -> None:
                 "the mass ∫∫ν dy dx is conserved.",
                 computed=f"unperturbed: largest change of the fields {st['mean_flow_change']:.1e}, "
                 f"mass drift {st['mass_drift']:.1e}; eigenmode run: mass drift {s['mass_drift']:.1e}",
-                passed=st["mean_flow_change"] < 1e-10 and s["mass_drift"] < 1e-12,
+                # the relaxed steady state's scaled residual is at its round-off floor, 3e-12;
+                # every step now takes one chord iteration (the solver used to accept the
+                # unchanged state, change 0.0), so the fields drift at that rate: measured
+                # 1.7e-10 over the 200 steps (546 time units) of this run
+                passed=st["mean_flow_change"] < 1e-9 and s["mass_drift"] < 1e-12,
                 detail="the steady solver's flow is this grid's steady state to "
                 f"{st['steady_relaxation']:.1e}",
             )
