@@ -27,7 +27,7 @@ __all__ = ["DnsSetup", "simulate", "summary", "relax_steady", "measure_mode", "b
 
 #: Initial conditions: the least-stable eigenmode at k = 2π/L, or small random noise.
 INITS = ("mode", "noise")
-_FORMAT = 1
+_FORMAT = 2
 
 
 @dataclass(frozen=True)
@@ -204,6 +204,9 @@ def _initial(
         # the mode in the frame ξ = x − ct: exp((α + ikc) t + ikξ)
         alpha = mode.alpha + 1j * disc.k[1] * setup.frame
         Cm[:, :, 1] += V * np.exp(-alpha * dt)
+        # the x-mean of ν = e^s depends on the amplitude (∝ |ŝ|²): give the level t = −Δt the
+        # x-mean density of t = 0 node by node, so that BDF2 starts from equal masses
+        Cm[0, :, 0] += np.log(_xmean_nu(disc, C0) / _xmean_nu(disc, Cm))
         return C0, Cm, change
     rng = np.random.default_rng(setup.seed)
     m_hi = max(1, setup.modes // 2)
@@ -212,6 +215,16 @@ def _initial(
     # density perturbation ν̂ ∝ ν0 (ŝ uniform in y): white in the lower half of the modes
     C[0, :, 1 : m_hi + 1] += coef[None, :]
     return C, None, change
+
+
+def _xmean_nu(disc: Discretisation, C: np.ndarray) -> np.ndarray:
+    return np.exp(disc.to_physical(C[0])).mean(axis=-1)
+
+
+def _coefficients(disc: Discretisation, phys: tuple) -> np.ndarray:
+    """Coefficients of a history level (ν, u, v, T) on the padded grid."""
+    nu, u, v, T = phys
+    return disc.coefficients_of({"s": np.log(nu), "u": u, "v": v, "T": T})
 
 
 def _checkpoint_path(out: str | os.PathLike | None, checkpoint: str | os.PathLike | None) -> Path | None:
@@ -366,6 +379,7 @@ def simulate(
     wall0 = 0.0
     t, step, dt_now = 0.0, 0, setup.dt
     C_prev_phys = None
+    h_prev = setup.dt
     restart_bdf1 = True
     C, Cm, relax_change = _initial(disc, flow, mode, setup, setup.dt, setup.relax)
     C_init = C.copy()
@@ -380,6 +394,7 @@ def simulate(
                     C_prev_phys = tuple(ck["prev"]) if ck["prev"].size else None
                     t, step, dt_now = float(ck["t"]), int(ck["step"]), float(ck["dt"])
                     restart_bdf1 = bool(ck["restart"]) or C_prev_phys is None
+                    h_prev = float(ck["h_prev"])
                     rec_t = list(ck["rec_t"])
                     rec_rho, rec_Q = list(ck["rec_rho"]), list(ck["rec_Q"])
                     snaps_t, snaps = list(ck["snaps_t"]), list(ck["snaps"])
@@ -410,14 +425,20 @@ def simulate(
     while t < setup.time * (1 - 1e-12):
         h = min(dt_now, setup.time - t)
         now_phys = stepper.physical(C)
-        first = restart_bdf1 or abs(h - dt_now) > 1e-12 * dt_now
+        first = restart_bdf1 or C_prev_phys is None
         hist = (now_phys, C_prev_phys if C_prev_phys is not None else now_phys)
+        guess = None
+        if not first and C_prev_phys is not None:
+            # (from the stored level, so that a resumed run takes the same steps)
+            C_prev = _coefficients(disc, C_prev_phys)
+            # linear extrapolation in time: Newton's starting point
+            guess = C + (h / h_prev) * (C - C_prev)
         try:
-            C_new, info = stepper.step(C, hist, h, first=first)
+            C_new, info = stepper.step(C, hist, h, first=first, guess=guess, ratio=h / h_prev)
         except ConvergenceError as exc:
             dt_now *= 0.5
             restart_bdf1 = True
-            stepper._lus = None
+            stepper.reset()
             if dt_now < min_dt_fraction * setup.dt:
                 status = f"stopped at t = {t:.6g}: {exc}"
                 break
@@ -426,13 +447,14 @@ def simulate(
             status = f"stopped at t = {t:.6g}: non-finite fields"
             break
         C_prev_phys, C = now_phys, C_new
+        h_prev = h
         restart_bdf1 = False
         t += h
         step += 1
         newton_its.append(info.newton)
         ok_since_change += 1
         if dt_now < setup.dt and ok_since_change >= 20:
-            dt_now, restart_bdf1, ok_since_change = min(2 * dt_now, setup.dt), True, 0
+            dt_now, ok_since_change = min(2 * dt_now, setup.dt), 0
         if step % record_every == 0 or t >= setup.time * (1 - 1e-12):
             record(C)
         if any(abs(t - s * setup.dt) < 0.5 * setup.dt for s in snap_steps[1:]) and (
@@ -454,6 +476,7 @@ def simulate(
                     step=step,
                     dt=dt_now,
                     restart=restart_bdf1,
+                    h_prev=h_prev,
                     rec_t=np.array(rec_t),
                     rec_rho=np.array(rec_rho),
                     rec_Q=np.array(rec_Q),

@@ -9,7 +9,7 @@ back onto m ≤ M (3/2 rule). Rows (the stability operator's choice, :mod:`chute
 ========  ========================  ======================  ===============================
 block     interior nodes            floor (y = 0)           top (y = y_max)
 ========  ========================  ======================  ===============================
-s         mass (2.1) ÷ ν            y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
+s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
 u         x-momentum ÷ μ            eq. (2.9) ÷ μ           û_y + |k| û = 0 per mode
 v         y-momentum ÷ μ            v = 0                   v̂_y + |k| v̂ = 0 per mode
 T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ = 0 per mode
@@ -17,6 +17,10 @@ T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ 
 
 The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)); the
 density one is applied pointwise with the local temperature, the others mode by mode.
+
+(a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(ŝ_0(y_j)),
+plus a uniform source λ in mode 0 (:meth:`Discretisation.mass_source`), so that the total
+mass is conserved at any amplitude (docs/dns.md, *Mass*).
 """
 
 from __future__ import annotations
@@ -26,7 +30,6 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..closures import ChuteModel
 from ..equations import TOP_OF, compiled_equations
@@ -185,7 +188,7 @@ class Discretisation:
         res, part = evaluate_residuals(st, self.model, self.theta)
         mu, kap, nu = part["mu"][(0, 0)], part["kappa"][(0, 0)], st["nu"]
         R = np.empty((4,) + nu.shape)
-        R[0] = res["mass"] / nu
+        R[0] = res["mass"]
         R[1] = res["xmom"] / mu
         R[2] = res["ymom"] / mu
         R[3] = res["energy"] / kap
@@ -195,6 +198,7 @@ class Discretisation:
         R[3, 0] = res["floor_energy"][0] / kap[0]
         R[0, -1] = self._top_nu(st)
         out = self.to_modes(R)
+        out[0, 1:-1] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf)
         ik = self.k
         top = self._top_terms
         for i, f in enumerate(UNKNOWNS[1:], start=1):
@@ -204,6 +208,50 @@ class Discretisation:
                 acc += coef * ik**kpow * d
             out[i, -1] = acc
         return out
+
+    def _mass_rows(self, C: np.ndarray, mass: np.ndarray, nu, T_top, history: tuple, dt: float, bdf):
+        """Interior rows of eq. (2.1), mode by mode, projected before they are scaled.
+
+        ``mass`` is the derived residual −(∂_t ν + ∇·(ν u)) at the padded points. Its modes
+        m ≤ M are divided by ν̄_j = exp(ŝ_0(y_j)) only after the projection, so that the
+        mode-0 row states ⟨∂_t ν⟩_j = −⟨∇·(νu)⟩_j for the x-mean itself (projecting the
+        pointwise mass/ν, the s-equation, does not, and mass drifted ∝ amplitude²). The floor
+        and top nodes carry boundary rows instead of eq. (2.1), the x-mean of the pointwise
+        divergence integrates to the top flux only up to the collocation error, and the mass
+        diagnostic includes the isothermal tail above y_max: :meth:`mass_source` returns what
+        these leave, as a uniform relative source λ of the interior mode-0 rows, so that the
+        total mass ∫∫ν dx dy (with the tail) changes by the Newton residual only.
+        """
+        nubar = np.exp(C[0, :, 0].real)
+        modes = self.to_modes(mass)
+        rows = modes / nubar[:, None]
+        rows[1:-1, 0] -= self.mass_source(nubar, modes[:, 0].real, nu, T_top, history, dt, bdf)
+        return rows[1:-1]
+
+    def mass_source(self, nubar, mass0, nu, T_top, history: tuple, dt: float, bdf) -> float:
+        """The uniform relative mass source λ of the interior mode-0 mass rows.
+
+        With B_j = ⟨BDF(ν)⟩_j / Δt the discrete time derivative of the x-mean ν at node j
+        (in the frame of the run), D_j = −⟨mass residual⟩_j − B_j its spatial part, τ the
+        isothermal tail ν T / cos θ at y_max (:meth:`depth_integrals`) and w the
+        Clenshaw–Curtis weights: λ = (w_0 B_0 + w_N B_N + ∂_t⟨τ⟩ − Σ_int w_j D_j) / Σ_int w_j ν̄_j.
+        Then the interior rows B_j + D_j + λ ν̄_j = 0 give Σ_j w_j B_j + ∂_t⟨τ⟩ = 0. In the
+        continuum limit λ → 0 (it is the boundary nodes' mass residual and the quadrature error
+        of the divergence; see docs/dns.md for its size).
+        """
+        w = self.grid.weights
+        a0, a1, a2 = bdf
+        cos = self.sin_cos[1]
+        B = a0 * nu + a1 * history[0][0]
+        tau = a0 * nu[-1] * T_top + a1 * history[0][0][-1] * history[0][3][-1]
+        if a2:
+            B = B + a2 * history[1][0]
+            tau = tau + a2 * history[1][0][-1] * history[1][3][-1]
+        Bm = B.mean(axis=-1) / dt
+        tail_t = float(np.mean(tau)) / (dt * cos)
+        D = -mass0 - Bm
+        defect = w[0] * Bm[0] + w[-1] * Bm[-1] + tail_t - w[1:-1] @ D[1:-1]
+        return float(defect / (w[1:-1] @ nubar[1:-1]))
 
     @cached_property
     def _Dtop(self) -> dict[int, np.ndarray]:
@@ -348,25 +396,32 @@ class Discretisation:
         pieces[0][m - 1, 3 * m + m - 1] += float(self._top_nu(hi) - self._top_nu(lo)) / (2 * h)
         return {"pieces": pieces, "K": K, "Bt": Bt}
 
-    def factorise(self, blocks: dict, dt: float, a0: float) -> list:
-        """LU factors of the Jacobian of each mode m = 0 … M (:meth:`linear_blocks`)."""
-        out = []
-        for km in self.k:
-            J = blocks["K"] * abs(km) + blocks["Bt"] * (a0 / dt - self.frame * 1j * km)
-            J = J.astype(complex)
-            for b, P in blocks["pieces"].items():
-                J = J + (1j * km) ** b * P
-            out.append(sla.lu_factor(J, check_finite=False))
-        return out
+    def factorise(self, blocks: dict, dt: float, a0: float) -> np.ndarray:
+        """Inverses (M + 1, 4(N+1), 4(N+1)) of the Jacobian of each mode m = 0 … M
+        (:meth:`linear_blocks`), computed in one batched LAPACK call; applied by one batched
+        product in :meth:`precondition` (much cheaper than M + 1 triangular solves)."""
+        k = self.k
+        J = (
+            blocks["K"][None] * np.abs(k)[:, None, None]
+            + blocks["Bt"][None] * (a0 / dt - self.frame * 1j * k)[:, None, None]
+        )
+        for b, P in blocks["pieces"].items():
+            J = J + ((1j * k) ** b)[:, None, None] * P[None]
+        return np.linalg.inv(J)
 
-    def precondition(self, lus: list, R: np.ndarray) -> np.ndarray:
+    def precondition(self, inverses: np.ndarray, R: np.ndarray) -> np.ndarray:
         """Apply the block-diagonal inverse: mode by mode, (J_m)⁻¹ R_m."""
-        out = np.empty_like(R)
-        for i, lu in enumerate(lus):
-            sol = sla.lu_solve(lu, R[:, :, i].reshape(-1), check_finite=False)
-            out[:, :, i] = sol.reshape(4, self.n + 1)
+        m = self.n + 1
+        r = np.moveaxis(R.reshape(4 * m, self.modes + 1), -1, 0)[..., None]
+        sol = np.matmul(inverses, r)[..., 0]
+        out = np.moveaxis(sol, 0, -1).reshape(R.shape)
         out[:, :, 0] = out[:, :, 0].real
         return out
+
+    def total_mass(self, nu: np.ndarray, T_top: np.ndarray) -> float:
+        """Mass per unit length ⟨∫ν dy⟩ + ⟨ν(y_max) T(y_max)⟩/cos θ of ν, T on the padded grid
+        (the x-mean of :meth:`depth_integrals`' ρ̄)."""
+        return float(self.grid.weights @ nu.mean(axis=-1) + np.mean(nu[-1] * T_top) / self.sin_cos[1])
 
     # -- diagnostics --------------------------------------------------------------------
     def depth_integrals(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -17,8 +17,10 @@ from ..points import POINTS
 #: The verification's wavenumber (issue 11): L = 2π/0.003 ≈ 2094.
 K_VERIFY = 0.003
 #: The wave-formation run of the full stage: (L, time, Δt, modes, noise amplitude).
-#: (The session that added the stage ran it to t = 22520: a ±10 % wave, still growing; 44 min.)
-WAVE_RUN = (1000.0, 22000.0, 4.0, 32, 1e-3)
+#: To t = 28000 the wave grows from noise to −24 … +31 % in ρ̄ and its growth falls to a
+#: third of the linear rate (saturation, docs/dns.md); ≈ 35 min of wall time on a loaded
+#: 2-core machine.
+WAVE_RUN = (1000.0, 28000.0, 4.0, 32, 1e-3)
 
 
 @register_stage("dns", order=70, title="Time-dependent simulation: linear phase and density waves (issue 11)")
@@ -82,7 +84,11 @@ def _linear(ctx: StageContext) -> None:
                 "the mass ∫∫ν dy dx is conserved.",
                 computed=f"unperturbed: largest change of the fields {st['mean_flow_change']:.1e}, "
                 f"mass drift {st['mass_drift']:.1e}; eigenmode run: mass drift {s['mass_drift']:.1e}",
-                passed=st["mean_flow_change"] < 1e-10 and s["mass_drift"] < 1e-12,
+                # the relaxed steady state's scaled residual is at its round-off floor, 3e-12;
+                # every step now takes one chord iteration (the solver used to accept the
+                # unchanged state, change 0.0), so the fields drift at that rate: measured
+                # 1.7e-10 over the 200 steps (546 time units) of this run
+                passed=st["mean_flow_change"] < 1e-9 and s["mass_drift"] < 1e-12,
                 detail="the steady solver's flow is this grid's steady state to "
                 f"{st['steady_relaxation']:.1e}",
             )
