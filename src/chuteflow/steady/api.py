@@ -260,7 +260,7 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
             break
         n, st, q = n2, st2, q2
     if change > rtol:
-        raise ConvergenceError(
+        raise ResolutionError(
             f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
             f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
             f"(n_max = {n_max})"
@@ -284,6 +284,11 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
     if q2["h"] < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, q2["h"], min_thickness), flow)
     return flow
+
+
+class ResolutionError(ConvergenceError):
+    """Newton converged at every resolution up to ``n_max``, but the scalars still changed
+    by more than ``rtol`` between the last two."""
 
 
 class ThinLayerError(NoSteadyFlowError):

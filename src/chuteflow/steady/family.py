@@ -20,7 +20,8 @@ from .._version import __version__
 from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from .api import ThinLayerError, solve_point, tangent_from, tangent_vectors
+from ..spectral import coefficients
+from .api import ResolutionError, ThinLayerError, solve_point, tangent_from, tangent_vectors
 from .existence import ExistenceVerdict, steady_existence
 from .result import SteadyFlow
 from .solver import NewtonState, validate_point
@@ -98,6 +99,7 @@ class _Point:
     tangent: dict | None = None
     vectors: tuple | None = None  # packed dX/dν0(0), dX/dθ
     tried: frozenset = frozenset()  # sources tried for this point (see continue_row)
+    resolution: bool = False  # failed only because n_max did not reach rtol
 
     @property
     def usable(self) -> bool:
@@ -121,6 +123,8 @@ def _attempt(
         return _Point("thin", exc.flow, str(exc))
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
+    except ResolutionError as exc:
+        return _Point("not_converged", None, str(exc), resolution=True)
     except ConvergenceError as exc:
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
@@ -130,6 +134,35 @@ def _attempt(
 def _start_n(flow: SteadyFlow, opts: Options) -> int:
     """The coarser of the two resolutions the neighbour was accepted at."""
     return max(opts.n, int(round(flow.n * 2 / 3)))
+
+
+#: A neighbour's Chebyshev coefficients (of ln ν0, u0, T0, relative to the largest) beyond
+#: the resolution a ladder starts at are below this: far below the change rtol = 1e-8 that
+#: the ladder then checks between two resolutions.
+_RESOLVED = 1e-11
+
+
+def _resolved_n(flow: SteadyFlow, opts: Options) -> int:
+    """Resolution to start a continuation step's ladder at.
+
+    The neighbour's accepted n only grows along a row or a map (each step starts at 2/3 of
+    the neighbour's n, and the ladder only goes up), although most flows are resolved by far
+    fewer nodes (θ = 16°, ν0(0) = 0.05: n = 96 from a cold start, 216 deep in a map). The
+    start is therefore the first resolution n of the ladder n → n + n/2 from ``opts.n`` whose
+    Chebyshev coefficients of the neighbour (interpolated to n) are resolved: every
+    coefficient of index ≥ 2n/3 below :data:`_RESOLVED` relative to the largest (spectral
+    convergence: the truncation error at n is then ≪ rtol). Never above
+    :func:`_start_n`."""
+    top = _start_n(flow, opts)
+    k = 0
+    for f in (flow.log_nu, flow.u, flow.T):
+        c = np.abs(coefficients(np.asarray(f)))
+        big = np.nonzero(c > _RESOLVED * c.max())[0]
+        k = max(k, int(big[-1]) + 1 if len(big) else 0)
+    n = opts.n
+    while n < top and 2 * n < 3 * k:
+        n += max(n // 2, 8)
+    return min(n, top)
 
 
 def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
@@ -174,7 +207,13 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
         else:
             th, nu = th0 + (theta - th0) * s, nu00 + (nu0 - nu00) * s
         assert cur.flow is not None  # continue_to steps only from accepted (usable) points
-        q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
+        pred = _predict(cur, th, nu)
+        n_low, n_old = _resolved_n(cur.flow, opts), _start_n(cur.flow, opts)
+        q = _attempt(th, nu, model, opts, pred, n_low)
+        if not q.usable and n_low < n_old and not q.resolution:
+            # Newton failed on the coarser grid (a layer it does not resolve): the
+            # neighbour's own resolution, as before
+            q = _attempt(th, nu, model, opts, pred, n_old)
         if q.usable and s != 1.0:
             q = _with_tangent(q, opts)
         return Trial(q.usable, q)
