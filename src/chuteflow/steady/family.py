@@ -21,10 +21,17 @@ from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import coefficients
-from .api import ResolutionError, ThinLayerError, solve_point, tangent_from, tangent_vectors
+from .api import (
+    ResolutionError,
+    ThinLayerError,
+    solve_point,
+    state_tangent_vectors,
+    tangent_from,
+    tangent_vectors,
+)
 from .existence import ExistenceVerdict, steady_existence
 from .result import SteadyFlow
-from .solver import NewtonState, validate_point
+from .solver import NewtonState, _resample, validate_point
 
 #: Scalar variables of a family / map dataset (float, NaN where no steady flow).
 SCALARS = (
@@ -99,7 +106,7 @@ class _Point:
     tangent: dict | None = None
     vectors: tuple | None = None  # packed dX/dν0(0), dX/dθ
     tried: frozenset = frozenset()  # sources tried for this point (see continue_row)
-    resolution: bool = False  # failed only because n_max did not reach rtol
+    resolution: bool = False  # a flow (h ≥ min_thickness) that n_max does not resolve to rtol
 
     @property
     def usable(self) -> bool:
@@ -124,7 +131,17 @@ def _attempt(
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
     except ResolutionError as exc:
-        return _Point("not_converged", None, str(exc), resolution=True)
+        # a solution found at every resolution: with h ≥ min_thickness, a flow that exists
+        # but that n_max does not resolve to rtol
+        if exc.h >= opts.min_thickness:
+            return _Point(
+                "not_converged",
+                None,
+                f"a steady flow exists here (Newton converges at every resolution, h = {exc.h:.4g}) "
+                f"but is not resolved: {exc}",
+                resolution=True,
+            )
+        return _Point("not_converged", None, str(exc))
     except ConvergenceError as exc:
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
@@ -166,13 +183,17 @@ def _resolved_n(flow: SteadyFlow, opts: Options) -> int:
 
 
 def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
-    """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor)."""
+    """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor), on
+    the grid the tangents were computed on (:func:`_with_tangent`)."""
     f = point.flow
     assert f is not None, "a predictor needs a converged neighbour"
-    X = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
+    st0 = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+    if point.vectors is not None:
+        st0 = _resample(st0, len(point.vectors[0]) // 3 - 1)
+    X = st0.pack()
     if point.vectors is not None:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
-        st = NewtonState.unpack(f.n, Xp)
+        st = NewtonState.unpack(st0.n, Xp)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
         if (
             0.5 * f.y_max < st.L < 2.0 * f.y_max
@@ -180,15 +201,25 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
             and (st.s < np.log(f.model.nu_max)).all()
         ):
             return st
-    return NewtonState.unpack(f.n, X)
+    return NewtonState.unpack(st0.n, X)
 
 
 def _with_tangent(point: _Point, opts: Options) -> _Point:
+    """Tangent vectors of a converged point: for the predictor of its neighbours and, with
+    ``opts.tangent``, the derivatives along the family (:func:`tangent_from`). Those are
+    outputs and use the exact Jacobian at the accepted resolution; a predictor needs no such
+    accuracy, so without ``opts.tangent`` the vectors come from the coarser of the two
+    resolutions the flow was checked at (a third of the cost of the LU factorisation)."""
     if point.flow is not None and point.vectors is None:
+        f = point.flow
         try:
-            point.vectors = tangent_vectors(point.flow, theta=True)
             if opts.tangent and point.status == "ok":
-                point.tangent = tangent_from(point.flow, point.vectors[0])
+                point.vectors = tangent_vectors(f, theta=True)
+                point.tangent = tangent_from(f, point.vectors[0])
+            else:
+                st = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+                st = _resample(st, _start_n(f, opts))
+                point.vectors = state_tangent_vectors(f.theta, f.nu0, f.model, f.nu_top, st)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             point.vectors = None
     return point
@@ -298,6 +329,8 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
         if p.usable:
             return _with_tangent(p, opts), v
         errors.append(f"n = {m}: {p.error}")
+        if p.resolution:
+            break  # converged at every resolution: a finer start ends at the same n_max
         m *= 2
     if not v.physical:
         return _Point("no_steady_flow", None, v.reason), v
@@ -418,12 +451,13 @@ def continue_row(
         return pts[i] is not None and pts[i].usable
 
     def proven(i):
-        # decided by the shooting scan (or a scan's covering verdict) to have no flow:
-        # continuation does not try it again
-        return not usable(i) and ("scan" in tried[i] or "proof" in tried[i])
+        # decided by the shooting scan (or a scan's covering verdict) to have no flow, or a
+        # flow found by Newton at every resolution that n_max does not resolve to rtol
+        # (every other start converges to it and fails alike): not tried again
+        return not usable(i) and ("scan" in tried[i] or "proof" in tried[i] or "resolution" in tried[i])
 
     def settled(i):
-        return usable(i) or "scan" in tried[i] or "proof" in tried[i]
+        return usable(i) or "scan" in tried[i] or "proof" in tried[i] or "resolution" in tried[i]
 
     def open_(i):
         return not usable(i) and not proven(i)
@@ -431,8 +465,10 @@ def continue_row(
     def attempt(i, tag, make):
         tried[i].add(tag)
         p = make()
-        if pts[i] is None or p.usable:
+        if pts[i] is None or p.usable or p.resolution:
             pts[i] = p
+        if p.resolution:
+            tried[i].add("resolution")
 
     cold = [0]
 
