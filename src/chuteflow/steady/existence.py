@@ -350,8 +350,9 @@ def steady_existence(
     reaches the top is a separatrix (typically a dense band packing to ν_m that either
     collapses or heats up above it), not a solution, and the scan goes on below it.
 
-    Cost: about 18 coarse trials plus 10–30 refining ones, 1–3 s per point on one core
-    (the trials call :meth:`ChuteModel.evaluate` at every step).
+    Cost: about 18 coarse trials plus 10–30 refining ones, 0.05–1 s per point on one core
+    (the right-hand side is generated scalar code, :mod:`chuteflow.steady._scalar_ode`, ~5 µs
+    a call; most of the time is scipy's integrator).
 
     Parameters
     ----------
