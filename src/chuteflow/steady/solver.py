@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -229,12 +230,12 @@ class SteadyNewton:
         N = 3 * m + 1
         J = np.zeros((N, N))
         # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs (c = 0 is never used)
-        dnu = (
+        dnu: tuple[Any, ...] = (
             None,
             nu[:, None] * (np.diag(s1) + D1),
             nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1),
         )
-        mats = (None, D1, D2)
+        mats: tuple[Any, ...] = (None, D1, D2)
         for ce, rows, sl, kind, res, coefs, scale in ctx["rows"]:
             Jr = J[rows]  # view into J: rows of this equation
             dL = np.zeros(len(res))
