@@ -106,7 +106,6 @@ class _Point:
     tangent: dict | None = None
     vectors: tuple | None = None  # packed dX/dν0(0), dX/dθ
     tried: frozenset = frozenset()  # sources tried for this point (see continue_row)
-    resolution: bool = False  # a flow (h ≥ min_thickness) that n_max does not resolve to rtol
 
     @property
     def usable(self) -> bool:
@@ -139,7 +138,6 @@ def _attempt(
                 None,
                 f"a steady flow exists here (Newton converges at every resolution, h = {exc.h:.4g}) "
                 f"but is not resolved: {exc}",
-                resolution=True,
             )
         return _Point("not_converged", None, str(exc))
     except ConvergenceError as exc:
@@ -241,9 +239,10 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
         pred = _predict(cur, th, nu)
         n_low, n_old = _resolved_n(cur.flow, opts), _start_n(cur.flow, opts)
         q = _attempt(th, nu, model, opts, pred, n_low)
-        if not q.usable and n_low < n_old and not q.resolution:
-            # Newton failed on the coarser grid (a layer it does not resolve): the
-            # neighbour's own resolution, as before
+        if not q.usable and n_low < n_old:
+            # failed from the coarser grid (Newton on a layer it does not resolve, or a
+            # ladder whose last change is at Newton's round-off floor): the neighbour's own
+            # resolution, as before
             q = _attempt(th, nu, model, opts, pred, n_old)
         if q.usable and s != 1.0:
             q = _with_tangent(q, opts)
@@ -329,8 +328,6 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
         if p.usable:
             return _with_tangent(p, opts), v
         errors.append(f"n = {m}: {p.error}")
-        if p.resolution:
-            break  # converged at every resolution: a finer start ends at the same n_max
         m *= 2
     if not v.physical:
         return _Point("no_steady_flow", None, v.reason), v
@@ -451,13 +448,12 @@ def continue_row(
         return pts[i] is not None and pts[i].usable
 
     def proven(i):
-        # decided by the shooting scan (or a scan's covering verdict) to have no flow, or a
-        # flow found by Newton at every resolution that n_max does not resolve to rtol
-        # (every other start converges to it and fails alike): not tried again
-        return not usable(i) and ("scan" in tried[i] or "proof" in tried[i] or "resolution" in tried[i])
+        # decided by the shooting scan (or a scan's covering verdict) to have no flow:
+        # continuation does not try it again
+        return not usable(i) and ("scan" in tried[i] or "proof" in tried[i])
 
     def settled(i):
-        return usable(i) or "scan" in tried[i] or "proof" in tried[i] or "resolution" in tried[i]
+        return usable(i) or "scan" in tried[i] or "proof" in tried[i]
 
     def open_(i):
         return not usable(i) and not proven(i)
@@ -465,10 +461,8 @@ def continue_row(
     def attempt(i, tag, make):
         tried[i].add(tag)
         p = make()
-        if pts[i] is None or p.usable or p.resolution:
+        if pts[i] is None or p.usable:
             pts[i] = p
-        if p.resolution:
-            tried[i].add("resolution")
 
     cold = [0]
 
