@@ -21,8 +21,8 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
 - ``steady_stage_maps``: the two maps of the ``steady`` stage of ``chuteflow reproduce
   --quick`` (φ = 0.05 over θ ∈ [8°, 21°] by 1/3°, φ = 0.10 over [11°, 27°] by 0.4°, 40 floor
   densities; 20 × 20 with ``--quick``), two processes. No baseline is run (the ratio is NaN);
-  the note gives the status counts. Target (issue 9): 3× faster than before (113 s each on 2
-  loaded cores before this benchmark was added).
+  the note gives the status counts. Target (issue 9): the steady stage 3× faster than the
+  339 s it took in the quick reproduce before.
 - ``steady_map_40x40``: φ = 0.05, θ ∈ [10°, 20°] × ν0(0) ∈ [0.005, 0.5] (geometric), 40 × 40,
   two processes (one BLAS thread each). Baseline: the shooting baseline's median time per
   solution times the number of points with a flow (estimated, not run: ~half an hour).
