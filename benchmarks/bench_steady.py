@@ -14,6 +14,15 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
 - ``steady_map_paper_60x60`` (30 × 30 with ``--quick``): the φ = 0.05 diagram grid of the
   paper, steady flows only, every point decided; baseline: continuation alone (points it does
   not reach left 'unreached'). Target (issue 9): < 10 s.
+- ``steady_existence_scan``: the shooting scan (:func:`~chuteflow.steady.existence.steady_existence`)
+  at six points of the φ = 0.05 map (flows, too small, too large with a separatrix), CPU time.
+  Baseline: the same scan with the right-hand side of before issue 9 item 4 (the closures'
+  and equations' numpy code called with scalars); the verdicts and u0(0), h must agree.
+- ``steady_stage_maps``: the two maps of the ``steady`` stage of ``chuteflow reproduce
+  --quick`` (φ = 0.05 over θ ∈ [8°, 21°] by 1/3°, φ = 0.10 over [11°, 27°] by 0.4°, 40 floor
+  densities; 20 × 20 with ``--quick``), two processes. No baseline is run (the ratio is NaN);
+  the note gives the status counts. Target (issue 9): the steady stage 3× faster than the
+  339 s it took in the quick reproduce before.
 - ``steady_map_40x40``: φ = 0.05, θ ∈ [10°, 20°] × ν0(0) ∈ [0.005, 0.5] (geometric), 40 × 40,
   two processes (one BLAS thread each). Baseline: the shooting baseline's median time per
   solution times the number of points with a flow (estimated, not run: ~half an hour).
@@ -90,6 +99,9 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
 
+    rows.append(_existence_row())
+    rows.append(_stage_maps_row(quick))
+
     size = 20 if quick else 40
     ths = np.linspace(10.0, 20.0, size)
     nus = np.geomspace(0.005, 0.5, size)
@@ -151,6 +163,108 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     return rows
+
+
+#: Points of the shooting-scan benchmark: (θ, ν0(0)) at φ = 0.05.
+_SCAN_POINTS = ((16.0, 0.05), (12.0, 0.01), (20.0, 0.3), (14.67, 0.45), (10.67, 0.5), (18.67, 0.2))
+
+
+def _numpy_ode():
+    """SteadyODE with the right-hand side of before issue 9 item 4 (baseline)."""
+    from chuteflow.closures.model import FUNCTIONS, ORDERS, _compiled
+    from chuteflow.equations import BASE, compiled_equations
+    from chuteflow.steady.existence import SteadyODE, _term_index
+
+    class NumpyODE(SteadyODE):
+        def __init__(self, theta, model):
+            super().__init__(theta, model)
+            eqs = compiled_equations()
+            self._ymom, self._energy = eqs["ymom"], eqs["energy"]
+            self._i_nu_y = _term_index(self._ymom, "nu", 1)
+            self._i_T_yy = _term_index(self._energy, "T", 2)
+            self._partials = _compiled(*model.closures)[0]
+            self._ip = FUNCTIONS.index("p") * len(ORDERS) + ORDERS.index((0, 0))
+            self._imu = FUNCTIONS.index("mu") * len(ORDERS) + ORDERS.index((0, 0))
+            self._slot = {b: i for i, b in enumerate(BASE)}
+
+        def rhs(self, y, z):
+            s, u, T, T_y = (np.float64(v) for v in z)
+            nu = np.exp(s)
+            flat = [np.float64(v) for v in self._partials(nu, T, *self._params)]
+            u_y = self.tan * flat[self._ip] / flat[self._imu]
+            base = [np.float64(0.0)] * len(self._slot)
+            for name, value in (("nu", nu), ("u", u), ("u_y", u_y), ("T", T), ("T_y", T_y)):
+                base[self._slot[name]] = value
+            args = base + flat + [self.sin, self.cos]
+            r, c = self._ymom.evaluate_arguments(args)
+            nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
+            args[self._slot["nu_y"]] = nu_y
+            r, c = self._energy.evaluate_arguments(args)
+            T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
+            return [float(nu_y / nu), float(u_y), float(T_y), float(T_yy)]
+
+    return NumpyODE
+
+
+def _existence_row() -> dict:
+    from chuteflow.closures import ChuteModel
+    from chuteflow.steady import existence
+
+    model = ChuteModel(roughness=0.05)
+    existence.steady_existence(16.0, 0.05, model)  # generated code loaded (or derived) once
+
+    def scan():
+        c0 = time.process_time()
+        out = [existence.steady_existence(th, nu, model) for th, nu in _SCAN_POINTS]
+        return time.process_time() - c0, out
+
+    original = existence.SteadyODE
+    t_new, new = scan()
+    existence.SteadyODE = _numpy_ode()
+    try:
+        t_old, old = scan()
+    finally:
+        existence.SteadyODE = original
+    same = all(a.kind == b.kind for a, b in zip(new, old))
+    agree = max(
+        (abs(a.u_floor / b.u_floor - 1) for a, b in zip(new, old) if a.exists and b.exists), default=0.0
+    )
+    return {
+        "name": "steady_existence_scan",
+        "seconds": t_new,
+        "baseline_seconds": t_old,
+        "ratio": t_old / t_new,
+        "note": f"{len(_SCAN_POINTS)} points (φ=0.05), CPU time, {sum(v.shots for v in new)} shots; "
+        f"baseline: numpy right-hand side; same verdicts: {same}, u0(0) agree to {agree:.0e}",
+    }
+
+
+def _stage_maps_row(quick: bool) -> dict:
+    from chuteflow.closures import ChuteModel
+    from chuteflow.steady import steady_map
+
+    size = 20 if quick else 40
+    grids = {0.05: (8.0, 21.0, 1.0 / 3.0), 0.10: (11.0, 27.0, 0.4)}
+    t0 = time.perf_counter()
+    parts = []
+    for phi, (lo, hi, step) in grids.items():
+        ths = np.round(np.arange(lo, hi + 0.5 * step, step), 10)
+        if quick:
+            ths = ths[:: max(1, len(ths) // size)]
+        ds = steady_map(ths, np.geomspace(0.005, 0.55, size), ChuteModel(roughness=phi), workers=2)
+        st = ds.status.values
+        counts = ", ".join(
+            f"{k} {int((st == k).sum())}" for k in ("ok", "thin", "no_steady_flow", "not_converged")
+        )
+        parts.append(f"φ={phi:g} {len(ths)}×{size}: {counts}")
+    t = time.perf_counter() - t0
+    return {
+        "name": "steady_stage_maps",
+        "seconds": t,
+        "baseline_seconds": float("nan"),
+        "ratio": float("nan"),
+        "note": "the steady stage's two maps, 2 processes; " + "; ".join(parts),
+    }
 
 
 if __name__ == "__main__":

@@ -69,6 +69,23 @@ I = 1j
 Heaviside = numpy.heaviside
 """
 
+#: Namespace of scalar code (``modules="math"``): what ``sympy.lambdify(..., modules="math")``
+#: provides (``from math import *`` and its translations). Python floats in, Python floats
+#: out, without numpy's per-call overhead (about 5× faster on scalars); outside a function's
+#: domain it raises (ValueError, ZeroDivisionError, OverflowError) or returns a complex
+#: number (a negative base to a fractional power) instead of giving NaN.
+_PRELUDE_MATH = """\
+import builtins
+import math
+globals().update({_k: _v for _k, _v in vars(math).items() if not _k.startswith("_")})
+E = math.e
+ln = math.log
+ceiling = math.ceil
+Abs = abs
+"""
+
+_PRELUDES = {"numpy": _PRELUDE, "math": _PRELUDE_MATH}
+
 _DISABLED = ("", "0", "off", "none", "false", "no")
 
 
@@ -196,7 +213,9 @@ def _source_digest(module: str) -> str | None:
         return None
 
 
-def cache_key(name: str, key: str, sources: Iterable[Any] = ()) -> tuple[str, str] | None:
+def cache_key(
+    name: str, key: str, sources: Iterable[Any] = (), modules: str = "numpy"
+) -> tuple[str, str] | None:
     """The key material (JSON) and its SHA-256, or ``None`` if it cannot be made reliable.
 
     ``None`` when ``key`` shows an object address (a ``repr`` without fields) or a source
@@ -214,6 +233,7 @@ def cache_key(name: str, key: str, sources: Iterable[Any] = ()) -> tuple[str, st
     material = json.dumps(
         {
             "format": FORMAT,
+            "modules": modules,
             "name": name,
             "key": key,
             "chuteflow": __version__,
@@ -232,6 +252,7 @@ def cached_lambdify(
     *,
     sources: Iterable[Any] = (),
     cse: bool = True,
+    modules: str = "numpy",
 ) -> GeneratedCode:
     """Numeric functions of derived sympy expressions, from the disk cache when possible.
 
@@ -252,13 +273,19 @@ def cached_lambdify(
         source code the expressions come from; their files' hashes are part of the key.
     cse : bool
         Common-subexpression elimination in the generated code.
+    modules : {"numpy", "math"}
+        Namespace of the generated code: ``"numpy"`` (arrays; NaN outside a function's
+        domain) or ``"math"`` (Python scalars only, several times faster on them; raises or
+        returns a complex number outside a function's domain).
 
     Returns
     -------
     GeneratedCode
         ``functions[fname](*args)`` returns the list of expressions' values.
     """
-    made = cache_key(name, key, sources)
+    if modules not in _PRELUDES:
+        raise ValueError(f"modules = {modules!r}: expected one of {sorted(_PRELUDES)}")
+    made = cache_key(name, key, sources, modules)
     folder = cache_dir()
     path = None
     if made is not None and folder is not None:
@@ -268,10 +295,10 @@ def cached_lambdify(
         if loaded is not None:
             return loaded
     else:
-        material = json.dumps({"name": name, "key": key, "uncached": True})
+        material = json.dumps({"name": name, "key": key, "modules": modules, "uncached": True})
         digest = hashlib.sha256(material.encode()).hexdigest()
     try:
-        text = _generate(name, material, digest, build_exprs, cse)
+        text = _generate(name, material, digest, build_exprs, cse, modules)
     except _NotReproducible as exc:  # code that only lambdify's own namespace can run
         return GeneratedCode(exc.functions, exc.data, digest, None)
     if path is not None:
@@ -351,7 +378,7 @@ def _exec(text: str, filename: str) -> dict[str, Any]:
     return ns
 
 
-def _generate(name, material, digest, build_exprs, cse) -> str:
+def _generate(name, material, digest, build_exprs, cse, modules="numpy") -> str:
     """Derive the expressions and return the text of the module holding their code."""
     sp = lazy_module("sympy")  # imported only on a cache miss
     built = build_exprs()
@@ -361,7 +388,7 @@ def _generate(name, material, digest, build_exprs, cse) -> str:
         spec, data = built, None
     if data is not None and _literal(repr(data)) != data:
         raise ValueError(f"{name}: data {data!r} is not a Python literal")
-    prelude = _exec(_PRELUDE, "<chuteflow codegen prelude>")
+    prelude = _exec(_PRELUDES[modules], "<chuteflow codegen prelude>")
     # Python names of the generated functions: never clash with the numpy namespace
     defnames = {fname: f"_generated_{i}_{_safe(fname)}" for i, fname in enumerate(spec)}
     parts = [
@@ -371,13 +398,13 @@ def _generate(name, material, digest, build_exprs, cse) -> str:
         f"MATERIAL = {material!r}",
         f"DATA = {data!r}",
         f"FUNCTIONS = {defnames!r}",
-        _PRELUDE,
+        _PRELUDES[modules],
     ]
     lambdified, reproducible = {}, True
     for fname, item in spec.items():
         args, exprs = item[0], item[1]
         fcse = item[2] if len(item) > 2 else cse
-        f = sp.lambdify(tuple(args), list(exprs), modules="numpy", cse=fcse)
+        f = sp.lambdify(tuple(args), list(exprs), modules=modules, cse=fcse)
         lambdified[fname] = f
         src = inspect.getsource(f)
         head = "def _lambdifygenerated("

@@ -260,10 +260,11 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
             break
         n, st, q = n2, st2, q2
     if change > rtol:
-        raise ConvergenceError(
+        raise ResolutionError(
             f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
             f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
-            f"(n_max = {n_max})"
+            f"(n_max = {n_max})",
+            h=float(q2["h"]),
         )
     flow = SteadyFlow(
         theta=theta,
@@ -284,6 +285,15 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
     if q2["h"] < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, q2["h"], min_thickness), flow)
     return flow
+
+
+class ResolutionError(ConvergenceError):
+    """Newton converged at every resolution up to ``n_max``, but the scalars still changed
+    by more than ``rtol`` between the last two; ``.h`` is the thickness at the finest."""
+
+    def __init__(self, message, h=float("nan")):
+        super().__init__(message)
+        self.h = h
 
 
 class ThinLayerError(NoSteadyFlowError):
@@ -333,19 +343,20 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
     """Packed dX/dβ (β = ν0(0)) and, if ``theta``, dX/dθ (per degree), from one LU of the
     exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
-    newton = SteadyNewton(flow.n, flow.theta, flow.nu0, flow.model, flow.nu_top)
     st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
+    return state_tangent_vectors(flow.theta, flow.nu0, flow.model, flow.nu_top, st, theta=theta)
+
+
+def state_tangent_vectors(theta_deg, nu0, model, nu_top, st: NewtonState, theta: bool = True):
+    """:func:`tangent_vectors` at a solution given as a :class:`NewtonState` (any n)."""
+    newton = SteadyNewton(st.n, theta_deg, nu0, model, nu_top)
     _, J = newton.evaluate(st)
     rhs = np.zeros((J.shape[0], 2 if theta else 1))
-    rhs[0, 0] = -1.0 / flow.nu0
+    rhs[0, 0] = -1.0 / nu0
     if theta:
         eps = 1e-3
-        Rp = SteadyNewton(flow.n, flow.theta + eps, flow.nu0, flow.model, flow.nu_top).evaluate(
-            st, jac=False
-        )[0]
-        Rm = SteadyNewton(flow.n, flow.theta - eps, flow.nu0, flow.model, flow.nu_top).evaluate(
-            st, jac=False
-        )[0]
+        Rp = SteadyNewton(st.n, theta_deg + eps, nu0, model, nu_top).evaluate(st, jac=False)[0]
+        Rm = SteadyNewton(st.n, theta_deg - eps, nu0, model, nu_top).evaluate(st, jac=False)[0]
         rhs[:, 1] = (Rp - Rm) / (2 * eps)
     sol = -np.linalg.solve(J, rhs)
     return sol[:, 0], (sol[:, 1] if theta else None)

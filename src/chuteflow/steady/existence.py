@@ -26,11 +26,13 @@ e.g. a band that packs to ν_m and then either collapses or heats up), not a sol
 A solution thinner than one diameter (§3.2) is reported as such.
 
 The steady ODEs are not typed again here: ν0' follows from the y-momentum residual and T0''
-from the energy residual of :func:`chuteflow.equations.compiled_equations` (both are affine
-in that highest derivative, so one evaluation with it set to zero and its coefficient give
-it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq. (3.7) as used by the
-Newton solver, and the floor values come from the floor_x and floor_energy residuals
-(eqs 2.9, 2.10), all with the transport functions of :meth:`ChuteModel.evaluate`.
+from the energy residual of the derived equations (:mod:`chuteflow.equations`; both are
+affine in that highest derivative, so the residual with it set to zero and its coefficient
+give it exactly), u0' = tanθ p/μ is the integrated x-momentum balance eq. (3.7) as used by
+the Newton solver — derived symbolically once and generated as scalar code
+(:mod:`chuteflow.steady._scalar_ode`) — and the floor values come from the floor_x and
+floor_energy residuals (eqs 2.9, 2.10) of :func:`chuteflow.equations.compiled_equations`, with
+the closures' partials of :meth:`ChuteModel.scalar_evaluator`.
 """
 
 from __future__ import annotations
@@ -43,10 +45,11 @@ from typing import Any
 import numpy as np
 
 from ..closures import ChuteModel
-from ..closures.model import FUNCTIONS, ORDERS, _compiled
+from ..closures.model import FUNCTIONS, ORDERS, SCALAR_ORDERS
 from ..equations import BASE, compiled_equations
 from ..spectral import ChebyshevGrid
 from ._roots import brent_root
+from ._scalar_ode import scalar_rhs
 from .solver import NewtonState, validate_point
 
 #: Default admissible range of the floor slip velocity u0(0) (units of √(gσ)). At the
@@ -85,63 +88,59 @@ class SteadyODE:
         self.sin, self.cos = math.sin(th), math.cos(th)
         self.tan = self.sin / self.cos
         self.model = model
+        # the right-hand side, called ~10⁴ times per point with scalars: one generated
+        # function of Python floats (steady/_scalar_ode.py, derived from the same residuals)
+        self._rhs = scalar_rhs(*model.closures)
+        self._params = model._params
+        # the floor values (a few calls per trial): the compiled floor conditions with the
+        # flat argument list that equations.arguments would build, the closures' partials
+        # from the model's scalar evaluator (first order: all the floor conditions use).
+        # The slots of the second-order partials hold NaN: they enter only coefficients
+        # that are not used here, and any use would show as NaN
+        # (tests/steady/test_existence.py compares with an independent transcription).
         eqs = compiled_equations()
-        self._ymom, self._energy = eqs["ymom"], eqs["energy"]
         self._floor_x, self._floor_energy = eqs["floor_x"], eqs["floor_energy"]
-        self._i_nu_y = _term_index(self._ymom, "nu", 1)
-        self._i_T_yy = _term_index(self._energy, "T", 2)
         self._i_floor_u = _term_index(self._floor_x, "u", 0)
         self._i_floor_T_y = _term_index(self._floor_energy, "T", 1)
-        # the scan calls rhs() ~10⁴ times per point with scalars: the compiled closures and
-        # equations are called directly with the flat argument list that
-        # ChuteModel.evaluate and equations.arguments would build (same functions, same
-        # numbers, without the per-call dictionaries: about twice as fast)
-        self._partials = _compiled(*model.closures)[0]
-        self._params = model._params
-        self._i_p = FUNCTIONS.index("p") * len(ORDERS) + ORDERS.index((0, 0))
-        self._i_mu = FUNCTIONS.index("mu") * len(ORDERS) + ORDERS.index((0, 0))
-        self._slot = {b: i for i, b in enumerate(BASE)}
+        self._fast = model.scalar_evaluator(SCALAR_ORDERS)
+        nb, no = len(BASE), len(ORDERS)
+        self._pos = tuple(nb + k * no + ORDERS.index(o) for k in range(len(FUNCTIONS)) for o in SCALAR_ORDERS)
+        self._template = [0.0] * nb + [math.nan] * (len(FUNCTIONS) * no) + [self.sin, self.cos]
+        slot = {b: i for i, b in enumerate(BASE)}
+        self._i_p = FUNCTIONS.index("p") * len(SCALAR_ORDERS)
+        self._i_mu = FUNCTIONS.index("mu") * len(SCALAR_ORDERS)
+        self._s_nu, self._s_u, self._s_T = slot["nu"], slot["u"], slot["T"]
+        self._s_u_y, self._s_T_y = slot["u_y"], slot["T_y"]
 
-    def _base(self, nu, u, T, T_y, part):
-        u_y = self.tan * part["p"][(0, 0)] / part["mu"][(0, 0)]  # eq. (3.7)
-        return {
-            "nu": nu,
-            "nu_y": 0.0,
-            "nu_yy": 0.0,
-            "u": u,
-            "u_y": u_y,
-            "u_yy": 0.0,
-            "T": T,
-            "T_y": T_y,
-            "T_yy": 0.0,
-        }
+    def _arguments(self, nu: float, u: float, T: float, T_y: float) -> list:
+        """The compiled equations' argument list at a point of a trajectory (ν0' = T0'' = 0
+        and the other second derivatives 0; u0' from eq. (3.7)), floats."""
+        flat = self._fast(nu, T)
+        args = self._template.copy()
+        for i, v in zip(self._pos, flat):
+            args[i] = v
+        args[self._s_nu], args[self._s_u], args[self._s_T], args[self._s_T_y] = nu, u, T, T_y
+        args[self._s_u_y] = self.tan * flat[self._i_p] / flat[self._i_mu]  # eq. (3.7)
+        return args
 
     def rhs(self, y, z):
         """d/dy of (ln ν0, u0, T0, T0'). Outside the closures' domain (trial stages of the
-        integrator) the result is inf/nan, which makes the integrator shorten its step."""
-        s, u, T, T_y = (np.float64(v) for v in z)
-        nu = np.exp(s)
-        flat = [np.float64(v) for v in self._partials(nu, T, *self._params)]
-        u_y = self.tan * flat[self._i_p] / flat[self._i_mu]  # eq. (3.7)
-        base = [np.float64(0.0)] * len(self._slot)
-        for name, value in (("nu", nu), ("u", u), ("u_y", u_y), ("T", T), ("T_y", T_y)):
-            base[self._slot[name]] = value
-        args = base + flat + [self.sin, self.cos]
-        # y-momentum (eq. 3.5) is affine in ν0': R = R(ν0' = 0) + c ν0'
-        r, c = self._ymom.evaluate_arguments(args)
-        nu_y = -np.float64(r) / np.float64(c[self._i_nu_y])
-        args[self._slot["nu_y"]] = nu_y
-        # energy (eq. (3.6), docs/errata.md, item 1) is affine in T0''
-        r, c = self._energy.evaluate_arguments(args)
-        T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
-        return [float(nu_y / nu), float(u_y), float(T_y), float(T_yy)]
+        integrator) the result is NaN, which makes the integrator shorten its step."""
+        s, u, T, T_y = (float(v) for v in z)
+        try:
+            nu_y, u_y, T_yy = self._rhs(math.exp(s), u, T, T_y, *self._params, self.sin, self.cos)
+            return [float(nu_y), float(u_y), T_y, float(T_yy)]
+        except (ArithmeticError, ValueError, TypeError):
+            # math-module domain errors; complex numbers (ν0 > ν_m) fail in float()
+            return [math.nan] * 4
 
     def floor_velocity(self, nu0: float, T0: float) -> float:
         """u0(0) from eq. (2.9) (floor_x is linear in u0) given ν0(0) and T0(0)."""
-        part = self.model.evaluate(nu0, T0)
-        base = self._base(nu0, 0.0, T0, 0.0, part)
-        r, c = self._floor_x.evaluate(base, part, self.sin, self.cos)
-        return -float(r) / float(c[self._i_floor_u])
+        try:
+            out = self._floor_x._fun(*self._arguments(nu0, 0.0, T0, 0.0))
+            return -float(out[0]) / float(out[1 + self._i_floor_u])
+        except (ArithmeticError, ValueError, TypeError):
+            return math.nan
 
     def floor_values(self, nu0: float, u0: float) -> tuple[float, float]:
         """T0(0) and T0'(0) from the floor conditions eqs (2.9), (2.10) (eqs 3.11, 3.12).
@@ -161,10 +160,11 @@ class SteadyODE:
             if abs(dx) < 1e-12:
                 break
         T0 = math.exp(x)
-        part = self.model.evaluate(nu0, T0)
-        base = self._base(nu0, u0, T0, 0.0, part)
-        r, c = self._floor_energy.evaluate(base, part, self.sin, self.cos)
-        return T0, -float(r) / float(c[self._i_floor_T_y])
+        try:
+            out = self._floor_energy._fun(*self._arguments(nu0, u0, T0, 0.0))
+            return T0, -float(out[0]) / float(out[1 + self._i_floor_T_y])
+        except (ArithmeticError, ValueError, TypeError):
+            return T0, math.nan
 
 
 @dataclass(frozen=True)
@@ -350,8 +350,9 @@ def steady_existence(
     reaches the top is a separatrix (typically a dense band packing to ν_m that either
     collapses or heats up above it), not a solution, and the scan goes on below it.
 
-    Cost: about 18 coarse trials plus 10–30 refining ones, 1–3 s per point on one core
-    (the trials call :meth:`ChuteModel.evaluate` at every step).
+    Cost: about 18 coarse trials plus 10–30 refining ones, 0.05–1 s per point on one core
+    (the right-hand side is generated scalar code, :mod:`chuteflow.steady._scalar_ode`, ~5 µs
+    a call; most of the time is scipy's integrator).
 
     Parameters
     ----------

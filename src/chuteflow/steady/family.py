@@ -20,10 +20,18 @@ from .._version import __version__
 from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from .api import ThinLayerError, solve_point, tangent_from, tangent_vectors
+from ..spectral import coefficients
+from .api import (
+    ResolutionError,
+    ThinLayerError,
+    solve_point,
+    state_tangent_vectors,
+    tangent_from,
+    tangent_vectors,
+)
 from .existence import ExistenceVerdict, steady_existence
 from .result import SteadyFlow
-from .solver import NewtonState, validate_point
+from .solver import NewtonState, _resample, validate_point
 
 #: Scalar variables of a family / map dataset (float, NaN where no steady flow).
 SCALARS = (
@@ -121,6 +129,17 @@ def _attempt(
         return _Point("thin", exc.flow, str(exc))
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
+    except ResolutionError as exc:
+        # a solution found at every resolution: with h ≥ min_thickness, a flow that exists
+        # but that n_max does not resolve to rtol
+        if exc.h >= opts.min_thickness:
+            return _Point(
+                "not_converged",
+                None,
+                f"a steady flow exists here (Newton converges at every resolution, h = {exc.h:.4g}) "
+                f"but is not resolved: {exc}",
+            )
+        return _Point("not_converged", None, str(exc))
     except ConvergenceError as exc:
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
@@ -132,14 +151,47 @@ def _start_n(flow: SteadyFlow, opts: Options) -> int:
     return max(opts.n, int(round(flow.n * 2 / 3)))
 
 
+#: A neighbour's Chebyshev coefficients (of ln ν0, u0, T0, relative to the largest) beyond
+#: the resolution a ladder starts at are below this: far below the change rtol = 1e-8 that
+#: the ladder then checks between two resolutions.
+_RESOLVED = 1e-11
+
+
+def _resolved_n(flow: SteadyFlow, opts: Options) -> int:
+    """Resolution to start a continuation step's ladder at.
+
+    The neighbour's accepted n only grows along a row or a map (each step starts at 2/3 of
+    the neighbour's n, and the ladder only goes up), although most flows are resolved by far
+    fewer nodes (θ = 16°, ν0(0) = 0.05: n = 96 from a cold start, 216 deep in a map). The
+    start is therefore the first resolution n of the ladder n → n + n/2 from ``opts.n`` whose
+    Chebyshev coefficients of the neighbour (interpolated to n) are resolved: every
+    coefficient of index ≥ 2n/3 below :data:`_RESOLVED` relative to the largest (spectral
+    convergence: the truncation error at n is then ≪ rtol). Never above
+    :func:`_start_n`."""
+    top = _start_n(flow, opts)
+    k = 0
+    for f in (flow.log_nu, flow.u, flow.T):
+        c = np.abs(coefficients(np.asarray(f)))
+        big = np.nonzero(c > _RESOLVED * c.max())[0]
+        k = max(k, int(big[-1]) + 1 if len(big) else 0)
+    n = opts.n
+    while n < top and 2 * n < 3 * k:
+        n += max(n // 2, 8)
+    return min(n, top)
+
+
 def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
-    """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor)."""
+    """Neighbour advanced along its exact tangents dX/dν0(0), dX/dθ (Euler predictor), on
+    the grid the tangents were computed on (:func:`_with_tangent`)."""
     f = point.flow
     assert f is not None, "a predictor needs a converged neighbour"
-    X = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max).pack()
+    st0 = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+    if point.vectors is not None:
+        st0 = _resample(st0, len(point.vectors[0]) // 3 - 1)
+    X = st0.pack()
     if point.vectors is not None:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
-        st = NewtonState.unpack(f.n, Xp)
+        st = NewtonState.unpack(st0.n, Xp)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
         if (
             0.5 * f.y_max < st.L < 2.0 * f.y_max
@@ -147,15 +199,25 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
             and (st.s < np.log(f.model.nu_max)).all()
         ):
             return st
-    return NewtonState.unpack(f.n, X)
+    return NewtonState.unpack(st0.n, X)
 
 
 def _with_tangent(point: _Point, opts: Options) -> _Point:
+    """Tangent vectors of a converged point: for the predictor of its neighbours and, with
+    ``opts.tangent``, the derivatives along the family (:func:`tangent_from`). Those are
+    outputs and use the exact Jacobian at the accepted resolution; a predictor needs no such
+    accuracy, so without ``opts.tangent`` the vectors come from the coarser of the two
+    resolutions the flow was checked at (a third of the cost of the LU factorisation)."""
     if point.flow is not None and point.vectors is None:
+        f = point.flow
         try:
-            point.vectors = tangent_vectors(point.flow, theta=True)
             if opts.tangent and point.status == "ok":
-                point.tangent = tangent_from(point.flow, point.vectors[0])
+                point.vectors = tangent_vectors(f, theta=True)
+                point.tangent = tangent_from(f, point.vectors[0])
+            else:
+                st = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+                st = _resample(st, _start_n(f, opts))
+                point.vectors = state_tangent_vectors(f.theta, f.nu0, f.model, f.nu_top, st)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             point.vectors = None
     return point
@@ -174,7 +236,14 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options) -> _Po
         else:
             th, nu = th0 + (theta - th0) * s, nu00 + (nu0 - nu00) * s
         assert cur.flow is not None  # continue_to steps only from accepted (usable) points
-        q = _attempt(th, nu, model, opts, _predict(cur, th, nu), _start_n(cur.flow, opts))
+        pred = _predict(cur, th, nu)
+        n_low, n_old = _resolved_n(cur.flow, opts), _start_n(cur.flow, opts)
+        q = _attempt(th, nu, model, opts, pred, n_low)
+        if not q.usable and n_low < n_old:
+            # failed from the coarser grid (Newton on a layer it does not resolve, or a
+            # ladder whose last change is at Newton's round-off floor): the neighbour's own
+            # resolution, as before
+            q = _attempt(th, nu, model, opts, pred, n_old)
         if q.usable and s != 1.0:
             q = _with_tangent(q, opts)
         return Trial(q.usable, q)

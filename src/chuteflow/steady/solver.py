@@ -131,6 +131,7 @@ class SteadyNewton:
         self.nu0, self.model = nu0, model
         self.ln0, self.lntop = math.log(nu0), math.log(nu_top)
         self.eqs = compiled_equations()
+        self._last: tuple[np.ndarray, dict] | None = None  # see evaluate
         m = n + 1
         # (equation, rows of the system, nodes it is imposed at, row-scaling kind)
         self._layout = (
@@ -161,6 +162,19 @@ class SteadyNewton:
             )
 
     def evaluate(self, st: NewtonState, jac=True):
+        """Scaled residual R and (if ``jac``) its exact Jacobian J (None otherwise).
+
+        The residual's pieces of the last state are kept: ``evaluate(st, jac=False)`` and
+        then ``evaluate(st)`` with the same state object (Newton's line search: the
+        Jacobian only of the accepted trial, and only when another step is needed) compute
+        the closures and equations once for that state."""
+        X = st.pack()
+        if self._last is None or not np.array_equal(self._last[0], X):
+            self._last = (X, self._residual(st))
+        ctx = self._last[1]
+        return ctx["R"].copy(), (self._jacobian(ctx) if jac else None)
+
+    def _residual(self, st: NewtonState) -> dict:
         n, m, L = self.n, self.n + 1, st.L
         D1, D2 = self.ref.D / L, self.ref.D2 / L**2
         nu = np.exp(st.s)
@@ -178,34 +192,51 @@ class SteadyNewton:
             "T_yy": T2,
         }
         part = self.model.evaluate(nu, st.T)
-        N = 3 * m + 1
-        R = np.empty(N)
-        J: np.ndarray | None = np.zeros((N, N)) if jac else None
-        dnu: tuple[Any, ...]  # by jet order c (c = 0 is never used: None)
-        mats: tuple[Any, ...]
-        jets = {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])}
-        if jac:
-            # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs
-            dnu = (
-                None,
-                nu[:, None] * (np.diag(s1) + D1),
-                nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1),
-            )
-            mats = (None, D1, D2)
+        R = np.empty(3 * m + 1)
         kap = part["kappa"]
         # rows are scaled pointwise (ν-rows by 1/ν, T-rows by 1/κ; x-momentum by the constant
         # 1/ν0(0): (μu0')' carries absolute round-off that 1/ν would amplify at the dilute
         # top). The scale's own derivative is kept so that J is the exact Jacobian.
         scales = {"nu": 1.0 / nu, "u": np.full(m, 1.0 / self.nu0), "T": 1.0 / kap[(0, 0)], "one": np.ones(m)}
         args = arguments(base, part, self.sin, self.cos)  # shared by every equation below
+        rows_out = []
         for name, rows, sl, kind in self._layout:
             ce = self.eqs[name]
             res, coefs = ce.evaluate_arguments(args)
             res = np.broadcast_to(res, (m,))[sl]
             scale = scales[kind][sl]
             R[rows] = scale * res
-            if J is None:  # no Jacobian wanted
-                continue
+            rows_out.append((ce, rows, sl, kind, res, coefs, scale))
+        # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
+        R[0] = st.s[0] - self.ln0
+        R[-1] = st.s[n] - self.lntop
+        return {
+            "R": R,
+            "L": L,
+            "D1": D1,
+            "D2": D2,
+            "nu": nu,
+            "s1": s1,
+            "s2": s2,
+            "jets": {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])},
+            "kap": kap,
+            "rows": rows_out,
+        }
+
+    def _jacobian(self, ctx: dict) -> np.ndarray:
+        n, m = self.n, self.n + 1
+        L, D1, D2, nu, s1, s2 = ctx["L"], ctx["D1"], ctx["D2"], ctx["nu"], ctx["s1"], ctx["s2"]
+        jets, kap = ctx["jets"], ctx["kap"]
+        N = 3 * m + 1
+        J = np.zeros((N, N))
+        # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs (c = 0 is never used)
+        dnu: tuple[Any, ...] = (
+            None,
+            nu[:, None] * (np.diag(s1) + D1),
+            nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1),
+        )
+        mats: tuple[Any, ...] = (None, D1, D2)
+        for ce, rows, sl, kind, res, coefs, scale in ctx["rows"]:
             Jr = J[rows]  # view into J: rows of this equation
             dL = np.zeros(len(res))
             idx = np.arange(m)[sl]
@@ -233,13 +264,9 @@ class SteadyNewton:
                 Jr[r_idx, idx] -= res * scale**2 * kap[(1, 0)][sl] * nu[sl]
                 Jr[r_idx, 2 * m + idx] -= res * scale**2 * kap[(0, 1)][sl]
             J[rows] = Jr
-        # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
-        R[0] = st.s[0] - self.ln0
-        R[-1] = st.s[n] - self.lntop
-        if J is not None:
-            J[0, 0] = 1.0
-            J[-1, n] = 1.0
-        return R, J
+        J[0, 0] = 1.0
+        J[-1, n] = 1.0
+        return J
 
     def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
         # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
@@ -258,7 +285,7 @@ class SteadyNewton:
         independently by the change between two resolutions (:func:`solve_steady`)."""
         tol = max(tol, 1e-11 * (self.n / 64.0) ** 4)
         hist = []
-        R, J = self.evaluate(st)
+        R, _ = self.evaluate(st, jac=False)
         res = np.abs(R).max()
         for it in range(maxiter):
             hist.append(res)
@@ -266,6 +293,9 @@ class SteadyNewton:
                 break
             if res < tol and it >= min_iter:
                 return st, it, res, hist
+            # the Jacobian only now that a step is needed (evaluate keeps the residual's
+            # pieces of this state)
+            R, J = self.evaluate(st)
             try:
                 dX = -np.linalg.solve(J, R)
             except (ValueError, np.linalg.LinAlgError):
@@ -282,11 +312,11 @@ class SteadyNewton:
             while lam >= lam_min:
                 trial = NewtonState.unpack(self.n, X0 + lam * dX)
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
-                    Rt, Jt = self.evaluate(trial)
+                    Rt, _ = self.evaluate(trial, jac=False)
                     rt = np.abs(Rt).max()
                     better = rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)
                     if np.isfinite(rt) and better:
-                        st, R, J, res = trial, Rt, Jt, rt
+                        st, R, res = trial, Rt, rt
                         break
                 lam *= 0.5
             else:
