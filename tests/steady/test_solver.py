@@ -15,6 +15,7 @@ import pytest
 from chuteflow.closures import ChuteModel
 from chuteflow.errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from chuteflow.steady import solve_steady, steady_tangent
+from chuteflow.steady.api import tangent_from, tangent_vectors
 
 from .shooting import Material, solve_by_shooting
 
@@ -148,6 +149,21 @@ def test_tangent_against_finite_differences(p1):
     # nodal tangent of u0(0) and y_max
     assert t["u"][0] == pytest.approx((fp.u_floor - fm.u_floor) / (2 * d), rel=1e-5)
     assert t["y_max"] == pytest.approx((fp.y_max - fm.y_max) / (2 * d), rel=1e-5)
+
+
+def test_tangent_is_cached_and_protected(p1):
+    """steady_tangent is computed once per flow (sweep metrics share it): a second call
+    returns the same arrays, which are read-only, and replacing a key in the returned dict
+    does not reach the cache."""
+    t1 = steady_tangent(p1)
+    t2 = steady_tangent(p1)
+    assert t1["u"] is t2["u"]
+    with pytest.raises(ValueError):
+        t1["u"][0] = 0.0
+    t1["dQ_drho"] = 0.0
+    assert steady_tangent(p1)["dQ_drho"] == t2["dQ_drho"] != 0.0
+    fresh = tangent_from(p1, tangent_vectors(p1, theta=False)[0])
+    assert np.array_equal(fresh["T"], t2["T"])
 
 
 def test_guess_gives_same_solution(p1):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -312,7 +313,8 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     same exact Jacobian J that Newton used; β enters only through ln ν0(0) = ln β. This is the
     k = 0 null vector ∂X0/∂β of Appendix B. Scalar quantities are differentiated along that
     tangent (central difference on the exact tangent direction, step 1e-6 relative: error
-    O(1e-12)).
+    O(1e-12)). The result is cached per flow (the last few flows); its arrays are
+    read-only.
 
     Returns
     -------
@@ -321,7 +323,19 @@ def steady_tangent(flow: SteadyFlow) -> dict:
         d/dβ of ``rho_bar``, ``Q``, ``T_mean``, ``h``, ``nu_mean``, ``u_floor``, ``T_floor``,
         plus ``dQ_drho`` = dQ0/dρ̄0 (eq. (B 6)).
     """
-    return tangent_from(flow, tangent_vectors(flow, theta=False)[0])
+    return dict(_cached_tangent(flow))
+
+
+@functools.lru_cache(maxsize=8)
+def _cached_tangent(flow: SteadyFlow) -> dict:
+    """The tangent of one flow, computed once: several sweep metrics of the same point
+    (``kinematic``, the 1D criterion, the long-wave theory) need it. Its arrays are made
+    read-only so that no caller can alter the cached copy."""
+    out = tangent_from(flow, tangent_vectors(flow, theta=False)[0])
+    for v in out.values():
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
+    return out
 
 
 def tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
