@@ -88,7 +88,7 @@ class ShiftInvert:
         return self.solve(self.Bx(np.asarray(x, dtype=complex)))
 
     def nearest(
-        self, nev: int = 1, *, v0=None, tol: float = 1e-13, ncv: int | None = None, maxiter: int = 300
+        self, nev: int = 1, *, v0=None, tol: float = 1e-13, ncv: int | None = None, maxiter: int = 60
     ):
         """The ``nev`` finite eigenvalues nearest σ by shift-invert Arnoldi (ARPACK).
 
