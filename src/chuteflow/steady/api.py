@@ -313,7 +313,8 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     same exact Jacobian J that Newton used; β enters only through ln ν0(0) = ln β. This is the
     k = 0 null vector ∂X0/∂β of Appendix B. Scalar quantities are differentiated along that
     tangent (central difference on the exact tangent direction, step 1e-6 relative: error
-    O(1e-12)). The result is cached per flow (the last few flows); its arrays are
+    O(1e-12)). The result is cached per flow (the last 128 flows: a sweep task
+    runs each metric over its whole row); its arrays are
     read-only.
 
     Returns
@@ -326,7 +327,7 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     return dict(_cached_tangent(flow))
 
 
-@functools.lru_cache(maxsize=8)
+@functools.lru_cache(maxsize=128)
 def _cached_tangent(flow: SteadyFlow) -> dict:
     """The tangent of one flow, computed once: several sweep metrics of the same point
     (``kinematic``, the 1D criterion, the long-wave theory) need it. Its arrays are made
