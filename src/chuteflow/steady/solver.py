@@ -1,7 +1,8 @@
 """Steady flows uniform along the slope (paper §3): Chebyshev–Newton on a free top boundary.
 
 For given θ and floor density ν0(0) the unknowns are ln ν0, u0, T0 at the Chebyshev nodes of
-[0, y_max] and the height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
+[0, y_max] (clustered at the layer's edge by a sinh map, :func:`layer_grid_map`) and the
+height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
 equations are the uniform-state residuals of :mod:`chuteflow.equations`: y-momentum and
 energy (eqs 3.5, 3.6) at the inner nodes, x-momentum in its integrated form
 eq. (3.7) (μ u0' = tanθ p, the weight of the tail above y_max included;
