@@ -99,6 +99,11 @@ class ChebyshevGrid:
         """The computational variable x ∈ [−1, 1] of heights ``y``."""
         return (np.asarray(y, dtype=float) - self.a) / (0.5 * (self.b - self.a)) - 1.0
 
+    def from_computational(self, x) -> np.ndarray:
+        """Heights y of computational variables ``x`` ∈ [−1, 1] (inverse of
+        :meth:`to_computational`)."""
+        return self.a + 0.5 * (self.b - self.a) * (np.asarray(x, dtype=float) + 1.0)
+
     def integrate(self, f: np.ndarray) -> np.ndarray:
         """∫_a^b f dy (along the last axis)."""
         return f @ self.weights
@@ -212,6 +217,10 @@ class MappedChebyshevGrid(ChebyshevGrid):
                 if np.all(np.abs(dx) < 1e-15):
                     break
         return x
+
+    def from_computational(self, x) -> np.ndarray:
+        """Heights y of computational variables ``x`` ∈ [−1, 1] (the map itself)."""
+        return self._map(np.asarray(x, dtype=float))[0]
 
     def _map_key(self) -> tuple:
         return (self.a, self.b, self.center, self.width, self.blend)

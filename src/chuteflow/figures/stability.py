@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..spectral import ChebyshevGrid, MappedChebyshevGrid
+from ..spectral import MappedChebyshevGrid
 from ..stability.operator import equation_terms, stability_grid
 
 __all__ = [
@@ -288,7 +288,7 @@ def default_height(flow, fraction: float = 0.1) -> float:
     otherwise dominate the arrows (the paper's statements refer to y ≈ 1–3).
     """
 
-    g = ChebyshevGrid(len(flow.y) - 1, 0.0, flow.y_max)
+    g = flow.grid
     y = np.linspace(flow.y_peak, flow.y_max, 4001)
     s = g.interpolate(np.asarray(flow.log_nu), y)
     below = np.nonzero(s < s[0] + math.log(fraction))[0]

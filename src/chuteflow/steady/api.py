@@ -10,16 +10,22 @@ import numpy as np
 from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid
 from .existence import steady_existence
-from .result import SteadyFlow, derived_quantities, spectral_tail
+from .result import SteadyFlow, derived_quantities, spectral_tail, steady_grid
 from .solver import NewtonState, SteadyNewton, solve_state, validate_point
 
 _KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
 
 
+def state_of(flow: SteadyFlow) -> NewtonState:
+    """The Newton unknowns of a converged flow (on its own grid)."""
+    return NewtonState(
+        flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max, flow.grid_map
+    )
+
+
 def _quantities(theta, st: NewtonState, model):
-    g = ChebyshevGrid(st.n, 0.0, st.L)
+    g = steady_grid(st.n, st.L, st.grid_map)
     q = derived_quantities(theta, g, st.s, st.u, st.T, model)
     q.update(u_floor=float(st.u[0]), T_floor=float(st.T[0]), y_max=st.L)
     return g, q
@@ -85,9 +91,7 @@ def solve_steady(
     model = model or ChuteModel()
     theta, nu0 = validate_point(theta, nu0, model, nu_top)
     if guess is not None:
-        start = NewtonState(
-            guess.n, np.asarray(guess.log_nu), np.asarray(guess.u), np.asarray(guess.T), guess.y_max
-        )
+        start = state_of(guess)
         return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
     try:
         return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
@@ -208,14 +212,14 @@ def follow(
     def solve(cur, s):
         th, nu = th0 + s * (th1 - th0), nu00 + s * (nu1 - nu00)
         dxb, dxt = tangent_vectors(cur, theta=True)
-        X = NewtonState(cur.n, np.asarray(cur.log_nu), np.asarray(cur.u), np.asarray(cur.T), cur.y_max).pack()
-        pred = NewtonState.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb)
+        X = state_of(cur).pack()
+        pred = NewtonState.unpack(cur.n, X + (th - cur.theta) * dxt + (nu - cur.nu0) * dxb, cur.grid_map)
         if not (
             0.5 * cur.y_max < pred.L < 2 * cur.y_max
             and (pred.T > 0).all()
             and (pred.s < np.log(model.nu_max)).all()
         ):
-            pred = NewtonState.unpack(cur.n, X)
+            pred = NewtonState.unpack(cur.n, X, cur.grid_map)
         try:
             return Trial(
                 True,
@@ -251,8 +255,18 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
         n2 = n + max(n // 2, 8)
         # at least one Newton correction on the finer grid, so that the change measures
         # the discretisation even when the interpolated coarse solution already passes tol
+        # on the same grid map as n: the change then measures the resolution of one grid
         st2, it2, res2 = solve_state(
-            theta, nu0, model, nu_top, n2, guess=st, maxiter=maxiter, lam_min=lam_min, min_iter=1
+            theta,
+            nu0,
+            model,
+            nu_top,
+            n2,
+            guess=st,
+            maxiter=maxiter,
+            lam_min=lam_min,
+            min_iter=1,
+            grid_map=st.grid_map,
         )
         it += it2
         g2, q2 = _quantities(theta, st2, model)
@@ -281,6 +295,7 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
         iterations=it,
         convergence=float(change),
         spectral_tail=spectral_tail(st2.s, st2.u, st2.T),
+        grid_map=st2.grid_map,
         **q2,
     )
     if q2["h"] < min_thickness:
@@ -341,13 +356,13 @@ def _cached_tangent(flow: SteadyFlow) -> dict:
 
 def tangent_from(flow: SteadyFlow, dX: np.ndarray) -> dict:
     """steady_tangent's dict from the packed tangent dX/dβ."""
-    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
+    st = state_of(flow)
     m = flow.n + 1
     out = {"log_nu": dX[:m], "u": dX[m : 2 * m], "T": dX[2 * m : 3 * m], "y_max": dX[-1]}
     X = st.pack()
     eps = 1e-6 * flow.nu0
-    qp = _quantities(flow.theta, NewtonState.unpack(flow.n, X + eps * dX), flow.model)[1]
-    qm = _quantities(flow.theta, NewtonState.unpack(flow.n, X - eps * dX), flow.model)[1]
+    qp = _quantities(flow.theta, NewtonState.unpack(flow.n, X + eps * dX, flow.grid_map), flow.model)[1]
+    qm = _quantities(flow.theta, NewtonState.unpack(flow.n, X - eps * dX, flow.grid_map), flow.model)[1]
     for k in ("rho_bar", "Q", "T_mean", "h", "nu_mean", "u_floor", "T_floor"):
         out["d" + k] = (qp[k] - qm[k]) / (2 * eps)
     out["dQ_drho"] = out["dQ"] / out["drho_bar"]
@@ -358,20 +373,24 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
     """Packed dX/dβ (β = ν0(0)) and, if ``theta``, dX/dθ (per degree), from one LU of the
     exact Jacobian. θ enters the residual only through sin θ and cos θ, linearly, so a
     central difference of R in θ (step 1e-3°) is exact up to round-off (~1e-12)."""
-    st = NewtonState(flow.n, np.asarray(flow.log_nu), np.asarray(flow.u), np.asarray(flow.T), flow.y_max)
+    st = state_of(flow)
     return state_tangent_vectors(flow.theta, flow.nu0, flow.model, flow.nu_top, st, theta=theta)
 
 
 def state_tangent_vectors(theta_deg, nu0, model, nu_top, st: NewtonState, theta: bool = True):
     """:func:`tangent_vectors` at a solution given as a :class:`NewtonState` (any n)."""
-    newton = SteadyNewton(st.n, theta_deg, nu0, model, nu_top)
+    newton = SteadyNewton(st.n, theta_deg, nu0, model, nu_top, grid_map=st.grid_map)
     _, J = newton.evaluate(st)
     rhs = np.zeros((J.shape[0], 2 if theta else 1))
     rhs[0, 0] = -1.0 / nu0
     if theta:
         eps = 1e-3
-        Rp = SteadyNewton(st.n, theta_deg + eps, nu0, model, nu_top).evaluate(st, jac=False)[0]
-        Rm = SteadyNewton(st.n, theta_deg - eps, nu0, model, nu_top).evaluate(st, jac=False)[0]
+        Rp = SteadyNewton(st.n, theta_deg + eps, nu0, model, nu_top, grid_map=st.grid_map).evaluate(
+            st, jac=False
+        )[0]
+        Rm = SteadyNewton(st.n, theta_deg - eps, nu0, model, nu_top, grid_map=st.grid_map).evaluate(
+            st, jac=False
+        )[0]
         rhs[:, 1] = (Rp - Rm) / (2 * eps)
     sol = -np.linalg.solve(J, rhs)
     return sol[:, 0], (sol[:, 1] if theta else None)

@@ -25,6 +25,7 @@ from .api import (
     ResolutionError,
     ThinLayerError,
     solve_point,
+    state_of,
     state_tangent_vectors,
     tangent_from,
     tangent_vectors,
@@ -185,13 +186,13 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
     the grid the tangents were computed on (:func:`_with_tangent`)."""
     f = point.flow
     assert f is not None, "a predictor needs a converged neighbour"
-    st0 = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+    st0 = state_of(f)
     if point.vectors is not None:
         st0 = _resample(st0, len(point.vectors[0]) // 3 - 1)
     X = st0.pack()
     if point.vectors is not None:
         Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
-        st = NewtonState.unpack(st0.n, Xp)
+        st = NewtonState.unpack(st0.n, Xp, st0.grid_map)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
         if (
             0.5 * f.y_max < st.L < 2.0 * f.y_max
@@ -199,7 +200,7 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
             and (st.s < np.log(f.model.nu_max)).all()
         ):
             return st
-    return NewtonState.unpack(st0.n, X)
+    return NewtonState.unpack(st0.n, X, st0.grid_map)
 
 
 def _with_tangent(point: _Point, opts: Options) -> _Point:
@@ -215,7 +216,7 @@ def _with_tangent(point: _Point, opts: Options) -> _Point:
                 point.vectors = tangent_vectors(f, theta=True)
                 point.tangent = tangent_from(f, point.vectors[0])
             else:
-                st = NewtonState(f.n, np.asarray(f.log_nu), np.asarray(f.u), np.asarray(f.T), f.y_max)
+                st = state_of(f)
                 st = _resample(st, _start_n(f, opts))
                 point.vectors = state_tangent_vectors(f.theta, f.nu0, f.model, f.nu_top, st)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):

@@ -8,8 +8,21 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..closures import ChuteModel
-from ..spectral import ChebyshevGrid, coefficients, tail
+from ..spectral import ChebyshevGrid, MappedChebyshevGrid, coefficients, tail
 from ._roots import brent_root
+
+
+def steady_grid(n: int, y_max: float, grid_map: tuple[float, float] | None = None) -> ChebyshevGrid:
+    """The collocation grid of a steady flow: n + 1 Chebyshev–Lobatto nodes of [0, y_max],
+    either linear in the computational variable (``grid_map`` None) or clustered by the sinh
+    map of :class:`~chuteflow.spectral.MappedChebyshevGrid` around the layer's edge.
+
+    ``grid_map`` = (ξ_c, ξ_w) gives the map's centre and width as fractions of y_max, so that
+    the nodes sit at fixed ξ = y/y_max while y_max is an unknown of Newton (the free top)."""
+    if grid_map is None:
+        return ChebyshevGrid(n, 0.0, y_max)
+    xc, xw = grid_map
+    return MappedChebyshevGrid(n, 0.0, y_max, xc * y_max, xw * y_max)
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,7 +40,8 @@ class SteadyFlow:
     model : ChuteModel
         Parameters and closures the flow was computed with.
     y, nu, u, T : ndarray
-        Chebyshev–Lobatto nodes on [0, y_max] (ascending) and the profiles there.
+        Chebyshev–Lobatto nodes on [0, y_max] (ascending, see ``grid_map``) and the profiles
+        there.
     y_max : float
         Top of the domain, where ν0(y_max) = ``nu_top``.
     u_floor, T_floor : float
@@ -53,6 +67,10 @@ class SteadyFlow:
         this resolution and a coarser one: an estimate of the discretisation error.
     spectral_tail : float
         Largest of the ten highest Chebyshev coefficients of ln ν0, u0, T0 (relative).
+    grid_map : tuple of float or None
+        (ξ_c, ξ_w): the nodes are clustered by a sinh map around y = ξ_c y_max with width
+        ξ_w y_max (:func:`steady_grid`; the layer's edge, where the dense layer meets the
+        cold dilute top); None: plain Chebyshev nodes. :attr:`grid` is the grid either way.
     """
 
     theta: float
@@ -79,6 +97,7 @@ class SteadyFlow:
     iterations: int = 0
     convergence: float = float("nan")
     spectral_tail: float = float("nan")
+    grid_map: tuple[float, float] | None = None
 
     def __eq__(self, other):
         if other is self:
@@ -103,7 +122,8 @@ class SteadyFlow:
 
     @property
     def grid(self) -> ChebyshevGrid:
-        return ChebyshevGrid(self.n, 0.0, self.y_max)
+        """The collocation grid of the profiles (:func:`steady_grid`)."""
+        return steady_grid(self.n, self.y_max, self.grid_map)
 
     def profiles(self, y) -> dict[str, np.ndarray]:
         """ν0, u0, T0 interpolated spectrally at heights ``y`` (0 ≤ y ≤ y_max)."""
@@ -199,13 +219,12 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     # Chebyshev coefficients are computed once (x ∈ [-1, 1] ↔ y ∈ [0, y_max])
     from numpy.polynomial.chebyshev import chebval
 
-    L = grid.b - grid.a
     c_s = coefficients(log_nu)
     c_ds = coefficients(grid.D @ log_nu)
     xf = np.linspace(-1.0, 1.0, 8 * grid.n + 1)
-    yf = grid.a + 0.5 * L * (xf + 1.0)
+    yf = grid.from_computational(xf)
     dsf = chebval(xf, c_ds)
-    to_x = lambda y: 2.0 * (y - grid.a) / L - 1.0  # noqa: E731
+    to_x = grid.to_computational
     if (dsf <= 0).all():
         monotonic, y_peak = True, 0.0
     else:

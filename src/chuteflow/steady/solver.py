@@ -1,7 +1,8 @@
 """Steady flows uniform along the slope (paper §3): Chebyshev–Newton on a free top boundary.
 
 For given θ and floor density ν0(0) the unknowns are ln ν0, u0, T0 at the Chebyshev nodes of
-[0, y_max] and the height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
+[0, y_max] (clustered at the layer's edge by a sinh map, :func:`layer_grid_map`) and the
+height y_max itself, fixed by ν0(y_max) = ``nu_top`` (paper: 1e-9). The
 equations are the uniform-state residuals of :mod:`chuteflow.equations`: y-momentum and
 energy (eqs 3.5, 3.6) at the inner nodes, x-momentum in its integrated form
 eq. (3.7) (μ u0' = tanθ p, the weight of the tail above y_max included;
@@ -19,6 +20,7 @@ polished on a coarse grid; continuation (families, maps, the θ fallback of
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -28,31 +30,87 @@ import numpy as np
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid
+from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
+
+#: Width of the steady grid's sinh map in units of the dilute top's scale height T0(h)/cos θ
+#: (the same choice as the stability operator's map, :func:`chuteflow.stability.layer_map`).
+MAP_WIDTH = 2.0
+#: Maps wider than this fraction of y_max are dropped (plain Chebyshev nodes): the layer
+#: then has no sharp edge and the sinh map would only move nodes away from the floor.
+_MAP_MAX = 0.5
+
+
+@functools.lru_cache(maxsize=64)
+def reference_grid(n: int, grid_map: tuple[float, float] | None = None) -> ChebyshevGrid:
+    """The steady grid on ξ = y/y_max ∈ [0, 1] (:func:`~chuteflow.steady.result.steady_grid`
+    with y_max = 1); cached, its arrays are shared."""
+    return steady_grid(n, 1.0, grid_map)
 
 
 @dataclass
 class NewtonState:
-    """Nodal unknowns: s = ln ν0 (keeps relative accuracy over nine decades), u0, T0, y_max."""
+    """Nodal unknowns: s = ln ν0 (keeps relative accuracy over nine decades), u0, T0, y_max,
+    on the nodes ξ_j y_max of :func:`reference_grid` (n, ``grid_map``)."""
 
     n: int
     s: np.ndarray
     u: np.ndarray
     T: np.ndarray
     L: float
+    grid_map: tuple[float, float] | None = None
 
     @property
     def nu(self):
         return np.exp(self.s)
 
+    @property
+    def ref(self) -> ChebyshevGrid:
+        """The grid of the nodes in ξ = y/y_max."""
+        return reference_grid(self.n, self.grid_map)
+
     def pack(self):
         return np.concatenate([self.s, self.u, self.T, [self.L]])
 
     @classmethod
-    def unpack(cls, n, X):
+    def unpack(cls, n, X, grid_map=None):
         m = n + 1
-        return cls(n, X[:m].copy(), X[m : 2 * m].copy(), X[2 * m : 3 * m].copy(), float(X[-1]))
+        return cls(n, X[:m].copy(), X[m : 2 * m].copy(), X[2 * m : 3 * m].copy(), float(X[-1]), grid_map)
+
+
+def layer_grid_map(st: NewtonState, theta_deg: float) -> tuple[float, float] | None:
+    """The sinh map (ξ_c, ξ_w) that clusters nodes at the edge of the layer of ``st``.
+
+    Above the dense layer the density falls with the scale height T0/cos θ of an
+    isothermal atmosphere (y-momentum balance p' = −ν cos θ with p ≈ νT): at the edge of a
+    dense band under a cold top (the upper existence boundary, T0 ~ 0.1 there) ln ν0 bends
+    from the band's profile to that slope within a few scale heights, which a plain Chebyshev
+    grid on [0, y_max] resolves only with n ≈ 500 (its nodes crowd the floor and the top
+    instead). The map of :class:`~chuteflow.spectral.MappedChebyshevGrid` centred at the
+    thickness h (ν0 at 1 % of its maximum) with width ε = :data:`MAP_WIDTH` T0(h)/cos θ puts
+    a fixed number of nodes across that bend; the converged flow does not depend on it
+    (the ladder of :func:`~chuteflow.steady.api.solve_point` checks the resolution).
+
+    Returns None (plain grid) where the width exceeds half the domain or the profile has
+    no edge (a state far from converged).
+    """
+    try:
+        ref = st.ref
+        xi = np.linspace(0.0, 1.0, 8 * st.n + 1)
+        s = ref.interpolate(st.s, xi)
+        k = int(np.argmax(s))
+        below = np.nonzero(s[k:] <= s[k] + math.log(0.01))[0]
+        if not len(below):
+            return None
+        xc = float(xi[k + below[0]])
+        T_h = float(ref.interpolate(st.T, np.array([xc]))[0])
+        xw = MAP_WIDTH * T_h / math.cos(math.radians(theta_deg)) / st.L
+    except (ValueError, ArithmeticError, IndexError):
+        return None
+    if not (math.isfinite(xw) and 0.0 < xw <= _MAP_MAX and 0.0 < xc < 1.0):
+        return None
+    return (xc, xw)
 
 
 def validate_point(theta, nu0, model, nu_top):
@@ -122,10 +180,11 @@ def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
 class SteadyNewton:
     """Residual and exact Jacobian of the steady free-boundary problem on n + 1 nodes."""
 
-    def __init__(self, n, theta_deg, nu0, model, nu_top, integrated=True):
+    def __init__(self, n, theta_deg, nu0, model, nu_top, integrated=True, grid_map=None):
         self.n = n
         self.integrated = integrated
-        self.ref = ChebyshevGrid(n, 0.0, 1.0)
+        self.grid_map = grid_map
+        self.ref = reference_grid(n, grid_map)
         th = math.radians(theta_deg)
         self.sin, self.cos = math.sin(th), math.cos(th)
         self.nu0, self.model = nu0, model
@@ -310,7 +369,7 @@ class SteadyNewton:
                 return st, it, res, hist
             lam = 1.0
             while lam >= lam_min:
-                trial = NewtonState.unpack(self.n, X0 + lam * dX)
+                trial = NewtonState.unpack(self.n, X0 + lam * dX, self.grid_map)
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
                     Rt, _ = self.evaluate(trial, jac=False)
                     rt = np.abs(Rt).max()
@@ -335,31 +394,49 @@ class _NewtonFailure(Exception):
         self.state, self.history = state, history
 
 
-def _resample(st: NewtonState, n: int) -> NewtonState:
-    """Interpolate a state to n + 1 nodes on the same [0, y_max] (log ν for positivity)."""
-    if st.n == n:
-        return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L)
-    old = ChebyshevGrid(st.n, 0.0, 1.0)
-    new = ChebyshevGrid(n, 0.0, 1.0).y
-    return NewtonState(
-        n, old.interpolate(st.s, new), old.interpolate(st.u, new), old.interpolate(st.T, new), st.L
-    )
+_SAME: Any = object()
 
 
-def solve_state(theta, nu0, model, nu_top, n, guess=None, tol=1e-11, maxiter=60, lam_min=1e-6, min_iter=0):
+def _resample(st: NewtonState, n: int, grid_map: Any = _SAME) -> NewtonState:
+    """Interpolate a state to n + 1 nodes on the same [0, y_max] (log ν for positivity), on
+    the grid ``grid_map`` (default: the state's own)."""
+    gm = st.grid_map if grid_map is _SAME else grid_map
+    if st.n == n and gm == st.grid_map:
+        return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L, gm)
+    old = st.ref
+    new = reference_grid(n, gm).y
+    v = old.interpolate(np.stack([st.s, st.u, st.T]), new)
+    return NewtonState(n, v[0].copy(), v[1].copy(), v[2].copy(), st.L, gm)
+
+
+def solve_state(
+    theta,
+    nu0,
+    model,
+    nu_top,
+    n,
+    guess=None,
+    tol=1e-11,
+    maxiter=60,
+    lam_min=1e-6,
+    min_iter=0,
+    grid_map: Any = "auto",
+):
     """Solve the steady problem; returns (state, iterations, residual). Raises on failure.
 
     Without ``guess`` the cold start runs Newton on a coarse grid first (n = 32: its
     iterations are a third of the cost) and refines; the result does not depend on it.
+    The grid is ``grid_map`` ((ξ_c, ξ_w) or None: plain Chebyshev nodes); by default
+    (``"auto"``) the map of :func:`layer_grid_map` for the starting state (cold start or
+    ``guess``).
     """
-    newton = SteadyNewton(n, theta, nu0, model, nu_top)
     it0 = 0
     if guess is None:
         guess, it0 = _cold_start(theta, nu0, model, nu_top, n)
-        guess = _resample(guess, n)
-    else:
-        guess = _resample(guess, n)
-        guess.s = guess.s + (math.log(nu0) - guess.s[0])  # exact floor value, same shape
+    gm = layer_grid_map(guess, theta) if isinstance(grid_map, str) else grid_map
+    guess = _resample(guess, n, gm)
+    guess.s = guess.s + (math.log(nu0) - guess.s[0])  # exact floor value, same shape
+    newton = SteadyNewton(n, theta, nu0, model, nu_top, grid_map=gm)
     try:
         st, it, res, _ = newton.solve(guess, tol=tol, maxiter=maxiter, lam_min=lam_min, min_iter=min_iter)
     except _NewtonFailure as fail:

@@ -238,7 +238,8 @@ class SteadyQuantities(PointFunction):
     """Scalars of the steady flow (paper §3.2) and how converged they are."""
 
     name = "steady"
-    version = "1"
+    # 2: the steady solver's grid is sinh-mapped at the layer's edge (more points converge)
+    version = "2"
     variables = (
         Variable("h", "sigma", "thickness h (ν0 at 1 % of its maximum)", source="§3.2"),
         Variable("nu_mean", "1", "mean density ν̄ = ρ̄0 / h", source="§3.2"),
