@@ -46,6 +46,23 @@ def test_policy_is_frozen_and_checked():
     assert hash(RejectionPolicy()) == hash(DEFAULT_POLICY)
 
 
+def test_policy_ranks_a_direct_mode_over_the_relaxed_branch_only_past_the_continuum():
+    """The rule of least_stable's fallback (RejectionPolicy.direct_outranks_relaxed): beyond
+    relaxed_k_max (0.1) a resolved direct mode that drifts less than a flagged relaxed branch
+    value replaces it; below, the branch value always wins. Numbers: P4, k = 0.5, N = 200
+    (benchmarks/probes/relaxed_branch.py): direct drift 1.4e-8, tail 2.8e-12; relaxed drift
+    3.0e-3."""
+    p = DEFAULT_POLICY
+    assert p.relaxed_k_max == 0.1
+    assert p.direct_outranks_relaxed(0.5, 1.4e-8, 2.8e-12, 3.0e-3)
+    assert not p.direct_outranks_relaxed(0.005, 3.1e-7, 6.0e-10, 2.3e-4)  # below: branch
+    assert not p.direct_outranks_relaxed(0.5, 4e-3, 2.8e-12, 3.0e-3)  # drifts more
+    assert not p.direct_outranks_relaxed(0.5, 1e-8, 1e-4, 3.0e-3)  # not resolved
+    assert RejectionPolicy(relaxed_k_max=1.0).direct_outranks_relaxed(0.5, 1e-8, 0.0, 1e-3) is False
+    with pytest.raises(ParameterError, match="relaxed_k_max"):
+        RejectionPolicy(relaxed_k_max=-1.0)
+
+
 def test_policy_and_keywords_agree(p1_flow):
     a = least_stable(p1_flow, K, n=80, policy=RejectionPolicy(drift_tol=1e-6))
     b = least_stable(p1_flow, K, n=80, drift_tol=1e-6)

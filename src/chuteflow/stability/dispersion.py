@@ -428,6 +428,52 @@ def near_continuum_branch(
     return None
 
 
+def after_lost_branch(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    lost: str = "",
+) -> Mode | None:
+    """The answer at (k, kz) and N after the continuation lost the branch: the branch followed
+    with the relaxed tail threshold (:func:`near_continuum_branch`), unless the policy
+    prefers a direct solve (:meth:`RejectionPolicy.direct_outranks_relaxed`).
+
+    A relaxed value that passes the paper's tests, or one at |k| ≤ ``policy.relaxed_k_max``,
+    is returned as it is. Beyond, where the branch has dissolved into the continuum of
+    critical layers, the least-stable mode of a dense QZ solve at k (:func:`direct_mode`)
+    replaces a flagged relaxed value when it is resolved and drifts less between N and N'
+    (``method = "qz (branch lost)"``, the relaxed value and its drift in the note). ``lost``
+    (where the branch was lost) heads the note. None when the relaxed continuation does not
+    reach k.
+    """
+    policy = resolve_policy(policy)
+    relaxed = near_continuum_branch(flow, k, kz=kz, n=n, policy=policy, cache=cache)
+    if relaxed is None:
+        return None
+    relaxed = dataclasses.replace(relaxed, note=join_notes(lost, relaxed.note))
+    kk = math.hypot(k, kz)
+    if relaxed.physical or kk <= policy.relaxed_k_max:
+        return relaxed
+    direct = direct_mode(flow, k, kz=kz, n=n, policy=policy, cache=cache)
+    if direct is None or not policy.direct_outranks_relaxed(kk, direct.drift, direct.tail, relaxed.drift):
+        return relaxed
+    return dataclasses.replace(
+        direct,
+        method="qz (branch lost)",
+        note=join_notes(
+            lost,
+            f"the branch followed with relaxed tails reaches α = {relaxed.alpha:.6g} with drift "
+            f"{relaxed.drift:.1e} (inside the continuum, |k| > {policy.relaxed_k_max:g}); the "
+            f"direct solve's mode drifts {direct.drift:.1e}",
+            direct.note,
+        ),
+    )
+
+
 # -- dispersion relation -----------------------------------------------------------------
 def dispersion(
     flow: SteadyFlow,
@@ -503,9 +549,10 @@ def dispersion(
         if lost_at is not None:
             # branch lost: this and the larger k followed with the relaxed tail threshold
             # (on the branch, flagged by the paper's tests), else solved directly at k
-            relaxed = near_continuum_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
+            relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
             if relaxed is not None:
                 mode = relaxed
+                direct[i] = relaxed.method != "branch (relaxed)"
             else:
                 mode = least_stable(
                     flow,
@@ -770,7 +817,11 @@ def least_stable(
         ``method = "branch (relaxed)"``, at this and every further N of the ladder); only
         where that does not reach k either, the solver falls back to the direct solve at
         k. A value on the branch is preferred to a direct solve's candidate as the flagged
-        answer. :attr:`Mode.method` says which method answered.
+        answer, except beyond ``policy.relaxed_k_max`` (0.1), where the branch has
+        dissolved into the continuum: there a resolved direct mode that drifts less than
+        the flagged relaxed value replaces it (:func:`after_lost_branch`,
+        :meth:`RejectionPolicy.direct_outranks_relaxed`), and the further rungs are
+        solved directly. :attr:`Mode.method` says which method answered.
     policy : RejectionPolicy, optional
         Thresholds of the drift and tail tests and the resolution ladder (default: the
         paper's, §4.1).
@@ -824,9 +875,11 @@ def least_stable(
                     # threshold relaxed (near_continuum_branch), at every rung
                     lost, how = str(exc).split(" (theta")[0], "relaxed"
             if mode is None:
-                mode = near_continuum_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                mode = after_lost_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache, lost=lost or "")
                 if mode is not None:
-                    mode = dataclasses.replace(mode, note=join_notes(lost or "", mode.note))
+                    if mode.method != "branch (relaxed)":
+                        # the branch has dissolved into the continuum: direct solves from now on
+                        how = "qz"
                 else:
                     # not even the relaxed continuation reaches k: a direct solve at k
                     how = "qz"
@@ -856,12 +909,19 @@ def least_stable(
 def _better(mode: Mode, best: Mode | None, policy: RejectionPolicy) -> bool:
     """Whether ``mode`` replaces ``best`` as the flagged answer of :func:`least_stable`: a
     value on the branch (tracked, also with the relaxed tail threshold) beats a direct
-    solve's candidate, which is not known to be the branch; among equals, the smaller
+    solve's candidate, which is not known to be the branch, except where the policy ranks a
+    resolved direct mode above a relaxed value
+    (:meth:`RejectionPolicy.direct_outranks_relaxed`); among equals, the smaller
     :func:`mode_score` (nearer to passing the paper's tests; later N on ties)."""
     if best is None:
         return True
     on_branch, best_on_branch = mode.method.startswith("branch"), best.method.startswith("branch")
     if on_branch != best_on_branch:
+        branch, other = (mode, best) if on_branch else (best, mode)
+        if branch.method == "branch (relaxed)" and policy.direct_outranks_relaxed(
+            math.hypot(branch.k, branch.kz), other.drift, other.tail, branch.drift
+        ):
+            return not on_branch
         return on_branch
     return mode_score(mode, policy) <= mode_score(best, policy)
 

@@ -206,7 +206,9 @@ class Mode:
         ``"branch (relaxed)"`` (the branch followed with the continuation's tail threshold
         relaxed after it was lost near the continuum,
         :func:`~chuteflow.stability.dispersion.near_continuum_branch`), or
-        ``"qz (branch lost)"`` (direct solve where even that did not reach k).
+        ``"qz (branch lost)"`` (direct solve where even that did not reach k, or where the
+        policy ranks it above the relaxed branch,
+        :meth:`~chuteflow.stability.RejectionPolicy.direct_outranks_relaxed`).
     note : str
         What the solver wants the reader to know about this answer (e.g. where the branch
         was lost, the largest Re α of the unresolved continuum); empty if nothing.
