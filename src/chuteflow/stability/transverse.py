@@ -470,8 +470,9 @@ def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-1
         return None
     v = v / nv
     prev = None
+    (getrs,) = sla.get_lapack_funcs(("getrs",), (lu[0],))  # lu_solve's routine, unchecked
     for _ in range(maxiter):
-        w = sla.lu_solve(lu, bdiag * v, check_finite=False)
+        w, _info = getrs(lu[0], lu[1], bdiag * v)
         vw = float(v @ w)
         nw = float(np.linalg.norm(w))
         if vw == 0 or not np.isfinite(nw) or nw == 0:
