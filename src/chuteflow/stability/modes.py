@@ -493,9 +493,11 @@ def direct_mode(
     n: int,
     policy: RejectionPolicy | None = None,
     cache: OperatorCache | None = None,
+    modes: list[Mode] | None = None,
 ) -> Mode | None:
     """The least-stable mode at (k, kz) solved directly at that wavenumber (dense QZ at N
-    and N', no continuation from k = 0), judged by ``policy``.
+    and N', no continuation from k = 0), judged by ``policy``; ``modes``: the spectrum
+    (:func:`spectrum` with ``physical_only=False``) when the caller has it already.
 
     Returns the physical mode of largest Re α; when none passes both tests, the candidate
     nearest to passing (smallest max(drift/drift_tol, tail/tail_tol)) among the resolved
@@ -503,7 +505,8 @@ def direct_mode(
     ``physical = False``; None when QZ gives no finite eigenvalue.
     """
     policy = resolve_policy(policy)
-    modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
+    if modes is None:
+        modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
     phys = [m for m in modes if m.physical]
     # the near-neutral continuum of the dilute top: eigenvalues that converge (drift) but
     # whose eigenvectors are not resolved (tail); they are not modes, but bound Re α
