@@ -105,3 +105,19 @@ def test_transverse_peak_refined_before_the_loss(crossing_flow):
     assert got[0].growth == pytest.approx(got[1].growth, rel=1e-5)
     assert got[0].growth == pytest.approx(2.2123e-6, rel=1e-4)
     assert got[0].k == pytest.approx(5.75e-4, rel=0.02)
+
+
+def test_one_resolution_check_serves_both_axes(p1_flow):
+    """``judge_resolved`` (the check shared by the longitudinal maximum and the modes past
+    the transverse branch, review item D2) gives the tracked branch's own verdict: the same
+    α, drift |α(N) − α(N')| and tail as ``BranchTracker.mode`` (P1, k = 0.005, N = 80)."""
+    from chuteflow.stability import BranchTracker
+    from chuteflow.stability.transverse import judge_resolved
+
+    tr = BranchTracker(p1_flow, 80, n_max=80)
+    alpha, w = tr.advance(0.005)
+    ref = tr.mode(0.005)
+    mode = judge_resolved(p1_flow, 0.005, 0.0, alpha, w, 80, three_d=False, policy=RejectionPolicy(n_max=80))
+    assert mode is not None and mode.physical == ref.physical and mode.n == ref.n == 80
+    assert mode.alpha == ref.alpha and mode.drift == pytest.approx(ref.drift, rel=1e-6, abs=1e-15)
+    assert mode.tail == pytest.approx(ref.tail, rel=1e-9)

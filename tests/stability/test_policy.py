@@ -46,6 +46,26 @@ def test_policy_is_frozen_and_checked():
     assert hash(RejectionPolicy()) == hash(DEFAULT_POLICY)
 
 
+def test_policy_ranks_a_direct_mode_over_the_relaxed_branch_only_past_the_continuum():
+    """The rule of least_stable's fallback (RejectionPolicy.direct_outranks_relaxed): beyond
+    relaxed_k_max (0.1) a resolved direct mode that drifts less than a flagged relaxed branch
+    value and is at least as unstable replaces it; below, the branch value always wins.
+    Numbers (N = 200, benchmarks/probes/relaxed_branch.py): P5, k = 0.5: direct −0.3667
+    (drift 4.6e-9, tail 1.2e-11), relaxed −0.8279 (drift 7.5e-4); P4, k = 0.5: direct −2.5106
+    (drift 1.4e-8) against the branch −0.0300 (drift 6.4e-4); (16.5°, 0.13, 0.08, 0.30),
+    k = 0.005, N = 80: QZ −0.498 (drift 3.1e-7) against the branch −0.0028 (drift 2.3e-4)."""
+    p = DEFAULT_POLICY
+    assert p.relaxed_k_max == 0.1
+    assert p.direct_outranks_relaxed(0.5, -0.3667, 4.6e-9, 1.2e-11, -0.8279, 7.5e-4)  # P5
+    assert not p.direct_outranks_relaxed(0.5, -2.5106, 1.4e-8, 2.8e-12, -0.0300, 6.4e-4)  # P4
+    assert not p.direct_outranks_relaxed(0.005, -0.0027, 3.1e-7, 6.0e-10, -0.0028, 2.3e-4)  # below
+    assert not p.direct_outranks_relaxed(0.5, -0.3667, 4e-3, 1.2e-11, -0.8279, 3.0e-3)  # drifts more
+    assert not p.direct_outranks_relaxed(0.5, -0.3667, 1e-8, 1e-4, -0.8279, 3.0e-3)  # not resolved
+    assert not RejectionPolicy(relaxed_k_max=1.0).direct_outranks_relaxed(0.5, 0.0, 1e-8, 0.0, -1.0, 1e-3)
+    with pytest.raises(ParameterError, match="relaxed_k_max"):
+        RejectionPolicy(relaxed_k_max=-1.0)
+
+
 def test_policy_and_keywords_agree(p1_flow):
     a = least_stable(p1_flow, K, n=80, policy=RejectionPolicy(drift_tol=1e-6))
     b = least_stable(p1_flow, K, n=80, drift_tol=1e-6)

@@ -43,9 +43,6 @@ from ..stability.dispersion import BranchTracker
 from ..stability.modes import (
     Mode,
     OperatorCache,
-    drift_of,
-    interp_vector,
-    make_mode,
     nearest_eigenpair,
     stability_operator,
 )
@@ -55,6 +52,7 @@ from ..stability.transverse import (
     TransverseDispersion,
     TransverseTracker,
     growth_plane,
+    judge_resolved,
     transverse_dispersion,
     transverse_mode,
 )
@@ -653,7 +651,7 @@ def _peak_2d(flow, tr, ks, alphas, vecs, policy, cache) -> GrowthPeak:
         solves += ev
         if pay is not None:
             k_best, a_best, v_best = pay
-    mode = _judge_2d(flow, k_best, a_best, v_best, n, policy, cache)
+    mode = judge_resolved(flow, k_best, 0.0, a_best, v_best, n, three_d=False, policy=policy, cache=cache)
     cut = None
     for (k0, a0), (k1, a1) in zip(zip(ks[:-1], alphas[:-1]), zip(ks[1:], alphas[1:])):
         if a0.real > 0 >= a1.real:  # linear in ln k between the bracketing points
@@ -664,28 +662,6 @@ def _peak_2d(flow, tr, ks, alphas, vecs, policy, cache) -> GrowthPeak:
     return GrowthPeak(
         "longitudinal", float(m_alpha.real), float(k_best), float(m_alpha.imag), cut, mode, solves
     )
-
-
-def _judge_2d(flow, k, alpha, v, n, policy, cache) -> Mode | None:
-    """The longitudinal mode at k with its drift and tail, N raised while not physical."""
-    mode = None
-    nf = 4
-    for nn in policy.ladder(n):
-        pencil = stability_operator(flow, nn, cache=cache).pencil(k)
-        if nn != n:
-            try:
-                alpha, v = nearest_eigenpair(pencil, alpha, v0=interp_vector(v, nf, n, nn))
-            except ConvergenceError:
-                break
-            n = nn
-        try:
-            drift, n2 = drift_of(flow, alpha, v, nn, k, 0.0, False, cache=cache)
-        except ConvergenceError:
-            drift, n2 = math.inf, nn
-        mode = make_mode(pencil, alpha, v, drift, n2, policy)
-        if mode.physical:
-            break
-    return mode
 
 
 def transverse_peak(

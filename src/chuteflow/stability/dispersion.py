@@ -39,6 +39,7 @@ from .modes import (
     mode_score,
     nearest_eigenpair,
     resolve_policy,
+    spectrum,
     stability_operator,
     tail,
 )
@@ -428,6 +429,85 @@ def near_continuum_branch(
     return None
 
 
+#: Radius, in drifts of the relaxed value, of the neighbourhood searched for the branch among
+#: the band's eigenvalues (P4, k = 0.5, N = 200: the continuation lands 3.6e-3 (mapped) and
+#: 5.8e-3 (plain) from the branch, with drifts 3.0e-3 and 3.2e-3).
+BAND_RADIUS = 5.0
+#: A band eigenvalue replaces the relaxed value only when its eigenvector's tail is this
+#: factor smaller (P4, k = 0.5, N = 200: 1.8e-5 against 7.1e-4 mapped, 4.8e-5 against
+#: 7.0e-4 plain; the other band members have tails ≥ 1.4e-4).
+BAND_TAIL_GAIN = 0.1
+
+
+def after_lost_branch(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    lost: str = "",
+) -> Mode | None:
+    """The answer at (k, kz) and N after the continuation lost the branch: the branch followed
+    with the relaxed tail threshold (:func:`near_continuum_branch`), or a direct solve where
+    the policy prefers it (:meth:`RejectionPolicy.direct_outranks_relaxed`).
+
+    A relaxed value that passes the paper's tests, or one at |k| ≤ ``policy.relaxed_k_max``,
+    is returned as it is. Beyond, the branch lies in a band of critical-layer eigenvalues
+    whose eigenvectors are not resolved (tails ~1e-3), and the continuation may land on a
+    neighbour: the dense spectrum at N (:func:`spectrum`) is searched within
+    :data:`BAND_RADIUS` drifts of the relaxed value, and the eigenvalue there whose tail is
+    smallest, by at least :data:`BAND_TAIL_GAIN`, replaces it (the branch: at P4, k = 0.5 it
+    converges with N, drift 6.4e-4 at N = 200 to 9.1e-6 at N = 360, while the band's
+    members do not). Then the least-stable mode of the same spectrum (:func:`direct_mode`)
+    replaces the (flagged) branch value when it is resolved, drifts less and is at least as
+    unstable (``method = "qz (branch lost)"``, the branch value and its drift in the note).
+    ``lost`` (where the branch was lost) heads the note. None when the relaxed continuation
+    does not reach k.
+    """
+    policy = resolve_policy(policy)
+    relaxed = near_continuum_branch(flow, k, kz=kz, n=n, policy=policy, cache=cache)
+    if relaxed is None:
+        return None
+    relaxed = dataclasses.replace(relaxed, note=join_notes(lost, relaxed.note))
+    kk = math.hypot(k, kz)
+    if relaxed.physical or kk <= policy.relaxed_k_max:
+        return relaxed
+    modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
+    radius = BAND_RADIUS * relaxed.drift
+    band = [m for m in modes if abs(m.alpha - relaxed.alpha) <= radius]
+    if band:
+        best = min(band, key=lambda m: m.tail)
+        if best.tail <= BAND_TAIL_GAIN * relaxed.tail:
+            relaxed = dataclasses.replace(
+                best,
+                method="branch (relaxed)",
+                note=join_notes(
+                    relaxed.note,
+                    f"the continuation landed on {relaxed.alpha:.6g} (tail {relaxed.tail:.1e}) in a "
+                    f"band of unresolved eigenvalues; the branch is the one of least tail within "
+                    f"{BAND_RADIUS:g} drifts",
+                ),
+            )
+    direct = direct_mode(flow, k, kz=kz, n=n, policy=policy, cache=cache, modes=modes)
+    if direct is None or not policy.direct_outranks_relaxed(
+        kk, direct.alpha.real, direct.drift, direct.tail, relaxed.alpha.real, relaxed.drift
+    ):
+        return relaxed
+    return dataclasses.replace(
+        direct,
+        method="qz (branch lost)",
+        note=join_notes(
+            lost,
+            f"the branch followed with relaxed tails reaches α = {relaxed.alpha:.6g} with drift "
+            f"{relaxed.drift:.1e} (|k| > {policy.relaxed_k_max:g}); the direct solve's mode is "
+            f"less damped and drifts {direct.drift:.1e}",
+            direct.note,
+        ),
+    )
+
+
 # -- dispersion relation -----------------------------------------------------------------
 def dispersion(
     flow: SteadyFlow,
@@ -503,9 +583,10 @@ def dispersion(
         if lost_at is not None:
             # branch lost: this and the larger k followed with the relaxed tail threshold
             # (on the branch, flagged by the paper's tests), else solved directly at k
-            relaxed = near_continuum_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
+            relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
             if relaxed is not None:
                 mode = relaxed
+                direct[i] = relaxed.method != "branch (relaxed)"
             else:
                 mode = least_stable(
                     flow,
@@ -770,7 +851,12 @@ def least_stable(
         ``method = "branch (relaxed)"``, at this and every further N of the ladder); only
         where that does not reach k either, the solver falls back to the direct solve at
         k. A value on the branch is preferred to a direct solve's candidate as the flagged
-        answer. :attr:`Mode.method` says which method answered.
+        answer, except beyond ``policy.relaxed_k_max`` (0.1), where the branch lies in a
+        band of critical-layer eigenvalues: there the branch is picked out of the band by
+        its tail, and a resolved direct mode that drifts less and is at least as unstable
+        replaces it (:func:`after_lost_branch`,
+        :meth:`RejectionPolicy.direct_outranks_relaxed`); the further rungs are then
+        solved directly. :attr:`Mode.method` says which method answered.
     policy : RejectionPolicy, optional
         Thresholds of the drift and tail tests and the resolution ladder (default: the
         paper's, §4.1).
@@ -824,9 +910,11 @@ def least_stable(
                     # threshold relaxed (near_continuum_branch), at every rung
                     lost, how = str(exc).split(" (theta")[0], "relaxed"
             if mode is None:
-                mode = near_continuum_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                mode = after_lost_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache, lost=lost or "")
                 if mode is not None:
-                    mode = dataclasses.replace(mode, note=join_notes(lost or "", mode.note))
+                    if mode.method != "branch (relaxed)":
+                        # the branch has dissolved into the continuum: direct solves from now on
+                        how = "qz"
                 else:
                     # not even the relaxed continuation reaches k: a direct solve at k
                     how = "qz"
@@ -856,12 +944,24 @@ def least_stable(
 def _better(mode: Mode, best: Mode | None, policy: RejectionPolicy) -> bool:
     """Whether ``mode`` replaces ``best`` as the flagged answer of :func:`least_stable`: a
     value on the branch (tracked, also with the relaxed tail threshold) beats a direct
-    solve's candidate, which is not known to be the branch; among equals, the smaller
+    solve's candidate, which is not known to be the branch, except where the policy ranks a
+    resolved direct mode above a relaxed value
+    (:meth:`RejectionPolicy.direct_outranks_relaxed`); among equals, the smaller
     :func:`mode_score` (nearer to passing the paper's tests; later N on ties)."""
     if best is None:
         return True
     on_branch, best_on_branch = mode.method.startswith("branch"), best.method.startswith("branch")
     if on_branch != best_on_branch:
+        branch, other = (mode, best) if on_branch else (best, mode)
+        if branch.method == "branch (relaxed)" and policy.direct_outranks_relaxed(
+            math.hypot(branch.k, branch.kz),
+            other.alpha.real,
+            other.drift,
+            other.tail,
+            branch.alpha.real,
+            branch.drift,
+        ):
+            return not on_branch
         return on_branch
     return mode_score(mode, policy) <= mode_score(best, policy)
 

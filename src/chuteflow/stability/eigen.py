@@ -75,13 +75,19 @@ class ShiftInvert:
                 f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift"
             )
         self.size = A.shape[0]
+        # LAPACK's getrs on the factors, without lu_solve's per-call checks (the same
+        # routine, ~40 % less time per solve at N ~ 100: inverse iteration does hundreds)
+        (self._getrs,) = sla.get_lapack_funcs(("getrs",), (self.lu[0],))
 
     def Bx(self, x):
         return self._bdiag * x if self._bdiag is not None and x.ndim == 1 else self.B @ x
 
     def solve(self, x):
         """(A − σB)⁻¹ x."""
-        return sla.lu_solve(self.lu, x, check_finite=False)
+        x, info = self._getrs(self.lu[0], self.lu[1], np.asarray(x, dtype=self.lu[0].dtype))
+        if info != 0:  # pragma: no cover - only for malformed arguments
+            raise ValueError(f"getrs: illegal value in argument {-info}")
+        return x
 
     def apply(self, x):
         """(A − σB)⁻¹ B x."""

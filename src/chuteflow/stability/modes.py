@@ -206,7 +206,9 @@ class Mode:
         ``"branch (relaxed)"`` (the branch followed with the continuation's tail threshold
         relaxed after it was lost near the continuum,
         :func:`~chuteflow.stability.dispersion.near_continuum_branch`), or
-        ``"qz (branch lost)"`` (direct solve where even that did not reach k).
+        ``"qz (branch lost)"`` (direct solve where even that did not reach k, or where the
+        policy ranks it above the relaxed branch,
+        :meth:`~chuteflow.stability.RejectionPolicy.direct_outranks_relaxed`).
     note : str
         What the solver wants the reader to know about this answer (e.g. where the branch
         was lost, the largest Re α of the unresolved continuum); empty if nothing.
@@ -491,9 +493,11 @@ def direct_mode(
     n: int,
     policy: RejectionPolicy | None = None,
     cache: OperatorCache | None = None,
+    modes: list[Mode] | None = None,
 ) -> Mode | None:
     """The least-stable mode at (k, kz) solved directly at that wavenumber (dense QZ at N
-    and N', no continuation from k = 0), judged by ``policy``.
+    and N', no continuation from k = 0), judged by ``policy``; ``modes``: the spectrum
+    (:func:`spectrum` with ``physical_only=False``) when the caller has it already.
 
     Returns the physical mode of largest Re α; when none passes both tests, the candidate
     nearest to passing (smallest max(drift/drift_tol, tail/tail_tol)) among the resolved
@@ -501,7 +505,8 @@ def direct_mode(
     ``physical = False``; None when QZ gives no finite eigenvalue.
     """
     policy = resolve_policy(policy)
-    modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
+    if modes is None:
+        modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
     phys = [m for m in modes if m.physical]
     # the near-neutral continuum of the dilute top: eigenvalues that converge (drift) but
     # whose eigenvectors are not resolved (tail); they are not modes, but bound Re α

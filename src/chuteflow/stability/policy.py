@@ -46,6 +46,17 @@ class RejectionPolicy:
         Largest resolution N tried.
     n_growth : float
         Each rung of the ladder is round(``n_growth`` × the one before) (at most ``n_max``).
+    relaxed_k_max : float
+        Largest |k| at which a flagged value of the branch followed with the relaxed tail
+        threshold (``method = "branch (relaxed)"``) always outranks a direct solve's mode
+        (:meth:`direct_outranks_relaxed`). Below it the relaxed branch is the branch (at
+        θ = 16.5°, ν0(0) = 0.13, φ = 0.08, Φ = 0.30, k = 0.005 its drift falls from 2.3e-4
+        at N = 80 to 3.3e-6 at N = 244, where QZ finds the same eigenvalue). Above it the
+        branch lies in a band of critical-layer eigenvalues (phase velocity inside the range
+        of u0), the continuation may land on a neighbour in the band (P4, k = 0.5, N = 200:
+        −0.0279 − 0.8199i mapped, −0.0350 − 0.8188i plain, against the branch's
+        −0.0300 − 0.8171i), and a resolved direct mode competes with it
+        (``benchmarks/probes/relaxed_branch.py``).
     """
 
     drift_tol: float = 1e-7
@@ -55,8 +66,17 @@ class RejectionPolicy:
     n_start: int = 80
     n_max: int = 256
     n_growth: float = 1.25
+    relaxed_k_max: float = 0.1
 
     def __post_init__(self):
+        if isinstance(self.relaxed_k_max, bool) or not (
+            isinstance(self.relaxed_k_max, (int, float)) and self.relaxed_k_max >= 0
+        ):
+            raise ParameterError(
+                f"relaxed_k_max = {self.relaxed_k_max!r}: need a wavenumber >= 0 (where the "
+                "relaxed branch stops outranking a direct solve)"
+            )
+        object.__setattr__(self, "relaxed_k_max", float(self.relaxed_k_max))
         for name in ("drift_tol", "tail_tol", "track_tail_tol"):
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < 1):
@@ -86,6 +106,35 @@ class RejectionPolicy:
     def accepts(self, drift: float, tail: float) -> bool:
         """Both tests pass: drift < ``drift_tol`` and tail < ``tail_tol``."""
         return bool(drift < self.drift_tol and tail < self.tail_tol)
+
+    def direct_outranks_relaxed(
+        self,
+        k: float,
+        direct_re: float,
+        direct_drift: float,
+        direct_tail: float,
+        relaxed_re: float,
+        relaxed_drift: float,
+    ) -> bool:
+        """Whether a direct solve's mode (dense QZ at k; growth rate ``direct_re``) replaces a
+        flagged value of the branch followed with the relaxed tail threshold (growth rate
+        ``relaxed_re``) as the answer at wavenumber |k| = ``k``.
+
+        Only beyond :attr:`relaxed_k_max` (where the branch has reached the continuum), and
+        only when the direct mode is resolved (tail below :attr:`track_tail_tol`), agrees
+        between the resolutions N and N' better than the relaxed value (``direct_drift <
+        relaxed_drift``) and is at least as unstable (``direct_re >= relaxed_re``): a
+        resolved but more damped mode never hides a less damped one that N does not yet
+        resolve (P4, k = 0.5: the branch at −0.0300 − 0.8172i, drift 6.4e-4 at N = 200,
+        against a resolved mode at −2.51 − 0.87i). Below :attr:`relaxed_k_max` the branch
+        value always wins.
+        """
+        return bool(
+            k > self.relaxed_k_max
+            and direct_tail < self.track_tail_tol
+            and direct_drift < relaxed_drift
+            and direct_re >= relaxed_re
+        )
 
     def next_n(self, n: int) -> int:
         """The rung after N: min(``n_max``, round(``n_growth`` N))."""

@@ -44,6 +44,7 @@ from .modes import (
     Mode,
     OperatorCache,
     check_n,
+    drift_of,
     interp_vector,
     make_mode,
     nearest_eigenpair,
@@ -58,6 +59,7 @@ __all__ = [
     "TransverseTracker",
     "dense_modes",
     "growth_plane",
+    "judge_resolved",
     "least_stable_3d",
     "real_form",
     "transverse_dispersion",
@@ -468,8 +470,9 @@ def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-1
         return None
     v = v / nv
     prev = None
+    (getrs,) = sla.get_lapack_funcs(("getrs",), (lu[0],))  # lu_solve's routine, unchecked
     for _ in range(maxiter):
-        w = sla.lu_solve(lu, bdiag * v, check_finite=False)
+        w, _info = getrs(lu[0], lu[1], bdiag * v)
         vw = float(v @ w)
         nw = float(np.linalg.norm(w))
         if vw == 0 or not np.isfinite(nw) or nw == 0:
@@ -770,7 +773,9 @@ def _beyond_branch(flow, ks, n, policy, cache):
     branch): candidates seeded by a coarse dense scan (again whenever k_z has grown by
     :data:`RESEED_RATIO` or every candidate is lost), followed by shift-invert from their
     last eigenvectors at the N where the last winner passed (``n`` again at each seeding),
-    N raised along the ladder while not physical."""
+    N raised along the ladder while not physical. Seeds that cannot reach the best
+    :data:`N_CANDIDATES` found, and candidates just lost on the same pencil, are not solved
+    (again)."""
     nf = 5
     out: list[Mode | None] = []
     # candidates: (α, start vector, the N of that vector)
@@ -782,6 +787,12 @@ def _beyond_branch(flow, ks, n, policy, cache):
         found: list = []
         for attempt in range(2):
             if not cands or attempt == 1 or (k_seed is not None and k >= RESEED_RATIO * k_seed):
+                if attempt == 1 and n_cur == n:
+                    if k_seed == k:
+                        break  # seeded here already: the same seeds would be lost again
+                    # every candidate was just lost on this very pencil: solving them again
+                    # from the same shifts and vectors would give the same answers
+                    cands = []
                 n_cur = n  # new candidates: from the first rung again
                 seeds = [(a, v, SEED_N) for a, v in _seed_candidates(flow, k, policy, cache)]
                 cands = cands + seeds  # the followed ones first: their vectors are at N
@@ -791,9 +802,15 @@ def _beyond_branch(flow, ks, n, policy, cache):
             for a, v, nv in cands:
                 if nv == SEED_N and any(
                     abs(a.real - f.real) + abs(abs(a.imag) - abs(f.imag)) <= SEED_MATCH * max(abs(a), 1e-3)
-                    for f, _, _ in found
+                    for f, *_ in found
                 ):
                     continue  # a seed of an eigenvalue already followed
+                if nv == SEED_N and len(found) >= N_CANDIDATES:
+                    # an accepted solve lies within 0.2 max(|a|, 1e-3) of the seed: one that
+                    # cannot reach the best N_CANDIDATES found so far is not solved
+                    kth = sorted((f.real for f, *_ in found), reverse=True)[N_CANDIDATES - 1]
+                    if a.real + 0.2 * max(abs(a), 1e-3) < kth:
+                        continue
                 try:
                     alpha, w = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, nv, n_cur))
                 except ConvergenceError:
@@ -802,7 +819,7 @@ def _beyond_branch(flow, ks, n, policy, cache):
                     continue  # jumped to another eigenvalue
                 alpha = complex(alpha)
                 tol = 1e-8 * max(1.0, abs(alpha))
-                near = [abs(alpha.real - f.real) + abs(abs(alpha.imag) - abs(f.imag)) for f, _, _ in found]
+                near = [abs(alpha.real - f.real) + abs(abs(alpha.imag) - abs(f.imag)) for f, *_ in found]
                 if near and min(near) <= tol:
                     continue  # the same eigenvalue or its conjugate
                 t = tail(pencil.unscale(w), len(pencil.fields), policy.tail_terms)
@@ -813,7 +830,7 @@ def _beyond_branch(flow, ks, n, policy, cache):
                 break
         cands = [(a, w, n_cur) for a, w, _ in found]
         mode = None
-        for a, w, _ in found:
+        for a, w, *_ in found:
             mode = _judge_complex(flow, k, a, w, n_cur, policy, cache)
             if mode.physical:
                 break
@@ -823,26 +840,55 @@ def _beyond_branch(flow, ks, n, policy, cache):
     return out
 
 
-def _judge_complex(flow, kz, alpha, w, n, policy, cache) -> Mode:
-    """Drift and tail of a shift-invert eigenpair at (0, k_z), N raised while not physical."""
-    nf = 5
+def judge_resolved(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    alpha: complex,
+    v: np.ndarray,
+    n: int,
+    *,
+    three_d: bool,
+    policy: RejectionPolicy = DEFAULT_POLICY,
+    cache: OperatorCache | None = None,
+    rungs: int | None = None,
+) -> Mode | None:
+    """The resolution check of one eigenpair: (α, v), found at N on the pencil at (k_x, k_z),
+    with its drift |α(N) − α(N')| (N' = round(0.8 N), shift-invert from the interpolated
+    vector) and its tail, judged by ``policy`` (paper §4.1); while it fails, N is raised
+    along ``policy.ladder(n)`` (the first ``rungs`` rungs, all by default) and the eigenpair
+    re-solved there from the interpolated vector.
+
+    Returns the mode at the last N tried (drift ``inf`` where no eigenvalue at N' settles;
+    None only when the ladder is empty). Used past the tracked branch
+    (:func:`transverse_dispersion`) and by the metric's longitudinal maximum
+    (:func:`chuteflow.longwave.transverse.longitudinal_peak`).
+    """
+    nf = 5 if three_d else 4
     mode = None
-    for nn in policy.ladder(n)[:3]:
-        p = stability_operator(flow, nn, True, cache=cache).pencil(0.0, kz)
+    ladder = policy.ladder(n)
+    for nn in ladder if rungs is None else ladder[:rungs]:
+        p = stability_operator(flow, nn, three_d, cache=cache).pencil(kx, kz)
         if nn != n:
             try:
-                alpha, w = nearest_eigenpair(p, alpha, v0=interp_vector(w, nf, n, nn))
+                alpha, v = nearest_eigenpair(p, alpha, v0=interp_vector(v, nf, n, nn))
             except ConvergenceError:
                 break
             n = nn
         n2 = check_n(nn)
-        p2 = stability_operator(flow, n2, True, cache=cache).pencil(0.0, kz)
         try:
-            a2, _ = nearest_eigenpair(p2, alpha, v0=interp_vector(w, nf, nn, n2))
-            drift = abs(a2 - alpha)
+            drift, _ = drift_of(flow, alpha, v, nn, kx, kz, three_d, cache=cache)
         except ConvergenceError:
             drift = math.inf
-        mode = dataclasses.replace(make_mode(p, alpha, w, drift, n2, policy), method="shift")
+        mode = make_mode(p, alpha, v, drift, n2, policy)
         if mode.physical:
             break
-    return mode  # type: ignore[return-value]
+    return mode
+
+
+def _judge_complex(flow, kz, alpha, w, n, policy, cache) -> Mode:
+    """Drift and tail of a shift-invert eigenpair at (0, k_z), N raised while not physical
+    (at most three rungs): :func:`judge_resolved`, ``method = "shift"``."""
+    mode = judge_resolved(flow, 0.0, kz, alpha, w, n, three_d=True, policy=policy, cache=cache, rungs=3)
+    assert mode is not None  # the ladder from n has at least one rung
+    return dataclasses.replace(mode, method="shift")
