@@ -165,6 +165,25 @@ def test_comoving_frame(p1):
     assert abs(complex(s["alpha_dns_re"], s["alpha_dns_im"]) - complex(s["alpha_re"], s["alpha_im"])) < 2e-5
 
 
+def test_top_rows_agree_in_linear_phase(p1, p1_mode):
+    """The two rows of ln ν at the top node (eq. (2.1) with the atmosphere's gradient at inflow,
+    the default, and the decay condition of eq. (4.5), the stability operator's row) are the
+    same linear problem up to the O(ν(y_max) = 1e-9) coupling of the top's density: half a
+    period from the mode at k = 0.003, their BDF2-inverted eigenvalues differ by 1.3e-5 |α|
+    (measured; each is within 5e-5 |α| of :func:`chuteflow.stability.least_stable`)."""
+    period = 2 * math.pi / abs(p1_mode.alpha.imag)
+    kw = dict(model=MODEL, flow=p1, time=period / 2, dt=period / 100)
+    a = {}
+    for top in ("transport", "isothermal"):
+        s = summary(simulate(16.0, 0.05, L1, top=top, **kw))
+        assert s["status"] == "ok"
+        a[top] = complex(s["alpha_dns_re"], s["alpha_dns_im"])
+        assert abs(a[top] - p1_mode.alpha) < 2e-4 * abs(p1_mode.alpha)
+    assert abs(a["transport"] - a["isothermal"]) < 5e-5 * abs(p1_mode.alpha)
+    with pytest.raises(ParameterError, match="top"):
+        simulate(16.0, 0.05, L1, top="lid", **kw)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("nu0,sign", [(0.05, 1), (0.10, -1)])
 def test_linear_phase_p1_p3(nu0, sign):
