@@ -166,7 +166,7 @@ def test_comoving_frame(p1):
 
 
 def test_top_rows_agree_in_linear_phase(p1, p1_mode):
-    """The two rows of ln ν at the top node (eq. (2.1) with the atmosphere's gradient in its flux,
+    """The two rows of ln ν at the top node (eq. (2.1) with the atmosphere's gradient at inflow,
     the default, and the decay condition of eq. (4.5), the stability operator's row) are the
     same linear problem up to the O(ν(y_max) = 1e-9) coupling of the top's density: half a
     period from the mode at k = 0.003, their BDF2-inverted eigenvalues differ by 1.3e-5 |α|

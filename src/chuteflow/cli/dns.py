@@ -47,7 +47,7 @@ def dns(
     top: str = typer.Option(
         "transport",
         "--top",
-        help="Row of ln ν at the top: transport (eq. (2.1) with the atmosphere gradient) or isothermal.",
+        help="Row of ln ν at the top: transport (eq. (2.1), atmosphere gradient at inflow) or isothermal.",
     ),
     snapshots: int = typer.Option(6, "--snapshots", help="Full-field snapshots stored (equally spaced)."),
     record_every: int = typer.Option(

@@ -332,7 +332,7 @@ def simulate(
         (∝ (ωΔt)⁴ with ω the frequency seen in the frame) stays small at large Δt.
     top : {"transport", "isothermal"}
         Row of s = ln ν at the top node: eq. (2.1) with the isothermal atmosphere's density
-        gradient in the vertical flux (default), or the decay condition of eq. (4.5) as a
+        gradient where the flow enters (default), or the decay condition of eq. (4.5) as a
         constraint (the stability operator's row; at finite amplitude it over-determines
         the outflow and ln ν develops unresolved x-structure there, docs/dns.md).
 

@@ -9,14 +9,21 @@ back onto m ≤ M (3/2 rule). Rows (the stability operator's choice, :mod:`chute
 ========  ========================  ======================  ===============================
 block     interior nodes            floor (y = 0)           top (y = y_max)
 ========  ========================  ======================  ===============================
-s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
+s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          mass (2.1) ÷ ν̄ (b)
 u         x-momentum ÷ μ            eq. (2.9) ÷ μ           û_y + |k| û = 0 per mode
 v         y-momentum ÷ μ            v = 0                   v̂_y + |k| v̂ = 0 per mode
 T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ = 0 per mode
 ========  ========================  ======================  ===============================
 
-The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)); the
-density one is applied pointwise with the local temperature, the others mode by mode.
+The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)), mode by
+mode for u, v, T.
+
+(b) ``top="transport"`` (default): eq. (2.1) at the top node, with the density gradient of
+the isothermal atmosphere above, ν_y = −(cos θ/T) ν, where the flow enters (v < 0); ``"isothermal"``:
+the decay condition ν_y + (cos θ/T) ν = 0 itself, pointwise with the local T, ÷ ν (the
+stability operator's row). Both are the same linear problem up to the O(ν(y_max)) coupling;
+at finite amplitude the constraint over-determines ln ν where the flow leaves the domain
+(docs/dns.md, *The dilute top*).
 
 (a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(ŝ_0(y_j)),
 plus a uniform source λ in mode 0 (:meth:`Discretisation.mass_source`), so that the total
@@ -45,7 +52,7 @@ FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "T": "floor_energy"}
 BDF1 = (1.0, -1.0, 0.0)
 BDF2 = (1.5, -2.0, 0.5)
 #: Rows of s at the top node: eq. (2.1) with the vertical gradient of the isothermal
-#: atmosphere in its flux (``"transport"``, the default), or the decay condition
+#: atmosphere where the flow enters (``"transport"``, the default), or the decay condition
 #: ν_y + (cos θ/T) ν = 0 itself (``"isothermal"``, the stability operator's row).
 TOPS = ("transport", "isothermal")
 
@@ -186,7 +193,7 @@ class Discretisation:
         """
         st = self.jets(C)
         if self.top == "transport":
-            self._atmosphere_top(st)
+            self._upwind_top(st)
         a0, a1, a2 = bdf
         now = (st["nu"], st["u"], st["v"], st["T"])
         for i, f in enumerate(DNS_FIELDS):
@@ -222,18 +229,21 @@ class Discretisation:
             out[i, -1] = acc
         return out
 
-    def _atmosphere_top(self, st: dict) -> None:
+    def _upwind_top(self, st: dict) -> None:
         """The vertical density gradient that eq. (2.1) sees at the top node (``top="transport"``).
 
-        The gradient of the isothermal atmosphere above y_max, ν_y = −(cos θ/T) ν with the
-        local T (the decay condition of eq. (4.5), used in the vertical flux ∂_y(νv) instead
-        of as a constraint on ν). The row is then a transport equation in x along the top,
-        smooth in x. Linearised about the steady flow (v = 0) it is the linear problem's
-        mass equation at the top node. (Taking the collocated ν_y where the flow leaves,
-        v > 0, was tried: the switch at v = 0 puts a kink into the row, and ln ν's spectrum at
-        the top then falls only as m⁻³; docs/dns.md.)
+        Eq. (2.1) is a transport equation for ln ν (no diffusion of mass), so the top needs a
+        density only where the flow enters. Where it leaves (v > 0) the row uses the
+        collocated ν_y (the interior's density is carried out); where it enters (v < 0) the
+        gradient of the isothermal atmosphere above y_max, ν_y = −(cos θ/T) ν with the local T
+        (the decay condition of eq. (4.5) as the state of the inflow). Linearised about the
+        steady flow (v = 0) both give the linear problem's mass equation at the top node.
+        Using the atmosphere's gradient everywhere was tried and dropped: at outflow it
+        contradicts the interior, and the weakly nonlinear growth then changed with N
+        (docs/dns.md, *The dilute top*).
         """
-        st["nu_y"][-1] = -self.sin_cos[1] / st["T"][-1] * st["nu"][-1]
+        nu, v, T = st["nu"][-1], st["v"][-1], st["T"][-1]
+        st["nu_y"][-1] = np.where(v > 0, st["nu_y"][-1], -self.sin_cos[1] / T * nu)
 
     def _mass_rows(
         self, C: np.ndarray, mass: np.ndarray, nu, T_top, history: tuple, dt: float, bdf, top: bool = False
