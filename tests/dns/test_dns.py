@@ -279,6 +279,12 @@ def test_figure(tmp_path, p1):
     assert ds.attrs["frame_speed"] > 0  # from noise: the wave's frame
     png = save(plot_dns(ds), tmp_path / "dns.png")
     assert png.stat().st_size > 1000
+    from chuteflow.figures.dns import plot_wave_profile, wave_speed_from_flux
+
+    # Q − c ρ̄ = const for a wave travelling at c: here a fit through a tiny noise wave
+    assert np.isfinite(wave_speed_from_flux(ds)[0])
+    png = save(plot_wave_profile([ds, ds], family=([0.25, 0.27], [2.3, 2.4])), tmp_path / "w.png")
+    assert png.stat().st_size > 1000
 
 
 def test_mass_conserved_at_finite_amplitude(p1):
