@@ -165,6 +165,25 @@ def test_comoving_frame(p1):
     assert abs(complex(s["alpha_dns_re"], s["alpha_dns_im"]) - complex(s["alpha_re"], s["alpha_im"])) < 2e-5
 
 
+def test_top_rows_agree_in_linear_phase(p1, p1_mode):
+    """The two rows of ln ν at the top node (eq. (2.1) with the atmosphere's gradient at inflow,
+    the default, and the decay condition of eq. (4.5), the stability operator's row) are the
+    same linear problem up to the O(ν(y_max) = 1e-9) coupling of the top's density: half a
+    period from the mode at k = 0.003, their BDF2-inverted eigenvalues differ by 1.3e-5 |α|
+    (measured; each is within 5e-5 |α| of :func:`chuteflow.stability.least_stable`)."""
+    period = 2 * math.pi / abs(p1_mode.alpha.imag)
+    kw = dict(model=MODEL, flow=p1, time=period / 2, dt=period / 100)
+    a = {}
+    for top in ("transport", "isothermal"):
+        s = summary(simulate(16.0, 0.05, L1, top=top, **kw))
+        assert s["status"] == "ok"
+        a[top] = complex(s["alpha_dns_re"], s["alpha_dns_im"])
+        assert abs(a[top] - p1_mode.alpha) < 2e-4 * abs(p1_mode.alpha)
+    assert abs(a["transport"] - a["isothermal"]) < 5e-5 * abs(p1_mode.alpha)
+    with pytest.raises(ParameterError, match="top"):
+        simulate(16.0, 0.05, L1, top="lid", **kw)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("nu0,sign", [(0.05, 1), (0.10, -1)])
 def test_linear_phase_p1_p3(nu0, sign):
@@ -208,9 +227,9 @@ def test_relax_conserves_mass(p1):
     C[0, :, 0], C[1, :, 0], C[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
     out, change = relax_steady(d, C)
     assert change < 1e-3
-    # backward Euler conserves the discrete mass in time; in y the floor and top nodes carry
-    # their conditions instead of eq. (2.1), so ∫ν dy is kept to the collocation error only:
-    # measured 5e-11 here at N = 40 (a relaxation change of 1e-4), 1e-14 at N = 80
+    # backward Euler conserves the discrete mass in time, and the mass rows' uniform source
+    # (Discretisation.mass_source) returns what the boundary rows leave: measured 4e-16 here
+    # at N = 40 with the default top row, 2e-16 with top="isothermal" (relaxation change 6e-6)
     assert d.depth_integrals(out)[0][0] == pytest.approx(d.depth_integrals(C)[0][0], rel=1e-9)
 
 
@@ -259,6 +278,12 @@ def test_figure(tmp_path, p1):
     )
     assert ds.attrs["frame_speed"] > 0  # from noise: the wave's frame
     png = save(plot_dns(ds), tmp_path / "dns.png")
+    assert png.stat().st_size > 1000
+    from chuteflow.figures.dns import plot_wave_profile, wave_speed_from_flux
+
+    # Q − c ρ̄ = const for a wave travelling at c: here a fit through a tiny noise wave
+    assert np.isfinite(wave_speed_from_flux(ds)[0])
+    png = save(plot_wave_profile([ds, ds], family=([0.25, 0.27], [2.3, 2.4])), tmp_path / "w.png")
     assert png.stat().st_size > 1000
 
 

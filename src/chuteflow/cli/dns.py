@@ -44,6 +44,11 @@ def dns(
         "--frame-speed",
         help="Speed of the frame ξ = x − ct of the run (default 0 from a mode, the wave speed from noise).",
     ),
+    top: str = typer.Option(
+        "transport",
+        "--top",
+        help="Row of ln ν at the top: transport (eq. (2.1), atmosphere gradient at inflow) or isothermal.",
+    ),
     snapshots: int = typer.Option(6, "--snapshots", help="Full-field snapshots stored (equally spaced)."),
     record_every: int = typer.Option(
         1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
@@ -88,6 +93,7 @@ def dns(
                 amplitude=amplitude,
                 seed=seed,
                 frame_speed=frame_speed,
+                top=top,
                 snapshots=snapshots,
                 record_every=record_every,
                 out=out,

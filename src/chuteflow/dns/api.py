@@ -20,14 +20,14 @@ from ..errors import ConvergenceError, ParameterError
 from ..spectral import ChebyshevGrid
 from ..stability import Mode, OperatorCache, least_stable
 from ..steady import SteadyFlow, solve_steady
-from .discretisation import Discretisation
+from .discretisation import TOPS, Discretisation
 from .stepper import NewtonSettings, Stepper
 
 __all__ = ["DnsSetup", "simulate", "summary", "relax_steady", "measure_mode", "bdf2_eigenvalue", "INITS"]
 
 #: Initial conditions: the least-stable eigenmode at k = 2π/L, or small random noise.
 INITS = ("mode", "noise")
-_FORMAT = 2
+_FORMAT = 3
 
 
 @dataclass(frozen=True)
@@ -60,6 +60,8 @@ class DnsSetup:
         Start from this grid's discrete steady state (:func:`relax_steady`).
     frame : float
         Speed of the frame ξ = x − ct of the unknowns (:class:`Discretisation`).
+    top : str
+        Row of s = ln ν at the top node (:data:`chuteflow.dns.discretisation.TOPS`).
     """
 
     theta: float
@@ -75,6 +77,7 @@ class DnsSetup:
     model: ChuteModel
     relax: bool = True
     frame: float = 0.0
+    top: str = "transport"
 
     def key(self) -> str:
         """Content hash identifying the run (a checkpoint is reused only for the same key)."""
@@ -92,6 +95,7 @@ class DnsSetup:
                 "seed",
                 "relax",
                 "frame",
+                "top",
             )
         }
         d["model"] = self.model.to_dict()
@@ -137,7 +141,9 @@ def relax_steady(
     coefficients with mode 0 replaced and the largest change max |ΔC| (the steady solver's
     flow interpolated to this grid differs from this grid's steady state by that much).
     """
-    d0 = Discretisation(disc.theta, disc.model, disc.length, disc.y_max, disc.n, 0, frame=disc.frame)
+    d0 = Discretisation(
+        disc.theta, disc.model, disc.length, disc.y_max, disc.n, 0, frame=disc.frame, top=disc.top
+    )
     st = Stepper(d0)
     c = C[:, :, :1].copy()
     c[..., 0] = c[..., 0].real
@@ -164,6 +170,8 @@ def _check(setup: DnsSetup) -> None:
         raise ParameterError(f"time = {setup.time!r}: the simulated time must be positive")
     if not (math.isfinite(setup.dt) and 0 < setup.dt <= setup.time):
         raise ParameterError(f"dt = {setup.dt!r}: the time step must be in (0, time]")
+    if setup.top not in TOPS:
+        raise ParameterError(f"top = {setup.top!r}: choose one of {TOPS}")
     if setup.init not in INITS:
         raise ParameterError(f"init = {setup.init!r}: choose one of {INITS}")
     if not 0 <= setup.modes <= 512:
@@ -266,6 +274,7 @@ def simulate(
     min_dt_fraction: float = 1e-3,
     relax: bool = True,
     frame_speed: float | None = None,
+    top: str = "transport",
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (issue 11, docs/dns.md).
 
@@ -321,6 +330,11 @@ def simulate(
         result are ξ; velocities are the lab's). Default 0 (lab) from a mode, the eigenmode's
         phase velocity −Im α/k from noise, so that BDF2's damping of the travelling waves
         (∝ (ωΔt)⁴ with ω the frequency seen in the frame) stays small at large Δt.
+    top : {"transport", "isothermal"}
+        Row of s = ln ν at the top node: eq. (2.1) with the isothermal atmosphere's density
+        gradient where the flow enters (default), or the decay condition of eq. (4.5) as a
+        constraint (the stability operator's row; at finite amplitude it over-determines
+        the outflow and ln ν develops unresolved x-structure there, docs/dns.md).
 
     Returns
     -------
@@ -359,10 +373,11 @@ def simulate(
         frame=float(frame_speed)
         if frame_speed is not None
         else (0.0 if init == "mode" else float(mode.wave_speed)),
+        top=str(top),
     )
     _check(setup)
     disc = Discretisation(
-        setup.theta, model, setup.length, flow.y_max, setup.n, setup.modes, frame=setup.frame
+        setup.theta, model, setup.length, flow.y_max, setup.n, setup.modes, frame=setup.frame, top=setup.top
     )
     stepper = Stepper(disc, settings)
     ck_path = _checkpoint_path(out, checkpoint)
@@ -545,6 +560,7 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         "amplitude": setup.amplitude,
         "seed": setup.seed,
         "frame_speed": setup.frame,
+        "top": setup.top,
         "y_max": flow.y_max,
         "growth_rate": meas["growth_rate"],
         "phase_velocity": meas["phase_velocity"],

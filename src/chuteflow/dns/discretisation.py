@@ -9,14 +9,21 @@ back onto m ≤ M (3/2 rule). Rows (the stability operator's choice, :mod:`chute
 ========  ========================  ======================  ===============================
 block     interior nodes            floor (y = 0)           top (y = y_max)
 ========  ========================  ======================  ===============================
-s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          ν_y + (cos θ/T) ν = 0, ÷ ν
+s         mass (2.1) ÷ ν̄ (a)        y-momentum ÷ μ          mass (2.1) ÷ ν̄ (b)
 u         x-momentum ÷ μ            eq. (2.9) ÷ μ           û_y + |k| û = 0 per mode
 v         y-momentum ÷ μ            v = 0                   v̂_y + |k| v̂ = 0 per mode
 T         energy (2.3) ÷ κ          eq. (2.10) ÷ κ          T̂_y + |k| T̂ = 0 per mode
 ========  ========================  ======================  ===============================
 
-The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)); the
-density one is applied pointwise with the local temperature, the others mode by mode.
+The top conditions are :func:`chuteflow.equations.far_field_conditions` (eq. (4.5)), mode by
+mode for u, v, T.
+
+(b) ``top="transport"`` (default): eq. (2.1) at the top node, with the density gradient of
+the isothermal atmosphere above, ν_y = −(cos θ/T) ν, where the flow enters (v < 0); ``"isothermal"``:
+the decay condition ν_y + (cos θ/T) ν = 0 itself, pointwise with the local T, ÷ ν (the
+stability operator's row). Both are the same linear problem up to the O(ν(y_max)) coupling;
+at finite amplitude the constraint over-determines ln ν where the flow leaves the domain
+(docs/dns.md, *The dilute top*).
 
 (a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(ŝ_0(y_j)),
 plus a uniform source λ in mode 0 (:meth:`Discretisation.mass_source`), so that the total
@@ -44,6 +51,10 @@ FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "T": "floor_energy"}
 #: BDF coefficients (a0, a1, a2): ∂_t X ≈ (a0 X^{n+1} + a1 X^n + a2 X^{n−1}) / Δt.
 BDF1 = (1.0, -1.0, 0.0)
 BDF2 = (1.5, -2.0, 0.5)
+#: Rows of s at the top node: eq. (2.1) with the vertical gradient of the isothermal
+#: atmosphere where the flow enters (``"transport"``, the default), or the decay condition
+#: ν_y + (cos θ/T) ν = 0 itself (``"isothermal"``, the stability operator's row).
+TOPS = ("transport", "isothermal")
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,9 +91,12 @@ class Discretisation:
     modes: int
     nxp: int = 0
     frame: float = 0.0
+    top: str = "transport"
     grid: ChebyshevGrid = field(init=False, repr=False)
 
     def __post_init__(self):
+        if self.top not in TOPS:
+            raise ValueError(f"top = {self.top!r}: choose one of {TOPS}")
         if self.nxp < 3 * self.modes + 1:
             object.__setattr__(self, "nxp", max(3 * self.modes + 1, 4 if self.modes else 1))
         object.__setattr__(self, "grid", ChebyshevGrid(self.n, 0.0, self.y_max))
@@ -178,6 +192,8 @@ class Discretisation:
         one or two time levels (``(X^n, X^{n−1})``; X^{n−1} unused for BDF1).
         """
         st = self.jets(C)
+        if self.top == "transport":
+            self._upwind_top(st)
         a0, a1, a2 = bdf
         now = (st["nu"], st["u"], st["v"], st["T"])
         for i, f in enumerate(DNS_FIELDS):
@@ -196,9 +212,13 @@ class Discretisation:
         R[1, 0] = res["floor_x"][0] / mu[0]
         R[2, 0] = res["floor_v"][0]
         R[3, 0] = res["floor_energy"][0] / kap[0]
-        R[0, -1] = self._top_nu(st)
-        out = self.to_modes(R)
-        out[0, 1:-1] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf)
+        if self.top == "isothermal":
+            R[0, -1] = self._top_nu(st)
+            out = self.to_modes(R)
+            out[0, 1:-1] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf)
+        else:
+            out = self.to_modes(R)
+            out[0, 1:] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf, top=True)
         ik = self.k
         top = self._top_terms
         for i, f in enumerate(UNKNOWNS[1:], start=1):
@@ -209,7 +229,25 @@ class Discretisation:
             out[i, -1] = acc
         return out
 
-    def _mass_rows(self, C: np.ndarray, mass: np.ndarray, nu, T_top, history: tuple, dt: float, bdf):
+    def _upwind_top(self, st: dict) -> None:
+        """The vertical density gradient that eq. (2.1) sees at the top node (``top="transport"``).
+
+        Eq. (2.1) is a transport equation for ln ν (no diffusion of mass), so the top needs a
+        density only where the flow enters. Where it leaves (v > 0) the row uses the
+        collocated ν_y (the interior's density is carried out); where it enters (v < 0) the
+        gradient of the isothermal atmosphere above y_max, ν_y = −(cos θ/T) ν with the local T
+        (the decay condition of eq. (4.5) as the state of the inflow). Linearised about the
+        steady flow (v = 0) both give the linear problem's mass equation at the top node.
+        Using the atmosphere's gradient everywhere was tried and dropped: at outflow it
+        contradicts the interior, and the weakly nonlinear growth then changed with N
+        (docs/dns.md, *The dilute top*).
+        """
+        nu, v, T = st["nu"][-1], st["v"][-1], st["T"][-1]
+        st["nu_y"][-1] = np.where(v > 0, st["nu_y"][-1], -self.sin_cos[1] / T * nu)
+
+    def _mass_rows(
+        self, C: np.ndarray, mass: np.ndarray, nu, T_top, history: tuple, dt: float, bdf, top: bool = False
+    ):
         """Interior rows of eq. (2.1), mode by mode, projected before they are scaled.
 
         ``mass`` is the derived residual −(∂_t ν + ∇·(ν u)) at the padded points. Its modes
@@ -226,7 +264,7 @@ class Discretisation:
         modes = self.to_modes(mass)
         rows = modes / nubar[:, None]
         rows[1:-1, 0] -= self.mass_source(nubar, modes[:, 0].real, nu, T_top, history, dt, bdf)
-        return rows[1:-1]
+        return rows[1:] if top else rows[1:-1]
 
     def mass_source(self, nubar, mass0, nu, T_top, history: tuple, dt: float, bdf) -> float:
         """The uniform relative mass source λ of the interior mode-0 mass rows.
@@ -380,20 +418,20 @@ class Discretisation:
             add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
             name = FLOOR_OF[f]
             add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
-            add(
-                TOP_OF[f],
-                slice(m - 1, m),
-                1.0 / nu[-1] if f == "nu" else 1.0,
-                slice(r0 + m - 1, r0 + m),
-                False,
-            )
-        # the density top condition holds with the local T (a linear condition of the
-        # linear problem with T0 frozen): its T derivative, by central differences of the
-        # compiled condition, completes the Jacobian's top row of ŝ
-        h = 1e-6 * float(base["T"][-1])
-        hi = {**base, "T": base["T"] + h}
-        lo = {**base, "T": base["T"] - h}
-        pieces[0][m - 1, 3 * m + m - 1] += float(self._top_nu(hi) - self._top_nu(lo)) / (2 * h)
+            top = slice(m - 1, m)
+            if f == "nu" and self.top == "transport":
+                # eq. (2.1) at the top node (v̄ = 0 in the linear phase: no ŝ_y term)
+                add("mass", top, bulk_scale["mass"][top], slice(r0 + m - 1, r0 + m), True)
+                continue
+            add(TOP_OF[f], top, 1.0 / nu[-1] if f == "nu" else 1.0, slice(r0 + m - 1, r0 + m), False)
+        if self.top == "isothermal":
+            # the density top condition holds with the local T (a linear condition of the
+            # linear problem with T0 frozen): its T derivative, by central differences of
+            # the compiled condition, completes the Jacobian's top row of ŝ
+            h = 1e-6 * float(base["T"][-1])
+            hi = {**base, "T": base["T"] + h}
+            lo = {**base, "T": base["T"] - h}
+            pieces[0][m - 1, 3 * m + m - 1] += float(self._top_nu(hi) - self._top_nu(lo)) / (2 * h)
         return {"pieces": pieces, "K": K, "Bt": Bt}
 
     def factorise(self, blocks: dict, dt: float, a0: float) -> np.ndarray:

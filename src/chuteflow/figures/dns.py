@@ -3,6 +3,9 @@
 - :func:`plot_dns`: space–time plot of ρ̄(x, t), the amplitude of the k = 2π/L wave against
   the linear eigenvalue's growth, and a snapshot of ν(x, y) with velocity arrows (the
   velocity relative to the x-averaged profile, so that the wave's circulation shows).
+- :func:`plot_wave_profile`: the wave at the end of one or more runs (e.g. two resolutions):
+  ρ̄(ξ) with the crests aligned, and Q against ρ̄, a straight line of slope c for a wave
+  travelling unchanged at speed c (∂_t ρ̄ + ∂_x Q = 0).
 """
 
 from __future__ import annotations
@@ -11,7 +14,69 @@ import numpy as np
 
 from .reduced import save
 
-__all__ = ["plot_dns", "save"]
+__all__ = ["plot_dns", "plot_wave_profile", "wave_speed_from_flux", "save"]
+
+
+def wave_speed_from_flux(ds, index: int = -1) -> tuple[float, float]:
+    """Speed c and intercept q of the least-squares line Q = c ρ̄ + q through one record.
+
+    A wave that travels unchanged at speed c satisfies ∂_t ρ̄ + ∂_x Q = 0 with ρ̄(x − ct),
+    hence Q − c ρ̄ = const (Q is the flux in the floor's frame, so c is the lab speed).
+    """
+    rho = np.asarray(ds["rho_bar"].values[index], dtype=float)
+    Q = np.asarray(ds["Q"].values[index], dtype=float)
+    c, q = np.polyfit(rho, Q, 1)
+    return float(c), float(q)
+
+
+def plot_wave_profile(datasets, labels=None, *, family=None):
+    """ρ̄(ξ) at the last record of each run (crests aligned at L/2), and Q against ρ̄.
+
+    Parameters
+    ----------
+    datasets : sequence of xarray.Dataset
+        Results of :func:`chuteflow.dns.simulate` (e.g. one wave at two resolutions).
+    labels : sequence of str, optional
+        Legend entries (default nx × ny).
+    family : tuple of arrays, optional
+        (ρ̄0, Q0) of the steady family at the same θ, drawn for comparison (its slope
+        dQ0/dρ̄0 is the kinematic-wave speed).
+    """
+    import matplotlib.pyplot as plt
+
+    fig, axs = plt.subplots(1, 2, figsize=(12, 4.4))
+    labels = labels or [f"nx = {d.attrs['nx']}, ny = {d.attrs['ny']}" for d in datasets]
+    for i, (ds, lab) in enumerate(zip(datasets, labels)):
+        L = float(ds.attrs["length"])
+        x = ds["x"].values
+        rho, Q = ds["rho_bar"].values[-1], ds["Q"].values[-1]
+        shift = L / 2 - x[int(np.argmax(rho))]
+        xs = np.mod(x + shift, L)
+        o = np.argsort(xs)
+        t_end = float(ds["time"].values[-1])
+        axs[0].plot(xs[o], rho[o], f"C{i}-", label=f"{lab}, t = {t_end:.5g}")
+        c, q = wave_speed_from_flux(ds)
+        axs[1].plot(rho, Q, f"C{i}.", ms=3, label=f"{lab}: slope c = {c:.4g}")
+        r = np.linspace(rho.min(), rho.max(), 2)
+        axs[1].plot(r, c * r + q, f"C{i}-", lw=0.8)
+    if family is not None:
+        r0, q0 = (np.asarray(a, dtype=float) for a in family)
+        axs[1].plot(r0, q0, "k--", lw=1, label="steady family Q0(ρ̄0)")
+    axs[0].set_xlabel("ξ (crest at L/2, σ)")
+    axs[0].set_ylabel("ρ̄ = ∫ν dy")
+    axs[0].legend(fontsize=8)
+    axs[0].set_title("the wave's depth-integrated density", fontsize=10)
+    axs[1].set_xlabel("ρ̄")
+    axs[1].set_ylabel("Q = ∫νu dy")
+    axs[1].legend(fontsize=8)
+    axs[1].set_title("Q − c ρ̄ = const for a wave travelling unchanged at c", fontsize=10)
+    a = datasets[0].attrs
+    fig.suptitle(
+        f"θ = {float(a['theta']):g}°, ν₀(0) = {float(a['nu0']):g}, L = {float(a['length']):.5g}",
+        fontsize=11,
+    )
+    fig.tight_layout()
+    return fig
 
 
 def plot_dns(ds, *, snapshot: int = -1, y_top: float | None = None):
