@@ -50,12 +50,16 @@ def test_mapped_grid_needs_fewer_nodes_for_the_papers_tolerance(p1_flow):
 
 
 # |α_mapped(200) − α_plain(200)| / |α| measured (benchmarks/probes/n_table.py): ≤ 2e-9 at
-# P1–P3, P5, Q2, Q3; 8.8e-9 at Q1 (k = 0.005); 1.4e-8 at P4 (k ≤ 0.02).
+# P1–P3, P5, Q2, Q3; 8.8e-9 at Q1 (k = 0.005); 1.4e-8 at P4 (k ≤ 0.02) with the steady flow on a plain grid.
 # At k = 0.5 (benchmarks/probes/relaxed_branch.py): P5's answer is the direct solve's mode
 # (less damped than the relaxed branch), 1.8e-9. P4's is the branch, in a band of
 # critical-layer eigenvalues and resolved only at N ≈ 360 (drift 6.4e-4 mapped and 1.2e-3
 # plain at N = 200, 9.1e-6 at N = 360): the grids agree to 2.6e-4, within those drifts.
-TOL = {"P4": 3e-8}
+# P4 with the steady flow on its own mapped grid (n = 96): 1.4e-7 (k = 0.002) and 1.1e-7
+# (k = 0.005), i.e. |Δα| ≈ 6e-10 and 1e-9 against drifts of 3e-10 to 8e-10 on each grid:
+# round-off that grows with N (at N = 120 the same eigenvalue has drift 7e-12 mapped,
+# 4e-11 plain), far below the paper's 1e-7 drift test.
+TOL = {"P4": 2e-7}
 TOL_LARGE_K = {"P4": 1e-3}
 
 
@@ -65,10 +69,11 @@ def test_mapped_and_plain_grids_agree_at_the_paper_points(name):
     p = POINTS[name]
     flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
     for k in (0.002, 0.005, 0.02, 0.5):
-        am = least_stable(flow, k, n=200, cache=OperatorCache(2)).alpha
-        ap = least_stable(flow, k, n=200, cache=OperatorCache(2, mapped=False)).alpha
+        mm = least_stable(flow, k, n=200, cache=OperatorCache(2))
+        mp = least_stable(flow, k, n=200, cache=OperatorCache(2, mapped=False))
+        am, ap = mm.alpha, mp.alpha
         tol = (TOL_LARGE_K if k > 0.1 else TOL).get(name, 1e-8 if k > 0.1 else 2e-8)
-        assert abs(am - ap) <= tol * abs(ap), (name, k, am, ap)
+        assert abs(am - ap) <= tol * abs(ap), (name, k, am, ap, mm.drift, mp.drift)
 
 
 @pytest.mark.slow
