@@ -95,6 +95,7 @@ class Options:
     maxiter: int = _CONT_MAXITER
     lam_min: float = _CONT_LAM_MIN
     decide: bool = True
+    noise_exit: bool = True
 
 
 @dataclass
@@ -123,7 +124,17 @@ def _attempt(
     kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
     try:
         flow = solve_point(
-            theta, nu0, model, opts.nu_top, n, opts.rtol, opts.n_max, start, opts.min_thickness, **kw
+            theta,
+            nu0,
+            model,
+            opts.nu_top,
+            n,
+            opts.rtol,
+            opts.n_max,
+            start,
+            opts.min_thickness,
+            noise_exit=opts.noise_exit,
+            **kw,
         )
         return _Point("ok", flow)
     except ThinLayerError as exc:
