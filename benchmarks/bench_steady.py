@@ -18,6 +18,11 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
   at six points of the φ = 0.05 map (flows, too small, too large with a separatrix), CPU time.
   Baseline: the same scan with the right-hand side of before issue 9 item 4 (the closures'
   and equations' numpy code called with scalars); the verdicts and u0(0), h must agree.
+- ``steady_diagram_rows``: the steady metric of the quick φ = 0.05 stability diagram (40 × 40,
+  ``stage_config(0.05, True)``; every 4th row with ``--quick``), row by row as a sweep task
+  solves it (:func:`chuteflow.sweep.runner._steady_chunk`), one process, CPU time. Baseline:
+  the same rows with the resolution ladder run to n_max at the round-off floor
+  (``Options.noise_exit = False``); the statuses must agree.
 - ``steady_stage_maps``: the two maps of the ``steady`` stage of ``chuteflow reproduce
   --quick`` (φ = 0.05 over θ ∈ [8°, 21°] by 1/3°, φ = 0.10 over [11°, 27°] by 0.4°, 40 floor
   densities; 20 × 20 with ``--quick``), two processes. No baseline is run (the ratio is NaN);
@@ -31,6 +36,7 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
 
 from __future__ import annotations
 
+import dataclasses
 import statistics
 import sys
 import time
@@ -100,6 +106,7 @@ def run(quick: bool = False) -> list[dict]:
     )
 
     rows.append(_existence_row())
+    rows.append(_diagram_rows_row(quick))
     rows.append(_stage_maps_row(quick))
 
     size = 20 if quick else 40
@@ -236,6 +243,39 @@ def _existence_row() -> dict:
         "ratio": t_old / t_new,
         "note": f"{len(_SCAN_POINTS)} points (φ=0.05), CPU time, {sum(v.shots for v in new)} shots; "
         f"baseline: numpy right-hand side; same verdicts: {same}, u0(0) agree to {agree:.0e}",
+    }
+
+
+def _diagram_rows_row(quick: bool) -> dict:
+    from unittest import mock
+
+    from chuteflow.papers.mitarai2004.stages.diagrams import stage_config
+    from chuteflow.steady import family
+    from chuteflow.sweep.runner import _steady_chunk
+
+    cfg = stage_config(0.05, True)
+    rows = range(0, len(cfg.theta), 4 if quick else 1)
+
+    def sweep():
+        with np.errstate(all="ignore"):
+            return [s for i in rows for _, s, _ in _steady_chunk(cfg, cfg.theta[i], list(cfg.nu0), cfg.model)]
+
+    c0 = time.process_time()
+    new = sweep()
+    c_new = time.process_time() - c0
+    plain = family.Options(noise_exit=False)
+    with mock.patch.object(family, "Options", lambda **kw: dataclasses.replace(plain, **kw)):
+        c0 = time.process_time()
+        old = sweep()
+        c_old = time.process_time() - c0
+    counts = ", ".join(f"{k} {new.count(k)}" for k in sorted(set(new)))
+    return {
+        "name": "steady_diagram_rows",
+        "seconds": c_new,
+        "baseline_seconds": c_old,
+        "ratio": c_old / c_new,
+        "note": f"quick φ=0.05 diagram, {len(rows)} of {len(cfg.theta)} rows × {len(cfg.nu0)}, 1 process, "
+        f"CPU time; {counts}; same statuses as the baseline: {new == old}",
     }
 
 

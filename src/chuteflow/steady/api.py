@@ -246,11 +246,40 @@ def _thin_message(theta, nu0, model, h, min_thickness):
     )
 
 
-def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness, maxiter=60, lam_min=1e-6):
-    """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start)."""
+#: The ladder of :func:`solve_point` with ``noise_exit`` stops at n ≥ this when the change
+#: between resolutions has grown twice above rtol on a resolved profile (round-off floor).
+_NOISE_N = 216
+#: Spectral tail (:func:`~chuteflow.steady.result.spectral_tail`) below which a profile
+#: counts as resolved for ``noise_exit``, relative to rtol.
+_NOISE_TAIL = 1e-3
+
+
+def solve_point(
+    theta,
+    nu0,
+    model,
+    nu_top,
+    n,
+    rtol,
+    n_max,
+    start,
+    min_thickness,
+    maxiter=60,
+    lam_min=1e-6,
+    noise_exit=False,
+):
+    """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start).
+
+    With ``noise_exit`` the resolution ladder gives up (:class:`ResolutionError`) before
+    n_max when the change between resolutions is at the solver's round-off floor, which
+    grows with n (:meth:`~chuteflow.steady.solver.SteadyNewton.solve`) so that finer grids
+    cannot bring it below rtol: from n ≥ :data:`_NOISE_N` on, when the change exceeds rtol,
+    has grown since the previous pair (which exceeded rtol too), and the profile's spectral
+    tail is below :data:`_NOISE_TAIL` × rtol (the truncation error is far below the change).
+    """
     st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter, lam_min=lam_min)
     _, q = _quantities(theta, st, model)
-    change = math.inf
+    change = prev = math.inf
     while True:
         n2 = n + max(n // 2, 8)
         # at least one Newton correction on the finer grid, so that the change measures
@@ -273,12 +302,19 @@ def solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness,
         change = max(abs(q2[k] - q[k]) / max(abs(q2[k]), 1e-300) for k in _KEYS)
         if change <= rtol or n2 >= n_max:
             break
-        n, st, q = n2, st2, q2
+        if (
+            noise_exit
+            and n2 >= _NOISE_N
+            and rtol < prev < change
+            and spectral_tail(st2.s, st2.u, st2.T) < _NOISE_TAIL * rtol
+        ):
+            break
+        n, st, q, prev = n2, st2, q2, change
     if change > rtol:
         raise ResolutionError(
             f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
             f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
-            f"(n_max = {n_max})",
+            f"(n_max = {n_max}{', round-off floor' if n2 < n_max else ''})",
             h=float(q2["h"]),
         )
     flow = SteadyFlow(

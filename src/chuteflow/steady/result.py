@@ -201,6 +201,21 @@ def _isnan(v) -> bool:
     return isinstance(v, (float, np.floating)) and math.isnan(v)
 
 
+def _chebval1(c: list[float], x: float) -> float:
+    """Chebyshev series ``c`` at one point ``x``: numpy's ``chebval`` (the same Clenshaw
+    recurrence, operation for operation, hence the same float) on Python floats, which is
+    ~20× faster for a scalar (the root finding in :func:`derived_quantities`)."""
+    if len(c) == 1:
+        return c[0]
+    if len(c) == 2:
+        return c[0] + c[1] * x
+    x2 = 2 * x
+    c0, c1 = c[-2], c[-1]
+    for i in range(3, len(c) + 1):
+        c0, c1 = c[-i] - c1, c0 + c1 * x2
+    return c0 + c1 * x
+
+
 def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteModel):
     """h, ν̄, ρ̄0, Q0, T̄0, monotonicity and the density peak of a solved profile.
 
@@ -230,17 +245,19 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     else:
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
+        cds = c_ds.tolist()
         y_peak = (
-            brent_root(lambda y: chebval(to_x(y), c_ds), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
+            brent_root(lambda y: _chebval1(cds, float(to_x(y))), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
             if len(idx)
             else 0.0
         )
-    s_peak = float(chebval(to_x(y_peak), c_s))
+    cs = c_s.tolist()
+    s_peak = _chebval1(cs, float(to_x(y_peak)))
     target = s_peak + math.log(0.01)
     sf = chebval(xf, c_s)
     above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
     j = above[0]
-    h = brent_root(lambda y: chebval(to_x(y), c_s) - target, yf[j - 1], yf[j], xtol=1e-14)
+    h = brent_root(lambda y: _chebval1(cs, float(to_x(y))) - target, yf[j - 1], yf[j], xtol=1e-14)
     return {
         "h": h,
         "nu_mean": rho_bar / h,
