@@ -107,7 +107,7 @@ def run(quick: bool = False) -> list[dict]:
     growth = [f for f in cfg.point_functions() if f.name == "growth"]
     nks = int(growth[0].options["num"]) if growth else 24
     sample = [(16.0, 0.05), (14.0, 0.05), (17.0, 0.10)]
-    model = cfg.model()
+    model = cfg.model
     flows = [solve_steady(t, n, model) for t, n in sample]
     paper, per_solve = _dense_qz_seconds(flows, nks)
     rows.append(
