@@ -29,10 +29,12 @@ WINNER_GRID = {
 #: The answer to §5.3 on the 40 × 40 diagrams over the paper's ranges (DIAGRAM_RANGES), from
 #: ``chuteflow diagram --roughness PHI --grid 40x40 --theta-range … --nu0-range …
 #: --metrics steady,longwave,transverse`` (metric ``transverse`` version 3); recorded here,
-#: not recomputed by this stage (18 and 27 min on 2 heavily loaded cores). Counts are of the
-#: grid points with a steady flow.
+#: not recomputed by this stage (18 and 27 min on 2 heavily loaded cores; φ = 0.05 rerun with
+#: the steady solver's mapped grid in 164 s wall on 2 quiet cores: 49 more flows resolved,
+#: all longitudinal only, the other counts and the "both" breakdown unchanged). Counts are
+#: of the grid points with a steady flow.
 SWEEP_ANSWER_40x40 = {
-    0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1118 flows): stable 681, longitudinal only 249, "
+    0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1167 flows): stable 681, longitudinal only 298, "
     "transverse only 10, both 178. Where both occur the longitudinal instability grows faster "
     "at 100 points (median 14×, 1.1× to ~1e8×; λx = 2750–32000 σ, 80–1800 h; h = 12–54) and the "
     "transverse one at 23 thick dilute flows (θ = 16.9–18°, ν̄ = 0.012–0.025, h = 21–54; by "
