@@ -811,7 +811,7 @@ def crossings(
     )
 
 
-def _check_above_continuum(flow, k, kz, n_top, mode: Mode, policy, cache) -> Mode:
+def _check_above_continuum(flow, k, kz, n_top, mode: Mode, policy, cache, lost: str) -> Mode:
     """A direct solve's physical mode past the continuum (k > ``policy.relaxed_k_max``) with
     unresolved eigenvalues above it, checked once more at the ladder's last rung: there a
     branch in the band of critical-layer eigenvalues may be nearly resolved and less damped
@@ -822,7 +822,7 @@ def _check_above_continuum(flow, k, kz, n_top, mode: Mode, policy, cache) -> Mod
     if top is None or top.alpha.real <= mode.alpha.real + max(mode.drift, top.drift):
         return mode
     note = join_notes(
-        mode.note.split("; unresolved continuum")[0] if mode.method == "qz (branch lost)" else "",
+        lost,
         top.note,
         f"less damped than the mode {mode.alpha:.6g} that passes both tests at N = {mode.n}",
     )
@@ -944,11 +944,11 @@ def least_stable(
         if mode is not None and mode.physical:
             if (
                 mode.method.startswith("qz")
-                and "unresolved continuum" in mode.note
+                and mode.continuum_re > mode.alpha.real  # False when NaN
                 and math.hypot(k, kz) > policy.relaxed_k_max
                 and nn < ns[-1]
             ):
-                mode = _check_above_continuum(flow, k, kz, ns[-1], mode, policy, cache)
+                mode = _check_above_continuum(flow, k, kz, ns[-1], mode, policy, cache, lost or "")
             return mode
         if mode is not None and _better(mode, best, policy):
             best = mode

@@ -212,6 +212,10 @@ class Mode:
     note : str
         What the solver wants the reader to know about this answer (e.g. where the branch
         was lost, the largest Re α of the unresolved continuum); empty if nothing.
+    continuum_re : float
+        Direct solves (:func:`direct_mode`): the largest Re α of eigenvalues above this mode
+        that converge in N but whose eigenvectors are not resolved (the dilute top's
+        continuum, or a branch N does not yet resolve); NaN when there are none.
     """
 
     alpha: complex
@@ -232,6 +236,7 @@ class Mode:
     method: str = "branch"
     note: str = ""
     grid: ChebyshevGrid | None = field(default=None, repr=False)
+    continuum_re: float = math.nan
 
     @property
     def converged(self) -> bool:
@@ -547,7 +552,12 @@ def direct_mode(
             ),
         )
     if phys:
-        return dataclasses.replace(phys[0], method="qz", note=note)
+        return dataclasses.replace(
+            phys[0],
+            method="qz",
+            note=note,
+            continuum_re=max(m.alpha.real for m in cont) if cont else math.nan,
+        )
     if not modes:
         return None
     resolved = [m for m in modes if m.tail < policy.track_tail_tol] or modes
