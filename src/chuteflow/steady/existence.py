@@ -126,13 +126,22 @@ class SteadyODE:
     def rhs(self, y, z):
         """d/dy of (ln ν0, u0, T0, T0'). Outside the closures' domain (trial stages of the
         integrator) the result is NaN, which makes the integrator shorten its step."""
-        s, u, T, T_y = (float(v) for v in z)
+        s, u, T, T_y = z.tolist() if isinstance(z, np.ndarray) else map(float, z)
         try:
             nu_y, u_y, T_yy = self._rhs(math.exp(s), u, T, T_y, *self._params, self.sin, self.cos)
             return [float(nu_y), float(u_y), T_y, float(T_yy)]
         except (ArithmeticError, ValueError, TypeError):
             # math-module domain errors; complex numbers (ν0 > ν_m) fail in float()
             return [math.nan] * 4
+
+    def rhs_bounded(self, y, z):
+        """:meth:`rhs` with every non-finite value replaced by ±1e300, for the compiled
+        Dormand–Prince loop of :func:`integrate` (a huge derivative makes its error estimate
+        reject the trial step and shorten it, as NaN does in scipy's Python loop)."""
+        out = self.rhs(y, z)
+        if all(map(math.isfinite, out)):
+            return out
+        return [v if math.isfinite(v) else 1e300 if math.isnan(v) else math.copysign(1e300, v) for v in out]
 
     def floor_velocity(self, nu0: float, T0: float) -> float:
         """u0(0) from eq. (2.9) (floor_x is linear in u0) given ν0(0) and T0(0)."""
@@ -165,6 +174,155 @@ class SteadyODE:
             return T0, -float(out[0]) / float(out[1 + self._i_floor_T_y])
         except (ArithmeticError, ValueError, TypeError):
             return T0, math.nan
+
+
+class Trajectory:
+    """One trial integration: the accepted steps (heights ``t``, states ``y`` of shape
+    4 × steps, the last one at the event that stopped it) and, if dense, ``sol``: the
+    piecewise cubic Hermite interpolant through them (states and derivatives at the step
+    ends, third order like the integrator's own dense output), called as ``sol(y)`` with
+    values of shape 4 × len(y) (None otherwise).
+
+    Attributes
+    ----------
+    t : ndarray
+        Heights of the accepted steps.
+    y : ndarray
+        States (ln ν0, u0, T0, T0') there, shape (4, len(t)).
+    event : str or None
+        The event that stopped the integration ("top", "cold", "packed", "hot"); None if it
+        reached ``y_cap`` (``status`` 0) or the integrator gave up (``status`` −1).
+    status : int
+        0: ended at an event or at ``y_cap``; −1: the step size fell below round-off (a
+        finite-height singularity).
+    sol : callable or None
+        The dense interpolant.
+    """
+
+    def __init__(self, t, y, event, status, sol):
+        self.t, self.y, self.event, self.status, self.sol = t, y, event, status, sol
+
+
+def _hermite(t0, t1, y0, y1, f0, f1, t):
+    """Cubic Hermite interpolant of one step at t ∈ [t0, t1]."""
+    h = t1 - t0
+    s = (t - t0) / h
+    h00, h10 = (1 + 2 * s) * (1 - s) ** 2, s * (1 - s) ** 2
+    h01, h11 = s * s * (3 - 2 * s), s * s * (s - 1)
+    return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
+
+
+def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False) -> Trajectory:
+    """Integrate dz/dy = fun(y, z) from y = 0 with scipy's Dormand–Prince 5(4) (``dopri5``
+    of :class:`scipy.integrate.ode`, Hairer's Fortran code: the same method, error norm and
+    step control as ``solve_ivp(method="RK45")``, with the stepping loop compiled) until
+    one of ``events`` changes sign across an accepted step or y = ``y_cap``.
+
+    ``events`` is a sequence of (name, g, direction) with g(z) a scalar function of the
+    state; direction −1 stops only where g goes from positive to non-positive, +1 from
+    negative to non-negative, 0 either way (as ``solve_ivp``'s terminal events, which also
+    look at the step ends only). The crossing is located on the step's cubic Hermite
+    interpolant (by bisection to round-off); the earliest triggered event wins.
+    """
+    import warnings
+
+    # scipy.integrate costs ~0.3 s to import: only the existence scan needs it
+    from scipy.integrate import ode
+
+    ts: list[float] = []
+    zs: list[np.ndarray] = []
+    hit: list = []
+    stop: list = []  # the step where an event triggered: t_old, z_old, crossing estimate, t
+
+    def crossing(z_old, z_new, g, direction):
+        a, b = g(z_old), g(z_new)
+        if direction < 0:
+            return a > 0 >= b
+        if direction > 0:
+            return a < 0 <= b
+        return (a > 0 >= b) or (a < 0 <= b)
+
+    def solout(t, z):
+        z = np.array(z, dtype=float)
+        if ts:
+            t_old, z_old = ts[-1], zs[-1]
+            found = [(name, g) for name, g, d in events if crossing(z_old, z, g, d)]
+            if found:
+                f0 = np.asarray(fun(t_old, z_old), dtype=float)
+                f1 = np.asarray(fun(t, z), dtype=float)
+                best = None
+                for name, g in found:
+                    lo, hi = t_old, t
+                    glo = g(z_old)
+                    for _ in range(100):
+                        mid = 0.5 * (lo + hi)
+                        if mid <= lo or mid >= hi:
+                            break
+                        gm = g(_hermite(t_old, t, z_old, z, f0, f1, mid))
+                        if (gm > 0) == (glo > 0) and gm != 0:
+                            lo, glo = mid, gm
+                        else:
+                            hi = mid
+                    if best is None or hi < best[1]:
+                        best = (name, hi)
+                hit.append(best[0])
+                stop.extend([t_old, z_old, best[1], float(t)])
+                return -1
+        ts.append(float(t))
+        zs.append(z)
+        return 0
+
+    r = ode(fun).set_integrator("dopri5", rtol=rtol, atol=1e-12, nsteps=10**6)
+    r.set_solout(solout)
+    r.set_initial_value(np.asarray(z0, dtype=float), 0.0)
+    with warnings.catch_warnings():
+        # "step size becomes too small": reported through status −1
+        warnings.simplefilter("ignore", UserWarning)
+        r.integrate(y_cap)
+    if hit:
+        # the crossing on the step's interpolant is accurate to O(h⁴); two secant steps on
+        # g(z(t)), each integrating afresh from the start of that step to the estimate (the
+        # integrator ends exactly there), bring it to the integration's own tolerance, as
+        # solve_ivp's events on its dense output
+        t_old, z_old, t_ev, t_step = stop
+        g = next(gg for name, gg, _ in events if name == hit[0])
+
+        def state_at(t_end):
+            if t_end <= t_old:
+                return z_old
+            rr = ode(fun).set_integrator("dopri5", rtol=rtol, atol=1e-12, nsteps=10**4)
+            rr.set_initial_value(z_old, t_old)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                return np.array(rr.integrate(t_end), dtype=float)
+
+        z_ev = state_at(t_ev)
+        for _ in range(2):
+            f_ev = np.asarray(fun(t_ev, z_ev), dtype=float)
+            eps = 1e-7 * max(1.0, float(np.abs(z_ev).max())) / max(float(np.abs(f_ev).max()), 1e-300)
+            slope = (g(z_ev + eps * f_ev) - g(z_ev)) / eps
+            if not (math.isfinite(slope) and slope != 0):
+                break
+            t_new = t_ev - g(z_ev) / slope
+            if not (t_old < t_new < 2 * t_step - t_old) or t_new == t_ev:
+                break
+            t_ev, z_ev = t_new, state_at(t_new)
+        ts.append(t_ev)
+        zs.append(z_ev)
+    status = 0 if (hit or r.successful()) else -1
+    t = np.array(ts)
+    y = np.array(zs).T
+    sol = None
+    if dense and len(t) > 1:
+        from scipy.interpolate import CubicHermiteSpline
+
+        f = np.array([fun(ti, zi) for ti, zi in zip(t, y.T)], dtype=float)
+        spline = CubicHermiteSpline(t, y.T, f, axis=0, extrapolate=True)
+
+        def sol(yy):
+            return np.asarray(spline(yy)).T
+
+    return Trajectory(t, y, hit[0] if hit else None, status, sol)
 
 
 @dataclass(frozen=True)
@@ -206,44 +364,28 @@ def shoot(
     ln_top = math.log(nu_top)
     ln_pack = math.log(0.999 * ode.model.nu_max)
 
-    def top(y, z):
-        return z[0] - ln_top
-
-    def cold(y, z):
-        return z[2] - _COLD * T0
-
-    def hot(y, z):
-        return z[2] - 100.0 * T0
-
-    def packed(y, z):
-        return z[0] - ln_pack
-
-    for ev in (top, cold, packed, hot):
-        ev.terminal = True  # type: ignore[attr-defined]  # read by solve_ivp
-    top.direction = -1.0  # type: ignore[attr-defined]
+    z0 = [math.log(nu0), u_floor, T0, T0p]
+    events = (
+        ("top", lambda z: z[0] - ln_top, -1),
+        ("cold", lambda z: z[2] - _COLD * T0, 0),
+        ("packed", lambda z: z[0] - ln_pack, 0),
+        ("hot", lambda z: z[2] - 100.0 * T0, 0),
+    )
+    if not all(map(math.isfinite, z0)):
+        # the floor conditions have no solution at this trial (outside the closures'
+        # domain): nothing to integrate, and no sign of cooling, so hot (as a trajectory
+        # whose integrator gives up at once with T0' not negative, below)
+        start = Trajectory(np.zeros(1), np.array(z0, dtype=float)[:, None], None, -1, None)
+        return Shot(u_floor, 1, "hot", math.nan, 0.0, start)
     with np.errstate(all="ignore"):
-        # scipy.integrate costs ~0.3 s to import: only a cold start that failed needs it
-        from scipy.integrate import solve_ivp
-
-        sol = solve_ivp(
-            ode.rhs,
-            (0.0, y_cap),
-            [math.log(nu0), u_floor, T0, T0p],
-            method="RK45",
-            rtol=rtol,
-            atol=1e-12,
-            events=(top, cold, packed, hot),
-            dense_output=dense,
-        )
+        sol = integrate(ode.rhs_bounded, z0, y_cap, rtol, events, dense=dense)
     y_end = float(sol.t[-1])
-    if len(sol.t_events[0]):
-        d = float(sol.y_events[0][0][3])
+    if sol.event == "top":
+        d = float(sol.y[3, -1])
         return Shot(u_floor, 1 if d > 0 else -1, "top", d, y_end, sol)
-    if len(sol.t_events[1]):
-        return Shot(u_floor, -1, "cold", math.nan, y_end, sol)
-    if len(sol.t_events[2]):
-        return Shot(u_floor, -1, "packed", math.nan, y_end, sol)
-    if len(sol.t_events[3]) or sol.status == 0:
+    if sol.event in ("cold", "packed"):
+        return Shot(u_floor, -1, sol.event, math.nan, y_end, sol)
+    if sol.event == "hot" or sol.status == 0:
         return Shot(u_floor, 1, "hot", math.nan, y_end, sol)
     # the integrator gave up: a finite-height singularity. Cooling with T0' → −∞ is the
     # collapse of a cold layer; otherwise the temperature blows up (hot).

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, fields
 
@@ -216,6 +217,32 @@ def _chebval1(c: list[float], x: float) -> float:
     return c0 + c1 * x
 
 
+@functools.lru_cache(maxsize=16)
+def _fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fine sampling of :func:`derived_quantities` for a series of degree n: the points
+    x = linspace(−1, 1, 8n + 1) and the matrix of T_0 … T_n there (one product per series
+    instead of a Clenshaw recurrence over n vector operations); cached, read-only."""
+    xf = np.linspace(-1.0, 1.0, 8 * n + 1)
+    V = np.polynomial.chebyshev.chebvander(xf, n)
+    xf.flags.writeable = False
+    V.flags.writeable = False
+    return xf, V
+
+
+def _root_near(g, yf: np.ndarray, j: int, xtol: float) -> float:
+    """Root of ``g`` between the samples ``yf[j − 1]`` and ``yf[j]``, where the sampled
+    values (a matrix product, :func:`_fine_sampling`) change sign. ``g`` is the Clenshaw sum,
+    which differs from the product by round-off: where that flips the sign of a sample lying
+    on the root, the neighbouring intervals hold it."""
+    for a, b in ((j - 1, j), (j - 2, j - 1), (j, j + 1)):
+        if 0 <= a and b < len(yf):
+            try:
+                return brent_root(g, yf[a], yf[b], xtol=xtol)
+            except ValueError:
+                continue
+    raise ValueError(f"no sign change near y = {yf[j]:.6g}")
+
+
 def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteModel):
     """h, ν̄, ρ̄0, Q0, T̄0, monotonicity and the density peak of a solved profile.
 
@@ -232,13 +259,11 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     T_mean = (grid.integrate(nu * T) + T[-1] * tail_rho) / rho_bar
     # density maximum: sign of d ln ν/dy on a fine sampling, refined by root finding; the
     # Chebyshev coefficients are computed once (x ∈ [-1, 1] ↔ y ∈ [0, y_max])
-    from numpy.polynomial.chebyshev import chebval
-
     c_s = coefficients(log_nu)
     c_ds = coefficients(grid.D @ log_nu)
-    xf = np.linspace(-1.0, 1.0, 8 * grid.n + 1)
+    xf, V = _fine_sampling(grid.n)
     yf = grid.from_computational(xf)
-    dsf = chebval(xf, c_ds)
+    dsf = V @ c_ds
     to_x = grid.to_computational
     if (dsf <= 0).all():
         monotonic, y_peak = True, 0.0
@@ -246,18 +271,16 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
         cds = c_ds.tolist()
-        y_peak = (
-            brent_root(lambda y: _chebval1(cds, float(to_x(y))), yf[idx[0]], yf[idx[0] + 1], xtol=1e-13)
-            if len(idx)
-            else 0.0
-        )
+        y_peak = 0.0
+        if len(idx):
+            y_peak = _root_near(lambda y: _chebval1(cds, float(to_x(y))), yf, int(idx[0]) + 1, 1e-13)
     cs = c_s.tolist()
     s_peak = _chebval1(cs, float(to_x(y_peak)))
     target = s_peak + math.log(0.01)
-    sf = chebval(xf, c_s)
+    sf = V @ c_s
     above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
     j = above[0]
-    h = brent_root(lambda y: _chebval1(cs, float(to_x(y))) - target, yf[j - 1], yf[j], xtol=1e-14)
+    h = _root_near(lambda y: _chebval1(cs, float(to_x(y))) - target, yf, int(j), 1e-14)
     return {
         "h": h,
         "nu_mean": rho_bar / h,

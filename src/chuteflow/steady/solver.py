@@ -29,7 +29,7 @@ import numpy as np
 
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid
+from ..spectral import ChebyshevGrid, resampling_matrix
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
@@ -177,6 +177,26 @@ def isothermal_guess(theta_deg, nu0, model, nu_top, grid):
     return NewtonState(grid.n, np.log(nu), u, np.full_like(nu, T), L)
 
 
+def _rows(v, sl: slice, m: int) -> np.ndarray:
+    """The rows ``sl`` of a compiled coefficient or residual: an array over the m nodes,
+    or a constant (the generated code returns scalars for node-independent terms)."""
+    v = np.asarray(v, dtype=float)
+    if v.ndim:
+        return v[sl]
+    return np.full(len(range(*sl.indices(m))), float(v))
+
+
+@functools.cache
+def _steady_terms(ce) -> tuple[tuple[int, str, int, int], ...]:
+    """The terms of a compiled equation that a uniform steady state feels — no t, x, z
+    dependence, v = w = 0, |k| = 0 — as (coefficient index, field, field's block, order)."""
+    return tuple(
+        (i, t.field, _FIELDS.index(t.field), t.c)
+        for i, t in enumerate(ce.terms)
+        if not (t.a or t.b or t.d or t.k or t.field in ("v", "w"))
+    )
+
+
 class SteadyNewton:
     """Residual and exact Jacobian of the steady free-boundary problem on n + 1 nodes."""
 
@@ -262,7 +282,7 @@ class SteadyNewton:
         for name, rows, sl, kind in self._layout:
             ce = self.eqs[name]
             res, coefs = ce.evaluate_arguments(args)
-            res = np.broadcast_to(res, (m,))[sl]
+            res = _rows(res, sl, m)
             scale = scales[kind][sl]
             R[rows] = scale * res
             rows_out.append((ce, rows, sl, kind, res, coefs, scale))
@@ -299,24 +319,20 @@ class SteadyNewton:
             Jr = J[rows]  # view into J: rows of this equation
             dL = np.zeros(len(res))
             idx = np.arange(m)[sl]
-            for t, cf in zip(ce.terms, coefs):
-                # a uniform steady state: no t, x, z dependence, v = w = 0, |k| = 0
-                if t.a or t.b or t.d or t.k or t.field == "v" or t.field == "w":
-                    continue
-                cf = np.broadcast_to(cf, (m,))[sl]
-                k = _FIELDS.index(t.field)
+            r_idx = np.arange(len(idx))
+            for i, fname, k, c in _steady_terms(ce):
+                cf = _rows(coefs[i], sl, m)
                 blk = Jr[:, k * m : (k + 1) * m]
-                if t.c == 0:
+                if c == 0:
                     # diagonal: ∂/∂X_i of a pointwise term (for ν via ν = e^s)
-                    blk[np.arange(len(idx)), idx] += cf * (nu[sl] if t.field == "nu" else 1.0)
+                    blk[r_idx, idx] += cf * nu[sl] if fname == "nu" else cf
                 else:
-                    M = dnu[t.c] if t.field == "nu" else mats[t.c]
+                    M = dnu[c] if fname == "nu" else mats[c]
                     blk += cf[:, None] * M[sl]
-                    dL += cf * (-t.c / L) * jets[t.field][t.c][sl]
+                    dL += cf * (-c / L) * jets[fname][c][sl]
             Jr *= scale[:, None]
             Jr[:, -1] = scale * dL
             # derivative of the row scale
-            r_idx = np.arange(len(idx))
             if kind == "nu":
                 Jr[r_idx, idx] -= res * scale
             elif kind == "T":
@@ -403,6 +419,10 @@ def _resample(st: NewtonState, n: int, grid_map: Any = _SAME) -> NewtonState:
     gm = st.grid_map if grid_map is _SAME else grid_map
     if st.n == n and gm == st.grid_map:
         return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L, gm)
+    if gm == st.grid_map:
+        # same map, another n: a fixed matrix in the computational variable
+        v = resampling_matrix(st.n, n) @ np.stack([st.s, st.u, st.T], axis=-1)
+        return NewtonState(n, v[:, 0].copy(), v[:, 1].copy(), v[:, 2].copy(), st.L, gm)
     old = st.ref
     new = reference_grid(n, gm).y
     v = old.interpolate(np.stack([st.s, st.u, st.T]), new)
