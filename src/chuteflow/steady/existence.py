@@ -492,9 +492,10 @@ def steady_existence(
     reaches the top is a separatrix (typically a dense band packing to ν_m that either
     collapses or heats up above it), not a solution, and the scan goes on below it.
 
-    Cost: about 18 coarse trials plus 10–30 refining ones, 0.05–1 s per point on one core
+    Cost: about 18 coarse trials plus 10–30 refining ones, 0.02–0.4 s per point on one core
     (the right-hand side is generated scalar code, :mod:`chuteflow.steady._scalar_ode`, ~5 µs
-    a call; most of the time is scipy's integrator).
+    a call, and the stepping loop is scipy's compiled ``dopri5``, :func:`integrate`: most of
+    the time is now the right-hand side's Python calls).
 
     Parameters
     ----------
@@ -562,7 +563,7 @@ def steady_existence(
                 raise _Separatrix
             return shot.miss
 
-        # the miss jumps at separatrices: scipy's brentq (imported with solve_ivp, which
+        # the miss jumps at separatrices: scipy's brentq (imported with scipy.integrate, which
         # only a failed cold start needs) bisects those robustly
         from scipy.optimize import brentq
 
