@@ -448,6 +448,7 @@ def after_lost_branch(
     policy: RejectionPolicy | None = None,
     cache: OperatorCache | None = None,
     lost: str = "",
+    direct: bool = True,
 ) -> Mode | None:
     """The answer at (k, kz) and N after the continuation lost the branch: the branch followed
     with the relaxed tail threshold (:func:`near_continuum_branch`), or a direct solve where
@@ -464,7 +465,11 @@ def after_lost_branch(
     replaces the (flagged) branch value when it is resolved, drifts less and is at least as
     unstable (``method = "qz (branch lost)"``, the branch value and its drift in the note).
     ``lost`` (where the branch was lost) heads the note. None when the relaxed continuation
-    does not reach k.
+    does not reach k. With ``direct=False`` the dense spectrum is skipped (the band search and
+    the direct mode): the relaxed value is returned as it is (:func:`least_stable` at the
+    rungs of its ladder below the last, where an unresolved answer only leads to the next
+    rung: the two dense QZ at N and N' per rung cost 4 times the relaxed continuation at
+    N ≥ 195; P4, k = 0.2: 77 s before, the dense spectrum at the last rung only).
     """
     policy = resolve_policy(policy)
     relaxed = near_continuum_branch(flow, k, kz=kz, n=n, policy=policy, cache=cache)
@@ -472,7 +477,7 @@ def after_lost_branch(
         return None
     relaxed = dataclasses.replace(relaxed, note=join_notes(lost, relaxed.note))
     kk = math.hypot(k, kz)
-    if relaxed.physical or kk <= policy.relaxed_k_max:
+    if relaxed.physical or kk <= policy.relaxed_k_max or not direct:
         return relaxed
     modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
     radius = BAND_RADIUS * relaxed.drift
@@ -928,7 +933,11 @@ def least_stable(
                     # threshold relaxed (near_continuum_branch), at every rung
                     lost, how = str(exc).split(" (theta")[0], "relaxed"
             if mode is None:
-                mode = after_lost_branch(flow, k, kz=kz, n=nn, policy=policy, cache=cache, lost=lost or "")
+                # the dense spectrum (band search, direct mode) only at the last rung: below
+                # it an unresolved relaxed value only leads to the next rung
+                mode = after_lost_branch(
+                    flow, k, kz=kz, n=nn, policy=policy, cache=cache, lost=lost or "", direct=nn == ns[-1]
+                )
                 if mode is not None:
                     if mode.method != "branch (relaxed)":
                         # the branch has dissolved into the continuum: direct solves from now on
