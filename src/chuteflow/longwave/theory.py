@@ -33,7 +33,7 @@ import scipy.linalg as sla
 from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
-from ..stability.dispersion import BranchTracker, near_continuum_branch
+from ..stability.dispersion import BranchTracker, after_lost_branch
 from ..stability.modes import (
     OperatorCache,
     check_n,
@@ -209,8 +209,9 @@ def eigen_sign(
                         a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
                         bp = dataclasses.replace(bp, alpha=complex(a), vector=w)
                     except ConvergenceError:
-                        # lost near the continuum: with the tail threshold relaxed
-                        m = near_continuum_branch(flow, k, n=nn, cache=cache)
+                        # lost near the continuum: as least_stable answers there
+                        # (after_lost_branch; at these k, the relaxed tail threshold)
+                        m = after_lost_branch(flow, k, n=nn, cache=cache)
                         if m is not None:
                             bp = dataclasses.replace(bp, alpha=m.alpha, vector=None)
             memo[nn] = bp

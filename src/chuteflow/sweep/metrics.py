@@ -23,7 +23,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
-from ..stability.dispersion import near_continuum_branch
+from ..stability.dispersion import after_lost_branch
 from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
@@ -137,9 +137,12 @@ class GrowthMetric(PointFunction):
     (relative tolerance 1e-6). Points that miss the paper's drift and tail tests at
     N = ``n_max`` are kept with their estimate (``growth_converged`` = 0, the largest drift
     in ``growth_drift``, a note in the point's message); where the tracker loses the branch
-    near the continuum of the dilute top, the rest of the k grid is followed with the tail
-    threshold relaxed (:func:`chuteflow.stability.dispersion.near_continuum_branch`,
-    flagged the same way). Only where that fails too are the values missing
+    near the continuum of the dilute top, the rest of the k grid gets what
+    :func:`~chuteflow.stability.least_stable` answers there
+    (:func:`chuteflow.stability.dispersion.after_lost_branch`: the branch followed with the
+    tail threshold relaxed, and past ``RejectionPolicy.relaxed_k_max`` picked out of the band
+    or replaced by a resolved direct mode; flagged the same way; version 4: the same values
+    as version 3 for k_max ≤ 0.1). Only where that fails too are the values missing
     (``dispersion_sampled`` = 1, the reason in the message).
     Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
@@ -147,7 +150,7 @@ class GrowthMetric(PointFunction):
     """
 
     name = "growth"
-    version = "3"
+    version = "4"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
     defaults = {
@@ -232,11 +235,13 @@ class GrowthMetric(PointFunction):
                 try:
                     modes.append(tr.mode(k))
                 except ConvergenceError as exc:
-                    # lost near the continuum: the rest of the grid with the relaxed tail
-                    # threshold, at the tracker's last N (None: not reached either)
+                    # lost near the continuum: the rest of the grid as least_stable answers
+                    # there (after_lost_branch: the relaxed tail threshold, and past
+                    # policy.relaxed_k_max the band search and the direct mode), at the
+                    # tracker's last N (None: not reached either)
                     lost = str(exc).split(" (theta")[0]
                     for kk in ks[len(modes) :]:
-                        m = near_continuum_branch(flow, float(kk), n=tr.n, policy=policy, cache=cache)
+                        m = after_lost_branch(flow, float(kk), n=tr.n, policy=policy, cache=cache, lost=lost)
                         if m is None:
                             raise ConvergenceError(
                                 f"{lost}; not reached with the relaxed tail threshold either "
