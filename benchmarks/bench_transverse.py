@@ -133,8 +133,8 @@ def run(quick: bool = False) -> list[dict]:
             "seconds": t_all,
             "baseline_seconds": t_den,
             "ratio": t_den / t_all,
-            "note": f"target < 0.5 s (CPU {c_all:.2f} s); 25 k_z; track: kz_max = {s['kz_max']:.5g}, growth_max = "
-            f"{s['growth_max']:.6g}, cut-off {s['kz_cutoff']:.5g}; dense: {sd['kz_max']:.5g}, "
+            "note": f"target < 0.5 s (CPU {c_all:.2f} s); 25 k_z; track: kz_max = {s['kz_max']:.5g}, "
+            f"growth_max = {s['growth_max']:.6g}, cut-off {s['kz_cutoff']:.5g}; dense: {sd['kz_max']:.5g}, "
             f"{sd['growth_max']:.6g}, {sd['kz_cutoff']:.5g}",
         }
     )

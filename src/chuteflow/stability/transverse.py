@@ -509,7 +509,7 @@ def _real_pieces(op):
     odd = inw[:, None] - inw[None, :]
     R = [np.zeros((M, M)) for _ in range(3)]
     scale, worst = 0.0, 0.0
-    for (b, d), P in op._pieces_eq.items():  # noqa: SLF001 - the same package's operator
+    for (b, d), P in op._pieces_eq.items():  # the same package's operator
         if b:
             continue
         if d > 2:  # pragma: no cover - the equations are of second order in ∂_z
@@ -521,7 +521,7 @@ def _real_pieces(op):
             R[d] += (1.0 - cross) * P if d == 0 else (cross - 1.0) * P
             imag = cross * P
         scale, worst = max(scale, float(np.abs(P).max())), max(worst, float(np.abs(imag).max()))
-    rows, cols, vals = op._K_eq  # noqa: SLF001 - the |k| coefficient (top conditions)
+    rows, cols, vals = op._K_eq  # the |k| coefficient (top conditions)
     c = cross[rows, cols]
     np.add.at(R[1], (rows, cols), (1.0 - c) * vals)
     worst = max(worst, float(np.abs(c * vals).max(initial=0.0)))
@@ -822,14 +822,21 @@ def _seed_spectrum(op, kz):
     d = np.abs(np.diag(lu))
     if not np.all(np.isfinite(d)) or d.min() == 0.0:
         return _finite_spectrum(p, True)
-    C = sla.lu_solve((lu, piv), np.eye(m), check_finite=False) * bd[None, :]
-    theta, Y = np.linalg.eig(C)
+    # C is zero on the columns of the boundary rows (B' = 0 there): its eigenvalues θ ≠ 0
+    # are those of the block on the other rows and columns, y = (y_i, C_bi y_i / θ)
+    inner = bd != 0
+    C = sla.lu_solve((lu, piv), np.eye(m)[:, inner], check_finite=False) * bd[inner][None, :]
+    theta, Yi = np.linalg.eig(C[inner])
     if not np.all(np.isfinite(theta)):  # pragma: no cover - σ on an eigenvalue
         return _finite_spectrum(p, True)
     keep = np.abs(theta) > 1e-10 * np.abs(theta).max()
-    w = SEED_SHIFT + 1.0 / theta[keep]
+    theta, Yi = theta[keep], Yi[:, keep]
+    Y = np.empty((m, len(theta)), dtype=complex)
+    Y[inner] = Yi
+    Y[~inner] = (C[~inner] @ Yi) / theta[None, :]
+    w = SEED_SHIFT + 1.0 / theta
     order = np.argsort(-w.real, kind="stable")
-    return w[order], Y[:, keep][:, order] * s[:, None]
+    return w[order], Y[:, order] * s[:, None]
 
 
 def _seed_candidates(flow, kz, policy, cache):
@@ -847,6 +854,10 @@ def _seed_candidates(flow, kz, policy, cache):
     return [(complex(w[i]), V[:, i]) for i in keep]
 
 
+#: ‖A'‖∞ of the last few real-form matrices (by identity), for the residuals of the polish.
+_NORMS: dict = {}
+
+
 class _RealFormShiftInvert(ShiftInvert):
     """:class:`~chuteflow.stability.eigen.ShiftInvert` on the real form (A', diag B') of the
     k_x = 0 pencil (:func:`real_form`). For a real shift the LU of A' − σB' is real (about a
@@ -857,7 +868,7 @@ class _RealFormShiftInvert(ShiftInvert):
     Arnoldi, polish) is the one :class:`ShiftInvert` runs on (A, B)."""
 
     def __init__(self, Ar: np.ndarray, bdiag: np.ndarray, sigma: complex):
-        self.A, self.sigma, self._bdiag = Ar, complex(sigma), bdiag
+        self.A, self.sigma, self._bdiag, self._bd = Ar, complex(sigma), bdiag, bdiag
         self.size = Ar.shape[0]
         self._real = self.sigma.imag == 0
         M = Ar.copy() if self._real else Ar.astype(complex)
@@ -865,13 +876,28 @@ class _RealFormShiftInvert(ShiftInvert):
         self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
         piv = np.abs(np.diag(self.lu[0]))
         if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
-            raise ConvergenceError(f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift")
+            raise ConvergenceError(
+                f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift"
+            )
         (self._getrs,) = sla.get_lapack_funcs(("getrs",), (self.lu[0],))
 
     @property
     def B(self) -> np.ndarray:  # type: ignore[override]
-        """The diagonal B' as a matrix (for the residual norms of :meth:`polish`)."""
-        return np.diag(self._bdiag)
+        """The diagonal B' as a matrix."""
+        return np.diag(self._bd)
+
+    def norms(self) -> tuple[float, float]:
+        """(‖A'‖∞, ‖B'‖∞) = those of the equilibrated pencil (|s| = 1), ‖A'‖∞ kept per A'."""
+        if not hasattr(self, "_norms"):
+            key = id(self.A)
+            hit = _NORMS.get(key)
+            if hit is None or hit[0] is not self.A:
+                hit = (self.A, float(np.abs(self.A).sum(axis=1).max()))
+                if len(_NORMS) > 8:
+                    _NORMS.clear()
+                _NORMS[key] = hit
+            self._norms = (hit[1], float(np.abs(self._bd).max()))
+        return self._norms
 
     def solve(self, x):
         """(A' − σB')⁻¹ x."""
@@ -900,8 +926,8 @@ def _nearest_kx0(op, kz: float, sigma: complex, v0=None):
     pieces instead of a complex assembly): the same inverse iteration from ``v0`` (a random
     start without it), the same nudge of a shift on an eigenvalue and the same Arnoldi
     fallback, so the same eigenpair up to round-off. A shift within
-    :data:`REAL_SHIFT_RTOL` relative of the real axis is taken as real. Returns (α, w, pencil), w an eigenvector of the equilibrated
-    pencil."""
+    :data:`REAL_SHIFT_RTOL` relative of the real axis is taken as real. Returns
+    (α, w, pencil), w an eigenvector of the equilibrated pencil."""
     p, Ar, bd, s = _real_pencil(op, kz)
     sigma = complex(sigma)
     if abs(sigma.imag) <= REAL_SHIFT_RTOL * abs(sigma):
