@@ -4,7 +4,8 @@
 interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_transverse.py
 [--quick]``. Flow: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05). Targets (the 3D stability issue):
 one transverse analysis (α2z, k_z*, growth) under 0.5 s; a transverse dispersion of 50 k_z
-under 2 s.
+under 2 s. The notes of the rows with a target also give the CPU time of the measured run
+(``time.process_time``): the wall times are those of a shared machine.
 
 - ``transverse_alpha2z``: α2z by bordered perturbation theory at k = 0 (one LU per
   resolution) against the plain alternative, a fit of Re α / k_z² to dense-QZ eigenvalues

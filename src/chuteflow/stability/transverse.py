@@ -23,7 +23,12 @@ k_z ≈ 3.25e-3 and is lost in it (its eigenvector is no longer resolved); the l
 physical mode at larger k_z is another one. :func:`transverse_dispersion` with
 ``method="track"`` follows the branch while it is resolved and, beyond, a few candidate
 modes taken from one dense scan (each by shift-invert, re-seeded by a dense scan whenever a
-candidate is lost); ``method="dense"`` is the reference scan at every k_z.
+candidate is lost); ``method="dense"`` is the reference scan at every k_z. Past the branch
+the shift-invert solves also run on the real form (a real LU when the shift is real, a fifth
+of the complex one's cost), the seeding scan is the dense eigenproblem of (A' − σB')⁻¹B'
+(a third of the QZ's), and the check α(N') of a rung of the resolution ladder is the α just
+solved on the rung below: the same eigenpairs as the complex solves, to round-off (at P1 the
+50-k_z dispersion past the branch took 3.3 s of CPU before, 1.9 s after; issue 10).
 """
 
 from __future__ import annotations
