@@ -458,10 +458,19 @@ class _Point:
     n: int
 
 
+def _shifted(A: np.ndarray, bdiag: np.ndarray, sigma, dtype=float) -> np.ndarray:
+    """A − σ diag(bdiag), a new array in Fortran order: LAPACK's, so that ``lu_factor``
+    factors it in place instead of copying a C-ordered array first (the same factors; at
+    N = 80–100 the complex factorisation takes a third less time)."""
+    M = np.empty(A.shape, dtype=dtype, order="F")
+    M[...] = A
+    i = np.arange(A.shape[0])
+    M[i, i] -= sigma * bdiag
+    return M
+
+
 def _real_lu(A: np.ndarray, bdiag: np.ndarray, sigma: float):
-    M = A.copy()
-    M.flat[:: M.shape[0] + 1] -= sigma * bdiag
-    return sla.lu_factor(M, overwrite_a=True, check_finite=False)
+    return sla.lu_factor(_shifted(A, bdiag, sigma), overwrite_a=True, check_finite=False)
 
 
 def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-15):
@@ -821,9 +830,7 @@ def _seed_spectrum(op, kz):
     Falls back on QZ when σ lies on an eigenvalue (a zero pivot or θ not finite)."""
     p, Ar, bd, s = _real_pencil(op, kz)
     m = Ar.shape[0]
-    M = Ar.copy()
-    M.flat[:: m + 1] -= SEED_SHIFT * bd
-    lu, piv = sla.lu_factor(M, overwrite_a=True, check_finite=False)
+    lu, piv = sla.lu_factor(_shifted(Ar, bd, SEED_SHIFT), overwrite_a=True, check_finite=False)
     d = np.abs(np.diag(lu))
     if not np.all(np.isfinite(d)) or d.min() == 0.0:
         return _finite_spectrum(p, True)
@@ -876,8 +883,10 @@ class _RealFormShiftInvert(ShiftInvert):
         self.A, self.sigma, self._bdiag, self._bd = Ar, complex(sigma), bdiag, bdiag
         self.size = Ar.shape[0]
         self._real = self.sigma.imag == 0
-        M = Ar.copy() if self._real else Ar.astype(complex)
-        M.flat[:: self.size + 1] -= (self.sigma.real if self._real else self.sigma) * bdiag
+        if self._real:
+            M = _shifted(Ar, bdiag, self.sigma.real)
+        else:
+            M = _shifted(Ar, bdiag, self.sigma, complex)
         self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
         piv = np.abs(np.diag(self.lu[0]))
         if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
