@@ -28,7 +28,7 @@ the shift-invert solves also run on the real form (a real LU when the shift is r
 of the complex one's cost), the seeding scan is the dense eigenproblem of (A' − σB')⁻¹B'
 (a third of the QZ's), and the check α(N') of a rung of the resolution ladder is the α just
 solved on the rung below: the same eigenpairs as the complex solves, to round-off (at P1 the
-50-k_z dispersion past the branch took 3.3 s of CPU before, 1.9 s after; issue 10).
+50-k_z dispersion past the branch took 3.3 s of CPU before, 1.7–2.0 s after; issue 10).
 """
 
 from __future__ import annotations
@@ -460,8 +460,8 @@ class _Point:
 
 def _shifted(A: np.ndarray, bdiag: np.ndarray, sigma, dtype=float) -> np.ndarray:
     """A − σ diag(bdiag), a new array in Fortran order: LAPACK's, so that ``lu_factor``
-    factors it in place instead of copying a C-ordered array first (the same factors; at
-    N = 80–100 the complex factorisation takes a third less time)."""
+    factors it in place instead of copying a C-ordered array first (bitwise the same
+    factors, one copy of the matrix fewer)."""
     M = np.empty(A.shape, dtype=dtype, order="F")
     M[...] = A
     i = np.arange(A.shape[0])
