@@ -360,7 +360,15 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
     The tangent is taken at fixed ξ = y/y_max; at fixed y, ∂f/∂β|_y = ∂f/∂β|_ξ − (y/y_max)
     (dy_max/dβ) f'(y).
     """
-    flow = op.flow
+    y = op.grid.y
+    fixed_y = fixed_height_tangent(op.flow, tangent, y)
+    parts = [fixed_y[f] if f in fixed_y else np.zeros_like(y) for f in op.fields]
+    return np.concatenate(parts)
+
+
+def fixed_height_tangent(flow, tangent: dict, y: np.ndarray) -> dict[str, np.ndarray]:
+    """∂ν0/∂β, ∂u0/∂β, ∂T0/∂β at fixed height, at the heights ``y`` (keys "nu", "u", "T";
+    the non-zero fields of :func:`null_vector`)."""
     g, L, dL = flow.grid, flow.y_max, tangent["y_max"]
     shift = (g.y / L) * dL
     fixed_y = {
@@ -368,9 +376,7 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
         "u": tangent["u"] - shift * (g.D @ flow.u),
         "T": tangent["T"] - shift * (g.D @ flow.T),
     }
-    y = op.grid.y
-    parts = [g.interpolate(fixed_y[f], y) if f in fixed_y else np.zeros_like(y) for f in op.fields]
-    return np.concatenate(parts)
+    return {f: g.interpolate(v, y) for f, v in fixed_y.items()}
 
 
 def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:

@@ -46,7 +46,7 @@ from ..stability.modes import (
     nearest_eigenpair,
     stability_operator,
 )
-from ..stability.operator import StabilityOperator
+from ..stability.operator import StabilityOperator, base_on_grid, stability_grid
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
 from ..stability.transverse import (
     TransverseDispersion,
@@ -57,7 +57,7 @@ from ..stability.transverse import (
     transverse_mode,
 )
 from ..steady import SteadyFlow, steady_tangent
-from .theory import bordered_coefficients, null_vector
+from .theory import bordered_coefficients, fixed_height_tangent
 
 __all__ = [
     "GrowthPeak",
@@ -195,11 +195,12 @@ def lubrication_alpha2z(flow: SteadyFlow, n: int = 160) -> float:
     Uses V0 = ∂X0/∂β at fixed height on an N = ``n`` grid: p̂ = p_ν ν̂ + p_T T̂,
     Ŝ(y) = ∫_y^∞ p̂, W0(y) = ∫_y^∞ ν0, η*(0) and μ0 from the flow's model.
     """
-    op = stability_operator(flow, n, True)
-    tg = steady_tangent(flow)
-    V0 = op.pencil(0.0, 0.0).split(null_vector(op, tg))
-    g = op.grid
-    nu, T = op.base["nu"], op.base["T"]
+    # the grid and base state of the three-dimensional operator at N = n (plain Chebyshev),
+    # without assembling it: only V0 and the base state are used
+    g = stability_grid(flow, n, mapped=False)
+    V0 = fixed_height_tangent(flow, steady_tangent(flow), g.y)
+    base = base_on_grid(flow, g.y)
+    nu, T = base["nu"], base["T"]
     part = flow.model.evaluate(nu, T)
     p, mu, eta = part["p"], part["mu"][(0, 0)], part["eta_star"][(0, 0)]
     dp = p[(1, 0)] * V0["nu"] + p[(0, 1)] * V0["T"]

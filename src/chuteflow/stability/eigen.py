@@ -167,11 +167,15 @@ class ShiftInvert:
             prev = alpha
         return None
 
-    def residual(self, alpha, v) -> float:
-        """Relative residual ‖(A − αB)v‖∞ / ((‖A‖∞ + |α| ‖B‖∞) ‖v‖∞)."""
+    def norms(self) -> tuple[float, float]:
+        """(‖A‖∞, ‖B‖∞), computed once."""
         if not hasattr(self, "_norms"):
             self._norms = (np.abs(self.A).sum(axis=1).max(), np.abs(self.B).sum(axis=1).max())
-        normA, normB = self._norms
+        return self._norms
+
+    def residual(self, alpha, v) -> float:
+        """Relative residual ‖(A − αB)v‖∞ / ((‖A‖∞ + |α| ‖B‖∞) ‖v‖∞)."""
+        normA, normB = self.norms()
         r = self.A @ v - alpha * self.Bx(v)
         return float(np.abs(r).max() / ((normA + abs(alpha) * normB) * np.abs(v).max()))
 
@@ -183,8 +187,7 @@ class ShiftInvert:
         """
         alpha = np.atleast_1d(np.asarray(alpha, dtype=complex)).copy()
         V = np.asarray(V, dtype=complex).reshape(self.size, -1).copy()
-        normA = np.abs(self.A).sum(axis=1).max()
-        normB = np.abs(self.B).sum(axis=1).max()
+        normA, normB = self.norms()
         res = np.empty(len(alpha))
         for j in range(len(alpha)):
             v = V[:, j] / np.linalg.norm(V[:, j])

@@ -23,7 +23,12 @@ k_z ≈ 3.25e-3 and is lost in it (its eigenvector is no longer resolved); the l
 physical mode at larger k_z is another one. :func:`transverse_dispersion` with
 ``method="track"`` follows the branch while it is resolved and, beyond, a few candidate
 modes taken from one dense scan (each by shift-invert, re-seeded by a dense scan whenever a
-candidate is lost); ``method="dense"`` is the reference scan at every k_z.
+candidate is lost); ``method="dense"`` is the reference scan at every k_z. Past the branch
+the shift-invert solves also run on the real form (a real LU when the shift is real, a fifth
+of the complex one's cost), the seeding scan is the dense eigenproblem of (A' − σB')⁻¹B'
+(a third of the QZ's), and the check α(N') of a rung of the resolution ladder is the α just
+solved on the rung below: the same eigenpairs as the complex solves, to round-off (at P1 the
+50-k_z dispersion past the branch took 3.3 s of CPU before, 1.7–2.0 s after; issue 10).
 """
 
 from __future__ import annotations
@@ -39,7 +44,8 @@ from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .dispersion import branch_mode, null_vectors
+from .dispersion import branch_mode
+from .eigen import ShiftInvert
 from .modes import (
     Mode,
     OperatorCache,
@@ -452,10 +458,19 @@ class _Point:
     n: int
 
 
+def _shifted(A: np.ndarray, bdiag: np.ndarray, sigma, dtype=float) -> np.ndarray:
+    """A − σ diag(bdiag), a new array in Fortran order: LAPACK's, so that ``lu_factor``
+    factors it in place instead of copying a C-ordered array first (bitwise the same
+    factors, one copy of the matrix fewer)."""
+    M = np.empty(A.shape, dtype=dtype, order="F")
+    M[...] = A
+    i = np.arange(A.shape[0])
+    M[i, i] -= sigma * bdiag
+    return M
+
+
 def _real_lu(A: np.ndarray, bdiag: np.ndarray, sigma: float):
-    M = A.copy()
-    M.flat[:: M.shape[0] + 1] -= sigma * bdiag
-    return sla.lu_factor(M, overwrite_a=True, check_finite=False)
+    return sla.lu_factor(_shifted(A, bdiag, sigma), overwrite_a=True, check_finite=False)
 
 
 def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-15):
@@ -486,31 +501,84 @@ def _inverse_iteration(lu, bdiag, sigma, v0, *, maxiter=14, tol=1e-9, floor=1e-1
 
 
 _REAL_PIECES: dict = {}
+#: The last (op, k_z, result) of :func:`_real_pencil` per operator (its A' is never written).
+_REAL_LAST: dict = {}
+
+
+def _real_pieces(op):
+    """(R0, R1, R2, diag B', s) of the real form A'(k_z) = S⁻¹ A(0, k_z) S = R0 + k_z R1 +
+    k_z² R2 (:func:`real_form`) at k_z ≥ 0, straight from the operator's equilibrated real
+    pieces: A(0, k_z) = Σ_d (ik_z)^d A_{0,d} + k_z K, each term times i^d s_c / s_r, which is
+    real wherever the piece is not zero (checked)."""
+    m, M = op.grid.n + 1, op.size
+    jw = op.fields.index("w")
+    s = np.ones(M, dtype=complex)
+    s[jw * m : (jw + 1) * m] = 1j
+    inw = np.zeros(M)
+    inw[jw * m : (jw + 1) * m] = 1.0
+    # i^d s_c / s_r: d even → (−1)^(d/2) within the ŵ block and outside it (imaginary across);
+    # d odd → +1 from the ŵ rows to the other columns, −1 from the other rows to ŵ
+    # (imaginary within): the real factor of each order and where it vanishes
+    cross = np.abs(inw[:, None] - inw[None, :])  # 1 across the ŵ block's edge
+    odd = inw[:, None] - inw[None, :]
+    R = [np.zeros((M, M)) for _ in range(3)]
+    scale, worst = 0.0, 0.0
+    for (b, d), P in op._pieces_eq.items():  # the same package's operator
+        if b:
+            continue
+        if d > 2:  # pragma: no cover - the equations are of second order in ∂_z
+            raise AssertionError(f"a piece of order {d} in k_z")
+        if d == 1:
+            R[1] += odd * P
+            imag = (1.0 - cross) * P
+        else:
+            R[d] += (1.0 - cross) * P if d == 0 else (cross - 1.0) * P
+            imag = cross * P
+        scale, worst = max(scale, float(np.abs(P).max())), max(worst, float(np.abs(imag).max()))
+    rows, cols, vals = op._K_eq  # the |k| coefficient (top conditions)
+    c = cross[rows, cols]
+    np.add.at(R[1], (rows, cols), (1.0 - c) * vals)
+    worst = max(worst, float(np.abs(c * vals).max(initial=0.0)))
+    if worst > 1e-12 * scale:  # pragma: no cover - structural identity
+        raise AssertionError("the kx = 0 pencil is not real after ŵ → iŵ")
+    return R[0], R[1], R[2], np.diag(op.B_eq).copy(), s
 
 
 def _real_pencil(op, kz: float):
     """(pencil, A', diag B', s) at (0, k_z ≥ 0) from the real form's three pieces
-    A'(k_z) = R0 + k_z R1 + k_z² R2 (evaluated once per operator from :func:`real_form` at
-    k_z = 0, 1, 2), a few additions per k_z instead of a complex assembly."""
+    A'(k_z) = R0 + k_z R1 + k_z² R2 (:func:`_real_pieces`, once per operator), a few
+    additions per k_z instead of a complex assembly; the last k_z of each operator is kept.
+    Callers must not write into A'."""
     key = id(op)
     hit = _REAL_PIECES.get(key)
     if hit is None or hit[0] is not op:
-        M = [real_form(op.pencil(0.0, float(k)))[0] for k in (0.0, 1.0, 2.0)]
-        R2 = 0.5 * (M[2] - 2.0 * M[1] + M[0])
-        R1 = M[1] - M[0] - R2
-        p0 = op.pencil(0.0, 1.0)
-        s = np.ones(p0.size, dtype=complex)
-        s[p0.slices()["w"]] = 1j
-        hit = (op, M[0], R1, R2, np.diag(p0.equilibrated()[1]).copy(), s)
+        hit = (op, *_real_pieces(op))
         if len(_REAL_PIECES) > 8:
             _REAL_PIECES.clear()
         _REAL_PIECES[key] = hit
     _, R0, R1, R2, bd, s = hit
     kz = abs(float(kz))
-    A = R0 + kz * R1
+    last = _REAL_LAST.get(key)
+    if last is not None and last[0] is op and last[1] == kz:
+        return last[2]  # the same k_z again (candidates, drifts, judging): not rebuilt
+    A = R1 * kz
+    A += R0
     if kz:
         A += (kz * kz) * R2
-    return op.pencil(0.0, kz), A, bd, s
+    out = (op.pencil(0.0, kz), A, bd, s)
+    if len(_REAL_LAST) > 8:
+        _REAL_LAST.clear()
+    _REAL_LAST[key] = (op, kz, out)
+    return out
+
+
+def _null_vector(op) -> np.ndarray:
+    """The right eigenvector of the equilibrated k = 0 pencil for its eigenvalue nearest 0:
+    the shift-invert Arnoldi at σ = 0 of :func:`~chuteflow.stability.dispersion.null_vectors`
+    on the real form (a real LU; the left vector is not needed here)."""
+    _, Ar, bd, s = _real_pencil(op, 0.0)
+    _, W = _RealFormShiftInvert(Ar, bd, 0.0).nearest(1)
+    return s * W[:, 0]
 
 
 class TransverseTracker:
@@ -552,9 +620,7 @@ class TransverseTracker:
         self.alpha2z = None if alpha2z is None else float(alpha2z)
         self.n = int(policy.n_start if n is None else n)
         self.max_ratio = float(max_ratio)
-        op = self._op(self.n)
-        nv = null_vectors(op)
-        w = nv.right / op.col_eq  # eigenvector of the equilibrated pencil at k = 0
+        w = _null_vector(self._op(self.n))  # eigenvector of the equilibrated pencil at k = 0
         w = w / w[np.argmax(np.abs(w))]
         self.history: list[_Point] = [_Point(0.0, 0.0, np.ascontiguousarray(w.real), self.n)]
         self.lost_at: float | None = None
@@ -749,18 +815,155 @@ N_CANDIDATES = 2
 SEED_MATCH = 2e-3
 
 
+#: Shift of the dense shift-invert that seeds the candidates past the branch
+#: (:func:`_seed_spectrum`): to the right of the decaying spectrum there.
+SEED_SHIFT = 0.5
+
+
+def _seed_spectrum(op, kz):
+    """Finite eigenvalues (decreasing Re) and eigenvectors of the equilibrated pencil at
+    (0, k_z) on ``op``, as :func:`_finite_spectrum` returns them, by the dense eigenproblem
+    of C = (A' − σB')⁻¹B' (real form, σ = :data:`SEED_SHIFT`, one real LU and a real
+    ``geev``; α = σ + 1/θ for the eigenvalues θ ≠ 0 of C, the infinite ones mapping to θ = 0):
+    about a third of the real QZ's time at N = 48. The same eigenpairs: at P1, k_z = 0.004–3,
+    the seeds (eigenvalues and tails) agree with the QZ ones to 1e-12 and 1e-9 relative.
+    Falls back on QZ when σ lies on an eigenvalue (a zero pivot or θ not finite)."""
+    p, Ar, bd, s = _real_pencil(op, kz)
+    m = Ar.shape[0]
+    lu, piv = sla.lu_factor(_shifted(Ar, bd, SEED_SHIFT), overwrite_a=True, check_finite=False)
+    d = np.abs(np.diag(lu))
+    if not np.all(np.isfinite(d)) or d.min() == 0.0:
+        return _finite_spectrum(p, True)
+    # C is zero on the columns of the boundary rows (B' = 0 there): its eigenvalues θ ≠ 0
+    # are those of the block on the other rows and columns, y = (y_i, C_bi y_i / θ)
+    inner = bd != 0
+    C = sla.lu_solve((lu, piv), np.eye(m)[:, inner], check_finite=False) * bd[inner][None, :]
+    theta, Yi = np.linalg.eig(C[inner])
+    if not np.all(np.isfinite(theta)):  # pragma: no cover - σ on an eigenvalue
+        return _finite_spectrum(p, True)
+    keep = np.abs(theta) > 1e-10 * np.abs(theta).max()
+    theta, Yi = theta[keep], Yi[:, keep]
+    Y = np.empty((m, len(theta)), dtype=complex)
+    Y[inner] = Yi
+    Y[~inner] = (C[~inner] @ Yi) / theta[None, :]
+    w = SEED_SHIFT + 1.0 / theta
+    order = np.argsort(-w.real, kind="stable")
+    return w[order], Y[:, order] * s[:, None]
+
+
 def _seed_candidates(flow, kz, policy, cache):
-    """Candidate eigenpairs at (0, k_z) from one coarse dense QZ (N = :data:`SEED_N`, real
-    form), best first, one of each conjugate pair: those whose eigenvectors are nearly
-    resolved there (tail < 1e-4; the continuum of the dilute top is dropped by |α| > 1e-5 and
-    by the tail test at N). Returns [(α, eigenvector of the equilibrated pencil at N =
-    :data:`SEED_N`)]: the vector starts the shift-invert at N (without it the inverse
-    iteration starts from a random vector and often falls back on Arnoldi)."""
-    p = stability_operator(flow, SEED_N, True, cache=cache).pencil(0.0, kz)
-    w, V = _finite_spectrum(p, True)
-    t = _tails(p, V, policy.tail_terms)
+    """Candidate eigenpairs at (0, k_z) from one coarse dense eigensolve (N = :data:`SEED_N`,
+    real form, :func:`_seed_spectrum`), best first, one of each conjugate pair: those whose
+    eigenvectors are nearly resolved there (tail < 1e-4; the continuum of the dilute top is
+    dropped by |α| > 1e-5 and by the tail test at N). Returns [(α, eigenvector of the
+    equilibrated pencil at N = :data:`SEED_N`)]: the vector starts the shift-invert at N
+    (without it the inverse iteration starts from a random vector and often falls back on
+    Arnoldi)."""
+    op = stability_operator(flow, SEED_N, True, cache=cache)
+    w, V = _seed_spectrum(op, kz)
+    t = _tails(op.pencil(0.0, kz), V, policy.tail_terms)
     keep = np.nonzero((t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5))[0][: 2 * N_CANDIDATES]
     return [(complex(w[i]), V[:, i]) for i in keep]
+
+
+#: ‖A'‖∞ of the last few real-form matrices (by identity), for the residuals of the polish.
+_NORMS: dict = {}
+
+
+class _RealFormShiftInvert(ShiftInvert):
+    """:class:`~chuteflow.stability.eigen.ShiftInvert` on the real form (A', diag B') of the
+    k_x = 0 pencil (:func:`real_form`). For a real shift the LU of A' − σB' is real (about a
+    fifth of the complex one's time at N = 80–125) and a complex vector is solved as two
+    real right-hand sides; for a complex shift it is the complex LU of the real A'. Vectors
+    live in the real form's coordinates W' = S⁻¹W; |s| = 1, so norms, inner products and
+    residuals are those of the equilibrated pencil and every iteration (inverse iteration,
+    Arnoldi, polish) is the one :class:`ShiftInvert` runs on (A, B)."""
+
+    def __init__(self, Ar: np.ndarray, bdiag: np.ndarray, sigma: complex):
+        self.A, self.sigma, self._bdiag, self._bd = Ar, complex(sigma), bdiag, bdiag
+        self.size = Ar.shape[0]
+        self._real = self.sigma.imag == 0
+        if self._real:
+            M = _shifted(Ar, bdiag, self.sigma.real)
+        else:
+            M = _shifted(Ar, bdiag, self.sigma, complex)
+        self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
+        piv = np.abs(np.diag(self.lu[0]))
+        if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
+            raise ConvergenceError(
+                f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift"
+            )
+        (self._getrs,) = sla.get_lapack_funcs(("getrs",), (self.lu[0],))
+
+    @property
+    def B(self) -> np.ndarray:  # type: ignore[override]
+        """The diagonal B' as a matrix."""
+        return np.diag(self._bd)
+
+    def norms(self) -> tuple[float, float]:
+        """(‖A'‖∞, ‖B'‖∞) = those of the equilibrated pencil (|s| = 1), ‖A'‖∞ kept per A'."""
+        if not hasattr(self, "_norms"):
+            key = id(self.A)
+            hit = _NORMS.get(key)
+            if hit is None or hit[0] is not self.A:
+                hit = (self.A, float(np.abs(self.A).sum(axis=1).max()))
+                if len(_NORMS) > 8:
+                    _NORMS.clear()
+                _NORMS[key] = hit
+            self._norms = (hit[1], float(np.abs(self._bd).max()))
+        return self._norms
+
+    def solve(self, x):
+        """(A' − σB')⁻¹ x."""
+        x = np.asarray(x, dtype=complex)
+        if not self._real:
+            return super().solve(x)
+        rhs = np.empty((self.size, 2 * (x.size // self.size)), order="F")
+        xr = x.reshape(self.size, -1)
+        rhs[:, 0::2], rhs[:, 1::2] = xr.real, xr.imag
+        y, info = self._getrs(self.lu[0], self.lu[1], rhs)
+        if info != 0:  # pragma: no cover - only for malformed arguments
+            raise ValueError(f"getrs: illegal value in argument {-info}")
+        return (y[:, 0::2] + 1j * y[:, 1::2]).reshape(x.shape)
+
+
+#: A shift whose imaginary part is below this fraction of its modulus is taken as real by
+#: :func:`_nearest_kx0` (the real LU). Real eigenvalues solved in complex arithmetic carry
+#: imaginary parts of round-off, up to 1.4e-9 relative at P1 next to the continuum; the
+#: complex pairs past the branch have |Im α| > 0.1 |α|.
+REAL_SHIFT_RTOL = 1e-8
+
+
+def _nearest_kx0(op, kz: float, sigma: complex, v0=None):
+    """:func:`~chuteflow.stability.nearest_eigenpair` on ``op.pencil(0, k_z)`` computed on
+    its real form (:class:`_RealFormShiftInvert`, the matrix from :func:`_real_pencil`'s
+    pieces instead of a complex assembly): the same inverse iteration from ``v0`` (a random
+    start without it), the same nudge of a shift on an eigenvalue and the same Arnoldi
+    fallback, so the same eigenpair up to round-off. A shift within
+    :data:`REAL_SHIFT_RTOL` relative of the real axis is taken as real. Returns
+    (α, w, pencil), w an eigenvector of the equilibrated pencil."""
+    p, Ar, bd, s = _real_pencil(op, kz)
+    sigma = complex(sigma)
+    if abs(sigma.imag) <= REAL_SHIFT_RTOL * abs(sigma):
+        sigma = complex(sigma.real)
+    try:
+        si = _RealFormShiftInvert(Ar, bd, sigma)
+    except ConvergenceError:  # σ hit an eigenvalue to machine precision: nudge it
+        sigma = sigma * (1 + 1e-12) + 1e-14 * (1 + 1j)
+        si = _RealFormShiftInvert(Ar, bd, sigma)
+    if v0 is not None:
+        start = np.asarray(v0, dtype=complex) / s
+        found = si.iterate(start)
+    else:
+        rng = np.random.default_rng(2024)
+        start = si.apply((rng.standard_normal(si.size) + 1j * rng.standard_normal(si.size)) / s)
+        found = si.iterate(start, maxiter=16)
+    if found is None:
+        alpha, V = si.nearest(1, v0=si.apply(start))
+        if len(alpha) == 0:
+            raise ConvergenceError(f"no eigenvalue converged near {complex(sigma):.6g} at N = {p.n}")
+        found = alpha[0], V[:, 0]
+    return found[0], s * found[1], p
 
 
 #: Past the branch the candidates are re-seeded by a coarse dense scan every time k_z has
@@ -797,7 +1000,8 @@ def _beyond_branch(flow, ks, n, policy, cache):
                 seeds = [(a, v, SEED_N) for a, v in _seed_candidates(flow, k, policy, cache)]
                 cands = cands + seeds  # the followed ones first: their vectors are at N
                 k_seed = k
-            pencil = stability_operator(flow, n_cur, True, cache=cache).pencil(0.0, k)
+            op = stability_operator(flow, n_cur, True, cache=cache)
+            pencil = op.pencil(0.0, k)
             found = []
             for a, v, nv in cands:
                 if nv == SEED_N and any(
@@ -812,7 +1016,7 @@ def _beyond_branch(flow, ks, n, policy, cache):
                     if a.real + 0.2 * max(abs(a), 1e-3) < kth:
                         continue
                 try:
-                    alpha, w = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, nv, n_cur))
+                    alpha, w, _ = _nearest_kx0(op, k, a, v0=interp_vector(v, nf, nv, n_cur))
                 except ConvergenceError:
                     continue
                 if abs(alpha - a) > 0.2 * max(abs(a), 1e-3):
@@ -860,9 +1064,10 @@ def judge_resolved(
     re-solved there from the interpolated vector.
 
     Returns the mode at the last N tried (drift ``inf`` where no eigenvalue at N' settles;
-    None only when the ladder is empty). Used past the tracked branch
-    (:func:`transverse_dispersion`) and by the metric's longitudinal maximum
-    (:func:`chuteflow.longwave.transverse.longitudinal_peak`).
+    None only when the ladder is empty). Used by the metric's longitudinal maximum
+    (:func:`chuteflow.longwave.transverse.longitudinal_peak`); past the tracked branch
+    (:func:`transverse_dispersion`) the same check runs on the real form of the k_x = 0
+    pencil, each rung's α(N') reused from the rung below.
     """
     nf = 5 if three_d else 4
     mode = None
@@ -888,7 +1093,35 @@ def judge_resolved(
 
 def _judge_complex(flow, kz, alpha, w, n, policy, cache) -> Mode:
     """Drift and tail of a shift-invert eigenpair at (0, k_z), N raised while not physical
-    (at most three rungs): :func:`judge_resolved`, ``method = "shift"``."""
-    mode = judge_resolved(flow, 0.0, kz, alpha, w, n, three_d=True, policy=policy, cache=cache, rungs=3)
+    (at most three rungs), ``method = "shift"``: :func:`judge_resolved` on the real form
+    (:func:`_nearest_kx0`). A rung's check resolution N' = round(0.8 N) is the rung before
+    (80 → 100 → 125 → 156 …), where this eigenvalue was just solved: that α(N') is reused
+    instead of solving again from the interpolated vector (the same eigenvalue at the same
+    N, to the inverse iteration's tolerance 1e-7 |α − σ|)."""
+    nf = 5
+    mode = None
+    before = None  # (N, α) of the rung before
+    for nn in policy.ladder(n)[:3]:
+        op = stability_operator(flow, nn, True, cache=cache)
+        if nn != n:
+            try:
+                a_new, w, _ = _nearest_kx0(op, kz, alpha, v0=interp_vector(w, nf, n, nn))
+            except ConvergenceError:
+                break
+            before = (n, alpha)
+            alpha, n = a_new, nn
+        n2 = check_n(nn)
+        if before is not None and before[0] == n2:
+            drift = abs(alpha - before[1])
+        else:
+            try:
+                op2 = stability_operator(flow, n2, True, cache=cache)
+                a2, _, _ = _nearest_kx0(op2, kz, alpha, v0=interp_vector(w, nf, nn, n2))
+                drift = abs(a2 - alpha)
+            except ConvergenceError:
+                drift = math.inf
+        mode = make_mode(op.pencil(0.0, kz), alpha, w, drift, n2, policy)
+        if mode.physical:
+            break
     assert mode is not None  # the ladder from n has at least one rung
     return dataclasses.replace(mode, method="shift")

@@ -31,8 +31,10 @@ WINNER_GRID = {
 #: --metrics steady,longwave,transverse`` (metric ``transverse`` version 3); recorded here,
 #: not recomputed by this stage (18 and 27 min on 2 heavily loaded cores; φ = 0.05 rerun with
 #: the steady solver's mapped grid in 164 s wall on 2 quiet cores: 49 more flows resolved,
-#: all longitudinal only, the other counts and the "both" breakdown unchanged). Counts are
-#: of the grid points with a steady flow.
+#: all longitudinal only, the other counts and the "both" breakdown unchanged; φ = 0.10
+#: rerun likewise in 413 s wall on 2 cores shared with other jobs (load 3–4.5, niced): 50
+#: more flows, 10 stable and 40 longitudinal only, the other counts and the "both" breakdown
+#: unchanged). Counts are of the grid points with a steady flow.
 SWEEP_ANSWER_40x40 = {
     0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1167 flows): stable 681, longitudinal only 298, "
     "transverse only 10, both 178. Where both occur the longitudinal instability grows faster "
@@ -42,7 +44,7 @@ SWEEP_ANSWER_40x40 = {
     "(ν0(0) ≤ 0.028, h = 24–159) the longitudinal branch is lost at k ~ 1e-5 and no winner "
     "is named. The 10 transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 "
     "(h = 19–31) just outside the longitudinal unstable region (Re α2 < 0, α2z > 0).",
-    0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 990 flows): stable 711, longitudinal only 217, "
+    0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 1040 flows): stable 721, longitudinal only 257, "
     "transverse only 2, both 60. Where both occur the longitudinal instability grows faster at "
     "39 points (median 15×, 1.06× to 4e4×; λx = 5800–33000 σ, 105–1700 h; h = 19–69) and the "
     "transverse one at 6 thick dilute flows (θ = 22.0–22.5°, ν̄ = 0.007–0.011, h = 37–64; by "
