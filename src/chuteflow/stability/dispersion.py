@@ -448,7 +448,7 @@ def after_lost_branch(
     policy: RejectionPolicy | None = None,
     cache: OperatorCache | None = None,
     lost: str = "",
-    direct: bool = True,
+    check_direct: bool = True,
 ) -> Mode | None:
     """The answer at (k, kz) and N after the continuation lost the branch: the branch followed
     with the relaxed tail threshold (:func:`near_continuum_branch`), or a direct solve where
@@ -465,7 +465,7 @@ def after_lost_branch(
     replaces the (flagged) branch value when it is resolved, drifts less and is at least as
     unstable (``method = "qz (branch lost)"``, the branch value and its drift in the note).
     ``lost`` (where the branch was lost) heads the note. None when the relaxed continuation
-    does not reach k. With ``direct=False`` the dense spectrum is skipped (the band search and
+    does not reach k. With ``check_direct=False`` the dense spectrum is skipped (the band search and
     the direct mode): the relaxed value is returned as it is (:func:`least_stable` at the
     rungs of its ladder below the last, where an unresolved answer only leads to the next
     rung: the two dense QZ at N and N' per rung cost 4 times the relaxed continuation at
@@ -477,7 +477,7 @@ def after_lost_branch(
         return None
     relaxed = dataclasses.replace(relaxed, note=join_notes(lost, relaxed.note))
     kk = math.hypot(k, kz)
-    if relaxed.physical or kk <= policy.relaxed_k_max or not direct:
+    if relaxed.physical or kk <= policy.relaxed_k_max or not check_direct:
         return relaxed
     modes = spectrum(flow, k, kz=kz, n=n, policy=policy, physical_only=False, cache=cache)
     radius = BAND_RADIUS * relaxed.drift
@@ -936,7 +936,14 @@ def least_stable(
                 # the dense spectrum (band search, direct mode) only at the last rung: below
                 # it an unresolved relaxed value only leads to the next rung
                 mode = after_lost_branch(
-                    flow, k, kz=kz, n=nn, policy=policy, cache=cache, lost=lost or "", direct=nn == ns[-1]
+                    flow,
+                    k,
+                    kz=kz,
+                    n=nn,
+                    policy=policy,
+                    cache=cache,
+                    lost=lost or "",
+                    check_direct=nn == ns[-1],
                 )
                 if mode is not None:
                     if mode.method != "branch (relaxed)":
