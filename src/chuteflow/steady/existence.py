@@ -92,6 +92,7 @@ class SteadyODE:
         # function of Python floats (steady/_scalar_ode.py, derived from the same residuals)
         self._rhs = scalar_rhs(*model.closures)
         self._params = model._params
+        self._trailing = (*model._params, self.sin, self.cos)  # the generated rhs's last arguments
         # the floor values (a few calls per trial): the compiled floor conditions with the
         # flat argument list that equations.arguments would build, the closures' partials
         # from the model's scalar evaluator (first order: all the floor conditions use).
@@ -137,9 +138,16 @@ class SteadyODE:
     def rhs_bounded(self, y, z):
         """:meth:`rhs` with every non-finite value replaced by ±1e300, for the compiled
         Dormand–Prince loop of :func:`integrate` (a huge derivative makes its error estimate
-        reject the trial step and shorten it, as NaN does in scipy's Python loop)."""
-        out = self.rhs(y, z)
-        if all(map(math.isfinite, out)):
+        reject the trial step and shorten it, as NaN does in scipy's Python loop). Called
+        ~10⁵ times per scan with the integrator's array: one call level, no checks beyond
+        the finiteness of the result."""
+        s, u, T, T_y = z.tolist()
+        try:
+            nu_y, u_y, T_yy = self._rhs(math.exp(s), u, T, T_y, *self._trailing)
+            out = [float(nu_y), float(u_y), T_y, float(T_yy)]
+        except (ArithmeticError, ValueError, TypeError):
+            return [1e300] * 4
+        if math.isfinite(out[0] + out[1] + out[2] + out[3]):
             return out
         return [v if math.isfinite(v) else 1e300 if math.isnan(v) else math.copysign(1e300, v) for v in out]
 
@@ -234,19 +242,21 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
     hit: list = []
     stop: list = []  # the step where an event triggered: t_old, z_old, crossing estimate, t
 
-    def crossing(z_old, z_new, g, direction):
-        a, b = g(z_old), g(z_new)
+    def crossing(a, b, direction):
         if direction < 0:
             return a > 0 >= b
         if direction > 0:
             return a < 0 <= b
         return (a > 0 >= b) or (a < 0 <= b)
 
+    g_prev: list = []  # the events' values at the last accepted step
+
     def solout(t, z):
         z = np.array(z, dtype=float)
+        g_now = [g(z) for _, g, _ in events]
         if ts:
             t_old, z_old = ts[-1], zs[-1]
-            found = [(name, g) for name, g, d in events if crossing(z_old, z, g, d)]
+            found = [(name, g) for (name, g, d), a, b in zip(events, g_prev, g_now) if crossing(a, b, d)]
             if found:
                 f0 = np.asarray(fun(t_old, z_old), dtype=float)
                 f1 = np.asarray(fun(t, z), dtype=float)
@@ -270,6 +280,7 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
                 return -1
         ts.append(float(t))
         zs.append(z)
+        g_prev[:] = g_now
         return 0
 
     r = ode(fun).set_integrator("dopri5", rtol=rtol, atol=1e-12, nsteps=10**6)
