@@ -18,6 +18,10 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
   at six points of the φ = 0.05 map (flows, too small, too large with a separatrix), CPU time.
   Baseline: the same scan with the right-hand side of before issue 9 item 4 (the closures'
   and equations' numpy code called with scalars); the verdicts and u0(0), h must agree.
+- ``steady_existence_loop``: the same scan, CPU time, with the trials in scipy's compiled
+  Dormand–Prince loop (``dopri5`` of ``scipy.integrate.ode``, events located on the step's
+  interpolant and refined) against ``solve_ivp(method="RK45")`` with terminal events (the
+  same pair; its stepping loop in Python), as before; the verdicts and u0(0) must agree.
 - ``steady_diagram_rows``: the steady metric of the quick φ = 0.05 stability diagram (40 × 40,
   ``stage_config(0.05, True)``; every 4th row with ``--quick``), row by row as a sweep task
   solves it (:func:`chuteflow.sweep.runner._steady_chunk`), one process, CPU time. Baseline:
@@ -106,6 +110,7 @@ def run(quick: bool = False) -> list[dict]:
     )
 
     rows.append(_existence_row())
+    rows.append(_existence_loop_row())
     rows.append(_diagram_rows_row(quick))
     rows.append(_stage_maps_row(quick))
 
@@ -210,7 +215,71 @@ def _numpy_ode():
             T_yy = -np.float64(r) / np.float64(c[self._i_T_yy])
             return [float(nu_y / nu), float(u_y), float(T_y), float(T_yy)]
 
+        def rhs_bounded(self, y, z):
+            # what the compiled Dormand–Prince loop calls: the baseline's right-hand side
+            # with the same bounding of non-finite values
+            try:
+                out = self.rhs(y, z)
+            except (ArithmeticError, ValueError, TypeError):
+                return [1e300] * 4
+            return [v if np.isfinite(v) else 1e300 for v in out]
+
     return NumpyODE
+
+
+def _solve_ivp_integrate(fun, z0, y_cap, rtol, events, *, dense=False):
+    """``steady.existence.integrate`` as it was before: scipy's ``solve_ivp`` (RK45, its
+    stepping loop in Python) with terminal events on its dense output (baseline)."""
+    from scipy.integrate import solve_ivp
+
+    from chuteflow.steady.existence import Trajectory
+
+    evs = []
+    for _, g, d in events:
+
+        def ev(y, z, g=g):
+            return g(z)
+
+        ev.terminal, ev.direction = True, float(d)  # type: ignore[attr-defined]
+        evs.append(ev)
+    with np.errstate(all="ignore"):
+        sol = solve_ivp(
+            fun, (0.0, y_cap), z0, method="RK45", rtol=rtol, atol=1e-12, events=evs, dense_output=dense
+        )
+    hit = next((events[i][0] for i, te in enumerate(sol.t_events) if len(te)), None)
+    status = 0 if (hit or sol.status == 0) else -1
+    return Trajectory(sol.t, sol.y, hit, status, sol.sol if dense else None)
+
+
+def _existence_loop_row() -> dict:
+    from unittest import mock
+
+    from chuteflow.closures import ChuteModel
+    from chuteflow.steady import existence
+
+    model = ChuteModel(roughness=0.05)
+    existence.steady_existence(16.0, 0.05, model)
+
+    def scan():
+        c0 = time.process_time()
+        out = [existence.steady_existence(th, nu, model) for th, nu in _SCAN_POINTS]
+        return time.process_time() - c0, out
+
+    t_new, new = scan()
+    with mock.patch.object(existence, "integrate", _solve_ivp_integrate):
+        t_old, old = scan()
+    same = all(a.kind == b.kind for a, b in zip(new, old))
+    agree = max(
+        (abs(a.u_floor / b.u_floor - 1) for a, b in zip(new, old) if a.exists and b.exists), default=0.0
+    )
+    return {
+        "name": "steady_existence_loop",
+        "seconds": t_new,
+        "baseline_seconds": t_old,
+        "ratio": t_old / t_new,
+        "note": f"the scan's {len(_SCAN_POINTS)} points, CPU time: scipy's compiled dopri5 with events "
+        f"against solve_ivp RK45 (Python loop); same verdicts: {same}, u0(0) agree to {agree:.0e}",
+    }
 
 
 def _existence_row() -> dict:
@@ -242,7 +311,8 @@ def _existence_row() -> dict:
         "baseline_seconds": t_old,
         "ratio": t_old / t_new,
         "note": f"{len(_SCAN_POINTS)} points (φ=0.05), CPU time, {sum(v.shots for v in new)} shots; "
-        f"baseline: numpy right-hand side; same verdicts: {same}, u0(0) agree to {agree:.0e}",
+        f"baseline: numpy right-hand side (both in scipy's compiled dopri5 loop); same verdicts: "
+        f"{same}, u0(0) agree to {agree:.0e}",
     }
 
 
