@@ -230,17 +230,6 @@ class MappedChebyshevGrid(ChebyshevGrid):
         return MappedChebyshevGrid(n, self.a, self.b, self.center, self.width, self.blend)
 
 
-@functools.lru_cache(maxsize=32)
-def resampling_matrix(n: int, n_new: int) -> np.ndarray:
-    """Matrix P, (n_new + 1) × (n + 1), taking nodal values on the n-interval Lobatto grid to
-    the values of their interpolant on the n_new-interval grid of the same map (both in the
-    computational variable x, so one matrix serves every map). Cached, read-only."""
-    x_new = _reference(n_new)[0]
-    P = np.polynomial.chebyshev.chebvander(x_new, n) @ coefficients(np.eye(n + 1)).T
-    P.setflags(write=False)
-    return P
-
-
 def coefficients(f: np.ndarray) -> np.ndarray:
     """Chebyshev coefficients c_k of the interpolant of nodal values (nodes ascending in x)."""
     f = np.asarray(f)

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid, resampling_matrix
+from ..spectral import ChebyshevGrid
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
@@ -419,10 +419,6 @@ def _resample(st: NewtonState, n: int, grid_map: Any = _SAME) -> NewtonState:
     gm = st.grid_map if grid_map is _SAME else grid_map
     if st.n == n and gm == st.grid_map:
         return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L, gm)
-    if gm == st.grid_map:
-        # same map, another n: a fixed matrix in the computational variable
-        v = resampling_matrix(st.n, n) @ np.stack([st.s, st.u, st.T], axis=-1)
-        return NewtonState(n, v[:, 0].copy(), v[:, 1].copy(), v[:, 2].copy(), st.L, gm)
     old = st.ref
     new = reference_grid(n, gm).y
     v = old.interpolate(np.stack([st.s, st.u, st.T]), new)
