@@ -300,3 +300,15 @@ def test_mass_conserved_at_finite_amplitude(p1):
     rho = ds["rho_bar"].values
     assert np.ptp(rho[-1]) / rho[-1].mean() > 0.05  # a finite-amplitude wave
     assert ds.attrs["mass_drift"] < 1e-13
+
+
+def test_kinematic_wave_speed_is_dq0_drho(p1, p1_mode):
+    """``kinematic_wave_speed`` is dQ0/dρ̄0 of the steady family (eq. (B 6): −Im α1 of the
+    long-wave expansion, 4.15236 at P1 from ``chuteflow longwave``), not the eigenmode's
+    phase velocity at k = 2π/L (7.6626 at L = 2π/0.003), which is ``mode_phase_velocity``.
+    (It held the phase velocity until the L = 2000 / P4 / P5 runs of docs/dns.md.)"""
+    s = summary(simulate(16.0, 0.05, L1, model=MODEL, flow=p1, time=8.0, dt=4.0))
+    assert s["kinematic_wave_speed"] == pytest.approx(4.152359745, rel=1e-6)
+    # the DNS solves its mode on the plain Chebyshev grid, the fixture on the default one: 2e-8 apart
+    assert s["mode_phase_velocity"] == pytest.approx(p1_mode.wave_speed, rel=1e-6)
+    assert s["mode_phase_velocity"] > 1.8 * s["kinematic_wave_speed"]

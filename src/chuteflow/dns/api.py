@@ -19,7 +19,7 @@ from ..closures import ChuteModel
 from ..errors import ConvergenceError, ParameterError
 from ..spectral import ChebyshevGrid
 from ..stability import Mode, OperatorCache, least_stable
-from ..steady import SteadyFlow, solve_steady
+from ..steady import SteadyFlow, solve_steady, steady_tangent
 from .discretisation import TOPS, Discretisation
 from .stepper import NewtonSettings, Stepper
 
@@ -343,7 +343,10 @@ def simulate(
         coefficient of ρ̄), fields ``nu, u, v, T(snapshot, y, x)``, and as attributes the
         measured ``growth_rate``, ``phase_velocity``, the eigenvalue compared with
         (``alpha_re``, ``alpha_im``), the BDF2-inverted discrete eigenvalue
-        (``alpha_dns_re``, ``alpha_dns_im``), ``mass_drift``, ``status``, timings and the model.
+        (``alpha_dns_re``, ``alpha_dns_im``), the eigenmode's phase velocity
+        ``mode_phase_velocity`` = −Im α/k and the kinematic-wave speed ``kinematic_wave_speed``
+        = dQ0/dρ̄0 of the steady family (eq. (B 6)), ``mass_drift``, ``status``, timings and
+        the model.
     """
     model = model if model is not None else ChuteModel()
     if flow is None:
@@ -576,7 +579,10 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         "newton_mean": float(np.mean(newton)) if newton else 0.0,
         "wall_time": float(wall),
         "time_per_step": float(wall / max(len(newton), 1)),
-        "kinematic_wave_speed": float(mode.wave_speed),
+        # dQ0/dρ̄0 of the steady family at fixed θ (eq. (B 6), the k → 0 limit of the phase
+        # velocity) — not the eigenmode's phase velocity at k = 2π/L, which is stored apart
+        "kinematic_wave_speed": float(steady_tangent(flow)["dQ_drho"]),
+        "mode_phase_velocity": float(mode.wave_speed),
         "rho_bar0": flow.rho_bar,
         "Q0": flow.Q,
         **{f"model_{k_}": v for k_, v in setup.model.attrs().items()},
@@ -625,6 +631,7 @@ def summary(ds: xr.Dataset) -> dict:
         "alpha_dns_re",
         "alpha_dns_im",
         "kinematic_wave_speed",
+        "mode_phase_velocity",
         "mass_drift",
         "mean_flow_change",
         "steady_relaxation",
