@@ -251,38 +251,10 @@ def _solve_ivp_integrate(fun, z0, y_cap, rtol, events, *, dense=False):
     return Trajectory(sol.t, sol.y, hit, status, sol.sol if dense else None)
 
 
-def _existence_loop_row() -> dict:
-    from unittest import mock
-
-    from chuteflow.closures import ChuteModel
-    from chuteflow.steady import existence
-
-    model = ChuteModel(roughness=0.05)
-    existence.steady_existence(16.0, 0.05, model)
-
-    def scan():
-        c0 = time.process_time()
-        out = [existence.steady_existence(th, nu, model) for th, nu in _SCAN_POINTS]
-        return time.process_time() - c0, out
-
-    t_new, new = scan()
-    with mock.patch.object(existence, "integrate", _solve_ivp_integrate):
-        t_old, old = scan()
-    same = all(a.kind == b.kind for a, b in zip(new, old))
-    agree = max(
-        (abs(a.u_floor / b.u_floor - 1) for a, b in zip(new, old) if a.exists and b.exists), default=0.0
-    )
-    return {
-        "name": "steady_existence_loop",
-        "seconds": t_new,
-        "baseline_seconds": t_old,
-        "ratio": t_old / t_new,
-        "note": f"the scan's {len(_SCAN_POINTS)} points, CPU time: scipy's compiled dopri5 with events "
-        f"against solve_ivp RK45 (Python loop); same verdicts: {same}, u0(0) agree to {agree:.0e}",
-    }
-
-
-def _existence_row() -> dict:
+def _scan_pair(name: str, baseline, note) -> dict:
+    """The shooting scan at :data:`_SCAN_POINTS` (CPU time), then again inside the context
+    manager ``baseline`` (which swaps in the baseline's piece); the verdicts and u0(0) of the
+    two are compared. ``note(new, same, agree)`` writes the row's note."""
     from chuteflow.closures import ChuteModel
     from chuteflow.steady import existence
 
@@ -294,26 +266,48 @@ def _existence_row() -> dict:
         out = [existence.steady_existence(th, nu, model) for th, nu in _SCAN_POINTS]
         return time.process_time() - c0, out
 
-    original = existence.SteadyODE
     t_new, new = scan()
-    existence.SteadyODE = _numpy_ode()
-    try:
+    with baseline(existence):
         t_old, old = scan()
-    finally:
-        existence.SteadyODE = original
     same = all(a.kind == b.kind for a, b in zip(new, old))
     agree = max(
         (abs(a.u_floor / b.u_floor - 1) for a, b in zip(new, old) if a.exists and b.exists), default=0.0
     )
     return {
-        "name": "steady_existence_scan",
+        "name": name,
         "seconds": t_new,
         "baseline_seconds": t_old,
         "ratio": t_old / t_new,
-        "note": f"{len(_SCAN_POINTS)} points (φ=0.05), CPU time, {sum(v.shots for v in new)} shots; "
-        f"baseline: numpy right-hand side (both in scipy's compiled dopri5 loop); same verdicts: "
-        f"{same}, u0(0) agree to {agree:.0e}",
+        "note": note(new, same, agree),
     }
+
+
+def _existence_loop_row() -> dict:
+    from unittest import mock
+
+    return _scan_pair(
+        "steady_existence_loop",
+        lambda existence: mock.patch.object(existence, "integrate", _solve_ivp_integrate),
+        lambda new, same, agree: (
+            f"the scan's {len(_SCAN_POINTS)} points, CPU time: scipy's compiled "
+            f"dopri5 with events against solve_ivp RK45 (Python loop); same verdicts: {same}, u0(0) "
+            f"agree to {agree:.0e}"
+        ),
+    )
+
+
+def _existence_row() -> dict:
+    from unittest import mock
+
+    return _scan_pair(
+        "steady_existence_scan",
+        lambda existence: mock.patch.object(existence, "SteadyODE", _numpy_ode()),
+        lambda new, same, agree: (
+            f"{len(_SCAN_POINTS)} points (φ=0.05), CPU time, "
+            f"{sum(v.shots for v in new)} shots; baseline: numpy right-hand side (both in scipy's "
+            f"compiled dopri5 loop); same verdicts: {same}, u0(0) agree to {agree:.0e}"
+        ),
+    )
 
 
 def _diagram_rows_row(quick: bool) -> dict:
