@@ -46,10 +46,11 @@ def test_policy_is_frozen_and_checked():
     assert hash(RejectionPolicy()) == hash(DEFAULT_POLICY)
 
 
-def test_policy_ranks_a_direct_mode_over_the_relaxed_branch_only_past_the_continuum():
+def test_policy_ranks_a_direct_mode_over_the_relaxed_branch():
     """The rule of least_stable's fallback (RejectionPolicy.direct_outranks_relaxed): beyond
     relaxed_k_max (0.1) a resolved direct mode that drifts less than a flagged relaxed branch
-    value and is at least as unstable replaces it; below, the branch value always wins.
+    value and is at least as unstable replaces it; below, only a direct mode that passes both
+    of the paper's tests and is less damped does.
     Numbers (N = 200, benchmarks/probes/relaxed_branch.py): P5, k = 0.5: direct −0.3667
     (drift 4.6e-9, tail 1.2e-11), relaxed −0.8279 (drift 7.5e-4); P4, k = 0.5: direct −2.5106
     (drift 1.4e-8) against the branch −0.0300 (drift 6.4e-4); (16.5°, 0.13, 0.08, 0.30),
@@ -59,9 +60,21 @@ def test_policy_ranks_a_direct_mode_over_the_relaxed_branch_only_past_the_contin
     assert p.direct_outranks_relaxed(0.5, -0.3667, 4.6e-9, 1.2e-11, -0.8279, 7.5e-4)  # P5
     assert not p.direct_outranks_relaxed(0.5, -2.5106, 1.4e-8, 2.8e-12, -0.0300, 6.4e-4)  # P4
     assert not p.direct_outranks_relaxed(0.005, -0.0027, 3.1e-7, 6.0e-10, -0.0028, 2.3e-4)  # below
+    # below relaxed_k_max a mode that passes both tests and is less damped outranks the
+    # rejected relaxed value ((17.5°, 0.11, 0.075, 0.35), k = 0.005, N = 125: −0.00522663
+    # with drift 2.8e-8, tail 1.0e-10 against −0.0054775 with drift 1.8e-4) …
+    assert p.direct_outranks_relaxed(0.005, -0.00522663, 2.8e-8, 1.0e-10, -0.0054775, 1.8e-4)
+    # … but not a more damped one, nor one that fails a test
+    assert not p.direct_outranks_relaxed(0.005, -0.0060, 2.8e-8, 1.0e-10, -0.0054775, 1.8e-4)
+    assert not p.direct_outranks_relaxed(0.005, -0.00522663, 2.4e-7, 1.9e-9, -0.0054775, 1.8e-4)
     assert not p.direct_outranks_relaxed(0.5, -0.3667, 4e-3, 1.2e-11, -0.8279, 3.0e-3)  # drifts more
     assert not p.direct_outranks_relaxed(0.5, -0.3667, 1e-8, 1e-4, -0.8279, 3.0e-3)  # not resolved
-    assert not RejectionPolicy(relaxed_k_max=1.0).direct_outranks_relaxed(0.5, 0.0, 1e-8, 0.0, -1.0, 1e-3)
+    # relaxed_k_max moves the boundary: at k = 0.5 < 1.0 the rule below the continuum applies
+    # (a direct mode that fails the drift test does not outrank, however resolved its tail)
+    wide = RejectionPolicy(relaxed_k_max=1.0)
+    assert not wide.direct_outranks_relaxed(0.5, 0.0, 2e-7, 0.0, -1.0, 1e-3)
+    assert p.direct_outranks_relaxed(0.5, 0.0, 2e-7, 0.0, -1.0, 1e-3)
+    assert wide.direct_outranks_relaxed(0.5, 0.0, 1e-8, 0.0, -1.0, 1e-3)
     with pytest.raises(ParameterError, match="relaxed_k_max"):
         RejectionPolicy(relaxed_k_max=-1.0)
 

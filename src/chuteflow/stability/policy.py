@@ -126,14 +126,19 @@ class RejectionPolicy:
         relaxed_drift``) and is at least as unstable (``direct_re >= relaxed_re``): a
         resolved but more damped mode never hides a less damped one that N does not yet
         resolve (P4, k = 0.5: the branch at −0.0300 − 0.8172i, drift 6.4e-4 at N = 200,
-        against a resolved mode at −2.51 − 0.87i). Below :attr:`relaxed_k_max` the branch
-        value always wins.
+        against a resolved mode at −2.51 − 0.87i).
+
+        Below :attr:`relaxed_k_max` the branch value wins unless the direct mode passes both
+        of the paper's tests (:meth:`accepts`) and is less damped: the least-stable physical
+        mode is then that mode, and the relaxed value, which the tests reject, is not (θ =
+        17.5°, ν0(0) = 0.11, φ = 0.075, Φ = 0.35, k = 0.005: the relaxed branch wanders
+        between −0.00530 and −0.00614 with drifts ≥ 1.8e-4 up to N = 256, while −0.00522663 −
+        0.0310785i passes both tests from N = 125, drift 1.3e-11 at N = 256).
         """
+        if k <= self.relaxed_k_max:
+            return bool(self.accepts(direct_drift, direct_tail) and direct_re > relaxed_re)
         return bool(
-            k > self.relaxed_k_max
-            and direct_tail < self.track_tail_tol
-            and direct_drift < relaxed_drift
-            and direct_re >= relaxed_re
+            direct_tail < self.track_tail_tol and direct_drift < relaxed_drift and direct_re >= relaxed_re
         )
 
     def next_n(self, n: int) -> int:
