@@ -353,11 +353,12 @@ def interp_vector(v: np.ndarray, nfields: int, n_from: int, n_to: int) -> np.nda
     return (v.reshape(nfields, n_from + 1) @ M.T).reshape(-1)
 
 
-def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
+def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None, *, restarts: int = 60):
     """The eigenpair (alpha, w) nearest σ, by shift-invert on the equilibrated pencil.
 
     One LU of A − σB; inverse iteration first (from ``v0`` if given, else from a random
-    vector), Arnoldi (ARPACK) if that does not settle. With ``v0`` close to an eigenvector
+    vector), Arnoldi (ARPACK, at most ``restarts`` restarts per Krylov size,
+    :meth:`ShiftInvert.nearest`) if that does not settle. With ``v0`` close to an eigenvector
     (continuation, another resolution) the iteration stays on that eigenpair even if
     another eigenvalue is marginally nearer σ — callers check the answer. ``w`` is an
     eigenvector of the *equilibrated* pencil (:meth:`Pencil.equilibrated`; the eigenvector
@@ -384,7 +385,7 @@ def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None):
         if found is not None:
             return found
     start = si.apply(v0)
-    alpha, V = si.nearest(1, v0=start)
+    alpha, V = si.nearest(1, v0=start, maxiter=restarts)
     if len(alpha) == 0:
         raise ConvergenceError(f"no eigenvalue converged near {complex(sigma):.6g} at N = {pencil.n}")
     return alpha[0], V[:, 0]

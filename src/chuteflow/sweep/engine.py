@@ -19,6 +19,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -29,6 +30,9 @@ from .classify import classify
 from .config import SweepConfig
 from .runner import STATUS, TaskResult, run_task, warm_up
 from .store import ConfigMismatchError, PartStore, atomic_target
+
+if TYPE_CHECKING:
+    from ..steady import SteadyFlow
 
 __all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "markers"]
 
@@ -100,6 +104,9 @@ class Sweep:
         self.fresh = fresh
         self.keep_parts = keep_parts
         self.stats = SweepStats()
+        #: The steady flows computed by the last :meth:`run` with ``keep_flows=True``, by
+        #: grid index (i, j) (tasks reused from the store contribute none).
+        self.flows: dict[tuple[int, int], SteadyFlow] = {}
 
     # ------------------------------------------------------------------ public
     def run(
@@ -109,6 +116,7 @@ class Sweep:
         client=None,
         scheduler: str | None = None,
         progress: bool | ProgressFn = False,
+        keep_flows: bool = False,
     ):
         """Compute (or resume) the sweep and return the assembled :class:`xarray.Dataset`.
 
@@ -124,8 +132,13 @@ class Sweep:
         progress : bool or callable
             ``True``: a rich progress bar with ETA on stderr. A callable is called as
             ``progress(message, advance=n, total=N)`` (as a report stage's ``ctx.progress``).
+        keep_flows : bool
+            Keep the steady flows of the grid points computed in this run in
+            :attr:`flows` (about 4 kB each; for follow-up computations at the same points,
+            e.g. :func:`chuteflow.papers.mitarai2004.adaptive.refine_longwave`).
         """
         cfg = self.config
+        self.flows = {}
         t0 = time.perf_counter()
         tasks = cfg.tasks()
         self.stats = st = SweepStats(tasks=len(tasks), points=cfg.npoints)
@@ -146,6 +159,8 @@ class Sweep:
         todo = [t for t in tasks if t.key not in done]
 
         def finished(res: TaskResult):
+            self.flows.update(((res.i, j), flow) for j, flow in res.flows.items())
+            res.flows = {}
             if store is not None:
                 store.write(res)
             else:
@@ -164,16 +179,16 @@ class Sweep:
         ) as bar:
             if todo:
                 if client is not None or scheduler is not None:
-                    self._run_dask(todo, finished, client, scheduler)
+                    self._run_dask(todo, finished, client, scheduler, keep_flows)
                 else:
                     n = int(workers) if workers else (os.cpu_count() or 1)
                     n = max(1, min(n, len(todo)))
                     if n == 1:
                         st.backend, st.workers = "serial", 1
-                        _run_serial(cfg, todo, finished)
+                        _run_serial(cfg, todo, finished, keep_flows)
                     else:
                         st.backend, st.workers = "processes", n
-                        _run_pool(cfg, todo, finished, n)
+                        _run_pool(cfg, todo, finished, n, keep_flows)
         if store is not None:
             parts = [store.read(t.key) for t in tasks]
         else:
@@ -205,7 +220,7 @@ class Sweep:
             )
         return None
 
-    def _run_dask(self, todo, finished, client, scheduler):
+    def _run_dask(self, todo, finished, client, scheduler, keep_flows=False):
         try:
             from dask.distributed import Client, as_completed
         except ImportError:
@@ -227,7 +242,10 @@ class Sweep:
             st.workers = sum(client.nthreads().values())
             cfg = self.config
             prefix = f"chuteflow-{cfg.digest()[:10]}"
-            futures = [client.submit(run_task, cfg, t, pure=False, key=f"{prefix}-{t.key}") for t in todo]
+            futures = [
+                client.submit(run_task, cfg, t, keep_flows=keep_flows, pure=False, key=f"{prefix}-{t.key}")
+                for t in todo
+            ]
             try:
                 for fut in as_completed(futures):
                     finished(fut.result())
@@ -239,10 +257,10 @@ class Sweep:
                 client.close()
 
 
-def _run_serial(cfg, todo, finished):
+def _run_serial(cfg, todo, finished, keep_flows=False):
     with limit_blas_threads(1, set_env=False):
         for t in todo:
-            finished(run_task(cfg, t, limit_threads=False))
+            finished(run_task(cfg, t, limit_threads=False, keep_flows=keep_flows))
 
 
 def _init_worker():
@@ -253,7 +271,7 @@ def _init_worker():
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _run_pool(cfg, todo, finished, n):
+def _run_pool(cfg, todo, finished, n, keep_flows=False):
     # fork inherits the compiled equations (≈1.5 s of sympy per process otherwise)
     if sys.platform.startswith("linux"):
         warm_up(cfg)
@@ -262,7 +280,7 @@ def _run_pool(cfg, todo, finished, n):
         ctx = mp.get_context("spawn")
     ex = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker)
     try:
-        pending = {ex.submit(run_task, cfg, t) for t in todo}
+        pending = {ex.submit(run_task, cfg, t, keep_flows=keep_flows) for t in todo}
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:

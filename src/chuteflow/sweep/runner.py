@@ -53,6 +53,9 @@ class TaskResult:
     max_rss_kib: int = 0
     point_seconds: np.ndarray = field(default_factory=lambda: np.zeros(0))
     metric_seconds: dict = field(default_factory=dict)
+    #: The steady flows of the task's grid points, by column j (only with ``keep_flows``;
+    #: never stored, for follow-up computations in the same run).
+    flows: dict = field(default_factory=dict)
 
 
 _THREADS_LIMITED = False
@@ -131,12 +134,13 @@ def _steady_chunk(config, theta: float, nus, model):
     return out
 
 
-def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
+def run_task(config, task, *, limit_threads: bool = True, keep_flows: bool = False) -> TaskResult:
     """Compute every point of ``task`` (see :class:`~chuteflow.sweep.config.Task`).
 
     Steady flows come from :func:`_steady_chunk` (continuation along ν0; each marked point
     from its own cold start). Errors at a point become its status and message;
-    nothing here raises for a single point.
+    nothing here raises for a single point. ``keep_flows``: also return the grid points'
+    steady flows (:attr:`TaskResult.flows`).
     """
 
     if limit_threads:
@@ -238,4 +242,9 @@ def run_task(config, task, *, limit_threads: bool = True) -> TaskResult:
         max_rss_kib=int(rss),
         point_seconds=pt_seconds,
         metric_seconds=msec,
+        flows=(
+            {j: steady[k][0] for k, j in enumerate(range(task.j0, task.j1)) if steady[k][0] is not None}
+            if keep_flows and not marker
+            else {}
+        ),
     )

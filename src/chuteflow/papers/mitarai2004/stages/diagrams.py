@@ -70,9 +70,10 @@ def diagrams(ctx: StageContext) -> None:
         # the sweep's own store; the refined diagram (what the figure, the checks and later
         # stages use) is diagram_phi….nc
         sweep = Sweep(cfg, ctx.path(f"diagram_phi{phi:g}_sweep.nc"), fresh=True)
-        ds = sweep.run(progress=ctx.progress)
+        ds = sweep.run(progress=ctx.progress, keep_flows=True)
         t0 = time.perf_counter()
-        ds, counts = refine_longwave(ds, cfg, progress=ctx.progress)
+        ds, counts = refine_longwave(ds, cfg, progress=ctx.progress, flows=sweep.flows)
+        sweep.flows = {}
         t_refine = time.perf_counter() - t0
         ds.to_netcdf(ctx.path(f"diagram_phi{phi:g}.nc"))
         # the refined diagram is what later stages (reduced: point-by-point comparison) use
