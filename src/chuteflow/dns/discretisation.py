@@ -155,8 +155,9 @@ class Discretisation:
         return np.stack([self.to_modes(np.asarray(fields[f], dtype=float)) for f in UNKNOWNS])
 
     # -- jets ---------------------------------------------------------------------------
-    def jets(self, C: np.ndarray) -> dict[str, np.ndarray]:
-        """Every jet of :data:`chuteflow.dns.residual.JETS` except ∂_t, on the padded grid."""
+    def primitive_jets(self, C: np.ndarray) -> dict[str, np.ndarray]:
+        """Values and x, y derivatives up to second order of s, u, v, T on the padded grid
+        (keys ``"s"``, ``"s_x"``, ``"s_y"``, ``"s_xx"``, ``"s_xy"``, ``"s_yy"``, ``"u"``, …)."""
         ik = 1j * self.k
         D, D2 = self.grid.D, self.grid.D2
         out = {}
@@ -171,6 +172,13 @@ class Discretisation:
             out[f + "_y"] = D @ v0
             out[f + "_yy"] = D2 @ v0
             out[f + "_xy"] = D @ v1
+        return out
+
+    @staticmethod
+    def state_jets(prim: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The jets of :data:`chuteflow.dns.residual.JETS` (without ∂_t) from
+        :meth:`primitive_jets`: ν = e^s and its derivatives by the chain rule."""
+        out = dict(prim)
         s, sx, sy = out.pop("s"), out.pop("s_x"), out.pop("s_y")
         sxx, sxy, syy = out.pop("s_xx"), out.pop("s_xy"), out.pop("s_yy")
         nu = np.exp(s)
@@ -184,6 +192,10 @@ class Discretisation:
         )
         return out
 
+    def jets(self, C: np.ndarray) -> dict[str, np.ndarray]:
+        """Every jet of :data:`chuteflow.dns.residual.JETS` except ∂_t, on the padded grid."""
+        return self.state_jets(self.primitive_jets(C))
+
     # -- residual -----------------------------------------------------------------------
     def residual(self, C: np.ndarray, history: tuple, dt: float, bdf=BDF2) -> np.ndarray:
         """Scaled residual (4, N+1, M+1) of the implicit step to coefficients ``C``.
@@ -192,8 +204,39 @@ class Discretisation:
         one or two time levels (``(X^n, X^{n−1})``; X^{n−1} unused for BDF1).
         """
         st = self.jets(C)
+        R = self.pointwise_rows(st, history, dt, bdf)
+        nu = st["nu"]
+        if self.top == "isothermal":
+            out = self.to_modes(R)
+            out[0, 1:-1] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf)
+        else:
+            out = self.to_modes(R)
+            out[0, 1:] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf, top=True)
+        ik = self.k
+        top = self._top_terms
+        for i, f in enumerate(UNKNOWNS[1:], start=1):
+            acc = np.zeros(self.modes + 1, dtype=complex)
+            for c, kpow, coef in top[f]:
+                d = C[i, -1] if c == 0 else self._Dtop[c] @ C[i]
+                acc += coef * ik**kpow * d
+            out[i, -1] = acc
+        return out
+
+    def pointwise_rows(
+        self, st: dict, history: tuple, dt: float, bdf=BDF2, inflow: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The rows (4, N+1, points) of the residual at each point, before the projection.
+
+        ``st`` holds the jets of :meth:`jets` (completed here by the upwind top density
+        gradient and the ∂_t jets of the BDF formula), ``history`` the fields of the previous
+        time levels on the same points. Bulk rows are scaled as in the module table; the
+        mass rows are left unscaled (:meth:`residual` divides their modes by ν̄); the top
+        rows of u, v, T are per-mode conditions and are not among these rows (their entries
+        are the bulk equations there). ``inflow`` (where v(y_max) ≤ 0) fixes the upwind choice of
+        :meth:`_upwind_top` (default: from ``st``), so that it can be differentiated.
+        """
         if self.top == "transport":
-            self._upwind_top(st)
+            self._upwind_top(st, inflow)
         a0, a1, a2 = bdf
         now = (st["nu"], st["u"], st["v"], st["T"])
         for i, f in enumerate(DNS_FIELDS):
@@ -214,22 +257,9 @@ class Discretisation:
         R[3, 0] = res["floor_energy"][0] / kap[0]
         if self.top == "isothermal":
             R[0, -1] = self._top_nu(st)
-            out = self.to_modes(R)
-            out[0, 1:-1] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf)
-        else:
-            out = self.to_modes(R)
-            out[0, 1:] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf, top=True)
-        ik = self.k
-        top = self._top_terms
-        for i, f in enumerate(UNKNOWNS[1:], start=1):
-            acc = np.zeros(self.modes + 1, dtype=complex)
-            for c, kpow, coef in top[f]:
-                d = C[i, -1] if c == 0 else self._Dtop[c] @ C[i]
-                acc += coef * ik**kpow * d
-            out[i, -1] = acc
-        return out
+        return R
 
-    def _upwind_top(self, st: dict) -> None:
+    def _upwind_top(self, st: dict, inflow: np.ndarray | None = None) -> None:
         """The vertical density gradient that eq. (2.1) sees at the top node (``top="transport"``).
 
         Eq. (2.1) is a transport equation for ln ν (no diffusion of mass), so the top needs a
@@ -243,7 +273,8 @@ class Discretisation:
         (docs/dns.md, *The dilute top*).
         """
         nu, v, T = st["nu"][-1], st["v"][-1], st["T"][-1]
-        st["nu_y"][-1] = np.where(v > 0, st["nu_y"][-1], -self.sin_cos[1] / T * nu)
+        enters = ~(v > 0) if inflow is None else inflow
+        st["nu_y"][-1] = np.where(enters, -self.sin_cos[1] / T * nu, st["nu_y"][-1])
 
     def _mass_rows(
         self, C: np.ndarray, mass: np.ndarray, nu, T_top, history: tuple, dt: float, bdf, top: bool = False

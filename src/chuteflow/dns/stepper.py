@@ -8,7 +8,10 @@ Jacobian and one chord iteration converges. The block inverses are reused across
 Newton converges in at most ``refresh_after`` iterations and GMRES in at most
 ``refresh_krylov``, and rebuilt from the current state's x-mean otherwise. Newton starts from
 the caller's extrapolation in time and asks GMRES only for the reduction that reaches the
-tolerance (inexact Newton); docs/dns.md, *Solver*.
+tolerance (inexact Newton). At large amplitude the x-mean describes the Jacobian badly
+(GMRES needs hundreds of iterations) and ``preconditioner="auto"`` switches to the Jacobian
+of each x-column at the local state (:class:`~chuteflow.dns.columns.ColumnPreconditioner`),
+rebuilt when GMRES needs twice what it needed after the last build; docs/dns.md, *Solver*.
 """
 
 from __future__ import annotations
@@ -20,9 +23,13 @@ import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError
+from .columns import ColumnPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
-__all__ = ["NewtonSettings", "Stepper", "StepInfo"]
+__all__ = ["NewtonSettings", "Stepper", "StepInfo", "PRECONDITIONERS"]
+
+#: Preconditioners of the Newton–Krylov solve (:class:`NewtonSettings`).
+PRECONDITIONERS = ("auto", "mean", "columns")
 
 
 @dataclass(frozen=True)
@@ -48,6 +55,13 @@ class NewtonSettings:
     chord_ratio : float
         A chord step (preconditioner as Jacobian, no GMRES) is kept when it reduces the
         residual by at least this factor; otherwise GMRES is used.
+    preconditioner : {"auto", "mean", "columns"}
+        ``"mean"``: the per-mode linearisation about the x-averaged state (exact in the
+        linear phase); ``"columns"``: the Jacobian of each x-column at the local state
+        (:class:`~chuteflow.dns.columns.ColumnPreconditioner`); ``"auto"``: ``"mean"`` until
+        one GMRES solve needs more than ``switch_krylov`` iterations, ``"columns"`` from then on.
+    switch_krylov : int
+        GMRES iterations of one solve that make ``"auto"`` switch to ``"columns"``.
     """
 
     atol: float = 1e-10
@@ -59,6 +73,12 @@ class NewtonSettings:
     refresh_krylov: int = 30
     refresh_every: int = 20
     chord_ratio: float = 0.2
+    preconditioner: str = "auto"
+    switch_krylov: int = 60
+
+    def __post_init__(self):
+        if self.preconditioner not in PRECONDITIONERS:
+            raise ValueError(f"preconditioner = {self.preconditioner!r}: choose one of {PRECONDITIONERS}")
 
 
 @dataclass(frozen=True)
@@ -84,10 +104,14 @@ class Stepper:
     def __init__(self, disc: Discretisation, settings: NewtonSettings | None = None):
         self.disc = disc
         self.settings = settings or NewtonSettings()
-        self._lus: np.ndarray | None = None
+        self._lus: np.ndarray | ColumnPreconditioner | None = None
         self._lu_key: tuple | None = None
         self.factorisations = 0
         self._age = 0
+        self._base_krylov: int | None = None
+        #: Whether the column preconditioner is in use (from the start with
+        #: ``preconditioner="columns"``, after the switch with ``"auto"``).
+        self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
 
     def reset(self) -> None:
         """Forget the preconditioner (it is rebuilt at the next step)."""
@@ -98,9 +122,13 @@ class Stepper:
         d = self.disc
         return (np.exp(d.to_physical(C[0])), d.to_physical(C[1]), d.to_physical(C[2]), d.to_physical(C[3]))
 
-    def _factor(self, C, dt, a0):
-        self._lus = self.disc.factorise(self.disc.linear_blocks(C), dt, a0)
-        self._lu_key = (dt, a0)
+    def _factor(self, C, dt, bdf, history):
+        if self.columns:
+            self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf)
+        else:
+            self._lus = self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0])
+        self._lu_key = (dt, bdf[0])
+        self._base_krylov = None
         self.factorisations += 1
         self._age = 0
 
@@ -133,7 +161,7 @@ class Stepper:
         if first is False and w == 1.0:
             bdf = BDF2
         if self._lus is None or self._lu_key is None or not _close(self._lu_key, (dt, bdf[0])):
-            self._factor(C_now, dt, bdf[0])
+            self._factor(C_now, dt, bdf, history)
         self._age += 1
         C = (C_now if guess is None else guess).copy()
         z = d.pack(C)
@@ -149,6 +177,8 @@ class Stepper:
             lus = self._lus
 
             def prec(v, lus=lus):
+                if isinstance(lus, ColumnPreconditioner):
+                    return d.pack(lus.apply(d.unpack(v)))
                 return d.pack(d.precondition(lus, d.unpack(v)))
 
             if rn < s.atol:
@@ -207,8 +237,18 @@ class Stepper:
                 break
             # a refresh for GMRES's sake at most every `refresh_every` steps: at large
             # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
-            if it > s.refresh_after or (count[0] > s.refresh_krylov and self._age >= s.refresh_every):
-                self._factor(d.unpack(z), dt, bdf[0])
+            if s.preconditioner == "auto" and not self.columns and d.modes and count[0] > s.switch_krylov:
+                # the x-mean no longer describes the Jacobian: the local columns from now on
+                self.columns = True
+                self._factor(d.unpack(z), dt, bdf, history)
+                continue
+            if self._base_krylov is None:
+                self._base_krylov = count[0]
+            # the column preconditioner is dear to build: refreshed when GMRES needs twice
+            # what it needed right after the last build (and more than `refresh_krylov`)
+            limit = max(s.refresh_krylov, 2 * self._base_krylov) if self.columns else s.refresh_krylov
+            if it > s.refresh_after or (count[0] > limit and self._age >= s.refresh_every):
+                self._factor(d.unpack(z), dt, bdf, history)
         rn = float(np.max(np.abs(r)))
         if rn < s.atol:
             return self._conserve(d.unpack(z), history, bdf), StepInfo(s.max_iter, krylov, rn)

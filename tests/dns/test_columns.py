@@ -1,0 +1,138 @@
+"""Tests of the column preconditioner of the nonlinear phase (docs/dns.md, *Solver*).
+
+References: the per-mode linearisation :meth:`Discretisation.linear_blocks` (built from
+:func:`chuteflow.equations.compiled_equations`, itself checked against the finite-difference
+Jacobian in test_dns.py) for the coefficients, the algebraic identity P⁻¹ P = 1 for the
+factorisation, and the step of the x-mean preconditioner for the Newton solution.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from chuteflow.closures import ChuteModel
+from chuteflow.dns import Discretisation, Stepper
+from chuteflow.dns.columns import ColumnPreconditioner, column_coefficients, column_matrix
+from chuteflow.dns.discretisation import BDF2
+from chuteflow.dns.stepper import NewtonSettings
+from chuteflow.steady import solve_steady
+
+MODEL = ChuteModel(roughness=0.05)
+
+
+@pytest.fixture(scope="module")
+def p1():
+    return solve_steady(16.0, 0.05, MODEL)
+
+
+def _steady(d, flow):
+    p = flow.profiles(d.grid.y)
+    C = np.zeros(d.shape, complex)
+    C[0, :, 0], C[1, :, 0], C[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
+    return C
+
+
+def _wave(d, flow, amplitude):
+    """The steady flow with a density wave in modes 1 and 2 (and its small velocity)."""
+    C = _steady(d, flow)
+    C[0, :, 1] += amplitude * (1 + 0.5j)
+    C[0, :, 2] += 0.3 * amplitude * (0.2 - 1j)
+    C[2, 1:, 1] += 0.1 * amplitude * d.grid.y[1:] / d.y_max
+    return C
+
+
+def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
+    """At an x-independent state the column matrix is diagonal in the modes, and its block of
+    mode m is the per-mode Jacobian (linear_blocks) with ik → i sin(kh)/h and (ik)² →
+    −(2 − 2cos kh)/h² (central differences), |k| of the top rows exact."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 2, frame=7.8)
+    C = _steady(d, p1)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    dt = 3.0
+    J = column_matrix(d, column_coefficients(d, C, hist, dt, BDF2))
+    P = ColumnPreconditioner(d, J)
+    blocks = d.linear_blocks(C)
+    m, nx = d.n + 1, 2 * d.modes + 1
+    h = d.length / nx
+    for mode in (1, 2):
+        k = d.k[mode]
+        d1 = 1j * math.sin(k * h) / h
+        d2 = -(2 - 2 * math.cos(k * h)) / h**2
+        ref = (
+            blocks["K"] * k
+            + blocks["Bt"] * (1.5 / dt - d.frame * d1)
+            + blocks["pieces"].get(0, 0)
+            + d1 * blocks["pieces"].get(1, 0)
+            + d2 * blocks["pieces"].get(2, 0)
+        )
+        for j in range(0, 4 * m, 5):
+            V = np.zeros(d.shape, complex)
+            V[j // m, j % m, mode] = 1.0
+            out = P.to_modes(J @ P.to_points(V))
+            # nothing leaks into the other modes
+            others = np.delete(out, mode, axis=-1)
+            scale = np.abs(ref[:, j]).max()
+            assert np.abs(others).max() <= 1e-9 * scale
+            # one-sided differences of step 1e-7 × max|jet| in the coefficients; the density
+            # top row drops the O(ν(y_max)) term of the linear problem's condition (test_dns)
+            assert np.abs(out[:, :, mode].ravel() - ref[:, j]).max() <= 1e-5 * scale + 1e-6, (mode, j)
+
+
+def test_column_preconditioner_is_the_inverse_of_its_matrix(p1):
+    """apply(R) solves the assembled matrix exactly (to round-off) at a finite-amplitude state."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 16, 4, frame=7.8)
+    C = _wave(d, p1, 0.2)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    P = ColumnPreconditioner.build(d, C, hist, 4.0, BDF2)
+    rng = np.random.default_rng(1)
+    R = rng.normal(size=d.shape) + 1j * rng.normal(size=d.shape)
+    R[..., 0] = R[..., 0].real
+    x = P.apply(R)
+    lhs = P.matrix @ P.to_points(x)
+    rhs = P.to_points(R)
+    assert np.abs(lhs - rhs).max() <= 1e-9 * np.abs(rhs).max()
+    # and the points ↔ modes maps are inverse to each other
+    assert np.allclose(P.to_modes(P.to_points(R)), R, rtol=0, atol=1e-13)
+
+
+def test_newton_with_columns_reaches_the_same_steps(p1):
+    """Three BDF2 steps at a ±20 % wave: the column and the x-mean preconditioners give the
+    same solution to the Newton tolerance (max-norm of the scaled residual 1e-10)."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
+    C0 = _wave(d, p1, 0.1)
+    out = {}
+    for name in ("mean", "columns"):
+        st = Stepper(d, NewtonSettings(preconditioner=name))
+        C, hist_first = C0.copy(), True
+        hist = (st.physical(C), st.physical(C))
+        krylov = []
+        for _ in range(3):
+            C_new, info = st.step(C, hist, 4.0, first=hist_first)
+            assert info.residual < 1e-10
+            krylov.append(info.krylov)
+            hist = (st.physical(C_new), hist[0])
+            C, hist_first = C_new, False
+        out[name] = (C, krylov)
+    diff = np.abs(out["mean"][0] - out["columns"][0]).max()
+    # the residual's tolerance 1e-10 on rows of unit scale: solutions agree to ~1e-9
+    assert diff <= 1e-8, diff
+    assert np.abs(out["mean"][0] - C0).max() > 1e-4  # the steps did move the wave
+
+
+def test_auto_switches_to_columns(p1):
+    """``"auto"`` starts with the x-mean preconditioner and changes to the columns once a
+    GMRES solve needs more than ``switch_krylov`` iterations."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
+    C = _wave(d, p1, 0.1)
+    st = Stepper(d, NewtonSettings(switch_krylov=0))
+    assert not st.columns
+    hist = (st.physical(C), st.physical(C))
+    st.step(C, hist, 4.0, first=True)
+    assert st.columns
+    with pytest.raises(ValueError, match="preconditioner"):
+        NewtonSettings(preconditioner="ilu")
