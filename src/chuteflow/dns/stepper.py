@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, ParameterError
 from .columns import ColumnPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
@@ -78,7 +78,9 @@ class NewtonSettings:
 
     def __post_init__(self):
         if self.preconditioner not in PRECONDITIONERS:
-            raise ValueError(f"preconditioner = {self.preconditioner!r}: choose one of {PRECONDITIONERS}")
+            raise ParameterError(
+                f"preconditioner = {self.preconditioner!r}: choose one of {', '.join(PRECONDITIONERS)}"
+            )
 
 
 @dataclass(frozen=True)

@@ -923,6 +923,7 @@ def least_stable(
     best: Mode | None = None
     lost = None
     seed: Mode | None = None  # direct candidate below the continuum (_direct_candidate)
+    kk = math.hypot(k, kz)
     for nn in ns:
         mode: Mode | None
         if sigma is not None:
@@ -962,12 +963,12 @@ def least_stable(
                     if mode.method != "branch (relaxed)":
                         # the branch has dissolved into the continuum: direct solves from now on
                         how = "qz"
-                    elif not mode.physical and math.hypot(k, kz) <= policy.relaxed_k_max:
+                    elif not mode.physical and kk <= policy.relaxed_k_max:
                         # below the continuum: a resolved, less damped mode outranks the
                         # flagged relaxed value (RejectionPolicy.direct_outranks_relaxed)
                         seed = _direct_candidate(flow, k, kz, nn, seed, policy, cache)
                         if seed is not None and policy.direct_outranks_relaxed(
-                            math.hypot(k, kz),
+                            kk,
                             seed.alpha.real,
                             seed.drift,
                             seed.tail,
