@@ -149,6 +149,49 @@ def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
     assert [s["status"] for s in data["stages"]] == ["failed", "ok"]
 
 
+def test_independent_stages_run_in_a_second_process(tmp_path):
+    """Stages registered ``independent`` run in a forked process beside the others: their
+    sections come back in the stages' order, with their checkpoints (a failure included),
+    and their files are written; ``concurrent=False`` runs everything here."""
+    import os
+
+    with isolated_registry():
+
+        @register_stage("first", order=1)
+        def first(ctx):
+            """In this process."""
+            ctx.shared["first"] = os.getpid()
+            ctx.report.check("first.pid", source="-", statement="-", computed=str(os.getpid()), passed=True)
+
+        @register_stage("side", order=2, independent=True)
+        def side(ctx):
+            """Beside the others."""
+            ctx.path("side.txt").write_text("written")
+            ctx.report.check("side.pid", source="-", statement="-", computed=str(os.getpid()), passed=True)
+
+        @register_stage("side_fails", order=3, independent=True)
+        def side_fails(ctx):
+            """Fails beside the others."""
+            raise RuntimeError("boom beside")
+
+        @register_stage("last", order=4)
+        def last(ctx):
+            """Reads what the first stage left."""
+            ctx.report.check(
+                "last.shared", source="-", statement="-", computed="-", passed="first" in ctx.shared
+            )
+
+        for concurrent in (True, False):
+            rep = run_reproduce(tmp_path / str(concurrent), show_progress=False, concurrent=concurrent)
+            assert list(rep.sections) == ["first", "side", "side_fails", "last"]
+            pids = {cp.id: cp.computed for _, cp in rep.iter_checkpoints()}
+            assert (pids["side.pid"] != pids["first.pid"]) is concurrent
+            assert [s.status for s in rep.sections.values()] == ["ok", "ok", "failed", "ok"]
+            assert rep.counts() == {"pass": 3, "fail": 1, "not checked": 0}
+            assert "boom beside" in (tmp_path / str(concurrent) / "report.md").read_text(encoding="utf-8")
+            assert (tmp_path / str(concurrent) / "side" / "side.txt").read_text() == "written"
+
+
 def test_duplicate_stage_name_rejected():
     with isolated_registry():
 

@@ -10,12 +10,15 @@ the dense eigenproblem of (A' − σB')⁻¹B'), not which: the solver of each p
 its verdict are the same, and every value agrees within its own convergence estimate.
 
 Tolerance of Re α and |Im α| at each k_z: the larger of the two drifts |α(N) − α(N')| (the
-stated estimate) plus the round-off floor 1e-12 (1 + |α|) of a shift-invert solve here. On
-the tracked branch at P1 the drifts (1e-16 to 4e-13) are themselves round-off: two
-computations that differ only by round-off (the same A' assembled in another order) move α
-by up to 6.3e-13 there (measured, this change: ≤ 6.3e-13 on the branch, ≤ 8.2e-12 past it,
-where |α| reaches 39). The drifts and tails agree to half their value plus that floor
-(measured: the drifts of resolved modes to 37 %, T2 at k_z = 2.3, |α| = 30).
+stated estimate) plus a round-off floor 2e-11 (1 + |α|). On the tracked branch at P1 the
+drifts (1e-16 to 4e-13) are themselves round-off: two computations that differ only by
+round-off move α by up to 6.3e-13 there and 8.2e-12 past it, where |α| reaches 39 (the same
+A' assembled in another order, measured when the fast path came). A steady flow that
+differs only by round-off (relative 5e-12: Newton's solves with a second right-hand side,
+or another machine's BLAS kernels) moves α past the branch by up to 4.6e-11 at |α| = 2.6
+(T2, k_z = 1.07) and 1.2e-11 at |α| = 1.6 (P1, k_z = 0.38; measured), hence the floor.
+The drifts and tails agree to half their value plus that floor (measured: the drifts of
+resolved modes to 37 %, T2 at k_z = 2.3, |α| = 30).
 """
 
 from __future__ import annotations
@@ -36,7 +39,7 @@ KZ50 = np.geomspace(1e-5, 3.0, 50)
 
 
 def _floor(alpha_re):
-    return 1e-12 * (1.0 + np.abs(np.nan_to_num(alpha_re)))
+    return 2e-11 * (1.0 + np.abs(np.nan_to_num(alpha_re)))
 
 
 def _compare(got, stored):
@@ -64,7 +67,10 @@ def _check_point(name):
     s, rs = r.summary(), ref["summary"]
     # α2z: bordered perturbation theory, not touched; its estimate is convergence_alpha2
     assert s["alpha2_z"] == pytest.approx(rs["alpha2_z"], rel=rs["convergence_alpha2"])
-    assert s["convergence_alpha2"] == pytest.approx(rs["convergence_alpha2"], rel=1e-6)
+    # the estimate is a difference of two α2z values: a change of the steady tangent within
+    # its own precision (2e-9, from Newton's last LU, tests/steady/test_solver.py) moves it
+    # by 1.4e-4 relative at P1; 1e-2 still checks that it is the same estimate
+    assert s["convergence_alpha2"] == pytest.approx(rs["convergence_alpha2"], rel=1e-2)
     # α at k_check = 1e-4 on the branch over k_check²: the floor 1e-12 over 1e-8
     assert s["alpha2_z_eigen"] == pytest.approx(rs["alpha2_z_eigen"], abs=1e-12 / rs["k_check"] ** 2)
     _compare(r.dispersion, ref["disp25"])

@@ -92,6 +92,19 @@ class StepInfo:
     residual: float
 
 
+@dataclass(frozen=True)
+class MeanBlocks:
+    """The x-mean preconditioner: the inverses of the Jacobian's per-mode blocks at the
+    x-mean state (:meth:`Discretisation.factorise`), with the same ``apply`` as
+    :class:`~chuteflow.dns.columns.ColumnPreconditioner`."""
+
+    disc: Discretisation
+    inverses: np.ndarray
+
+    def apply(self, R: np.ndarray) -> np.ndarray:
+        return self.disc.precondition(self.inverses, R)
+
+
 class Stepper:
     """BDF2 time stepping of a :class:`Discretisation` (BDF1 for a first step without history).
 
@@ -106,7 +119,7 @@ class Stepper:
     def __init__(self, disc: Discretisation, settings: NewtonSettings | None = None):
         self.disc = disc
         self.settings = settings or NewtonSettings()
-        self._lus: np.ndarray | ColumnPreconditioner | None = None
+        self._lus: MeanBlocks | ColumnPreconditioner | None = None
         self._lu_key: tuple | None = None
         self.factorisations = 0
         self._age = 0
@@ -128,7 +141,7 @@ class Stepper:
         if self.columns:
             self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf)
         else:
-            self._lus = self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0])
+            self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
         self._lu_key = (dt, bdf[0])
         self._base_krylov = None
         self.factorisations += 1
@@ -179,9 +192,7 @@ class Stepper:
             lus = self._lus
 
             def prec(v, lus=lus):
-                if isinstance(lus, ColumnPreconditioner):
-                    return d.pack(lus.apply(d.unpack(v)))
-                return d.pack(d.precondition(lus, d.unpack(v)))
+                return d.pack(lus.apply(d.unpack(v)))
 
             if rn < s.atol:
                 if it == 1:

@@ -123,6 +123,9 @@ class Stage:
     #: The paper package the stage belongs to (``None``: a stage registered elsewhere,
     #: e.g. in a test, which runs with any paper).
     paper: str | None = None
+    #: Needs nothing from ``ctx.shared`` and leaves nothing there that another stage
+    #: reads: it may run in a second process beside the others (see ``register_stage``).
+    independent: bool = False
 
     def __call__(self, ctx: StageContext) -> None:
         self.func(ctx)
@@ -141,7 +144,12 @@ def _paper_of(module: str) -> str | None:
 
 
 def register_stage(
-    name: str, order: float, *, title: str | None = None, paper: str | None = None
+    name: str,
+    order: float,
+    *,
+    title: str | None = None,
+    paper: str | None = None,
+    independent: bool = False,
 ) -> Callable[[StageFunc], StageFunc]:
     """Decorator registering ``func(ctx) -> None`` as stage ``name``.
 
@@ -158,6 +166,12 @@ def register_stage(
     paper : str, optional
         The paper package the stage belongs to (default: taken from the module,
         ``chuteflow.papers.NAME...``).
+    independent : bool
+        The stage reads nothing from ``ctx.shared`` and writes nothing there that another
+        stage reads. :func:`~chuteflow.report.reproduce.run_reproduce` then runs it in a
+        second process beside the other stages on a machine with two or more cores (its
+        section, checkpoints and files are the same; its wall time overlaps theirs).
+        Meant for stages that use one core while the others wait on serial work.
 
     Returns the function unchanged. Registering another function under a taken name
     raises ``ValueError``.
@@ -177,7 +191,7 @@ def register_stage(
                 f"stage {name!r} is already registered by {old.func.__module__}.{old.func.__qualname__}"
             )
         owner = paper if paper is not None else _paper_of(func.__module__)
-        _REGISTRY[name] = Stage(name, float(order), func, heading, owner)
+        _REGISTRY[name] = Stage(name, float(order), func, heading, owner, bool(independent))
         return func
 
     return decorator

@@ -28,8 +28,8 @@ from rich.progress import (
 from rich.table import Table
 
 from .papers import DEFAULT_PAPERS, PAPERS
-from .registry import StageContext, load_stages, select_stages
-from .report import Checkpoint, Report
+from .registry import Stage, StageContext, load_stages, select_stages
+from .report import Checkpoint, Report, Section
 
 __all__ = ["run_reproduce", "StageProgress", "summary_table"]
 
@@ -112,6 +112,99 @@ def _model_defaults() -> dict[str, Any]:
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
+def _run_stage(stage: Stage, ctx: StageContext) -> Section:
+    """Run one stage into its section of ``ctx.report``: status, wall time, and a failed
+    checkpoint ``NAME.completed`` with the traceback if it raised (the run goes on)."""
+    report = ctx.report
+    t0 = time.perf_counter()
+    with report.stage(stage.name, stage.title) as section:
+        section.status = "running"
+        try:
+            stage.func(ctx)
+        except Exception as exc:  # recorded, run continues
+            section.status = "failed"
+            report.add_checkpoint(_failed(stage.name, f"{type(exc).__name__}: {exc}", traceback.format_exc()))
+        else:
+            section.status = "ok"
+        section.wall_time = time.perf_counter() - t0
+    return section
+
+
+def _failed(name: str, computed: str, detail: str) -> Checkpoint:
+    return Checkpoint(
+        id=f"{name}.completed",
+        source=f"chuteflow stage '{name}'",
+        statement="The stage runs to completion.",
+        computed=computed,
+        passed=False,
+        detail=detail,
+    )
+
+
+def _run_detached_stages(names: list[str], out: Path, quick: bool) -> list[Section]:
+    """In the second process: the independent stages in order, each into a report of its
+    own; their sections go back to the parent. At the lowest priority (nice 19): they take
+    the cores that the other stages leave idle (their serial parts) and do not slow down
+    the parallel ones."""
+    from chuteflow._threads import limit_blas_threads
+
+    from .registry import get_stage
+
+    limit_blas_threads(1)
+    if hasattr(os, "nice"):
+        try:
+            os.nice(19)
+        except OSError:  # not permitted here: same priority, still beside the others
+            pass
+    report = Report()
+    sections = []
+    for name in names:
+        stage = get_stage(name)
+        ctx = StageContext(out=out, quick=quick, report=report, stage=name, shared={})
+        sections.append(_run_stage(stage, ctx))
+    return sections
+
+
+class _Detached:
+    """The independent stages in one forked process (nothing when ``stages`` is empty).
+    ``result()`` waits for their sections; a process that dies (killed, out of memory)
+    gives each stage a failed ``NAME.completed`` checkpoint instead."""
+
+    def __init__(self, stages: list[Stage], out: Path, quick: bool) -> None:
+        self.stages, self.out, self.quick = stages, out, quick
+        self.pool: Any = None
+        self.future: Any = None
+
+    def __enter__(self) -> _Detached:
+        if self.stages:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
+
+            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
+            self.pool = ProcessPoolExecutor(max_workers=1, mp_context=ctx)
+            self.future = self.pool.submit(
+                _run_detached_stages, [s.name for s in self.stages], self.out, self.quick
+            )
+        return self
+
+    def result(self) -> list[Section]:
+        try:
+            return list(self.future.result())
+        except Exception as exc:
+            out = []
+            for stage in self.stages:
+                sec = Section(stage.name, stage.title, status="failed", wall_time=0.0)
+                sec.checkpoints.append(
+                    _failed(stage.name, f"the second process ended: {type(exc).__name__}: {exc}", "")
+                )
+                out.append(sec)
+            return out
+
+    def __exit__(self, *exc: object) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(wait=exc[0] is None, cancel_futures=True)
+
+
 def run_reproduce(
     out: str | Path = "reproduce-out",
     quick: bool = True,
@@ -121,6 +214,7 @@ def run_reproduce(
     show_progress: bool | None = None,
     parameters: dict[str, Any] | None = None,
     papers: Sequence[str] | None = None,
+    concurrent: bool = True,
 ) -> Report:
     """Run the reproduction stages and write ``report.md`` / ``report.html`` in ``out``.
 
@@ -143,6 +237,10 @@ def run_reproduce(
     papers : sequence of str, optional
         Paper packages (:mod:`chuteflow.papers`) whose stages run; default
         ``chuteflow.papers.DEFAULT_PAPERS``.
+    concurrent : bool
+        Run the stages registered ``independent`` in a second process beside the others
+        when the machine has two or more cores (default); False: all in order, in this
+        process.
 
     Returns
     -------
@@ -201,9 +299,32 @@ def run_reproduce(
         transient=True,
         disable=not live,
     )
-    with progress:
+    # independent stages run in a second process beside the others (two or more cores)
+    detached = [s for s in selected if s.independent] if concurrent else []
+    if len(detached) == len(selected) or (os.cpu_count() or 1) < 2:
+        detached = []
+    for stage in selected:  # the report keeps the stages' order, whichever finishes first
+        report.section(stage.name, stage.title)
+
+    def announce(i: int, section: Section, suffix: str = "") -> None:
+        n_fail = sum(cp.passed is False for cp in section.checkpoints)
+        colour = "red" if section.status == "failed" or n_fail else "green"
+        console.print(
+            f"[{i}/{n}] {section.name}: [{colour}]{section.status}[/]"
+            f"{f', {n_fail} failed checkpoint(s)' if n_fail else ''}"
+            f" ({section.wall_time:.1f} s{suffix})",
+            highlight=False,
+        )
+
+    with progress, _Detached(detached, out, quick) as side:
         overall = progress.add_task("stages", total=n)
+        if detached:
+            side_task = progress.add_task(
+                f"in a second process: {', '.join(s.name for s in detached)}", total=None
+            )
         for i, stage in enumerate(selected, 1):
+            if stage in detached:
+                continue
             task = progress.add_task(f"{stage.name}", total=None)
             ctx = StageContext(
                 out=out,
@@ -213,37 +334,20 @@ def run_reproduce(
                 progress=StageProgress(progress, task, f"{stage.name}: "),
                 shared=shared,
             )
-            t0 = time.perf_counter()
-            with report.stage(stage.name, stage.title) as section:
-                section.status = "running"
-                try:
-                    stage.func(ctx)
-                except Exception as exc:  # recorded, run continues
-                    section.status = "failed"
-                    report.add_checkpoint(
-                        Checkpoint(
-                            id=f"{stage.name}.completed",
-                            source=f"chuteflow stage '{stage.name}'",
-                            statement="The stage runs to completion.",
-                            computed=f"{type(exc).__name__}: {exc}",
-                            passed=False,
-                            detail=traceback.format_exc(),
-                        )
-                    )
-                else:
-                    section.status = "ok"
-                section.wall_time = time.perf_counter() - t0
+            section = _run_stage(stage, ctx)
             progress.remove_task(task)
             progress.advance(overall)
-            n_fail = sum(cp.passed is False for cp in section.checkpoints)
-            colour = "red" if section.status == "failed" or n_fail else "green"
-            console.print(
-                f"[{i}/{n}] {stage.name}: [{colour}]{section.status}[/]"
-                f"{f', {n_fail} failed checkpoint(s)' if n_fail else ''}"
-                f" ({section.wall_time:.1f} s)",
-                highlight=False,
-            )
+            announce(i, section)
             report.write(out, wall_time=time.perf_counter() - t_start)
+        if detached:
+            for stage, section in zip(detached, side.result(), strict=True):
+                report.sections[stage.name] = section
+                for cp in section.checkpoints:
+                    if cp.id:
+                        report._ids.add(cp.id)
+                progress.advance(overall)
+                announce(selected.index(stage) + 1, section, ", in a second process")
+            progress.remove_task(side_task)
 
     report.write(out, wall_time=time.perf_counter() - t_start)
     if report.checkpoints:

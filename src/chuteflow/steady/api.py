@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import collections
 import functools
 import math
 
@@ -267,8 +268,17 @@ def solve_point(
     maxiter=60,
     lam_min=1e-6,
     noise_exit=False,
+    keep: dict | None = None,
 ):
     """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start).
+
+    Newton's last Jacobian at the finer of the two accepted resolutions also gives the
+    family tangent dX/dβ (an extra right-hand side of its LU), which
+    :func:`steady_tangent` then uses instead of a new factorisation when that Jacobian was
+    taken within :data:`TANGENT_STEP` (relative) of the result. With ``keep`` (a dict),
+    the states at the two accepted resolutions are stored there (``"coarse"``, ``"fine"``)
+    with their :attr:`~chuteflow.steady.solver.NewtonState.tangents` (continuation
+    predictors: :mod:`chuteflow.steady.family`).
 
     With ``noise_exit`` the resolution ladder gives up (:class:`ResolutionError`) before
     n_max when the change between resolutions is at the solver's round-off floor, which
@@ -277,7 +287,9 @@ def solve_point(
     has grown since the previous pair (which exceeded rtol too), and the profile's spectral
     tail is below :data:`_NOISE_TAIL` × rtol (the truncation error is far below the change).
     """
-    st, it, res = solve_state(theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter, lam_min=lam_min)
+    st, it, res = solve_state(
+        theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter, lam_min=lam_min, tangents=True
+    )
     _, q = _quantities(theta, st, model)
     change = prev = math.inf
     while True:
@@ -296,6 +308,7 @@ def solve_point(
             lam_min=lam_min,
             min_iter=1,
             grid_map=st.grid_map,
+            tangents=True,
         )
         it += it2
         g2, q2 = _quantities(theta, st2, model)
@@ -334,9 +347,23 @@ def solve_point(
         grid_map=st2.grid_map,
         **q2,
     )
+    if st2.tangents is not None and st2.tangents[1] <= TANGENT_STEP:
+        _BETA_TANGENTS[flow] = st2.tangents[0]
+        while len(_BETA_TANGENTS) > 256:
+            _BETA_TANGENTS.popitem(last=False)
+    if keep is not None:
+        keep["coarse"], keep["fine"] = st, st2
     if q2["h"] < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, q2["h"], min_thickness), flow)
     return flow
+
+
+#: Largest relative Newton step after the Jacobian whose LU gave a flow's dX/dβ for
+#: :func:`steady_tangent` to use it (otherwise it factorises the Jacobian at the flow).
+#: The tangent's error is of the order of that step (measured: tests/steady/test_solver.py).
+TANGENT_STEP = 1e-10
+#: dX/dβ of recent flows from Newton's last LU (solve_point), by flow (the last 256).
+_BETA_TANGENTS: collections.OrderedDict = collections.OrderedDict()
 
 
 class ResolutionError(ConvergenceError):
@@ -383,7 +410,8 @@ def _cached_tangent(flow: SteadyFlow) -> dict:
     """The tangent of one flow, computed once: several sweep metrics of the same point
     (``kinematic``, the 1D criterion, the long-wave theory) need it. Its arrays are made
     read-only so that no caller can alter the cached copy."""
-    out = tangent_from(flow, tangent_vectors(flow, theta=False)[0])
+    dX = _BETA_TANGENTS.pop(flow, None)
+    out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
     for v in out.values():
         if isinstance(v, np.ndarray):
             v.flags.writeable = False

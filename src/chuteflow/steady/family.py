@@ -22,6 +22,7 @@ from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import coefficients
 from .api import (
+    TANGENT_STEP,
     ResolutionError,
     ThinLayerError,
     solve_point,
@@ -128,6 +129,7 @@ def _attempt(
     theta, nu0, model, opts: Options, start: NewtonState | None, n: int, cold: bool = False
 ) -> _Point:
     kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
+    keep: dict = {}
     try:
         flow = solve_point(
             theta,
@@ -140,11 +142,12 @@ def _attempt(
             start,
             opts.min_thickness,
             noise_exit=opts.noise_exit,
+            keep=keep,
             **kw,
         )
-        return _Point("ok", flow)
+        return _newton_vectors(_Point("ok", flow), keep, opts)
     except ThinLayerError as exc:
-        return _Point("thin", exc.flow, str(exc))
+        return _newton_vectors(_Point("thin", exc.flow, str(exc)), keep, opts)
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
     except ResolutionError as exc:
@@ -162,6 +165,26 @@ def _attempt(
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         return _Point("not_converged", None, f"{type(exc).__name__}: {exc}")
+
+
+def _newton_vectors(point: _Point, keep: dict, opts: Options) -> _Point:
+    """dX/dβ for :attr:`_Point.vectors` from Newton's last LU
+    (:func:`~chuteflow.steady.api.solve_point` with ``keep``), dX/dθ left for
+    :func:`_predict` to add if a step in θ needs it: for a predictor, dX/dβ of the coarser
+    accepted resolution; with ``opts.tangent`` (an output), that of the finer one if Newton's
+    last step after that LU was below :data:`~chuteflow.steady.api.TANGENT_STEP` (else
+    :func:`_with_tangent` factorises)."""
+    f = point.flow
+    coarse, fine = keep.get("coarse"), keep.get("fine")
+    if f is None or coarse is None or fine is None:
+        return point
+    if opts.tangent and point.status == "ok":
+        if fine.tangents is not None and fine.tangents[1] <= TANGENT_STEP:
+            point.vectors = (fine.tangents[0], None)
+            point.tangent = tangent_from(f, fine.tangents[0])
+    elif coarse.tangents is not None and coarse.n == _start_n(f, opts):
+        point.vectors = (coarse.tangents[0], None)
+    return point
 
 
 def _start_n(flow: SteadyFlow, opts: Options) -> int:
@@ -207,8 +230,17 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
     if point.vectors is not None:
         st0 = _resample(st0, len(point.vectors[0]) // 3 - 1)
     X = st0.pack()
+    if point.vectors is not None and point.vectors[1] is None and theta != f.theta:
+        # dX/dθ on the vectors' grid, once per point, where a step in θ needs it
+        try:
+            d_theta = state_tangent_vectors(f.theta, f.nu0, f.model, f.nu_top, st0)[1]
+            point.vectors = (point.vectors[0], d_theta)
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+            point.vectors = None
     if point.vectors is not None:
-        Xp = X + (nu0 - f.nu0) * point.vectors[0] + (theta - f.theta) * point.vectors[1]
+        Xp = X + (nu0 - f.nu0) * point.vectors[0]
+        if theta != f.theta:
+            Xp = Xp + (theta - f.theta) * point.vectors[1]
         st = NewtonState.unpack(st0.n, Xp, st0.grid_map)
         # near a fold a full Euler step can overshoot; keep it only where it is sane
         if (

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -60,6 +60,10 @@ class NewtonState:
     T: np.ndarray
     L: float
     grid_map: tuple[float, float] | None = None
+    #: Set by Newton (:meth:`SteadyNewton.solve` with ``tangents``) on the state it returns:
+    #: (dX/dβ, relative size of the last Newton step), the family tangent (β = ν0(0))
+    #: solved with the last Jacobian, which was taken at the state before that step.
+    tangents: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def nu(self):
@@ -211,6 +215,8 @@ class SteadyNewton:
         self.ln0, self.lntop = math.log(nu0), math.log(nu_top)
         self.eqs = compiled_equations()
         self._last: tuple[np.ndarray, dict] | None = None  # see evaluate
+        #: Newton also solves for dX/dβ (β = ν0(0)) with each LU (see _solve)
+        self.tangents = False
         m = n + 1
         # (equation, rows of the system, nodes it is imposed at, row-scaling kind)
         self._layout = (
@@ -300,6 +306,7 @@ class SteadyNewton:
             "jets": {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])},
             "kap": kap,
             "rows": rows_out,
+            "args": args,
         }
 
     def _jacobian(self, ctx: dict) -> np.ndarray:
@@ -371,10 +378,18 @@ class SteadyNewton:
             # the Jacobian only now that a step is needed (evaluate keeps the residual's
             # pieces of this state)
             R, J = self.evaluate(st)
+            # with ``tangents``, dX/dβ as a second right-hand side of the same LU (O(n²)):
+            # J dX/dβ = −∂R/∂β, and β = ν0(0) enters only through R[0] = ln ν(0) − ln β
+            if self.tangents:
+                B = np.zeros((len(R), 2))
+                B[:, 0], B[0, 1] = R, 1.0 / self.nu0
+            else:
+                B = R[:, None]
             try:
-                dX = -np.linalg.solve(J, R)
+                sol = np.linalg.solve(J, B)
             except (ValueError, np.linalg.LinAlgError):
                 break
+            dX = -sol[:, 0]
             X0 = st.pack()
             step = np.abs(dX).max() / max(np.abs(X0).max(), 1.0)
             # at large n the residual floor grows like eps·n⁴ (D2 near the ends): accept a
@@ -382,6 +397,8 @@ class SteadyNewton:
             # the result is checked independently by the change between two resolutions
             stalled = len(hist) > 2 and res > 0.5 * hist[-2] and (res < 1e-7 or (step < 1e-7 and res < 1e-4))
             if ((step < 1e-11 and res < 1e-6) or stalled) and it >= min_iter:
+                if self.tangents:  # this Jacobian was taken at st itself
+                    st.tangents = (sol[:, 1].copy(), 0.0)
                 return st, it, res, hist
             lam = 1.0
             while lam >= lam_min:
@@ -391,6 +408,8 @@ class SteadyNewton:
                     rt = np.abs(Rt).max()
                     better = rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)
                     if np.isfinite(rt) and better:
+                        if self.tangents:
+                            trial.tangents = (sol[:, 1].copy(), lam * step)
                         st, R, res = trial, Rt, rt
                         break
                 lam *= 0.5
@@ -437,6 +456,7 @@ def solve_state(
     lam_min=1e-6,
     min_iter=0,
     grid_map: Any = "auto",
+    tangents: bool = False,
 ):
     """Solve the steady problem; returns (state, iterations, residual). Raises on failure.
 
@@ -444,7 +464,8 @@ def solve_state(
     iterations are a third of the cost) and refines; the result does not depend on it.
     The grid is ``grid_map`` ((ξ_c, ξ_w) or None: plain Chebyshev nodes); by default
     (``"auto"``) the map of :func:`layer_grid_map` for the starting state (cold start or
-    ``guess``).
+    ``guess``). ``tangents`` sets the state's :attr:`NewtonState.tangents` (dX/dβ from
+    Newton's last Jacobian).
     """
     it0 = 0
     if guess is None:
@@ -453,6 +474,7 @@ def solve_state(
     guess = _resample(guess, n, gm)
     guess.s = guess.s + (math.log(nu0) - guess.s[0])  # exact floor value, same shape
     newton = SteadyNewton(n, theta, nu0, model, nu_top, grid_map=gm)
+    newton.tangents = tangents
     try:
         st, it, res, _ = newton.solve(guess, tol=tol, maxiter=maxiter, lam_min=lam_min, min_iter=min_iter)
     except _NewtonFailure as fail:

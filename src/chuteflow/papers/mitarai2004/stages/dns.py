@@ -25,7 +25,12 @@ K_VERIFY = 0.003
 WAVE_RUN = (1000.0, 28000.0, 4.0, 32, 1e-3)
 
 
-@register_stage("dns", order=70, title="Time-dependent simulation: linear phase and density waves (issue 11)")
+@register_stage(
+    "dns",
+    order=70,
+    title="Time-dependent simulation: linear phase and density waves (issue 11)",
+    independent=True,
+)
 def dns(ctx: StageContext) -> None:
     """Linear-phase checks against the eigenvalue; the wave-formation run when not quick."""
     with warnings.catch_warnings():

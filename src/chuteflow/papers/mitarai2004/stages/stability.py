@@ -56,7 +56,9 @@ def _k_grid(k_max: float, quick: bool):
     return np.unique(np.concatenate([np.linspace(0.0, k_max, n_lin), np.geomspace(1e-4, 0.1 * k_max, n_geo)]))
 
 
-@register_stage("stability", order=20, title="Linear stability (§4.2, figures 7–11, 13 and 14)")
+@register_stage(
+    "stability", order=20, title="Linear stability (§4.2, figures 7–11, 13 and 14)", independent=True
+)
 def stability(ctx: StageContext) -> None:
     """Dispersion relations, long-wave coefficients and eigenfunctions at P1–P5, Q1–Q3."""
     import warnings

@@ -59,7 +59,9 @@ OPERATOR_TOL = 1e-12
 A2Z_RTOL = 3e-4
 
 
-@register_stage("transverse", order=60, title="Three dimensions: transverse perturbations and §5.3")
+@register_stage(
+    "transverse", order=60, title="Three dimensions: transverse perturbations and §5.3", independent=True
+)
 def transverse_stage(ctx: StageContext) -> None:
     """Verification of the 3D operator, α2z, the transverse band and which instability wins."""
     import warnings
