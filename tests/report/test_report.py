@@ -45,3 +45,25 @@ def test_report_sections_and_duplicates(tmp_path):
     html = paths["html"].read_text(encoding="utf-8")
     assert "missing figure" in html and "theta" in html and "1.5 s" in html
     assert "## Steady flows" in paths["md"].read_text(encoding="utf-8")
+
+
+def test_adopt_replaces_a_section_in_place():
+    """A section made in another process takes the place of its placeholder (same
+    position); its checkpoint ids must be new to the rest of the report."""
+    from chuteflow.report.report import Section
+
+    rep = Report()
+    rep.section("a")
+    rep.section("b")
+    rep.check("a.x", source="-", statement="-", computed="-", passed=True, stage="a")
+    other = Section("b", "B", status="ok")
+    other.checkpoints.append(Checkpoint(id="b.y", source="-", statement="-", computed="-", passed=True))
+    rep.adopt(other)
+    assert list(rep.sections) == ["a", "b"] and rep.sections["b"] is other
+    clash = Section("b", "B")
+    clash.checkpoints.append(Checkpoint(id="a.x", source="-", statement="-", computed="-", passed=True))
+    with pytest.raises(ValueError, match="duplicate checkpoint id 'a.x'"):
+        rep.adopt(clash)
+    assert rep.sections["b"] is other
+    with pytest.raises(ValueError, match="duplicate"):
+        rep.check("b.y", source="-", statement="-", computed="-", passed=True, stage="a")

@@ -194,6 +194,19 @@ class Report:
         finally:
             self._current = previous
 
+    def adopt(self, section: Section) -> Section:
+        """Put ``section``, made elsewhere (a stage run in another process), in place of the
+        section of the same name, keeping its position; its checkpoint ids must be new to
+        the rest of this report."""
+        old = self.sections.get(section.name)
+        others = self._ids - {cp.id for cp in old.checkpoints} if old is not None else self._ids
+        dup = [cp.id for cp in section.checkpoints if cp.id in others]
+        if dup:
+            raise ValueError(f"duplicate checkpoint id {dup[0]!r}")
+        self._ids = others | {cp.id for cp in section.checkpoints}
+        self.sections[section.name] = section
+        return section
+
     def _target(self, stage: str | None) -> Section:
         return self.section(stage or self._current or GENERAL)
 

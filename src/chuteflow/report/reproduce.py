@@ -341,10 +341,7 @@ def run_reproduce(
             report.write(out, wall_time=time.perf_counter() - t_start)
         if detached:
             for stage, section in zip(detached, side.result(), strict=True):
-                report.sections[stage.name] = section
-                for cp in section.checkpoints:
-                    if cp.id:
-                        report._ids.add(cp.id)
+                report.adopt(section)
                 progress.advance(overall)
                 announce(selected.index(stage) + 1, section, ", in a second process")
             progress.remove_task(side_task)
