@@ -116,3 +116,40 @@ def test_refine_reuses_the_sweeps_flows():
     # measured: differences ≤ 2.6e-6 relative against estimates ≥ 6.7e-5)
     conv = a["alpha2_convergence"].values
     assert (np.abs(ra - rb) <= conv * np.abs(rb)).all(), (np.abs(ra / rb - 1).max(), conv.min())
+
+
+def test_row_ends_take_the_sweeps_flows():
+    """:func:`~chuteflow.papers.mitarai2004.edges.row_ends` with ``flows=`` (the sweep's
+    steady flows) starts a row's bisection below its least dense grid flow from that flow
+    instead of solving it again from the cold start; the row end it reports is that flow
+    here (every bisection step below it is refused) and it is classified with the sweep's
+    point functions (P2, θ = 16°, ν0(0) = 0.08: long-wave stable, §4.2)."""
+    import json
+    from unittest import mock
+
+    from chuteflow.errors import NoSteadyFlowError
+    from chuteflow.papers.mitarai2004 import edges
+    from chuteflow.steady import solve_steady
+
+    cfg = SweepConfig.grid(
+        0.05,
+        shape=(1, 2),
+        theta_range=(16.0, 16.0),
+        nu0_range=(0.07, 0.08),
+        metrics=("steady", "kinematic", StridedLongWave(stride=1)),
+    )
+    ds = _dataset(cfg, {})
+    ds["status"].values[0, 0] = 2  # the least dense point has no flow: bisect towards it
+    ds.attrs["config_json"] = json.dumps(cfg.to_dict(), sort_keys=True)
+    flow = solve_steady(16.0, 0.08)
+    calls = []
+
+    def refused(theta, nu0, model=None, **kw):
+        calls.append(kw.get("guess"))
+        raise NoSteadyFlowError("refused in this test")
+
+    with mock.patch.object(edges, "solve_steady", refused):
+        (end,) = edges.row_ends(ds, flows={(0, 1): flow}, bisections=2)
+    assert len(calls) == 2 and all(g is flow for g in calls)  # bisection only, from the flow
+    assert end["nu0"] == flow.nu0 and end["how"] == "grid" and end["h"] == flow.h
+    assert end["kind"] == "stable" and end["alpha2_re"] < 0

@@ -54,3 +54,64 @@ def test_noise_exit_keeps_statuses_and_values():
         if p.status == "ok":
             assert p.flow.Q == pytest.approx(q.flow.Q, rel=1e-12)
             assert p.flow.h == pytest.approx(q.flow.h, rel=1e-12)
+
+
+def _row(theta, nus, model, opts):
+    """continue_row with its cold starts and the Newton starts of its scans' flows counted."""
+    colds, starts = [], []
+    cold, attempt = family._cold, family._attempt
+
+    def counted_cold(*args, **kw):
+        p = cold(*args, **kw)
+        colds.append(p.usable)
+        return p
+
+    def counted_attempt(theta, nu0, model, opts, start, n, cold=False):
+        starts.append((nu0, n))
+        return attempt(theta, nu0, model, opts, start, n, cold)
+
+    with (
+        np.errstate(all="ignore"),
+        mock.patch.object(family, "_cold", counted_cold),
+        mock.patch.object(family, "_attempt", counted_attempt),
+    ):
+        return family.continue_row(theta, nus, model, opts), colds, starts
+
+
+def test_cold_starts_wait_for_the_verdict_at_the_branch_end():
+    """A row of the quick φ = 0.05 diagram grid whose flows lie at the dense end: once the
+    cold start in the middle has found them, the scan at the end of that piece of the branch
+    goes before any further cold start, and its verdict ('too small': no flow at any smaller
+    θ and ν0(0), :class:`~chuteflow.steady.family.Proof`) covers the rest of the row. Before,
+    three more cold starts below it failed there (~0.15 s each); statuses and values of the
+    40 × 40 quick diagrams of both φ are unchanged (measured: 0 status changes)."""
+    model = ChuteModel(roughness=0.05)
+    nus = np.linspace(0.01, 0.25, 20)
+    pts, colds, _ = _row(12.0 + 18.0 / 19.0, nus, model, family.Options(min_thickness=0.0, tangent=False))
+    st = [p.status for p in pts]
+    ok = [j for j, s in enumerate(st) if s == "ok"]
+    assert ok and ok == list(range(ok[0], len(nus)))  # the flows: the dense end of the row
+    assert all(s == "no_steady_flow" for s in st[: ok[0]])
+    assert sum(not u for u in colds) <= 1, colds
+    assert any("too small" in p.error or "heats up" in p.error for p in pts[: ok[0]])
+
+
+def test_layer_below_a_diameter_gets_two_newton_starts():
+    """The scan finds a layer of h = 0.16 (θ = 13.26°, ν0(0) = 0.098, φ = 0.05: below one
+    diameter, outside the hydrodynamics, §3.2) that Newton does not resolve to 1e-8 from the
+    shot profile: it is tried from n and 2n, not also from 4n (~0.5 s more; on the quick
+    diagrams of both φ no such layer converged from 4n only)."""
+    model = ChuteModel(roughness=0.05)
+    opts = family.Options(min_thickness=0.0, tangent=False)
+    starts = []
+    attempt = family._attempt
+
+    def counted(theta, nu0, model, opts, start, n, cold=False):
+        starts.append(n)
+        return attempt(theta, nu0, model, opts, start, n, cold)
+
+    with np.errstate(all="ignore"), mock.patch.object(family, "_attempt", counted):
+        p, v = family._decide(13.263157894737, 0.098421052632, model, opts)
+    assert v.exists and v.h < 1.0
+    assert starts == [64, 128]
+    assert p.status == "no_steady_flow" and "thinner than one diameter" in p.error

@@ -379,7 +379,8 @@ def _estimate(v: ExistenceVerdict) -> str:
 
 def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict | None]:
     """The shooting scan's verdict at (θ, ν0(0)) (:func:`steady_existence`); where a flow
-    exists, Newton from the shot profile at n, 2n, … ≤ n_max (a thin layer: once)."""
+    exists, Newton from the shot profile at n, 2n, … ≤ n_max (a layer thinner than
+    ``min_thickness``: from n only; one thinner than a diameter: from n and 2n)."""
     try:
         v = steady_existence(theta, nu0, model, nu_top=opts.nu_top, min_thickness=opts.min_thickness)
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
@@ -387,7 +388,11 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
     if not v.exists:
         return _Point("no_steady_flow", None, v.reason), v
     m, errors = opts.n, []
-    while m <= (opts.n_max if v.physical else opts.n):
+    # below one diameter (h < 1: outside the hydrodynamics, §3.2) Newton from the shot
+    # profile converges from n or 2n, or stalls at a resolution change of 1e-7…1e-4 from
+    # every start: the start from 4n (its ladder also climbs to n_max, ~0.5 s a point)
+    # converged nowhere on the 40 × 40 quick diagrams
+    while m <= (opts.n_max if v.physical and v.h >= 1.0 else 2 * opts.n if v.physical else opts.n):
         # the shot profile is accurate to ~1e-6: Newton converges in a few steps where the
         # grid resolves the layer, so fail fast as from a continuation guess
         p = _attempt(theta, nu0, model, opts, v.starting_state(m), m)
@@ -426,7 +431,8 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
 
 def _undecided_target(pts, settled, usable) -> int | None:
     """Next point to decide by the shooting scan: in a run of undecided points, the end
-    next to a converged flow (the existence boundary is there), else the middle."""
+    next to a point where ``usable`` holds (a converged flow: the existence boundary is
+    there; or a point the scan has decided), else the middle."""
     N = len(pts)
     runs, i = [], 0
     while i < N:
@@ -522,6 +528,11 @@ def continue_row(
     def settled(i):
         return usable(i) or "scan" in tried[i] or "proof" in tried[i]
 
+    def anchor(i):
+        # where a run of undecided points is decided from: next to a flow (the existence
+        # boundary is there) or next to a scanned point (outwards from the boundary)
+        return usable(i) or "scan" in tried[i]
+
     def open_(i):
         return not usable(i) and not proven(i)
 
@@ -532,6 +543,9 @@ def continue_row(
             pts[i] = p
 
     cold = [0]
+
+    def covered(i):
+        return any(q.covers(theta, nus[i]) for q in proofs)
 
     def walk():
         while True:
@@ -559,9 +573,19 @@ def continue_row(
                 continue
             if not cold_starts:
                 return
+            if opts.decide:
+                # with the scan deciding, the ends of the pieces of the branch found so far
+                # go first, outwards: the verdict there (a proof for a whole quadrant,
+                # usually the rest of the run) says where a cold start is pointless (a
+                # failed cold start costs ~0.15 s, a too_small verdict 0.04 s), and a scan
+                # finds any other piece of the branch
+                t = _undecided_target(pts, settled, anchor)
+                if t is not None and any(0 <= j < N and anchor(j) for j in (t - 1, t + 1)):
+                    return
             # walks stalled: a cold start where nothing has been attempted yet (a separate
-            # piece of the branch, or no piece found so far)
-            cand = [i for i in order if not tried[i]]
+            # piece of the branch, or no piece found so far), unless a scan's verdict
+            # already proves that there is none
+            cand = [i for i in order if not tried[i] and not covered(i)]
             if previous is None and not cand:
                 # a family: points where continuation failed get a cold start too (the
                 # isothermal start sometimes succeeds where a far neighbour's predictor does not)
@@ -581,7 +605,7 @@ def continue_row(
         walk()
         if not opts.decide:
             break
-        target = _undecided_target(pts, settled, usable)
+        target = _undecided_target(pts, settled, anchor)
         if target is None:
             break
         i = target
@@ -604,6 +628,13 @@ def continue_row(
                 continue
         tried[i].add("scan")
         p, v = _decide(theta, nus[i], model, opts)
+        if p.status == "not_converged" and previous is None and cold_starts and "cold" not in tried[i]:
+            # a flow exists but Newton from the shot profile did not converge: the isothermal
+            # cold start sometimes does (a family tried it before the scan, for every point
+            # next to a flow where continuation failed)
+            tried[i].add("cold")
+            q = _cold(theta, nus[i], model, opts)
+            p = q if q.usable else p
         pts[i] = p
         if v is not None and (v.kind in _LOW_KINDS or v.kind in _HIGH_KINDS) and p.status != "ok":
             proofs.append(Proof(theta, nus[i], v.kind, v.reason))

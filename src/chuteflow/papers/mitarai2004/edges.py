@@ -43,7 +43,7 @@ def _classify_flow(flow, fns):
     }
 
 
-def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
+def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5, flows=None):
     """Least dense flow reached on each θ row and its stability (A, B or stable).
 
     Parameters
@@ -57,6 +57,10 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
     halvings : int
         When the row's least dense grid flow is at the grid's lowest ν0 and stable: the
         contour is followed down to ν0_min / 2^halvings (steady family, continuation).
+    flows : dict, optional
+        The sweep's steady flows by grid index (i, j) (:attr:`chuteflow.sweep.Sweep.flows`,
+        computed with the same settings): a row's least dense grid flow is taken from there
+        instead of being solved again from the cold start.
 
     Returns
     -------
@@ -107,7 +111,9 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5):
             out.append(rec)
             continue
         try:
-            flow = solve_steady(theta, float(nus[j]), model, **kw)
+            flow = (flows or {}).get((i, j))
+            if flow is None:
+                flow = solve_steady(theta, float(nus[j]), model, **kw)
             how = "grid"
             if j > 0:
                 lo, hi = float(nus[j - 1]), float(nus[j])  # no flow at lo, flow at hi

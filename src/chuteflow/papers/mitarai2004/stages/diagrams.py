@@ -73,7 +73,6 @@ def diagrams(ctx: StageContext) -> None:
         ds = sweep.run(progress=ctx.progress, keep_flows=True)
         t0 = time.perf_counter()
         ds, counts = refine_longwave(ds, cfg, progress=ctx.progress, flows=sweep.flows)
-        sweep.flows = {}
         t_refine = time.perf_counter() - t0
         ds.to_netcdf(ctx.path(f"diagram_phi{phi:g}.nc"))
         # the refined diagram is what later stages (reduced: point-by-point comparison) use
@@ -91,7 +90,8 @@ def diagrams(ctx: StageContext) -> None:
         )
         ctx.progress(f"φ = {phi:g}: least dense flow of each θ contour")
         rows = range(0, cfg.shape[0], max(1, cfg.shape[0] // QUICK_ROWS) if ctx.quick else 2)
-        ends = row_ends(ds, rows=rows)
+        ends = row_ends(ds, rows=rows, flows=sweep.flows)
+        sweep.flows = {}
         for c in paper_checks(ds, ends):
             ctx.report.check(**c)
         st = ds["status"].values
