@@ -347,8 +347,9 @@ def solve_point(
         grid_map=st2.grid_map,
         **q2,
     )
-    if st2.tangents is not None and st2.tangents[1] <= TANGENT_STEP:
-        _BETA_TANGENTS[flow] = st2.tangents[0]
+    dX = newton_tangent(st2)
+    if dX is not None:
+        _BETA_TANGENTS[flow] = dX
         while len(_BETA_TANGENTS) > 256:
             _BETA_TANGENTS.popitem(last=False)
     if keep is not None:
@@ -364,6 +365,15 @@ def solve_point(
 TANGENT_STEP = 1e-10
 #: dX/dβ of recent flows from Newton's last LU (solve_point), by flow (the last 256).
 _BETA_TANGENTS: collections.OrderedDict = collections.OrderedDict()
+
+
+def newton_tangent(st: NewtonState) -> np.ndarray | None:
+    """dX/dβ of a converged state from Newton's last LU (:attr:`NewtonState.tangents`) if
+    that Jacobian was taken within :data:`TANGENT_STEP` of the state (accurate to about that
+    step, as an output); None otherwise (factorise at the state instead)."""
+    if st.tangents is not None and st.tangents[1] <= TANGENT_STEP:
+        return st.tangents[0]
+    return None
 
 
 class ResolutionError(ConvergenceError):

@@ -22,9 +22,9 @@ from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import coefficients
 from .api import (
-    TANGENT_STEP,
     ResolutionError,
     ThinLayerError,
+    newton_tangent,
     solve_point,
     state_of,
     state_tangent_vectors,
@@ -172,16 +172,17 @@ def _newton_vectors(point: _Point, keep: dict, opts: Options) -> _Point:
     (:func:`~chuteflow.steady.api.solve_point` with ``keep``), dX/dθ left for
     :func:`_predict` to add if a step in θ needs it: for a predictor, dX/dβ of the coarser
     accepted resolution; with ``opts.tangent`` (an output), that of the finer one if Newton's
-    last step after that LU was below :data:`~chuteflow.steady.api.TANGENT_STEP` (else
-    :func:`_with_tangent` factorises)."""
+    last step after that LU was small enough (:func:`~chuteflow.steady.api.newton_tangent`;
+    else :func:`_with_tangent` factorises)."""
     f = point.flow
     coarse, fine = keep.get("coarse"), keep.get("fine")
     if f is None or coarse is None or fine is None:
         return point
     if opts.tangent and point.status == "ok":
-        if fine.tangents is not None and fine.tangents[1] <= TANGENT_STEP:
-            point.vectors = (fine.tangents[0], None)
-            point.tangent = tangent_from(f, fine.tangents[0])
+        dX = newton_tangent(fine)
+        if dX is not None:
+            point.vectors = (dX, None)
+            point.tangent = tangent_from(f, dX)
     elif coarse.tangents is not None and coarse.n == _start_n(f, opts):
         point.vectors = (coarse.tangents[0], None)
     return point
@@ -388,11 +389,17 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
     if not v.exists:
         return _Point("no_steady_flow", None, v.reason), v
     m, errors = opts.n, []
-    # below one diameter (h < 1: outside the hydrodynamics, §3.2) Newton from the shot
-    # profile converges from n or 2n, or stalls at a resolution change of 1e-7…1e-4 from
-    # every start: the start from 4n (its ladder also climbs to n_max, ~0.5 s a point)
-    # converged nowhere on the 40 × 40 quick diagrams
-    while m <= (opts.n_max if v.physical and v.h >= 1.0 else 2 * opts.n if v.physical else opts.n):
+    if not v.physical:  # thinner than min_thickness: kept only as a thin layer
+        m_last = opts.n
+    elif v.h < 1.0:
+        # below one diameter (outside the hydrodynamics, §3.2) Newton from the shot profile
+        # converges from n or 2n, or stalls at a resolution change of 1e-7…1e-4 from every
+        # start: the start from 4n (its ladder also climbs to n_max, ~0.5 s a point)
+        # converged nowhere on the 40 × 40 quick diagrams
+        m_last = 2 * opts.n
+    else:
+        m_last = opts.n_max
+    while m <= m_last:
         # the shot profile is accurate to ~1e-6: Newton converges in a few steps where the
         # grid resolves the layer, so fail fast as from a continuation guess
         p = _attempt(theta, nu0, model, opts, v.starting_state(m), m)
@@ -548,8 +555,9 @@ def continue_row(
 
     cold = [0]
 
-    def covered(i):
-        return any(q.covers(theta, nus[i]) for q in proofs)
+    def covering(i) -> Proof | None:
+        # a scan's verdict that decides point i (no flow there), if any
+        return next((q for q in proofs if q.covers(theta, nus[i])), None)
 
     def walk():
         while True:
@@ -589,10 +597,11 @@ def continue_row(
             # walks stalled: a cold start where nothing has been attempted yet (a separate
             # piece of the branch, or no piece found so far), unless a scan's verdict
             # already proves that there is none
-            cand = [i for i in order if not tried[i] and not covered(i)]
-            if previous is None and not cand:
-                # a family: points where continuation failed get a cold start too (the
-                # isothermal start sometimes succeeds where a far neighbour's predictor does not)
+            cand = [i for i in order if not tried[i] and covering(i) is None]
+            if previous is None and not cand and not opts.decide:
+                # a family without the scan: points where continuation failed get a cold
+                # start too (the isothermal start sometimes succeeds where a far
+                # neighbour's predictor does not; with the scan, after it: see below)
                 cand = [
                     i
                     for i in order
@@ -613,7 +622,7 @@ def continue_row(
         if target is None:
             break
         i = target
-        cover = next((q for q in proofs if q.covers(theta, nus[i])), None)
+        cover = covering(i)
         if cover is not None:
             tried[i].add("proof")
             pts[i] = _implied(theta, nus[i], model, cover)
@@ -634,8 +643,8 @@ def continue_row(
         p, v = _decide(theta, nus[i], model, opts)
         if p.status == "not_converged" and previous is None and cold_starts and "cold" not in tried[i]:
             # a flow exists but Newton from the shot profile did not converge: the isothermal
-            # cold start sometimes does (a family tried it before the scan, for every point
-            # next to a flow where continuation failed)
+            # cold start sometimes does (the family's rule for points where continuation
+            # failed, above, applied after the scan)
             tried[i].add("cold")
             q = _cold(theta, nus[i], model, opts)
             p = q if q.usable else p

@@ -306,7 +306,6 @@ class SteadyNewton:
             "jets": {"u": (st.u, u1, u2), "T": (st.T, T1, T2), "nu": (nu, base["nu_y"], base["nu_yy"])},
             "kap": kap,
             "rows": rows_out,
-            "args": args,
         }
 
     def _jacobian(self, ctx: dict) -> np.ndarray:
