@@ -328,13 +328,15 @@ class _NotReproducible(Exception):
 KEEP = 32
 
 
-def _prune(folder: Path, stem: str, keep: Path) -> None:
-    """Delete all but the :data:`KEEP` most recent modules named ``stem-*.py`` (best effort)."""
+def _prune(folder: Path, stem: str, keep: Path, suffix: str = ".py") -> None:
+    """Delete all but the :data:`KEEP` most recent files named ``stem-*<suffix>`` (best
+    effort), with their byte code (modules) or C source (libraries, ``suffix=".so"``)."""
     try:
-        files = sorted(folder.glob(f"{stem}-*.py"), key=lambda p: p.stat().st_mtime, reverse=True)
+        files = sorted(folder.glob(f"{stem}-*{suffix}"), key=lambda p: p.stat().st_mtime, reverse=True)
         for old in files[KEEP:]:
             if old != keep:
                 old.unlink(missing_ok=True)
+                old.with_suffix(".c").unlink(missing_ok=True)
                 for pyc in (folder / "__pycache__").glob(old.stem + ".*"):
                     pyc.unlink(missing_ok=True)
     except OSError:

@@ -49,7 +49,7 @@ from ..closures.model import FUNCTIONS, ORDERS, SCALAR_ORDERS
 from ..equations import BASE, compiled_equations
 from ..spectral import ChebyshevGrid
 from ._roots import brent_root
-from ._scalar_ode import scalar_rhs
+from ._scalar_ode import FULL, NEQ, STOPPED, compiled_kernel, scalar_rhs
 from .solver import NewtonState, validate_point
 
 #: Default admissible range of the floor slip velocity u0(0) (units of √(gσ)). At the
@@ -93,6 +93,10 @@ class SteadyODE:
         self._rhs = scalar_rhs(*model.closures)
         self._params = model._params
         self._trailing = (*model._params, self.sin, self.cos)  # the generated rhs's last arguments
+        # the same right-hand side compiled with the Dormand–Prince loop around it (None
+        # where no C compiler is available: scipy's dopri5 calls rhs_bounded instead)
+        lib = compiled_kernel(*model.closures)
+        self.kernel = _Kernel(lib, self._trailing) if lib is not None else None
         # the floor values (a few calls per trial): the compiled floor conditions with the
         # flat argument list that equations.arguments would build, the closures' partials
         # from the model's scalar evaluator (first order: all the floor conditions use).
@@ -336,6 +340,168 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
     return Trajectory(t, y, hit[0] if hit else None, status, sol)
 
 
+def _level(k: int, c: float):
+    """The event function z ↦ z[k] − c."""
+    return lambda z: z[k] - c
+
+
+def _crossing(a, b, direction) -> bool:
+    """Whether an event function changes sign from a to b in ``direction`` (−1: from
+    positive to non-positive; +1: from negative to non-negative; 0: either)."""
+    if direction < 0:
+        return a > 0 >= b
+    if direction > 0:
+        return a < 0 <= b
+    return (a > 0 >= b) or (a < 0 <= b)
+
+
+class _Kernel:
+    """The compiled shooting integrator (:func:`~chuteflow.steady._scalar_ode.compiled_kernel`)
+    for one θ and model: :meth:`integrate` does what :func:`integrate` does with scipy's
+    dopri5 and :meth:`SteadyODE.rhs_bounded`, the stepping loop and the right-hand side in C
+    (one call per trajectory instead of ~10³ Python calls)."""
+
+    def __init__(self, lib, params):
+        import ctypes
+
+        self.lib = lib
+        self._dp = ctypes.POINTER(ctypes.c_double)
+        self._c_double, self._c_long, self._c_int = ctypes.c_double, ctypes.c_long, ctypes.c_int
+        self._par = np.array(params, dtype=float)
+        self._z = np.empty(NEQ)
+        self._f = np.empty(NEQ)
+        self._out = np.empty(1 + 2 * NEQ)
+        self._nrec = ctypes.c_long(0)
+        self._hit = ctypes.c_int(0)
+        self._p_par, self._p_z, self._p_f, self._p_out = map(
+            self._ptr, (self._par, self._z, self._f, self._out)
+        )
+        self._p_nrec, self._p_hit = ctypes.byref(self._nrec), ctypes.byref(self._hit)
+        self._grow(4096)
+
+    def _grow(self, cap: int) -> None:
+        self._cap = cap
+        self._ts = np.empty(cap)
+        self._zs = np.empty(cap * NEQ)
+        self._fs = np.empty(cap * NEQ)
+        self._p_ts, self._p_zs, self._p_fs = map(self._ptr, (self._ts, self._zs, self._fs))
+
+    def _ptr(self, a: np.ndarray):
+        return a.ctypes.data_as(self._dp)
+
+    def rhs(self, z) -> np.ndarray:
+        """d/dy of z (a copy), bounded as :meth:`SteadyODE.rhs_bounded`."""
+        self._z[:] = z
+        self.lib.cf_rhs(self._p_par, self._p_z, self._p_f)
+        return self._f.copy()
+
+    def _run(self, t0, z0, t_end, rtol, nmax, levels, record):
+        import ctypes
+
+        ne = len(levels)
+        ek = (ctypes.c_int * max(ne, 1))(*[k for _, k, _, _ in levels])
+        ec = (ctypes.c_double * max(ne, 1))(*[c for _, _, c, _ in levels])
+        ed = (ctypes.c_int * max(ne, 1))(*[d for _, _, _, d in levels])
+        self._z[:] = z0
+        while True:
+            status = self.lib.cf_integrate(
+                self._p_par,
+                float(t0),
+                self._p_z,
+                float(t_end),
+                float(rtol),
+                1e-12,
+                int(nmax),
+                ne,
+                ek,
+                ec,
+                ed,
+                self._cap if record else 0,
+                self._p_ts,
+                self._p_zs,
+                self._p_fs,
+                self._p_nrec,
+                self._p_hit,
+                self._p_out,
+            )
+            if status != FULL:
+                return status
+            self._grow(4 * self._cap)  # deterministic: the same run with room for it
+
+    def state_at(self, t0, z0, t_end, rtol) -> np.ndarray:
+        """The state at ``t_end`` integrated from (t0, z0) (no events; scipy's dopri5 with
+        ``nsteps = 10**4`` in :func:`integrate`)."""
+        self._run(t0, z0, t_end, rtol, 10**4, (), record=False)
+        return self._out[1 : 1 + NEQ].copy()
+
+    def integrate(self, z0, y_cap: float, rtol: float, levels, *, dense: bool = False) -> Trajectory:
+        """:func:`integrate` of the steady ODE from y = 0 with the events z[k] − c of
+        ``levels`` ((name, k, c, direction), in order of priority for simultaneous
+        crossings at the same height as in :func:`integrate`)."""
+        status = self._run(0.0, z0, y_cap, rtol, 10**6, levels, record=True)
+        n = self._nrec.value
+        t = self._ts[:n].copy()
+        zs = self._zs[: n * NEQ].reshape(n, NEQ).copy()
+        fs = self._fs[: n * NEQ].reshape(n, NEQ).copy()
+        hit = None
+        if status == STOPPED:
+            # the crossing on the step's cubic Hermite interpolant (bisection to round-off),
+            # then two secant steps each integrating afresh from the step's start, exactly
+            # as integrate() does
+            t_old, z_old, f0 = float(t[-1]), zs[-1], fs[-1]
+            t_new = float(self._out[0])
+            z_new, f1 = self._out[1 : 1 + NEQ].copy(), self._out[1 + NEQ :].copy()
+            mask = self._hit.value
+            best = None
+            for j, (name, k, c, _) in enumerate(levels):
+                if not mask & (1 << j):
+                    continue
+                lo, hi = t_old, t_new
+                glo = float(z_old[k]) - c
+                y0, y1, d0, d1 = float(z_old[k]), float(z_new[k]), float(f0[k]), float(f1[k])
+                for _ in range(100):
+                    mid = 0.5 * (lo + hi)
+                    if mid <= lo or mid >= hi:
+                        break
+                    gm = _hermite(t_old, t_new, y0, y1, d0, d1, mid) - c
+                    if (gm > 0) == (glo > 0) and gm != 0:
+                        lo, glo = mid, gm
+                    else:
+                        hi = mid
+                if best is None or hi < best[1]:
+                    best = (name, hi, k, c)
+            assert best is not None  # the mask names at least one event
+            hit, t_ev, k, c = best
+            z_ev = self.state_at(t_old, z_old, t_ev, rtol) if t_ev > t_old else z_old
+            for _ in range(2):
+                f_ev = self.rhs(z_ev)
+                eps = 1e-7 * max(1.0, float(np.abs(z_ev).max())) / max(float(np.abs(f_ev).max()), 1e-300)
+                g_ev = float(z_ev[k]) - c
+                slope = (float(z_ev[k] + eps * f_ev[k]) - c - g_ev) / eps
+                if not (math.isfinite(slope) and slope != 0):
+                    break
+                t_try = t_ev - g_ev / slope
+                if not (t_old < t_try < 2 * t_new - t_old) or t_try == t_ev:
+                    break
+                t_ev = t_try
+                z_ev = self.state_at(t_old, z_old, t_ev, rtol) if t_ev > t_old else z_old
+            t = np.append(t, t_ev)
+            zs = np.vstack([zs, z_ev])
+            fs = np.vstack([fs, self.rhs(z_ev)])
+        traj_status = 0 if (hit is not None or status > 0) else -1
+        y = zs.T
+        sol = None
+        if dense and len(t) > 1:
+            from scipy.interpolate import CubicHermiteSpline
+
+            spline = CubicHermiteSpline(t, zs, fs, axis=0, extrapolate=True)
+
+            def sol(yy):
+                return np.asarray(spline(yy)).T
+
+        return Trajectory(t, y, hit, traj_status, sol)
+
+
 @dataclass(frozen=True)
 class Shot:
     """One trial integration from the floor."""
@@ -376,11 +542,12 @@ def shoot(
     ln_pack = math.log(0.999 * ode.model.nu_max)
 
     z0 = [math.log(nu0), u_floor, T0, T0p]
-    events = (
-        ("top", lambda z: z[0] - ln_top, -1),
-        ("cold", lambda z: z[2] - _COLD * T0, 0),
-        ("packed", lambda z: z[0] - ln_pack, 0),
-        ("hot", lambda z: z[2] - 100.0 * T0, 0),
+    # (name, component k, constant c, direction): the event z[k] − c
+    levels = (
+        ("top", 0, ln_top, -1),
+        ("cold", 2, _COLD * T0, 0),
+        ("packed", 0, ln_pack, 0),
+        ("hot", 2, 100.0 * T0, 0),
     )
     if not all(map(math.isfinite, z0)):
         # the floor conditions have no solution at this trial (outside the closures'
@@ -388,8 +555,12 @@ def shoot(
         # whose integrator gives up at once with T0' not negative, below)
         start = Trajectory(np.zeros(1), np.array(z0, dtype=float)[:, None], None, -1, None)
         return Shot(u_floor, 1, "hot", math.nan, 0.0, start)
-    with np.errstate(all="ignore"):
-        sol = integrate(ode.rhs_bounded, z0, y_cap, rtol, events, dense=dense)
+    if ode.kernel is not None:
+        sol = ode.kernel.integrate(z0, y_cap, rtol, levels, dense=dense)
+    else:
+        events = tuple((name, _level(k, c), d) for name, k, c, d in levels)
+        with np.errstate(all="ignore"):
+            sol = integrate(ode.rhs_bounded, z0, y_cap, rtol, events, dense=dense)
     y_end = float(sol.t[-1])
     if sol.event == "top":
         d = float(sol.y[3, -1])
