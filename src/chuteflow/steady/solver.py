@@ -29,7 +29,7 @@ import numpy as np
 
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid
+from ..spectral import ChebyshevGrid, _reference
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
@@ -245,6 +245,23 @@ class SteadyNewton:
                 ("xmom", slice(m + 1, m + n), slice(1, n), "u"),
                 (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
             )
+        #: the Newton step eliminates u0' (:meth:`_step`) where the equations allow it
+        self.eliminate = integrated and _u_prime_only(self._layout, self.eqs)
+        #: where u0' enters the other rows once eliminated (by construction of the
+        #: assembly): (rows, first node) of the rows at nodes ≥ 1, each with w at its own
+        #: node only; the rows at the floor, with u0' everywhere (D1 M⁻¹'s row 0)
+        self._w_diagonal: list[tuple[slice, int]] = []
+        self._w_full: list[int] = []
+        if self.eliminate:
+            for name, rows, sl, _kind in self._layout:
+                if name == "xmom_integrated" or not any(
+                    f == "u" for _, f, _, _ in _steady_terms(self.eqs[name])
+                ):
+                    continue
+                if sl.start == 0:
+                    self._w_full += list(range(rows.start, rows.stop))
+                else:
+                    self._w_diagonal.append((rows, sl.start))
 
     def evaluate(self, st: NewtonState, jac=True):
         """Scaled residual R and (if ``jac``) its exact Jacobian J (None otherwise).
@@ -308,35 +325,58 @@ class SteadyNewton:
             "rows": rows_out,
         }
 
-    def _jacobian(self, ctx: dict) -> np.ndarray:
+    def _jacobian(self, ctx: dict, u_basis: tuple | None = None) -> np.ndarray:
+        """The exact Jacobian J; with ``u_basis`` = (M⁻¹, D1 M⁻¹) (:func:`_u_basis`), J T
+        instead, T = diag(I, M⁻¹, I, 1): the columns of u0 at the nodes replaced by those of
+        (u0(0), u0'(ξ_1…ξ_n)), which is how :meth:`_step` eliminates u0'."""
         n, m = self.n, self.n + 1
         L, D1, D2, nu, s1, s2 = ctx["L"], ctx["D1"], ctx["D2"], ctx["nu"], ctx["s1"], ctx["s2"]
         jets, kap = ctx["jets"], ctx["kap"]
         N = 3 * m + 1
         J = np.zeros((N, N))
-        # d(ν-jet c)/ds through ν = e^s, as matrices acting on δs (c = 0 is never used)
-        dnu: tuple[Any, ...] = (
-            None,
-            nu[:, None] * (np.diag(s1) + D1),
-            nu[:, None] * (np.diag(s2 + s1**2) + D2 + 2.0 * s1[:, None] * D1),
-        )
-        mats: tuple[Any, ...] = (None, D1, D2)
+        mats = (None, D1, D2)
         for ce, rows, sl, kind, res, coefs, scale in ctx["rows"]:
             Jr = J[rows]  # view into J: rows of this equation
             dL = np.zeros(len(res))
             idx = np.arange(m)[sl]
             r_idx = np.arange(len(idx))
+            # each field's block is diag(d) + diag(e1) D1 + diag(e2) D2 (rows ``sl``), with
+            # the row scale folded in; ν-terms through ν = e^s: d(ν_y)/ds = ν (s_y + D1),
+            # d(ν_yy)/ds = ν (s_yy + s_y² + D2 + 2 s_y D1)
+            acc: dict[int, list] = {}
+            nus, s1s, s2s = nu[sl], s1[sl], s2[sl]
             for i, fname, k, c in _steady_terms(ce):
                 cf = _rows(coefs[i], sl, m)
-                blk = Jr[:, k * m : (k + 1) * m]
-                if c == 0:
-                    # diagonal: ∂/∂X_i of a pointwise term (for ν via ν = e^s)
-                    blk[r_idx, idx] += cf * nu[sl] if fname == "nu" else cf
-                else:
-                    M = dnu[c] if fname == "nu" else mats[c]
-                    blk += cf[:, None] * M[sl]
+                if c:
                     dL += cf * (-c / L) * jets[fname][c][sl]
-            Jr *= scale[:, None]
+                if u_basis is not None and fname == "u":
+                    # d^c u0/dy^c = (D_c M⁻¹)(u0(0), u0'): c ∈ {0, 1} (_u_prime_only)
+                    Jr[:, m : 2 * m] += (scale * cf)[:, None] * u_basis[c][sl]
+                    continue
+                d_e = acc.get(k)
+                if d_e is None:
+                    d_e = acc[k] = [np.zeros(len(idx)), None, None]
+                if fname == "nu":
+                    g = cf * nus
+                    if c == 0:
+                        d_e[0] += g
+                    elif c == 1:
+                        d_e[0] += g * s1s
+                        d_e[1] = g if d_e[1] is None else d_e[1] + g
+                    else:
+                        d_e[0] += g * (s2s + s1s**2)
+                        d_e[2] = g if d_e[2] is None else d_e[2] + g
+                        d_e[1] = 2.0 * g * s1s if d_e[1] is None else d_e[1] + 2.0 * g * s1s
+                elif c == 0:
+                    d_e[0] += cf
+                else:
+                    d_e[c] = cf if d_e[c] is None else d_e[c] + cf
+            for k, (d, e1, e2) in acc.items():
+                blk = Jr[:, k * m : (k + 1) * m]
+                for e, M in ((e1, mats[1]), (e2, mats[2])):
+                    if e is not None:
+                        blk += (scale * e)[:, None] * M[sl]
+                blk[r_idx, idx] += scale * d
             Jr[:, -1] = scale * dL
             # derivative of the row scale
             if kind == "nu":
@@ -344,10 +384,63 @@ class SteadyNewton:
             elif kind == "T":
                 Jr[r_idx, idx] -= res * scale**2 * kap[(1, 0)][sl] * nu[sl]
                 Jr[r_idx, 2 * m + idx] -= res * scale**2 * kap[(0, 1)][sl]
-            J[rows] = Jr
         J[0, 0] = 1.0
         J[-1, n] = 1.0
         return J
+
+    def step(self, st: NewtonState, B: np.ndarray) -> np.ndarray:
+        """J⁻¹ B for the exact Jacobian J at ``st`` (columns of B: right-hand sides).
+
+        Where the equations allow (:attr:`eliminate`: u0 enters every row only through
+        u0', except the floor rows, which may also hold u0(0); the integrated x-momentum
+        eq. (3.7) μ u0' = tanθ p is the first such row), the unknowns u0(ξ_j) are replaced
+        by (u0(0), w_j = u0'(ξ_j), j = 1…n), u0 = M⁻¹ (u0(0), w) with M = [e_0; D1 rows
+        1…n] (:func:`_u_basis`). The x-momentum rows then hold w_j at their own node only
+        (a diagonal block), and so do the energy rows; eliminating w leaves a dense system of
+        2(n + 1) + 1 instead of 3(n + 1) + 1 unknowns (a third of the LU's work), whose
+        Schur complement costs O(n²). Otherwise, a dense LU of J."""
+        X = st.pack()
+        if self._last is None or not np.array_equal(self._last[0], X):
+            self._last = (X, self._residual(st))
+        ctx = self._last[1]
+        if not self.eliminate:
+            return np.linalg.solve(self._jacobian(ctx), B)
+        n, m = self.n, self.n + 1
+        Minv, D1Minv = _u_basis(n, self.grid_map, ctx["L"])
+        JT = self._jacobian(ctx, (Minv, D1Minv))
+        # rows of eq. (3.7) at nodes 1…n and the columns of w_j: the block m+1 … 2m−1;
+        # the rest (r = 2m + 2 rows and columns) is the block before and the block after
+        w, r = slice(m + 1, 2 * m), 2 * m + 2
+        a = np.diagonal(JT[w, w]).copy()
+        if not (np.all(np.isfinite(a)) and np.all(a != 0)):
+            Y = np.linalg.solve(JT, B)
+        else:
+            S = np.empty((r, r))
+            S[: m + 1, : m + 1], S[: m + 1, m + 1 :] = JT[: m + 1, : m + 1], JT[: m + 1, 2 * m :]
+            S[m + 1 :, : m + 1], S[m + 1 :, m + 1 :] = JT[2 * m :, : m + 1], JT[2 * m :, 2 * m :]
+            Z = np.hstack([JT[w, : m + 1], JT[w, 2 * m :]]) / a[:, None]  # w = b_w/a − Z y
+            bw = B[w] / a[:, None]
+            rhs = np.vstack([B[: m + 1], B[2 * m :]])
+
+            def rest(i):  # row i of J as a row of S (rows m+1 … 2m−1 are eliminated)
+                return i if i <= m else i - n
+
+            # S = A_rr − A_rw Z (and the right-hand side alike), with A_rw's pattern
+            for rows, j0 in self._w_diagonal:
+                k = rows.stop - rows.start
+                vals = np.diagonal(JT[rows, m + j0 : m + j0 + k])[:, None]
+                rs = slice(rest(rows.start), rest(rows.start) + k)
+                S[rs] -= vals * Z[j0 - 1 : j0 - 1 + k]
+                rhs[rs] -= vals * bw[j0 - 1 : j0 - 1 + k]
+            for i in self._w_full:
+                S[rest(i)] -= JT[i, w] @ Z
+                rhs[rest(i)] -= JT[i, w] @ bw
+            y = np.linalg.solve(S, rhs)
+            Y = np.empty_like(B)
+            Y[: m + 1], Y[2 * m :] = y[: m + 1], y[m + 1 :]
+            Y[w] = bw - Z @ y
+        Y[m : 2 * m] = Minv @ Y[m : 2 * m]  # back to u0 at the nodes
+        return Y
 
     def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
         # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
@@ -374,18 +467,17 @@ class SteadyNewton:
                 break
             if res < tol and it >= min_iter:
                 return st, it, res, hist
-            # the Jacobian only now that a step is needed (evaluate keeps the residual's
-            # pieces of this state)
-            R, J = self.evaluate(st)
             # with ``tangents``, dX/dβ as a second right-hand side of the same LU (O(n²)):
             # J dX/dβ = −∂R/∂β, and β = ν0(0) enters only through R[0] = ln ν(0) − ln β
             if self.tangents:
                 B = np.zeros((len(R), 2))
                 B[:, 0], B[0, 1] = R, 1.0 / self.nu0
             else:
-                B = R[:, None]
+                B = R[:, None].copy()
             try:
-                sol = np.linalg.solve(J, B)
+                # the Jacobian only now that a step is needed (the residual's pieces of this
+                # state are kept by evaluate)
+                sol = self.step(st, B)
             except (ValueError, np.linalg.LinAlgError):
                 break
             dX = -sol[:, 0]
@@ -420,6 +512,49 @@ class SteadyNewton:
                 return st, maxiter, res, hist
         hist.append(res)
         raise _NewtonFailure(st, hist)
+
+
+def _u_prime_only(layout, eqs) -> bool:
+    """Whether u0 enters the steady rows only through u0' (the floor rows, at node 0, also
+    through u0(0)), with the integrated x-momentum among them: what :meth:`SteadyNewton.step`
+    needs to eliminate u0'. Galilean invariance: the bulk equations hold velocity
+    differences only."""
+    if not any(name == "xmom_integrated" for name, *_ in layout):
+        return False
+    for name, _, sl, _ in layout:
+        node0 = sl == slice(0, 1)
+        for _i, fname, _k, c in _steady_terms(eqs[name]):
+            if fname == "u" and not (c == 1 or (c == 0 and node0)):
+                return False
+    return True
+
+
+@functools.lru_cache(maxsize=16)
+def _u_basis_ref(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """M_x⁻¹ and g_x = D_x[0] M_x⁻¹ for the Chebyshev differentiation matrix D_x on
+    x ∈ [−1, 1], M_x = [e_0; D_x rows 1…n]: u = M_x⁻¹ (u(x_0), du/dx at x_1…x_n), exactly
+    for polynomials of degree n. Any grid of n + 1 nodes y(x_j) (mapped or not) has
+    D1 = diag(1/y'(x_j)) D_x, hence M⁻¹ = M_x⁻¹ diag(1, y'(x_1), …): one inverse per n."""
+    Dx = _reference(n)[1]
+    Minv = np.linalg.inv(np.vstack([np.eye(1, n + 1), Dx[1:]]))
+    Minv[0] = np.eye(1, n + 1)[0]  # u(0) = u(0): exact
+    g = Dx[0] @ Minv
+    Minv.flags.writeable = False
+    g.flags.writeable = False
+    return Minv, g
+
+
+def _u_basis(n: int, grid_map, L: float) -> tuple[np.ndarray, np.ndarray]:
+    """(M⁻¹, D1 M⁻¹) on [0, L] with M = [e_0; D1 rows 1…n]: u0 at the nodes, and u0' there,
+    from (u0(0), u0'(y_1…y_n)). D1 M⁻¹ is the identity on rows 1…n (exactly: those rows of
+    M are D1's) and g on row 0."""
+    Minv_x, g_x = _u_basis_ref(n)
+    dydx = L * reference_grid(n, grid_map).jacobian  # y = L ξ(x)
+    q = dydx.copy()
+    q[0] = 1.0
+    D1Minv = np.eye(n + 1)
+    D1Minv[0] = g_x * q / dydx[0]
+    return Minv_x * q, D1Minv
 
 
 class _NewtonFailure(Exception):
