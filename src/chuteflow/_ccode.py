@@ -194,23 +194,25 @@ class Pointwise:
 
     def __init__(self, lib: ctypes.CDLL, n_arrays: int, n_out: int):
         self._fun = lib.cf_pointwise
-        dp = ctypes.POINTER(ctypes.c_double)
-        self._fun.argtypes = [ctypes.c_long, ctypes.POINTER(dp), dp, dp]
+        # raw addresses (numpy's .ctypes.data): no pointer objects per call
+        self._fun.argtypes = [ctypes.c_long, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
         self._fun.restype = None
-        self._dp = dp
         self.n_arrays, self.n_out = n_arrays, n_out
 
     def __call__(self, *args):
         import numpy as np
 
-        arrays = np.broadcast_arrays(*(np.asarray(a, dtype=float) for a in args[: self.n_arrays]))
+        arrays = [np.asarray(a, dtype=float) for a in args[: self.n_arrays]]
         shape = arrays[0].shape
-        flat = [np.ascontiguousarray(a, dtype=float).reshape(-1) for a in arrays]
+        if any(a.shape != shape for a in arrays):
+            arrays = np.broadcast_arrays(*arrays)
+            shape = arrays[0].shape
+        flat = [np.ascontiguousarray(a).reshape(-1) for a in arrays]
         n = flat[0].size
-        params = np.array([float(p) for p in args[self.n_arrays :]], dtype=float)
+        params = np.array(args[self.n_arrays :], dtype=float)
         out = np.empty((self.n_out, n))
-        ptrs = (self._dp * self.n_arrays)(*(a.ctypes.data_as(self._dp) for a in flat))
-        self._fun(n, ptrs, params.ctypes.data_as(self._dp), out.ctypes.data_as(self._dp))
+        ptrs = (ctypes.c_void_p * self.n_arrays)(*(a.ctypes.data for a in flat))
+        self._fun(n, ptrs, params.ctypes.data, out.ctypes.data)
         return out.reshape((self.n_out, *shape))
 
 

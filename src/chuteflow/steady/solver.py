@@ -350,8 +350,14 @@ class SteadyNewton:
                 if c:
                     dL += cf * (-c / L) * jets[fname][c][sl]
                 if u_basis is not None and fname == "u":
-                    # d^c u0/dy^c = (D_c M⁻¹)(u0(0), u0'): c ∈ {0, 1} (_u_prime_only)
-                    Jr[:, m : 2 * m] += (scale * cf)[:, None] * u_basis[c][sl]
+                    # d^c u0/dy^c = (D_c M⁻¹)(u0(0), u0'): c ∈ {0, 1} (_u_prime_only); D1 M⁻¹
+                    # is the identity on rows 1…n, and u0 at node 0 is u0(0)
+                    if c == 1 and sl.start >= 1:
+                        Jr[r_idx, m + idx] += scale * cf
+                    elif c == 0 and sl == slice(0, 1):
+                        Jr[:, m] += scale * cf
+                    else:
+                        Jr[:, m : 2 * m] += (scale * cf)[:, None] * u_basis[c][sl]
                     continue
                 d_e = acc.get(k)
                 if d_e is None:
