@@ -627,20 +627,20 @@ def continue_row(
             tried[i].add("proof")
             pts[i] = _implied(theta, nus[i], model, cover)
             continue
+        tried[i].add("scan")
+        p, v = _decide(theta, nus[i], model, opts)
         nb = [j for j in (i - 1, i + 1) if 0 <= j < N and usable(j)]
-        if nb and "substeps" not in tried[i]:
-            # next to a converged flow a shorter step often succeeds where the direct one
-            # failed (a sharp layer near the upper existence boundary): far cheaper than a scan
+        if not p.usable and v is not None and v.exists and nb and "substeps" not in tried[i]:
+            # the scan finds a flow that Newton from the shot profile does not resolve: next
+            # to a converged flow, shorter continuation steps often reach it (a sharp layer
+            # near the upper existence boundary). After the scan, not before: the scan's
+            # verdict (5–30 ms) usually settles the point, shorter steps cost ~0.1 s
             tried[i].add("substeps")
             fine = dataclasses.replace(opts, substeps=max(opts.substeps, 2))
             seed = pts[nb[0]]
             assert seed is not None  # usable
-            p = _continue(seed, theta, nus[i], model, fine, memo)
-            if p.usable:
-                pts[i] = p
-                continue
-        tried[i].add("scan")
-        p, v = _decide(theta, nus[i], model, opts)
+            q = _continue(seed, theta, nus[i], model, fine, memo)
+            p = q if q.usable else p
         if p.status == "not_converged" and previous is None and cold_starts and "cold" not in tried[i]:
             # a flow exists but Newton from the shot profile did not converge: the isothermal
             # cold start sometimes does (the family's rule for points where continuation
