@@ -182,7 +182,7 @@ class MappedChebyshevGrid(ChebyshevGrid):
         self.y = y
         self.jacobian = y1
         self.D = Dx / y1[:, None]
-        self._D2 = (Dx @ Dx) / (y1**2)[:, None] - (y2 / y1**3)[:, None] * Dx
+        self._y2 = y2
         self.weights = w * y1
 
     def _map(self, x):
@@ -197,10 +197,11 @@ class MappedChebyshevGrid(ChebyshevGrid):
         y2 = beta * eps * np.sinh(s) * ds**2
         return y, y1, y2
 
-    @property
+    @cached_property
     def D2(self) -> np.ndarray:
-        """Second-derivative matrix d²/dy² (chain rule in x)."""
-        return self._D2
+        """Second-derivative matrix d²/dy² (chain rule in x; built on first use: O(n³))."""
+        Dx, y1 = _reference(self.n)[1], self.jacobian
+        return (Dx @ Dx) / (y1**2)[:, None] - (self._y2 / y1**3)[:, None] * Dx
 
     def to_computational(self, y) -> np.ndarray:
         """The computational variable x ∈ [−1, 1] of heights ``y`` (Newton on the monotone
