@@ -95,7 +95,7 @@ def test_compiled_partials_equal_generated_python(phi):
     # measured 4.7e-15 (numpy's SIMD exp/pow against libm, and cancellations in the
     # second partials near nu_max)
     assert worst < 1e-12
-    out = model.evaluate(nu, T)
+    out = model.evaluate(nu, T, compiled=True)
     assert set(out) == set(closure_model.FUNCTIONS)
     assert out["p"][(1, 0)].shape == nu.shape
 

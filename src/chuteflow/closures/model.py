@@ -299,14 +299,21 @@ class ChuteModel:
         return ", ".join(parts)
 
     # ------------------------------------------------------------------ numbers
-    def evaluate(self, nu, T) -> dict[str, dict[tuple[int, int], np.ndarray]]:
-        """All functions of :data:`FUNCTIONS` and their partials of :data:`ORDERS` at (ν, T)."""
+    def evaluate(self, nu, T, *, compiled: bool = False) -> dict[str, dict[tuple[int, int], np.ndarray]]:
+        """All functions of :data:`FUNCTIONS` and their partials of :data:`ORDERS` at (ν, T).
+
+        ``compiled``: where a C compiler is available, the same expressions as a compiled
+        kernel (:func:`_compiled_c`; one C loop over the points, 5× faster than the ~200 numpy
+        operations of the generated Python code on ~100 points), equal to round-off (5e-15
+        relative). The steady Newton solver uses it; the stability operators keep numpy's
+        numbers, because where a branch is tracked at the edge of the continuum (T2 of
+        tests/stability/test_transverse_reference.py) a change of round-off can move the point
+        where the tracker loses it.
+        """
         nu = np.asarray(nu, dtype=float)
         T = np.asarray(T, dtype=float)
-        kernel = _compiled_c(*self.closures)
+        kernel = _compiled_c(*self.closures) if compiled else None
         if kernel is not None:
-            # the same expressions compiled (one C loop over the points, ~10× faster than
-            # the ~200 numpy operations of the generated Python code on a steady grid)
             rows = kernel(nu, T, *self._params)
             out, k = {}, 0
             for name in FUNCTIONS:

@@ -383,7 +383,14 @@ def transverse(
     j = int(np.argmax(g))
     kz_best, growth, aim = float(ks[j]), float(g[j]), float(disp.alpha_im[j])
     if 0 < j < len(ks) - 1 and np.isfinite(g[j - 1]):
-        hi = ks[j + 1] if np.isfinite(g[j + 1]) or tr is None else min(ks[j + 1], tr.history[-1].kz)
+        # where the tracker lost the branch after k_z[j], up to as far beyond its last point
+        # as TransverseTracker.point_at solves (max_ratio): where exactly it was lost depends
+        # on round-off, the maximum beyond k_z[j] does not
+        hi = (
+            ks[j + 1]
+            if np.isfinite(g[j + 1]) or tr is None
+            else min(ks[j + 1], tr.history[-1].kz * tr.max_ratio)
+        )
         seen = {}
 
         def minus_growth(x):

@@ -293,7 +293,7 @@ class SteadyNewton:
             "T_y": T1,
             "T_yy": T2,
         }
-        part = self.model.evaluate(nu, st.T)
+        part = self.model.evaluate(nu, st.T, compiled=True)
         R = np.empty(3 * m + 1)
         kap = part["kappa"]
         # rows are scaled pointwise (ν-rows by 1/ν, T-rows by 1/κ; x-momentum by the constant
