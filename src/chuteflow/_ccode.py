@@ -32,10 +32,19 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ._codegen import _DISABLED, _prune, _safe, cache_dir, cache_key
+from ._codegen import _DISABLED, _prune, _safe, cache_dir, cache_key, lazy_module
 from ._files import atomic_write
 
-__all__ = ["Pointwise", "cached_library", "cached_pointwise", "compiler", "enabled", "pointwise_source"]
+__all__ = [
+    "C_HEAD",
+    "Pointwise",
+    "c_statements",
+    "cached_library",
+    "cached_pointwise",
+    "compiler",
+    "enabled",
+    "pointwise_source",
+]
 
 #: Compiler flags: IEEE arithmetic (no fast-math, no fused multiply-add), position-independent.
 FLAGS = ("-O2", "-fPIC", "-shared", "-std=c99", "-ffp-contract=off")
@@ -156,22 +165,33 @@ def _build(cc: tuple[str, ...], text: str, folder: Path | None, stem: str) -> ct
         return _load(out)
 
 
+#: Head of every generated C source: the math library, and π (sympy prints ``M_PI``, which
+#: strict C99 does not define).
+C_HEAD = "#include <math.h>\n#include <string.h>\n#ifndef M_PI\n#define M_PI 3.14159265358979323846\n#endif\n"
+
+
+def c_statements(exprs, indent: str = "    ") -> tuple[list[str], list[str]]:
+    """The sympy ``exprs`` as C: declarations of their common subexpressions (``const
+    double xK = …;``, sympy's cse, as the generated Python code has them) and the C
+    expressions of the results, by sympy's C99 printer."""
+    from sympy.printing.c import C99CodePrinter
+
+    sp = lazy_module("sympy")
+    printer = C99CodePrinter()
+    reps, reduced = sp.cse(list(exprs))
+    decls = [f"{indent}const double {s} = {printer.doprint(e)};" for s, e in reps]
+    return decls, [printer.doprint(e) for e in reduced]
+
+
 def pointwise_source(array_args, scalar_args, exprs) -> str:
     """C source of ``void cf_pointwise(long n, const double *const *arrays, const double
     *params, double *out)``: the sympy ``exprs`` at each of n points, ``out[j*n + i]`` the
     j-th expression at point i, with ``arrays[a][i]`` the value of ``array_args[a]`` there and
     ``params`` those of ``scalar_args``. Common subexpressions are eliminated once (those of
     the parameters alone are hoisted out of the loop by the compiler)."""
-    sp = __import__("sympy")
-    from sympy.printing.c import C99CodePrinter
-
-    printer = C99CodePrinter()
-    reps, reduced = sp.cse(list(exprs))
+    decls, results = c_statements(exprs, indent=" " * 8)
     lines = [
-        "#include <math.h>",
-        "#ifndef M_PI",
-        "#define M_PI 3.14159265358979323846",
-        "#endif",
+        C_HEAD,
         "void cf_pointwise(long n, const double *const *arrays, const double *params, double *out)",
         "{",
     ]
@@ -180,9 +200,9 @@ def pointwise_source(array_args, scalar_args, exprs) -> str:
     lines += ["    long i;", "    for (i = 0; i < n; i++) {"]
     lines += [f"        const double {a} = arrays[{k}][i];" for k, a in enumerate(array_args)]
     lines += [f"        (void){a};" for a in array_args]
-    lines += [f"        const double {s} = {printer.doprint(e)};" for s, e in reps]
-    lines += [f"        out[{j}*n + i] = {printer.doprint(e)};" for j, e in enumerate(reduced)]
-    lines += ["    }", "}", "", f"long cf_outputs(void) {{ return {len(reduced)}; }}", ""]
+    lines += decls
+    lines += [f"        out[{j}*n + i] = {r};" for j, r in enumerate(results)]
+    lines += ["    }", "}", "", f"long cf_outputs(void) {{ return {len(results)}; }}", ""]
     return "\n".join(lines)
 
 

@@ -13,7 +13,7 @@ import pytest
 from chuteflow.closures import ChuteModel
 from chuteflow.steady import solve_steady
 from chuteflow.steady.api import state_of
-from chuteflow.steady.solver import SteadyNewton, _resample, _u_basis, reference_grid
+from chuteflow.steady.solver import SteadyNewton, _resample, _u_basis, _u_basis_ref, reference_grid
 
 _FLOWS = [(16.0, 0.08), (14.0, 0.3), (18.0, 0.03)]
 
@@ -84,7 +84,10 @@ def test_u_basis_identity(n, grid_map):
     """M⁻¹ maps (u(0), u' at nodes 1…n) to u, and D1 M⁻¹ has the unit rows 1…n that the
     eliminated step assumes: checked on a polynomial of degree n and on D1 @ M⁻¹."""
     L = 3.7
-    Minv, D1Minv = _u_basis(n, grid_map, L)
+    q, g0 = _u_basis(n, grid_map, L)
+    Minv = _u_basis_ref(n)[0] * q
+    D1Minv = np.eye(n + 1)
+    D1Minv[0] = g0  # the rows of D1 M⁻¹ that SteadyNewton.step assumes
     D1 = reference_grid(n, grid_map).D / L
     np.testing.assert_allclose(D1 @ Minv, D1Minv, atol=1e-9 * np.abs(D1 @ Minv).max())
     y = reference_grid(n, grid_map).y * L

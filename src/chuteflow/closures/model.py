@@ -313,14 +313,8 @@ class ChuteModel:
         nu = np.asarray(nu, dtype=float)
         T = np.asarray(T, dtype=float)
         kernel = _compiled_c(*self.closures) if compiled else None
-        if kernel is not None:
-            rows = kernel(nu, T, *self._params)
-            out, k = {}, 0
-            for name in FUNCTIONS:
-                out[name] = {o: rows[k + i] for i, o in enumerate(ORDERS)}
-                k += len(ORDERS)
-            return out
-        flat = _compiled(*self.closures)[0](nu, T, *self._params)
+        partials = kernel if kernel is not None else _compiled(*self.closures)[0]
+        flat = partials(nu, T, *self._params)
         out, it = {}, iter(flat)
         shape = np.broadcast(nu, T).shape
         for name in FUNCTIONS:

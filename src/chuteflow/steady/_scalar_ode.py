@@ -148,12 +148,6 @@ def compiled_kernel(transport, radial, wall):
 
 
 _KERNEL = r"""
-#include <math.h>
-#include <string.h>
-#ifndef M_PI
-#define M_PI 3.14159265358979323846
-#endif
-
 /* d/dy (ln nu0, u0, T0, T0') at z; par = (e, nu_m, phi, Phi, sin theta, cos theta) */
 void cf_rhs(const double *par, const double *z, double *f)
 {
@@ -347,18 +341,15 @@ int cf_integrate(const double *par, double x, const double *z0, double xend, dou
 def _kernel_source(transport, radial, wall) -> str:
     """C source of :func:`compiled_kernel`: the expressions of :func:`_derive_rhs` (common
     subexpressions eliminated, as in the Python code) printed by sympy's C99 printer."""
-    from sympy.printing.c import C99CodePrinter
+    from .._ccode import C_HEAD, c_statements
 
     args, exprs = _derive_rhs(transport, radial, wall)["rhs"]
     names = [str(a) for a in args]
     if names != ["nu", "u", "T", "T_y", "e", "nu_m", "phi", "Phi", "sin_theta", "cos_theta"]:
         raise ValueError(f"unexpected arguments of the steady right-hand side: {names}")
-    printer = C99CodePrinter()
-    reps, reduced = sp.cse(exprs)
-    body = "\n".join(f"    const double {s} = {printer.doprint(e)};" for s, e in reps)
-    out = [printer.doprint(e) for e in reduced]
-    return (
-        _KERNEL.replace("@BODY@", body)
+    decls, out = c_statements(exprs)
+    return C_HEAD + (
+        _KERNEL.replace("@BODY@", "\n".join(decls))
         .replace("@OUT0@", out[0])
         .replace("@OUT1@", out[1])
         .replace("@OUT2@", out[2])

@@ -224,6 +224,16 @@ def _hermite(t0, t1, y0, y1, f0, f1, t):
     return h00 * y0 + h10 * h * f0 + h01 * y1 + h11 * h * f1
 
 
+def _crossing(a, b, direction) -> bool:
+    """Whether an event function changes sign from a to b in ``direction`` (−1: from
+    positive to non-positive; +1: from negative to non-negative; 0: either)."""
+    if direction < 0:
+        return a > 0 >= b
+    if direction > 0:
+        return a < 0 <= b
+    return (a > 0 >= b) or (a < 0 <= b)
+
+
 def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False) -> Trajectory:
     """Integrate dz/dy = fun(y, z) from y = 0 with scipy's Dormand–Prince 5(4) (``dopri5``
     of :class:`scipy.integrate.ode`, Hairer's Fortran code: the same method, error norm and
@@ -246,13 +256,6 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
     hit: list = []
     stop: list = []  # the step where an event triggered: t_old, z_old, crossing estimate, t
 
-    def crossing(a, b, direction):
-        if direction < 0:
-            return a > 0 >= b
-        if direction > 0:
-            return a < 0 <= b
-        return (a > 0 >= b) or (a < 0 <= b)
-
     g_prev: list = []  # the events' values at the last accepted step
 
     def solout(t, z):
@@ -260,7 +263,7 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
         g_now = [g(z) for _, g, _ in events]
         if ts:
             t_old, z_old = ts[-1], zs[-1]
-            found = [(name, g) for (name, g, d), a, b in zip(events, g_prev, g_now) if crossing(a, b, d)]
+            found = [(name, g) for (name, g, d), a, b in zip(events, g_prev, g_now) if _crossing(a, b, d)]
             if found:
                 f0 = np.asarray(fun(t_old, z_old), dtype=float)
                 f1 = np.asarray(fun(t, z), dtype=float)
@@ -311,17 +314,9 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
                 warnings.simplefilter("ignore", UserWarning)
                 return np.array(rr.integrate(t_end), dtype=float)
 
-        z_ev = state_at(t_ev)
-        for _ in range(2):
-            f_ev = np.asarray(fun(t_ev, z_ev), dtype=float)
-            eps = 1e-7 * max(1.0, float(np.abs(z_ev).max())) / max(float(np.abs(f_ev).max()), 1e-300)
-            slope = (g(z_ev + eps * f_ev) - g(z_ev)) / eps
-            if not (math.isfinite(slope) and slope != 0):
-                break
-            t_new = t_ev - g(z_ev) / slope
-            if not (t_old < t_new < 2 * t_step - t_old) or t_new == t_ev:
-                break
-            t_ev, z_ev = t_new, state_at(t_new)
+        t_ev, z_ev = _secant_event(
+            g, lambda t, z: np.asarray(fun(t, z), dtype=float), state_at, t_old, t_ev, t_step
+        )
         ts.append(t_ev)
         zs.append(z_ev)
     status = 0 if (hit or r.successful()) else -1
@@ -329,30 +324,45 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
     y = np.array(zs).T
     sol = None
     if dense and len(t) > 1:
-        from scipy.interpolate import CubicHermiteSpline
-
-        f = np.array([fun(ti, zi) for ti, zi in zip(t, y.T)], dtype=float)
-        spline = CubicHermiteSpline(t, y.T, f, axis=0, extrapolate=True)
-
-        def sol(yy):
-            return np.asarray(spline(yy)).T
-
+        sol = _hermite_output(t, y.T, np.array([fun(ti, zi) for ti, zi in zip(t, y.T)], dtype=float))
     return Trajectory(t, y, hit[0] if hit else None, status, sol)
+
+
+def _secant_event(g, rhs, state_at, t_old, t_ev, t_step):
+    """The event g(z(t)) = 0 in the step (t_old, t_step] from its estimate ``t_ev`` on the
+    step's interpolant: two secant steps (``rhs(t, z)`` = dz/dt), each integrating afresh
+    from the step's start (``state_at``), brought to the integration's own tolerance.
+    Returns (t, z(t))."""
+    z_ev = state_at(t_ev)
+    for _ in range(2):
+        f_ev = rhs(t_ev, z_ev)
+        eps = 1e-7 * max(1.0, float(np.abs(z_ev).max())) / max(float(np.abs(f_ev).max()), 1e-300)
+        slope = (g(z_ev + eps * f_ev) - g(z_ev)) / eps
+        if not (math.isfinite(slope) and slope != 0):
+            break
+        t_new = t_ev - g(z_ev) / slope
+        if not (t_old < t_new < 2 * t_step - t_old) or t_new == t_ev:
+            break
+        t_ev, z_ev = t_new, state_at(t_new)
+    return t_ev, z_ev
+
+
+def _hermite_output(t, zs, fs):
+    """Dense output through the accepted steps: the piecewise cubic Hermite interpolant of
+    states ``zs`` and derivatives ``fs`` (both steps × 4), called as ``sol(y)`` → 4 × len(y)."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    spline = CubicHermiteSpline(t, zs, fs, axis=0, extrapolate=True)
+
+    def sol(yy):
+        return np.asarray(spline(yy)).T
+
+    return sol
 
 
 def _level(k: int, c: float):
     """The event function z ↦ z[k] − c."""
     return lambda z: z[k] - c
-
-
-def _crossing(a, b, direction) -> bool:
-    """Whether an event function changes sign from a to b in ``direction`` (−1: from
-    positive to non-positive; +1: from negative to non-negative; 0: either)."""
-    if direction < 0:
-        return a > 0 >= b
-    if direction > 0:
-        return a < 0 <= b
-    return (a > 0 >= b) or (a < 0 <= b)
 
 
 class _Kernel:
@@ -366,7 +376,6 @@ class _Kernel:
 
         self.lib = lib
         self._dp = ctypes.POINTER(ctypes.c_double)
-        self._c_double, self._c_long, self._c_int = ctypes.c_double, ctypes.c_long, ctypes.c_int
         self._par = np.array(params, dtype=float)
         self._z = np.empty(NEQ)
         self._f = np.empty(NEQ)
@@ -472,33 +481,17 @@ class _Kernel:
                     best = (name, hi, k, c)
             assert best is not None  # the mask names at least one event
             hit, t_ev, k, c = best
-            z_ev = self.state_at(t_old, z_old, t_ev, rtol) if t_ev > t_old else z_old
-            for _ in range(2):
-                f_ev = self.rhs(z_ev)
-                eps = 1e-7 * max(1.0, float(np.abs(z_ev).max())) / max(float(np.abs(f_ev).max()), 1e-300)
-                g_ev = float(z_ev[k]) - c
-                slope = (float(z_ev[k] + eps * f_ev[k]) - c - g_ev) / eps
-                if not (math.isfinite(slope) and slope != 0):
-                    break
-                t_try = t_ev - g_ev / slope
-                if not (t_old < t_try < 2 * t_new - t_old) or t_try == t_ev:
-                    break
-                t_ev = t_try
-                z_ev = self.state_at(t_old, z_old, t_ev, rtol) if t_ev > t_old else z_old
+
+            def state_at(t_end):
+                return self.state_at(t_old, z_old, t_end, rtol) if t_end > t_old else z_old
+
+            t_ev, z_ev = _secant_event(_level(k, c), lambda _t, z: self.rhs(z), state_at, t_old, t_ev, t_new)
             t = np.append(t, t_ev)
             zs = np.vstack([zs, z_ev])
             fs = np.vstack([fs, self.rhs(z_ev)])
         traj_status = 0 if (hit is not None or status > 0) else -1
         y = zs.T
-        sol = None
-        if dense and len(t) > 1:
-            from scipy.interpolate import CubicHermiteSpline
-
-            spline = CubicHermiteSpline(t, zs, fs, axis=0, extrapolate=True)
-
-            def sol(yy):
-                return np.asarray(spline(yy)).T
-
+        sol = _hermite_output(t, zs, fs) if dense and len(t) > 1 else None
         return Trajectory(t, y, hit, traj_status, sol)
 
 

@@ -246,22 +246,9 @@ class SteadyNewton:
                 (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
             )
         #: the Newton step eliminates u0' (:meth:`_step`) where the equations allow it
-        self.eliminate = integrated and _u_prime_only(self._layout, self.eqs)
-        #: where u0' enters the other rows once eliminated (by construction of the
-        #: assembly): (rows, first node) of the rows at nodes ≥ 1, each with w at its own
-        #: node only; the rows at the floor, with u0' everywhere (D1 M⁻¹'s row 0)
-        self._w_diagonal: list[tuple[slice, int]] = []
-        self._w_full: list[int] = []
-        if self.eliminate:
-            for name, rows, sl, _kind in self._layout:
-                if name == "xmom_integrated" or not any(
-                    f == "u" for _, f, _, _ in _steady_terms(self.eqs[name])
-                ):
-                    continue
-                if sl.start == 0:
-                    self._w_full += list(range(rows.start, rows.stop))
-                else:
-                    self._w_diagonal.append((rows, sl.start))
+        #: where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
+        self._w_pattern = _u_prime_pattern(self._layout, self.eqs) if integrated else None
+        self.eliminate = self._w_pattern is not None
 
     def evaluate(self, st: NewtonState, jac=True):
         """Scaled residual R and (if ``jac``) its exact Jacobian J (None otherwise).
@@ -270,11 +257,15 @@ class SteadyNewton:
         then ``evaluate(st)`` with the same state object (Newton's line search: the
         Jacobian only of the accepted trial, and only when another step is needed) compute
         the closures and equations once for that state."""
+        ctx = self._context(st)
+        return ctx["R"].copy(), (self._jacobian(ctx) if jac else None)
+
+    def _context(self, st: NewtonState) -> dict:
+        """The residual's pieces of ``st``, kept for the last state evaluated."""
         X = st.pack()
         if self._last is None or not np.array_equal(self._last[0], X):
             self._last = (X, self._residual(st))
-        ctx = self._last[1]
-        return ctx["R"].copy(), (self._jacobian(ctx) if jac else None)
+        return self._last[1]
 
     def _residual(self, st: NewtonState) -> dict:
         n, m, L = self.n, self.n + 1, st.L
@@ -325,10 +316,11 @@ class SteadyNewton:
             "rows": rows_out,
         }
 
-    def _jacobian(self, ctx: dict, u_basis: tuple | None = None) -> np.ndarray:
-        """The exact Jacobian J; with ``u_basis`` = (M⁻¹, D1 M⁻¹) (:func:`_u_basis`), J T
+    def _jacobian(self, ctx: dict, g0: np.ndarray | None = None) -> np.ndarray:
+        """The exact Jacobian J; with ``g0`` = row 0 of D1 M⁻¹ (:func:`_u_basis`), J T
         instead, T = diag(I, M⁻¹, I, 1): the columns of u0 at the nodes replaced by those of
-        (u0(0), u0'(ξ_1…ξ_n)), which is how :meth:`_step` eliminates u0'."""
+        (u0(0), u0'(ξ_1…ξ_n)), which is how :meth:`step` eliminates u0' (the equations'
+        u0-terms are then those :func:`_u_prime_pattern` allows)."""
         n, m = self.n, self.n + 1
         L, D1, D2, nu, s1, s2 = ctx["L"], ctx["D1"], ctx["D2"], ctx["nu"], ctx["s1"], ctx["s2"]
         jets, kap = ctx["jets"], ctx["kap"]
@@ -349,15 +341,15 @@ class SteadyNewton:
                 cf = _rows(coefs[i], sl, m)
                 if c:
                     dL += cf * (-c / L) * jets[fname][c][sl]
-                if u_basis is not None and fname == "u":
-                    # d^c u0/dy^c = (D_c M⁻¹)(u0(0), u0'): c ∈ {0, 1} (_u_prime_only); D1 M⁻¹
-                    # is the identity on rows 1…n, and u0 at node 0 is u0(0)
-                    if c == 1 and sl.start >= 1:
-                        Jr[r_idx, m + idx] += scale * cf
-                    elif c == 0 and sl == slice(0, 1):
+                if g0 is not None and fname == "u":
+                    # in (u0(0), w): u0' at node j ≥ 1 is w_j (D1 M⁻¹ is the identity on rows
+                    # 1…n), u0' at node 0 is g0 · (u0(0), w), u0 at node 0 is u0(0)
+                    if c == 0:
                         Jr[:, m] += scale * cf
+                    elif sl.start >= 1:
+                        Jr[r_idx, m + idx] += scale * cf
                     else:
-                        Jr[:, m : 2 * m] += (scale * cf)[:, None] * u_basis[c][sl]
+                        Jr[:, m : 2 * m] += (scale * cf)[:, None] * g0
                     continue
                 d_e = acc.get(k)
                 if d_e is None:
@@ -405,15 +397,12 @@ class SteadyNewton:
         (a diagonal block), and so do the energy rows; eliminating w leaves a dense system of
         2(n + 1) + 1 instead of 3(n + 1) + 1 unknowns (a third of the LU's work), whose
         Schur complement costs O(n²). Otherwise, a dense LU of J."""
-        X = st.pack()
-        if self._last is None or not np.array_equal(self._last[0], X):
-            self._last = (X, self._residual(st))
-        ctx = self._last[1]
-        if not self.eliminate:
+        ctx = self._context(st)
+        if self._w_pattern is None:
             return np.linalg.solve(self._jacobian(ctx), B)
         n, m = self.n, self.n + 1
-        Minv, D1Minv = _u_basis(n, self.grid_map, ctx["L"])
-        JT = self._jacobian(ctx, (Minv, D1Minv))
+        q, g = _u_basis(n, self.grid_map, ctx["L"])
+        JT = self._jacobian(ctx, g)
         # rows of eq. (3.7) at nodes 1…n and the columns of w_j: the block m+1 … 2m−1;
         # the rest (r = 2m + 2 rows and columns) is the block before and the block after
         w, r = slice(m + 1, 2 * m), 2 * m + 2
@@ -432,20 +421,21 @@ class SteadyNewton:
                 return i if i <= m else i - n
 
             # S = A_rr − A_rw Z (and the right-hand side alike), with A_rw's pattern
-            for rows, j0 in self._w_diagonal:
+            diagonal, full = self._w_pattern
+            for rows, j0 in diagonal:
                 k = rows.stop - rows.start
                 vals = np.diagonal(JT[rows, m + j0 : m + j0 + k])[:, None]
                 rs = slice(rest(rows.start), rest(rows.start) + k)
                 S[rs] -= vals * Z[j0 - 1 : j0 - 1 + k]
                 rhs[rs] -= vals * bw[j0 - 1 : j0 - 1 + k]
-            for i in self._w_full:
+            for i in full:
                 S[rest(i)] -= JT[i, w] @ Z
                 rhs[rest(i)] -= JT[i, w] @ bw
             y = np.linalg.solve(S, rhs)
             Y = np.empty_like(B)
             Y[: m + 1], Y[2 * m :] = y[: m + 1], y[m + 1 :]
             Y[w] = bw - Z @ y
-        Y[m : 2 * m] = Minv @ Y[m : 2 * m]  # back to u0 at the nodes
+        Y[m : 2 * m] = (_u_basis_ref(n)[0] * q) @ Y[m : 2 * m]  # u0 = M⁻¹ (u0(0), w)
         return Y
 
     def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
@@ -520,19 +510,30 @@ class SteadyNewton:
         raise _NewtonFailure(st, hist)
 
 
-def _u_prime_only(layout, eqs) -> bool:
-    """Whether u0 enters the steady rows only through u0' (the floor rows, at node 0, also
-    through u0(0)), with the integrated x-momentum among them: what :meth:`SteadyNewton.step`
-    needs to eliminate u0'. Galilean invariance: the bulk equations hold velocity
-    differences only."""
+def _u_prime_pattern(layout, eqs):
+    """Where u0' enters the steady rows once it is an unknown (:meth:`SteadyNewton.step`):
+    (diagonal, full), ``diagonal`` the (rows, first node) of the rows at nodes ≥ 1 other than
+    eq. (3.7)'s, each holding u0' at its own node only; ``full`` the rows at the floor,
+    holding u0'(0) = g0 · (u0(0), w). None where u0' cannot be eliminated: u0 enters a bulk
+    row other than through u0' (Galilean invariance: the bulk equations hold velocity
+    differences only; u0(0) appears in the floor rows), or the integrated x-momentum
+    eq. (3.7) is not among the rows."""
     if not any(name == "xmom_integrated" for name, *_ in layout):
-        return False
-    for name, _, sl, _ in layout:
+        return None
+    diagonal: list[tuple[slice, int]] = []
+    full: list[int] = []
+    for name, rows, sl, _ in layout:
+        orders = {c for _i, fname, _k, c in _steady_terms(eqs[name]) if fname == "u"}
         node0 = sl == slice(0, 1)
-        for _i, fname, _k, c in _steady_terms(eqs[name]):
-            if fname == "u" and not (c == 1 or (c == 0 and node0)):
-                return False
-    return True
+        if not orders <= ({0, 1} if node0 else {1}):
+            return None
+        if not orders or name == "xmom_integrated":
+            continue
+        if node0:
+            full += list(range(rows.start, rows.stop))
+        else:
+            diagonal.append((rows, sl.start))
+    return diagonal, full
 
 
 @functools.lru_cache(maxsize=16)
@@ -551,16 +552,14 @@ def _u_basis_ref(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _u_basis(n: int, grid_map, L: float) -> tuple[np.ndarray, np.ndarray]:
-    """(M⁻¹, D1 M⁻¹) on [0, L] with M = [e_0; D1 rows 1…n]: u0 at the nodes, and u0' there,
-    from (u0(0), u0'(y_1…y_n)). D1 M⁻¹ is the identity on rows 1…n (exactly: those rows of
-    M are D1's) and g on row 0."""
+    """(q, g0) on [0, L] for M = [e_0; D1 rows 1…n]: M⁻¹ = M_x⁻¹ diag(q) maps (u0(0),
+    u0'(y_1…y_n)) to u0 at the nodes, and g0 = D1[0] M⁻¹ gives u0'(0) from them (the other
+    rows of D1 M⁻¹ are those of the identity: they are M's own)."""
     Minv_x, g_x = _u_basis_ref(n)
     dydx = L * reference_grid(n, grid_map).jacobian  # y = L ξ(x)
     q = dydx.copy()
     q[0] = 1.0
-    D1Minv = np.eye(n + 1)
-    D1Minv[0] = g_x * q / dydx[0]
-    return Minv_x * q, D1Minv
+    return q, g_x * q / dydx[0]
 
 
 class _NewtonFailure(Exception):
