@@ -68,7 +68,6 @@ def _hand_written_operator(op):
     for piece in old.pieces.values():
         piece[tops] = 0.0
     old.pieces[(0, 0)][tops] = P[tops]
-    old.K = K
     nz = np.nonzero(K)
     r, c = op.row_eq[:, None], op.col_eq[None, :]
     old._pieces_eq = {key: piece * r * c for key, piece in old.pieces.items()}

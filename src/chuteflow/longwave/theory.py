@@ -376,7 +376,9 @@ def fixed_height_tangent(flow, tangent: dict, y: np.ndarray) -> dict[str, np.nda
         "u": tangent["u"] - shift * (g.D @ flow.u),
         "T": tangent["T"] - shift * (g.D @ flow.T),
     }
-    return {f: g.interpolate(v, y) for f, v in fixed_y.items()}
+    # one Clenshaw evaluation of the three series (the same numbers as one at a time)
+    vals = g.interpolate(np.stack(list(fixed_y.values())), y)
+    return dict(zip(fixed_y, vals))
 
 
 def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:

@@ -14,7 +14,6 @@ raised along the branch when a point fails.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import math
 from dataclasses import dataclass, field
@@ -63,11 +62,30 @@ def _growth(ratio: float | None) -> float:
     return 3.0 if ratio < 0.02 else 1.5 if ratio < 0.05 else 1.0
 
 
-def _track_rules(max_halvings: int) -> StepRules:
+#: Smallest continuation step of the branch tracker, relative to the wavenumber it heads for.
+#: A step h moves α by ~|dα/dk| h ~ |α| h/k; below h = 1e-9 k that is ~1e-9 |α|, the
+#: eigenvalue's own round-off (~1e-12 absolute near the continuum, |α| ≳ 1e-4 on the
+#: sweeps' k grid), so the acceptance test (miss < a quarter of the step) measures round-off.
+#: Where the branch meets another eigenvalue (an exceptional point k*, dα/dk infinite) every
+#: step across k* is rejected and accepted ever shorter steps creep up to it: at θ = 14.75°,
+#: ν0(0) = 0.21, φ = 0.05 the tracker went down to steps of 4e-13 k, 352 rejected steps in all
+#: (7.7 s of the growth metric's 12.4 s) before it gave up; 217 (5.3 s) with this bound. The
+#: first step's 16 halvings (1e-5/2¹⁶) stay above it for every k ≤ 0.1.
+TRACK_MIN_STEP = 1e-9
+
+
+def _track_rules(max_halvings: int, s_target: float = 0.0) -> StepRules:
     """Retry rules of the branch in k (:func:`chuteflow.continuation.continue_to`): steps
     grow by :func:`_growth`, at most ×3 in k (a step at most twice the k reached), halved
-    when rejected, at most ``max_halvings`` times per step."""
-    return StepRules(grow=_growth, shrink=0.5, max_step_ratio=2.0, max_halvings=max_halvings)
+    when rejected, at most ``max_halvings`` times per step, and never below
+    :data:`TRACK_MIN_STEP` × ``s_target``."""
+    return StepRules(
+        grow=_growth,
+        shrink=0.5,
+        max_step_ratio=2.0,
+        max_halvings=max_halvings,
+        min_step=TRACK_MIN_STEP * s_target,
+    )
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,8 +120,9 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
     try:
         si = ShiftInvert(A, B, 0.0, diagonal_B=True)
     except ConvergenceError:
-        # α0 = 0 to the last bit, an exact zero pivot (θ = 16.58°, ν0(0) = 0.193, φ = 0.05,
-        # N = 160): the same nudge as nearest_eigenpair, far inside the continuum's ~1e-8
+        # α0 = 0 to the last bit, an exact zero pivot (a flow of the 60 × 60 φ = 0.05 diagram,
+        # θ = 17.19°, ν0(0) = 0.144, N = 160): the same nudge as nearest_eigenpair, far
+        # inside the continuum's ~1e-8
         si = ShiftInvert(A, B, 1e-14 * (1 + 1j), diagonal_B=True)
     alpha, W = si.nearest(1)
     a0, w = alpha[0], W[:, 0]
@@ -281,7 +300,7 @@ class BranchTracker:
             # quadratic regime of every flow checked (docs/errata.md: it narrows to ~1e-5)
             h = FIRST_STEP if s_last == 0.0 else self._h
             res = continue_to(
-                self._solve, s_last, s_last, s_target, _track_rules(max_halvings), h=h, origin=0.0
+                self._solve, s_last, s_last, s_target, _track_rules(max_halvings, s_target), h=h, origin=0.0
             )
             self._h = res.h
             if not res.reached:
@@ -402,103 +421,37 @@ def near_continuum_branch(
     continuous continuation of the branch). The mode is judged by ``policy`` (the paper's
     drift and tail tests: it is returned flagged when it fails them, with its drift
     |α(N) − α(N')| as the convergence estimate) and ``method = "branch (relaxed)"``.
-    One wavenumber of :class:`RelaxedBranch`, which follows it over several.
 
     Returns None when no attempt reaches k, or the drift exceeds :data:`RELAXED_DRIFT`
     |α| (no eigenvalue at N' continues it: not a trustworthy branch value).
     """
+    policy = resolve_policy(policy)
     kk = math.hypot(k, kz)
     if kk == 0:
         return None
-    return RelaxedBranch(flow, n, direction=(k, kz), policy=policy, cache=cache).mode(kk)
-
-
-class RelaxedBranch:
-    """The α(0) = 0 branch followed with the tail threshold relaxed to :data:`RELAXED_TAIL`
-    at increasing wavenumbers on one grid (:func:`near_continuum_branch` at several k).
-
-    Each :meth:`mode` continues from the last wavenumber s0 it reached (at first k = 0) to
-    the targets s0 + (s − s0) j/m, j = 1 … m, for m in :data:`RELAXED_SPLITS`, instead of
-    afresh from k = 0 for every k (4–5 s per k at N = 160). A wavenumber that is not
-    reached leaves the state where it was. The steps differ from a fresh continuation's,
-    and so may where the predictor gets through: at the six points of the 60 × 60 φ = 0.05
-    diagram where the growth metric lost the branch in rows 21 and 27, the continued branch
-    reached the whole k grid at three (the fresh one per k at one), in 50 s against 92 s.
-
-    Parameters
-    ----------
-    flow : SteadyFlow
-        Base state.
-    n : int
-        Resolution N (fixed).
-    direction : (float, float)
-        Direction (k̂x, k̂z) of the wavevector; ``mode(s)`` is at k = s (k̂x, k̂z).
-    policy : RejectionPolicy, optional
-        The paper's tests the modes are judged by (default :data:`DEFAULT_POLICY`).
-    cache : OperatorCache, optional
-        Where the operators come from.
-    """
-
-    def __init__(
-        self,
-        flow: SteadyFlow,
-        n: int,
-        *,
-        direction=(1.0, 0.0),
-        policy: RejectionPolicy | None = None,
-        cache: OperatorCache | None = None,
-    ):
-        self.flow, self.n, self.cache = flow, int(n), cache
-        self.policy = resolve_policy(policy)
-        self.relaxed = self.policy.replace(
-            track_tail_tol=max(RELAXED_TAIL, self.policy.track_tail_tol), n_start=self.n, n_max=self.n
+    direction = (k, kz)
+    relaxed = policy.replace(track_tail_tol=max(RELAXED_TAIL, policy.track_tail_tol), n_start=n, n_max=n)
+    for m in RELAXED_SPLITS:
+        tr = BranchTracker(flow, n, direction=direction, policy=relaxed, cache=cache)
+        try:
+            for target in np.linspace(0.0, kk, m + 1)[1:]:
+                alpha, w = tr.advance(float(target))
+            pencil = tr._pencil(kk)
+            drift, n2 = drift_of(flow, alpha, w, n, k, kz, tr.three_d, cache=cache)
+        except ConvergenceError:
+            continue
+        if not drift <= RELAXED_DRIFT * abs(alpha):
+            continue
+        mode = make_mode(pencil, alpha, w, drift, n2, policy)
+        u = tr._operator(n).base["u"]
+        c = -alpha.imag / kk
+        note = (
+            f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
+            f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = {c:.4g} "
+            f"against u0 in [{float(np.min(u)):.4g}, {float(np.max(u)):.4g}]"
         )
-        self.direction = direction
-        self._tr: BranchTracker | None = None
-
-    def _fork(self, tr: BranchTracker) -> BranchTracker:
-        """A copy of ``tr`` (its accepted points) that continues under the relaxed threshold."""
-        new = copy.copy(tr)
-        new.history = list(tr.history)
-        new.policy = self.relaxed
-        return new
-
-    def mode(self, s: float) -> Mode | None:
-        """The relaxed branch at k = s (k̂x, k̂z), judged by the policy's tests; None when no
-        attempt reaches it or its drift exceeds :data:`RELAXED_DRIFT` |α|."""
-        if self._tr is None:
-            self._tr = BranchTracker(
-                self.flow, self.n, direction=self.direction, policy=self.relaxed, cache=self.cache
-            )
-        s = float(s)
-        kx, kz = self._tr.direction
-        if s < self._tr.history[-1][0]:
-            raise ParameterError("the relaxed branch is followed in increasing k only")
-        for m in RELAXED_SPLITS:
-            tr = self._fork(self._tr)
-            s0 = tr.history[-1][0]
-            try:
-                for target in np.linspace(s0, s, m + 1)[1:]:
-                    alpha, w = tr.advance(float(target))
-                pencil = tr._pencil(s)
-                drift, n2 = drift_of(
-                    self.flow, alpha, w, self.n, s * kx, s * kz, tr.three_d, cache=self.cache
-                )
-            except ConvergenceError:
-                continue
-            if not drift <= RELAXED_DRIFT * abs(alpha):
-                continue
-            self._tr = tr
-            mode = make_mode(pencil, alpha, w, drift, n2, self.policy)
-            u = tr._operator(self.n).base["u"]
-            c = -alpha.imag / s
-            note = (
-                f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
-                f"threshold {self.policy.track_tail_tol:g} lost it): phase velocity −Im α/k = {c:.4g} "
-                f"against u0 in [{float(np.min(u)):.4g}, {float(np.max(u)):.4g}]"
-            )
-            return dataclasses.replace(mode, method="branch (relaxed)", note=note)
-        return None
+        return dataclasses.replace(mode, method="branch (relaxed)", note=note)
+    return None
 
 
 #: ARPACK restarts (per Krylov size) of one continuation step of the branch tracker. Where
@@ -529,13 +482,10 @@ def after_lost_branch(
     cache: OperatorCache | None = None,
     lost: str = "",
     check_direct: bool = True,
-    branch: RelaxedBranch | None = None,
 ) -> Mode | None:
     """The answer at (k, kz) and N after the continuation lost the branch: the branch followed
-    with the relaxed tail threshold (:func:`near_continuum_branch`; ``branch``, a
-    :class:`RelaxedBranch` at N along (k, kz), continues the one of the previous, smaller k
-    instead), or a direct solve where the policy prefers it
-    (:meth:`RejectionPolicy.direct_outranks_relaxed`).
+    with the relaxed tail threshold (:func:`near_continuum_branch`), or a direct solve where
+    the policy prefers it (:meth:`RejectionPolicy.direct_outranks_relaxed`).
 
     A relaxed value that passes the paper's tests, or one at |k| ≤ ``policy.relaxed_k_max``,
     is returned as it is. Beyond, the branch lies in a band of critical-layer eigenvalues
@@ -555,12 +505,7 @@ def after_lost_branch(
     N ≥ 195; P4, k = 0.2: 77 s before, the dense spectrum at the last rung only).
     """
     policy = resolve_policy(policy)
-    if branch is not None:
-        if branch.n != n:
-            raise ParameterError(f"branch: a relaxed branch at N = {branch.n}, asked at N = {n}")
-        relaxed = branch.mode(math.hypot(k, kz))
-    else:
-        relaxed = near_continuum_branch(flow, k, kz=kz, n=n, policy=policy, cache=cache)
+    relaxed = near_continuum_branch(flow, k, kz=kz, n=n, policy=policy, cache=cache)
     if relaxed is None:
         return None
     relaxed = dataclasses.replace(relaxed, note=join_notes(lost, relaxed.note))
@@ -634,8 +579,7 @@ def dispersion(
         the branch is lost (default); otherwise return such points flagged
         ``physical = False``. Where the continuation loses the branch (non-strict), that
         and every larger k are followed with the relaxed tail threshold
-        (:class:`RelaxedBranch`: one continuation from k = 0 over these k, judged by the
-        paper's tests); where that does not
+        (:func:`near_continuum_branch`, judged by the paper's tests); where that does not
         reach k either, solved directly at k (least-stable physical mode by dense QZ with
         the rejection tests, :func:`least_stable` with ``method="qz"``), flagged
         ``direct = True`` and ``physical = False`` (a direct solve is not known to lie on
@@ -666,7 +610,6 @@ def dispersion(
     phys = np.zeros(len(ks), dtype=bool)
     direct = np.zeros(len(ks), dtype=bool)
     lost_at = None
-    rb: RelaxedBranch | None = None
     for i in order:
         if lost_at is None:
             try:
@@ -675,12 +618,10 @@ def dispersion(
                 if strict:
                     raise
                 lost_at = float(ks[i])
-                rb = RelaxedBranch(flow, tr.n, policy=policy, cache=cache)
         if lost_at is not None:
             # branch lost: this and the larger k followed with the relaxed tail threshold
-            # (on the branch, flagged by the paper's tests; continued from the last k
-            # reached), else solved directly at k
-            relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache, branch=rb)
+            # (on the branch, flagged by the paper's tests), else solved directly at k
+            relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
             if relaxed is not None:
                 mode = relaxed
                 direct[i] = relaxed.method != "branch (relaxed)"

@@ -36,6 +36,7 @@ the bulk equations; a term with |k| (k = √(k_x² + k_z²)) goes to K.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -95,6 +96,9 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     dense layer of nodes at k ≳ 0.5; the factor 2 gains at small k and loses little beyond.
     ε is capped at y_max (the map is then nearly linear).
     """
+    known = _LAYER_MAPS.get(flow)
+    if known is not None:
+        return known
     th = math.radians(flow.theta)
     y_max = float(flow.y_max)
     h = float(flow.h)
@@ -104,7 +108,13 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     width = MAP_WIDTH * abs(T_h) / math.cos(th)
     if not (math.isfinite(width) and width > 0):
         width = y_max
-    return h, float(min(width, y_max))
+    out = (h, float(min(width, y_max)))
+    _LAYER_MAPS[flow] = out
+    return out
+
+
+#: :func:`layer_map` of each flow while it lives (every operator of a flow asks for it).
+_LAYER_MAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGrid:
@@ -419,7 +429,7 @@ class StabilityOperator:
             scale_all[r0] = floor_scale[name]
             # far field: ν̂' = −(cos θ/T0) ν̂ (ν̂ ∝ ν0), f̂' = −|k| f̂ for û, v̂, ŵ, T̂
             add(TOP_OF[f], slice(m - 1, m), 1.0, slice(r0 + m - 1, r0 + m), False)
-        self.pieces, self.K, self.B = pieces, K, B
+        self.pieces, self.B = pieces, B
         self.row_scale, self.base = scale_all, base
         # Equilibration used by the solvers (an exact diagonal similarity, not part of the
         # public operator): mass rows divided by ν0 and ν̂ columns multiplied by ν0, i.e.
@@ -433,9 +443,19 @@ class StabilityOperator:
         r, c = self.row_eq[:, None], self.col_eq[None, :]
         self._pieces_eq = {key: P * r * c for key, P in pieces.items()}
         self.B_eq = B * r * c
-        nz = np.nonzero(K)
-        self._K_eq = (nz[0], nz[1], (K * r * c)[nz])
-        self._K_sparse = (nz[0], nz[1], K[nz])
+        # K has entries on the top rows only: kept as (rows, columns, values)
+        kr, kc = np.nonzero(K)
+        kv = K[kr, kc]
+        self._K_eq = (kr, kc, kv * self.row_eq[kr] * self.col_eq[kc])
+        self._K_sparse = (kr, kc, kv)
+
+    @property
+    def K(self) -> np.ndarray:
+        """Coefficient of |k| (dense; the top conditions' entries, built on each access)."""
+        rows, cols, vals = self._K_sparse
+        K = np.zeros((self.size, self.size))
+        K[rows, cols] = vals
+        return K
 
     # -- evaluation ----------------------------------------------------------------------
     def matrix(self, kx: float, kz: float = 0.0, *, equilibrated: bool = False) -> np.ndarray:

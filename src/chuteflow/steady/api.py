@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import collections
-import functools
 import math
+import weakref
 
 import numpy as np
 
@@ -350,8 +349,6 @@ def solve_point(
     dX = newton_tangent(st2)
     if dX is not None:
         _BETA_TANGENTS[flow] = dX
-        while len(_BETA_TANGENTS) > 256:
-            _BETA_TANGENTS.popitem(last=False)
     if keep is not None:
         keep["coarse"], keep["fine"] = st, st2
     if q2["h"] < min_thickness:
@@ -363,8 +360,11 @@ def solve_point(
 #: :func:`steady_tangent` to use it (otherwise it factorises the Jacobian at the flow).
 #: The tangent's error is of the order of that step (measured: tests/steady/test_solver.py).
 TANGENT_STEP = 1e-10
-#: dX/dβ of recent flows from Newton's last LU (solve_point), by flow (the last 256).
-_BETA_TANGENTS: collections.OrderedDict = collections.OrderedDict()
+#: dX/dβ from Newton's last LU (solve_point), by flow, while the flow lives (weak keys: a
+#: cache never keeps a flow, with its grid, alive).
+_BETA_TANGENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+#: The tangents of :func:`steady_tangent`, by flow, while the flow lives.
+_TANGENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def newton_tangent(st: NewtonState) -> np.ndarray | None:
@@ -401,8 +401,7 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     same exact Jacobian J that Newton used; β enters only through ln ν0(0) = ln β. This is the
     k = 0 null vector ∂X0/∂β of Appendix B. Scalar quantities are differentiated along that
     tangent (central difference on the exact tangent direction, step 1e-6 relative: error
-    O(1e-12)). The result is cached per flow (the last 128 flows: a sweep task
-    runs each metric over its whole row); its arrays are
+    O(1e-12)). The result is cached per flow while the flow lives; its arrays are
     read-only.
 
     Returns
@@ -415,16 +414,18 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     return dict(_cached_tangent(flow))
 
 
-@functools.lru_cache(maxsize=128)
 def _cached_tangent(flow: SteadyFlow) -> dict:
-    """The tangent of one flow, computed once: several sweep metrics of the same point
-    (``kinematic``, the 1D criterion, the long-wave theory) need it. Its arrays are made
-    read-only so that no caller can alter the cached copy."""
-    dX = _BETA_TANGENTS.pop(flow, None)
-    out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
-    for v in out.values():
-        if isinstance(v, np.ndarray):
-            v.flags.writeable = False
+    """The tangent of one flow, computed once while the flow lives: several sweep metrics of
+    the same point (``kinematic``, the 1D criterion, the long-wave theory) need it. Its
+    arrays are made read-only so that no caller can alter the cached copy."""
+    out = _TANGENTS.get(flow)
+    if out is None:
+        dX = _BETA_TANGENTS.pop(flow, None)
+        out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
+        for v in out.values():
+            if isinstance(v, np.ndarray):
+                v.flags.writeable = False
+        _TANGENTS[flow] = out
     return out
 
 

@@ -121,10 +121,20 @@ class SteadyFlow:
     def nu(self) -> np.ndarray:
         return np.exp(self.log_nu)
 
-    @property
+    @functools.cached_property
     def grid(self) -> ChebyshevGrid:
-        """The collocation grid of the profiles (:func:`steady_grid`)."""
+        """The collocation grid of the profiles (:func:`steady_grid`; built on first use and
+        kept: its D2 is O(n³), and every operator, derivative and interpolation uses it)."""
         return steady_grid(self.n, self.y_max, self.grid_map)
+
+    def __getstate__(self):
+        # the cached grid is rebuilt where it is needed, not shipped between processes
+        state = dict(self.__dict__)
+        state.pop("grid", None)
+        return state
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
 
     def profiles(self, y) -> dict[str, np.ndarray]:
         """ν0, u0, T0 interpolated spectrally at heights ``y`` (0 ≤ y ≤ y_max)."""

@@ -23,7 +23,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
-from ..stability.dispersion import RelaxedBranch, after_lost_branch
+from ..stability.dispersion import after_lost_branch
 from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
@@ -142,9 +142,8 @@ class GrowthMetric(PointFunction):
     (:func:`chuteflow.stability.dispersion.after_lost_branch`: the branch followed with the
     tail threshold relaxed, and past ``RejectionPolicy.relaxed_k_max`` picked out of the band
     or replaced by a resolved direct mode; flagged the same way; version 4: the same values
-    as version 3 for k_max ≤ 0.1; version 5: one relaxed continuation over the rest of the
-    grid, :class:`~chuteflow.stability.dispersion.RelaxedBranch`, instead of one from k = 0
-    per k). Only where that fails too are the values missing
+    as version 3 for k_max ≤ 0.1; version 5: the branch tracker's smallest step,
+    :data:`~chuteflow.stability.dispersion.TRACK_MIN_STEP`). Only where that fails too are the values missing
     (``dispersion_sampled`` = 1, the reason in the message).
     Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
@@ -228,7 +227,7 @@ class GrowthMetric(PointFunction):
         o = self.options
         ks = self.k_grid()
         # an own operator cache: the flow's operators are dropped when the point is done
-        cache = OperatorCache(4)
+        cache = OperatorCache(2)  # N and N′ (the drift check; the next rung reuses N)
         policy = RejectionPolicy(n_max=int(o["n_max"]))
         modes = []
         try:
@@ -242,13 +241,8 @@ class GrowthMetric(PointFunction):
                     # policy.relaxed_k_max the band search and the direct mode), at the
                     # tracker's last N (None: not reached either)
                     lost = str(exc).split(" (theta")[0]
-                    # one relaxed continuation over the rest of the grid, from the tracker's
-                    # last accepted point (not from k = 0 for every k)
-                    rb = RelaxedBranch(flow, tr.n, policy=policy, cache=cache)
                     for kk in ks[len(modes) :]:
-                        m = after_lost_branch(
-                            flow, float(kk), n=tr.n, policy=policy, cache=cache, lost=lost, branch=rb
-                        )
+                        m = after_lost_branch(flow, float(kk), n=tr.n, policy=policy, cache=cache, lost=lost)
                         if m is None:
                             raise ConvergenceError(
                                 f"{lost}; not reached with the relaxed tail threshold either "
