@@ -389,6 +389,7 @@ class StabilityOperator:
         }
         self.residuals = {}
         cache = {}
+        k_rows: set[int] = set()  # rows with |k| terms (the top conditions)
 
         def coefficients(name):
             if name not in cache:
@@ -412,6 +413,7 @@ class StabilityOperator:
                     if (t.k, t.b, t.d) != (1, 0, 0):
                         raise NotImplementedError(f"|k| enters {name} as {t}: not linear")
                     K[rows, col[t.field]] += blk
+                    k_rows.update(range(M)[rows])
                     continue
                 key = (t.b, t.d)
                 if key not in pieces:
@@ -443,8 +445,10 @@ class StabilityOperator:
         r, c = self.row_eq[:, None], self.col_eq[None, :]
         self._pieces_eq = {key: P * r * c for key, P in pieces.items()}
         self.B_eq = B * r * c
-        # K has entries on the top rows only: kept as (rows, columns, values)
-        kr, kc = np.nonzero(K)
+        # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
+        tops = np.array(sorted(k_rows), dtype=int)
+        ti, kc = np.nonzero(K[tops])
+        kr = tops[ti]
         kv = K[kr, kc]
         self._K_eq = (kr, kc, kv * self.row_eq[kr] * self.col_eq[kc])
         self._K_sparse = (kr, kc, kv)
@@ -502,7 +506,9 @@ class StabilityOperator:
         """
         z = np.zeros((self.size, self.size))
         A0 = self.pieces[(0, 0)].copy()
-        A1 = self.pieces.get((1, 0), z) - 1j * self.K
+        A1 = self.pieces.get((1, 0), z).astype(complex)
+        rows, cols, vals = self._K_sparse
+        A1[rows, cols] -= 1j * vals  # − i K, on K's entries only
         A2 = self.pieces.get((2, 0), z).astype(complex)
         return A0, A1, A2
 
