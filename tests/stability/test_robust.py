@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -285,3 +286,32 @@ def test_dispersion_follows_a_lost_branch_with_the_relaxed_threshold():
     alpha = complex(float(ds.alpha_re[1]), float(ds.alpha_im[1]))
     assert abs(alpha - complex(-0.0027679, -0.0192902)) < 1e-6
     assert float(ds.drift[1]) < 3e-4
+
+
+def test_null_vectors_move_a_shift_that_is_an_exact_eigenvalue(monkeypatch, p1_flow):
+    """Where A − 0·B has an exact zero pivot (α0 = 0 to the last bit; a flow of the 60 × 60
+    φ = 0.05 diagram at N = 160), ShiftInvert refuses σ = 0; null_vectors then shifts by
+    1e-14 (1 + i), far inside the continuum's ~1e-8, and finds the same null vector."""
+    import importlib
+
+    from chuteflow.stability import StabilityOperator
+    from chuteflow.stability.dispersion import null_vectors
+
+    op = StabilityOperator(p1_flow, 48, mapped=True)
+    ref = null_vectors(op)
+    shift_invert = importlib.import_module("chuteflow.stability.eigen").ShiftInvert
+    init = shift_invert.__init__
+    shifts = []
+
+    def singular_at_zero(self, A, B, sigma, **kw):
+        shifts.append(complex(sigma))
+        if sigma == 0:
+            raise ConvergenceError("shift 0 is an eigenvalue: A − σB is singular; move the shift")
+        init(self, A, B, sigma, **kw)
+
+    monkeypatch.setattr(shift_invert, "__init__", singular_at_zero)
+    nv = null_vectors(op)
+    assert shifts == [0, 1e-14 * (1 + 1j)]
+    assert abs(nv.alpha0) < 1e-9
+    overlap = abs(np.vdot(ref.right, nv.right)) / (np.linalg.norm(ref.right) * np.linalg.norm(nv.right))
+    assert overlap > 1 - 1e-8
