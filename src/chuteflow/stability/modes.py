@@ -365,11 +365,8 @@ def nearest_eigenpair(pencil: Pencil, sigma: complex, v0=None, *, restarts: int 
     of (A, B) is ``pencil.unscale(w)``); ``v0`` lives there too.
     """
     A, B = pencil.equilibrated()
-    try:
-        si = ShiftInvert(A, B, sigma, diagonal_B=True)
-    except ConvergenceError:  # σ hit an eigenvalue to machine precision: nudge it
-        sigma = complex(sigma) * (1 + 1e-12) + 1e-14 * (1 + 1j)
-        si = ShiftInvert(A, B, sigma, diagonal_B=True)
+    si = ShiftInvert.nudged(A, B, sigma, diagonal_B=True)
+    sigma = si.sigma
     if v0 is not None:
         # a start vector from a nearby solve (continuation, the other resolution) makes
         # inverse iteration converge in a few solves; ARPACK is the fallback

@@ -36,7 +36,6 @@ the bulk equations; a term with |k| (k = √(k_x² + k_z²)) goes to K.
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -46,6 +45,7 @@ from ..equations import TOP_OF, Term, compiled_equations
 from ..errors import ParameterError
 from ..spectral import ChebyshevGrid, MappedChebyshevGrid
 from ..steady import SteadyFlow
+from ..steady.result import cached_per_flow
 
 FIELDS_2D = ("nu", "u", "v", "T")
 FIELDS_3D = ("nu", "u", "v", "w", "T")
@@ -63,6 +63,7 @@ MAP_WIDTH = 2.0
 MAP_BLEND = 1.0
 
 
+@cached_per_flow  # every operator of a flow asks for it
 def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     """Centre y_c and width ε of the sinh map of the stability grid (issue 9, item 2).
 
@@ -96,9 +97,6 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     dense layer of nodes at k ≳ 0.5; the factor 2 gains at small k and loses little beyond.
     ε is capped at y_max (the map is then nearly linear).
     """
-    known = _LAYER_MAPS.get(flow)
-    if known is not None:
-        return known
     th = math.radians(flow.theta)
     y_max = float(flow.y_max)
     h = float(flow.h)
@@ -108,13 +106,7 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     width = MAP_WIDTH * abs(T_h) / math.cos(th)
     if not (math.isfinite(width) and width > 0):
         width = y_max
-    out = (h, float(min(width, y_max)))
-    _LAYER_MAPS[flow] = out
-    return out
-
-
-#: :func:`layer_map` of each flow while it lives (every operator of a flow asks for it).
-_LAYER_MAPS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+    return h, float(min(width, y_max))
 
 
 def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGrid:

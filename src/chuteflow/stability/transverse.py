@@ -45,7 +45,7 @@ from ..errors import ConvergenceError, ParameterError
 from ..spectral import coefficients
 from ..steady import SteadyFlow
 from .dispersion import branch_mode
-from .eigen import ShiftInvert
+from .eigen import ShiftInvert, factor_shifted
 from .modes import (
     Mode,
     OperatorCache,
@@ -577,7 +577,7 @@ def _null_vector(op) -> np.ndarray:
     the shift-invert Arnoldi at σ = 0 of :func:`~chuteflow.stability.dispersion.null_vectors`
     on the real form (a real LU; the left vector is not needed here)."""
     _, Ar, bd, s = _real_pencil(op, 0.0)
-    _, W = _RealFormShiftInvert(Ar, bd, 0.0).nearest(1)
+    _, W = _RealFormShiftInvert.nudged(Ar, bd, 0.0).nearest(1)
     return s * W[:, 0]
 
 
@@ -887,12 +887,7 @@ class _RealFormShiftInvert(ShiftInvert):
             M = _shifted(Ar, bdiag, self.sigma.real)
         else:
             M = _shifted(Ar, bdiag, self.sigma, complex)
-        self.lu = sla.lu_factor(M, overwrite_a=True, check_finite=False)
-        piv = np.abs(np.diag(self.lu[0]))
-        if not np.all(np.isfinite(piv)) or piv.min() == 0.0:
-            raise ConvergenceError(
-                f"shift {self.sigma:.6g} is an eigenvalue: A − σB is singular; move the shift"
-            )
+        self.lu = factor_shifted(M, self.sigma)
         (self._getrs,) = sla.get_lapack_funcs(("getrs",), (self.lu[0],))
 
     @property
@@ -946,11 +941,8 @@ def _nearest_kx0(op, kz: float, sigma: complex, v0=None):
     sigma = complex(sigma)
     if abs(sigma.imag) <= REAL_SHIFT_RTOL * abs(sigma):
         sigma = complex(sigma.real)
-    try:
-        si = _RealFormShiftInvert(Ar, bd, sigma)
-    except ConvergenceError:  # σ hit an eigenvalue to machine precision: nudge it
-        sigma = sigma * (1 + 1e-12) + 1e-14 * (1 + 1j)
-        si = _RealFormShiftInvert(Ar, bd, sigma)
+    si = _RealFormShiftInvert.nudged(Ar, bd, sigma)
+    sigma = si.sigma
     if v0 is not None:
         start = np.asarray(v0, dtype=complex) / s
         found = si.iterate(start)

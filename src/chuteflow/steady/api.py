@@ -11,7 +11,7 @@ from ..closures import ChuteModel
 from ..continuation import StepRules, Trial, continue_to
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from .existence import steady_existence
-from .result import SteadyFlow, derived_quantities, spectral_tail, steady_grid
+from .result import SteadyFlow, cached_per_flow, derived_quantities, spectral_tail, steady_grid
 from .solver import NewtonState, SteadyNewton, solve_state, validate_point
 
 _KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
@@ -363,8 +363,6 @@ TANGENT_STEP = 1e-10
 #: dX/dβ from Newton's last LU (solve_point), by flow, while the flow lives (weak keys: a
 #: cache never keeps a flow, with its grid, alive).
 _BETA_TANGENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-#: The tangents of :func:`steady_tangent`, by flow, while the flow lives.
-_TANGENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
 def newton_tangent(st: NewtonState) -> np.ndarray | None:
@@ -414,18 +412,16 @@ def steady_tangent(flow: SteadyFlow) -> dict:
     return dict(_cached_tangent(flow))
 
 
+@cached_per_flow
 def _cached_tangent(flow: SteadyFlow) -> dict:
     """The tangent of one flow, computed once while the flow lives: several sweep metrics of
     the same point (``kinematic``, the 1D criterion, the long-wave theory) need it. Its
     arrays are made read-only so that no caller can alter the cached copy."""
-    out = _TANGENTS.get(flow)
-    if out is None:
-        dX = _BETA_TANGENTS.pop(flow, None)
-        out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
-        for v in out.values():
-            if isinstance(v, np.ndarray):
-                v.flags.writeable = False
-        _TANGENTS[flow] = out
+    dX = _BETA_TANGENTS.pop(flow, None)
+    out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
+    for v in out.values():
+        if isinstance(v, np.ndarray):
+            v.flags.writeable = False
     return out
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import math
+import weakref
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -11,6 +12,30 @@ import numpy as np
 from ..closures import ChuteModel
 from ..spectral import ChebyshevGrid, MappedChebyshevGrid, coefficients, tail
 from ._roots import brent_root
+
+
+@functools.lru_cache(maxsize=8)
+def _flow_grid(n: int, y_max: float, grid_map: tuple[float, float] | None) -> ChebyshevGrid:
+    """:attr:`SteadyFlow.grid`: built once for the last few flows asked (its D2 is O(n³), and
+    every operator, derivative and interpolation of a flow uses it; a sweep asks for one
+    flow's grid at a time), without a flow keeping it (3 MB at N = 432). Its arrays are
+    shared: read them, do not change them."""
+    return steady_grid(n, y_max, grid_map)
+
+
+def cached_per_flow(func):
+    """Decorator: ``func(flow)`` computed once while the flow lives (weak keys: the cache
+    never keeps a flow alive; flows equal in value share the entry)."""
+    memo: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+    @functools.wraps(func)
+    def wrapper(flow):
+        out = memo.get(flow)
+        if out is None:
+            out = memo[flow] = func(flow)
+        return out
+
+    return wrapper
 
 
 def steady_grid(n: int, y_max: float, grid_map: tuple[float, float] | None = None) -> ChebyshevGrid:
@@ -121,20 +146,11 @@ class SteadyFlow:
     def nu(self) -> np.ndarray:
         return np.exp(self.log_nu)
 
-    @functools.cached_property
+    @property
     def grid(self) -> ChebyshevGrid:
-        """The collocation grid of the profiles (:func:`steady_grid`; built on first use and
-        kept: its D2 is O(n³), and every operator, derivative and interpolation uses it)."""
-        return steady_grid(self.n, self.y_max, self.grid_map)
-
-    def __getstate__(self):
-        # the cached grid is rebuilt where it is needed, not shipped between processes
-        state = dict(self.__dict__)
-        state.pop("grid", None)
-        return state
-
-    def __setstate__(self, state):
-        self.__dict__.update(state)
+        """The collocation grid of the profiles (:func:`steady_grid`), shared by the flows
+        asked for last (:func:`_flow_grid`)."""
+        return _flow_grid(self.n, self.y_max, self.grid_map)
 
     def profiles(self, y) -> dict[str, np.ndarray]:
         """ν0, u0, T0 interpolated spectrally at heights ``y`` (0 ≤ y ≤ y_max)."""

@@ -245,7 +245,6 @@ class SteadyNewton:
                 ("xmom", slice(m + 1, m + n), slice(1, n), "u"),
                 (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
             )
-        #: the Newton step eliminates u0' (:meth:`_step`) where the equations allow it
         #: where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
         self._w_pattern = _u_prime_pattern(self._layout, self.eqs) if integrated else None
         self.eliminate = self._w_pattern is not None

@@ -228,9 +228,6 @@ def run_task(config, task, *, limit_threads: bool = True, keep_flows: bool = Fal
             if point.notes:
                 messages[k] = _clip("; ".join([x for x in [messages[k]] if x] + point.notes))
             pt_seconds[k] += time.perf_counter() - t0
-            # the flow's grid, cached by its metrics (D and D2: 3 MB at N = 432), is not kept
-            # while the rest of the chunk is computed (the grid is rebuilt wherever needed)
-            vars(flow).pop("grid", None)
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     return TaskResult(
         key=task.key,
