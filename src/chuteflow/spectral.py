@@ -33,6 +33,18 @@ def _reference(n: int):
     return x, D, w
 
 
+@functools.lru_cache(maxsize=8)
+def _reference_d2(n: int) -> np.ndarray:
+    """D_x @ D_x of :func:`_reference` (read-only): the O(n³) part of a mapped grid's D2,
+    the same for every map of n intervals. Every flow has its own map, and a grid evicted
+    from a cache (the steady solver's, a flow's) is rebuilt with its D2 when the flow is
+    asked again (its tangent, its stability operators)."""
+    Dx = _reference(n)[1]
+    D2 = Dx @ Dx
+    D2.setflags(write=False)
+    return D2
+
+
 def _clenshaw_curtis(n: int) -> np.ndarray:
     theta = np.pi * np.arange(n + 1) / n
     w = np.zeros(n + 1)
@@ -199,9 +211,10 @@ class MappedChebyshevGrid(ChebyshevGrid):
 
     @cached_property
     def D2(self) -> np.ndarray:
-        """Second-derivative matrix d²/dy² (chain rule in x; built on first use: O(n³))."""
+        """Second-derivative matrix d²/dy² (chain rule in x; built on first use, O(n²) with
+        D_x² cached per n)."""
         Dx, y1 = _reference(self.n)[1], self.jacobian
-        return (Dx @ Dx) / (y1**2)[:, None] - (self._y2 / y1**3)[:, None] * Dx
+        return _reference_d2(self.n) / (y1**2)[:, None] - (self._y2 / y1**3)[:, None] * Dx
 
     def to_computational(self, y) -> np.ndarray:
         """The computational variable x ∈ [−1, 1] of heights ``y`` (Newton on the monotone

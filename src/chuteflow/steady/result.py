@@ -243,11 +243,13 @@ def _chebval1(c: list[float], x: float) -> float:
     return c0 + c1 * x
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=2)
 def _fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The fine sampling of :func:`derived_quantities` for a series of degree n: the points
     x = linspace(−1, 1, 8n + 1) and the matrix of T_0 … T_n there (one product per series
-    instead of a Clenshaw recurrence over n vector operations); cached, read-only."""
+    instead of a Clenshaw recurrence over n vector operations); cached, read-only. 12 MiB
+    at n = 432: the last two degrees are kept (a flow and its drift check use two; a
+    rebuild costs ~4 ms at n = 432)."""
     xf = np.linspace(-1.0, 1.0, 8 * n + 1)
     V = np.polynomial.chebyshev.chebvander(xf, n)
     xf.flags.writeable = False

@@ -144,7 +144,8 @@ class GrowthMetric(PointFunction):
     or replaced by a resolved direct mode; flagged the same way; version 4: the same values
     as version 3 for k_max ≤ 0.1; version 5: the branch tracker's smallest step,
     :data:`~chuteflow.stability.dispersion.TRACK_MIN_STEP`). Only where that fails too are the values missing
-    (``dispersion_sampled`` = 1, the reason in the message).
+    (``dispersion_sampled`` = 1, the reason in the message; the largest k of the grid is
+    tried first, so the message names it when it is not reached).
     Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
     Re α2 > 0 (about 5 s a point: off by default for diagrams).
@@ -241,14 +242,22 @@ class GrowthMetric(PointFunction):
                     # policy.relaxed_k_max the band search and the direct mode), at the
                     # tracker's last N (None: not reached either)
                     lost = str(exc).split(" (theta")[0]
-                    for kk in ks[len(modes) :]:
-                        m = after_lost_branch(flow, float(kk), n=tr.n, policy=policy, cache=cache, lost=lost)
+                    rest = [float(kk) for kk in ks[len(modes) :]]
+                    # the largest k first: each k is followed afresh from k = 0 (the same
+                    # answer in any order), and where one k is not reached the values stay
+                    # missing; the farthest is the likeliest to fail, and after it the
+                    # nearer ones are not worth computing
+                    order = rest[-1:] + rest[:-1]
+                    found = {}
+                    for kk in order:
+                        m = after_lost_branch(flow, kk, n=tr.n, policy=policy, cache=cache, lost=lost)
                         if m is None:
                             raise ConvergenceError(
                                 f"{lost}; not reached with the relaxed tail threshold either "
                                 f"(k = {kk:.3g}, N = {tr.n})"
                             ) from None
-                        modes.append(m)
+                        found[kk] = m
+                    modes.extend(found[kk] for kk in rest)
                     point.note(f"growth: {lost}; followed with the relaxed tail threshold from there")
                     break
         except ConvergenceError as exc:

@@ -1,0 +1,48 @@
+"""Give the heap's free memory back to the operating system between sweep points.
+
+A sweep worker solves dense problems of a few MiB each (M × M at M = 644 for N = 160) in
+varying sizes. glibc's malloc serves them from its heap once the first ones are freed (its
+mmap threshold rises to the largest freed block) and keeps the freed pages: the worker's
+resident memory then grows with every differently sized problem and peaks at the sum of the
+retained pages and the next point's working set. :func:`release_free_memory` calls glibc's
+``malloc_trim(0)``, which hands every free page of the heap back. Elsewhere (macOS, musl,
+Windows) it does nothing.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+from collections.abc import Callable
+
+_trim: Callable[[int], int] | None = None
+_loaded = False
+
+
+def _malloc_trim() -> Callable[[int], int] | None:
+    global _trim, _loaded
+    if not _loaded:
+        _loaded = True
+        if sys.platform.startswith("linux"):
+            try:
+                fn = ctypes.CDLL(None).malloc_trim  # glibc's, in the process's C library
+            except (OSError, AttributeError):  # not glibc (e.g. musl)
+                fn = None
+            if fn is not None:
+                fn.argtypes = [ctypes.c_size_t]
+                fn.restype = ctypes.c_int
+                _trim = fn
+    return _trim
+
+
+def release_free_memory() -> bool:
+    """Return the heap's free pages to the operating system (glibc ``malloc_trim(0)``).
+
+    Returns whether anything could be asked (False where the C library has no
+    ``malloc_trim``). Costs about a millisecond; live objects are untouched.
+    """
+    fn = _malloc_trim()
+    if fn is None:
+        return False
+    fn(0)
+    return True

@@ -1,0 +1,45 @@
+"""chuteflow._memory: handing the heap's free pages back between sweep points (issue 9)."""
+
+from __future__ import annotations
+
+import platform
+import sys
+
+import numpy as np
+
+from chuteflow._memory import release_free_memory
+
+
+def _rss_kib() -> int:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    raise AssertionError("no VmRSS line")  # pragma: no cover
+
+
+def test_release_free_memory_answers_whether_it_could_trim():
+    glibc = sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc"
+    assert release_free_memory() is glibc
+    assert release_free_memory() is glibc  # idempotent
+
+
+def test_release_free_memory_returns_freed_heap_pages_and_keeps_live_data():
+    if not (sys.platform.startswith("linux") and platform.libc_ver()[0] == "glibc"):
+        return  # nothing to trim: checked by the test above
+    # a heap like a worker's after a point: blocks of a few MiB, every other one freed (the
+    # first free raises glibc's mmap threshold, so the rest come from the heap)
+    first = np.ones(3 * 2**20 // 8)
+    del first
+    blocks = [np.full(3 * 2**20 // 8, float(i)) for i in range(40)]
+    del blocks[::2]
+    release_free_memory()
+    before = _rss_kib()
+    keep = blocks
+    blocks = [np.full(3 * 2**20 // 8, -1.0) for _ in range(20)]
+    del blocks  # 60 MiB freed on top of the heap's live blocks
+    freed_kept = _rss_kib()
+    release_free_memory()
+    after = _rss_kib()
+    assert freed_kept - after > 30 * 1024, (before, freed_kept, after)
+    assert all(np.all(b == float(2 * i + 1)) for i, b in enumerate(keep))
