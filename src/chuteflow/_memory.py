@@ -1,4 +1,4 @@
-"""Give the heap's free memory back to the operating system between sweep points.
+"""Give the heap's free memory back to the operating system between sweep tasks.
 
 A sweep worker solves dense problems of a few MiB each (M × M at M = 644 for N = 160) in
 varying sizes. glibc's malloc serves them from its heap once the first ones are freed (its
