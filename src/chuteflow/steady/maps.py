@@ -2,9 +2,15 @@
 
 Each θ row is solved by continuation along ν0 (:func:`~chuteflow.steady.family.continue_row`);
 a row also starts from the converged points of the row before it (continuation in θ), which
-reaches the non-monotonic branches that a cold start misses. Rows are swept outwards from a
-middle row in two directions, which are independent: with ``workers=2`` they run in two
-processes (one BLAS thread each).
+reaches the non-monotonic branches that a cold start misses. Rows are swept in chains
+outwards from start rows (solved on their own): from one middle row in two directions, or,
+on maps of at least :data:`TWO_STARTS` rows, from rows near a quarter and three quarters of
+the range in four (down to the first row, up to the middle between the two, down to it,
+up to the last). The chains are independent: with ``workers=2`` they run in two processes
+(one BLAS thread each); four chains share the two more evenly than two, because rows cost
+very different amounts (near the upper existence boundary a row of the paper's φ = 0.05
+map costs 10× one near the lower). A second pass then continues each row from its other
+neighbour as well.
 """
 
 from __future__ import annotations
@@ -37,43 +43,87 @@ def _sweep(thetas, nus, model, opts, seed_row=None, proofs=None):
     return rows
 
 
-def _start_row(ths, nus, model, opts, start_theta, proofs):
-    """Row where both sweeps start: the first of a few candidates (middle of the range
-    first) on which at least a quarter of the points converge, else the best of them."""
-    if start_theta is not None:
-        k = int(np.argmin(np.abs(ths - start_theta)))
-        return k, continue_row(ths[k], nus, model, opts, proofs=proofs)
-    fracs = (0.5, 0.65, 0.35, 0.8, 0.2)
+#: Maps with at least this many θ rows start from two rows instead of one (four chains).
+TWO_STARTS = 12
+#: A start row is good when at least this fraction of its points converge (physical or thin
+#: flows are both seeds).
+_GOOD_START = 0.25
+
+
+def _row_index(n, f):
+    return int(round(f * (n - 1)))
+
+
+def _first_good(ths, nus, model, opts, fracs, proofs, cold):
+    """The first row of the fractions ``fracs`` of the range on which at least
+    :data:`_GOOD_START` of the points converge, else the best of them: (index, good).
+    ``cold`` keeps the rows solved on their own (each at most once)."""
     best = None
     for f in fracs:
-        k = int(round(f * (len(ths) - 1)))
-        if best is not None and k == best[0]:
-            continue
-        row = continue_row(ths[k], nus, model, opts, proofs=proofs)
-        good = sum(p.status == "ok" for p in row)
-        if best is None or good > best[2]:
-            best = (k, row, good)
-        if good >= 0.25 * len(nus):
-            break
+        k = _row_index(len(ths), f)
+        if k not in cold:
+            cold[k] = continue_row(ths[k], nus, model, opts, proofs=proofs)
+        n_ok = sum(p.status == "ok" for p in cold[k])
+        good = n_ok >= _GOOD_START * len(nus)
+        if best is None or n_ok > best[2]:
+            best = (k, good, n_ok)
+        if good:
+            return k, True
     return best[0], best[1]
 
 
-def _sweep_back(thetas, nus, model, opts, rows, k, proofs):
-    """Second pass towards the start row ``k``: each row also continues from the row on
-    its outer side, which reaches pieces of the branch first found further out."""
-    for i in list(range(len(rows) - 2, k - 1, -1)) + list(range(1, k)):
-        j = i + 1 if i >= k else i - 1
-        if any(p.usable for p in rows[j]):
-            rows[i] = continue_row(
-                thetas[i],
-                nus,
-                model,
-                opts,
-                previous=rows[j],
-                existing=rows[i],
-                cold_starts=False,
-                proofs=proofs,
-            )
+def _start_rows(ths, nus, model, opts, start_theta, proofs):
+    """Rows where the chains start, solved on their own: {index: row}.
+
+    ``start_theta``: that row alone. Maps of fewer than :data:`TWO_STARTS` rows: one row,
+    the first good of the middle, 65 %, 35 %, 80 % and 20 % of the range (or the best of
+    them). Larger maps: the first good of 25 %, 35 %, 15 % and of 75 %, 65 %, 85 % — two
+    rows when both are good, otherwise the single start as for a small map."""
+    cold: dict = {}
+    if start_theta is not None:
+        k = int(np.argmin(np.abs(ths - start_theta)))
+        return {k: continue_row(ths[k], nus, model, opts, proofs=proofs)}
+    if len(ths) >= TWO_STARTS:
+        k1, good1 = _first_good(ths, nus, model, opts, (0.25, 0.35, 0.15), proofs, cold)
+        k2, good2 = _first_good(ths, nus, model, opts, (0.75, 0.65, 0.85), proofs, cold)
+        if good1 and good2 and k1 < k2:
+            return {k1: cold[k1], k2: cold[k2]}
+    k, _ = _first_good(ths, nus, model, opts, (0.5, 0.65, 0.35, 0.8, 0.2), proofs, cold)
+    return {k: cold[k]}
+
+
+def _chains(n, starts):
+    """Chains of row indices swept from the start rows: (start, [rows in order])."""
+    out = [(starts[0], list(range(starts[0] - 1, -1, -1)))]
+    for a, b in zip(starts, starts[1:]):
+        mid = (a + b) // 2
+        out += [(a, list(range(a + 1, mid + 1))), (b, list(range(b - 1, mid, -1)))]
+    out.append((starts[-1], list(range(starts[-1] + 1, n))))
+    return [c for c in out if c[1]]
+
+
+def _sweep_back(thetas, nus, model, opts, rows, chains, proofs):
+    """Second pass, each chain from its far end back towards its start row: each row also
+    continues from the row on its outer side (for the chain's last row: the grid's end, or
+    the last row of the chain it meets), which reaches pieces of the branch first found
+    further out. The start row itself is continued from the row above it."""
+    n = len(rows)
+    for start, chain in reversed(chains):
+        up = chain[0] > start
+        back = chain[::-1] + ([start] if up else [])
+        for i in back:
+            j = i + 1 if up else i - 1
+            if 0 <= j < n and any(p.usable for p in rows[j]):
+                rows[i] = continue_row(
+                    thetas[i],
+                    nus,
+                    model,
+                    opts,
+                    previous=rows[j],
+                    existing=rows[i],
+                    cold_starts=False,
+                    proofs=proofs,
+                )
     return rows
 
 
@@ -115,14 +165,18 @@ def steady_map(
     tangent : bool
         Also compute dQ0/dρ̄0 etc. from the exact family tangent (about 2 ms per point).
     workers : int or None
-        1: one process. 2: the two sweeps (θ upwards and downwards from the start row) in
-        two processes. None: 2 if the machine has at least two cores.
+        1: one process. 2 or more: the chains of rows (θ upwards and downwards from each
+        start row; two or four chains) in that many processes, the same numbers. None: 2 if
+        the machine has at least two cores.
     return_flows : bool
         Also return the converged flows (thin ones included) as a nested list [θ][ν0],
         None where there is none.
     start_theta : float, optional
-        Row where the sweeps start (default: the middle row, or a row at 65 %, 35 %, 80 %,
-        20 % of the range if fewer than a quarter of the middle row's points converge).
+        Row where the sweeps start (its nearest row; one start). Default: on maps of at
+        least :data:`TWO_STARTS` rows, two rows near 25 % and 75 % of the range (or 35 %,
+        15 % and 65 %, 85 % where fewer than a quarter of a row's points converge);
+        otherwise, or where either has no good candidate, the middle row, or a row at
+        65 %, 35 %, 80 %, 20 % of the range.
     decide : bool
         Decide every point that continuation does not reach by the shooting scan (or a
         scan's verdict that covers it: :func:`~chuteflow.steady.family.continue_row`).
@@ -161,32 +215,34 @@ def steady_map(
         decide=decide,
     )
     proofs: list = []
-    k, first = _start_row(ths, nus, model, opts, start_theta, proofs)
-    up, down = list(ths[k + 1 :]), list(ths[:k][::-1])
+    starts = _start_rows(ths, nus, model, opts, start_theta, proofs)
+    chains = _chains(len(ths), sorted(starts))
+    tasks = [([ths[i] for i in rows], nus, model, opts, starts[k], list(proofs)) for k, rows in chains]
     if workers is None:
         workers = 2 if (os.cpu_count() or 1) >= 2 else 1
-    if workers >= 2 and up and down:
+    if workers >= 2 and len(chains) >= 2:
         import multiprocessing as mp
         from concurrent.futures import ProcessPoolExecutor
 
         ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-        # the sympy-compiled closures and equations are already built (start row):
-        # forked children inherit them
-        with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
-            fu = pool.submit(_sweep_worker, (up, nus, model, opts, first, list(proofs)))
-            fd = pool.submit(_sweep_worker, (down, nus, model, opts, first, list(proofs)))
-            (r_up, p_up), (r_down, p_down) = fu.result(), fd.result()
-            rows_up = [first] + r_up
-            rows_down = r_down
-            proofs = p_up + [q for q in p_down if q not in p_up]
+        # the sympy-compiled closures and equations are already built (start rows):
+        # forked children inherit them. The chains go out from the top of the range first.
+        with ProcessPoolExecutor(max_workers=min(workers, len(chains)), mp_context=ctx) as pool:
+            futures = [pool.submit(_sweep_worker, t) for t in reversed(tasks)]
+            done = [f.result() for f in futures][::-1]
     else:
-        # the same order of work as with two processes (identical statuses and numbers)
-        p_up, p_down = list(proofs), list(proofs)
-        rows_up = [first] + _sweep(up, nus, model, opts, first, p_up)
-        rows_down = _sweep(down, nus, model, opts, first, p_down)
-        proofs = p_up + [q for q in p_down if q not in p_up]
-    rows = rows_down[::-1] + rows_up
-    rows = _sweep_back(ths, nus, model, opts, rows, k, proofs)
+        # the same work as with several processes (identical statuses and numbers)
+        done = [(_sweep(*t), t[-1]) for t in tasks]
+    rows: list = [None] * len(ths)
+    for k, row in starts.items():
+        rows[k] = row
+    merged = list(done[-1][1]) if done else list(proofs)
+    for (_k, chain), (chain_rows, _p) in zip(chains, done):
+        for i, row in zip(chain, chain_rows):
+            rows[i] = row
+    for _rows, chain_proofs in reversed(done[:-1]):
+        merged += [q for q in chain_proofs if q not in merged]
+    rows = _sweep_back(ths, nus, model, opts, rows, chains, merged)
     arrays = [row_arrays(r) for r in rows]
     data = {}
     for key in arrays[0]:
