@@ -299,3 +299,24 @@ def test_summary_and_xarray(p1):
         assert k in s
     ds = p1.to_xarray()
     assert ds.sizes["y"] == p1.n + 1 and ds.attrs["roughness"] == 0.05
+
+
+def test_unresolved_flow_is_not_called_no_flow():
+    """θ = 16.2712°, ν0(0) = 0.25 (φ = 0.05, a point of the 60 × 60 paper map near the
+    upper existence boundary: a nearly packed band, h ≈ 9.1): the independent shooting
+    scan of tests/steady/shooting.py finds a flow. solve_steady either resolves it or says
+    that it does not (ConvergenceError with the scan's estimate) — never "no steady flow",
+    which the θ-continuation fallback used to say when the branch it followed from 15°
+    ended at 15.98° (another branch)."""
+    from .test_existence import reference_verdict
+
+    exists, _ = reference_verdict(16.2712, 0.25, 0.05)
+    assert exists
+    try:
+        f = solve_steady(16.2712, 0.25, ChuteModel(roughness=0.05))
+    except NoSteadyFlowError as exc:
+        pytest.fail(f"a flow exists, but solve_steady says: {exc}")
+    except ConvergenceError as exc:
+        assert "shooting finds a solution" in str(exc) and "h = 9.1" in str(exc)
+    else:
+        assert f.h == pytest.approx(9.137, rel=1e-3)

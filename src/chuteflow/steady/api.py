@@ -76,7 +76,9 @@ def solve_steady(
     scan in u0(0) (:func:`~chuteflow.steady.existence.steady_existence`) decides whether a
     flow exists — :class:`NoSteadyFlowError` then carries its verdict — and gives Newton a
     starting profile. Only if Newton fails from that profile too is the branch followed by
-    continuation in θ at fixed ν0(0) from an angle where the cold start works.
+    continuation in θ at fixed ν0(0) from an angle where the cold start works; where that
+    branch ends before θ, the flow the scan found is not resolved (:class:`ConvergenceError`,
+    with the scan's estimate), which is not a verdict of no flow.
 
     Raises
     ------
@@ -154,14 +156,12 @@ def _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first_error):
     cur, reached = follow_theta(anchor, theta, max_steps=_MAX_STEPS, n=n, rtol=rtol, n_max=n_max)
     if reached:
         return cur
-    direction = 1.0 if theta > anchor.theta else -1.0
-    too = "large" if direction > 0 else "small"
-    raise NoSteadyFlowError(
-        f"no steady flow found at theta = {theta:g} deg, nu0 = {nu0:g}, roughness = "
-        f"{model.roughness:g}, wall_loss = {model.wall_loss:g}: the cold start failed and "
-        f"the branch followed in theta from {anchor.theta:g} deg ends near "
-        f"{cur.theta:.4g} deg (there h = {cur.h:.3g}, y_max = {cur.y_max:.3g}, peak "
-        f"density {cur.nu_peak:.3g}) — the angle is too {too} for this floor density"
+    # the shooting scan found a flow here (solve_steady comes here only then): the branch
+    # followed from the anchor is another one, which ends before theta — not a verdict
+    raise ConvergenceError(
+        f"{first_error}; the branch followed in theta from {anchor.theta:g} deg at the same "
+        f"floor density ends near {cur.theta:.4g} deg (there h = {cur.h:.3g}, y_max = "
+        f"{cur.y_max:.3g}, peak density {cur.nu_peak:.3g}) without reaching this flow"
     )
 
 

@@ -665,10 +665,14 @@ def _diagnose(theta, nu0, model, fail):
             f"{st.L:.3g} diameters) — the angle is too large for this roughness"
         )
     if st.L < 2.0 or st.T.min() < 1e-3:
+        how = (
+            f"decay length {st.L:.2g} diameters, below one particle diameter"
+            if st.L < 2.0
+            else f"the temperature falls to {st.T.min():.2g}: the layer freezes"
+        )
         return NoSteadyFlowError(
-            f"no steady flow at {where}: the layer collapses (decay length {st.L:.2g} "
-            "diameters, below one particle diameter) — the angle is too small for this "
-            "roughness, or the floor density too low"
+            f"no steady flow at {where}: the layer collapses ({how}) — the angle is too "
+            "small for this roughness, or the floor density too low"
         )
     return ConvergenceError(
         f"steady solver did not converge at {where}: Newton stalled with residual "
