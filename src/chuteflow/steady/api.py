@@ -106,6 +106,11 @@ def solve_steady(
     if not verdict.exists:
         raise NoSteadyFlowError(verdict.reason)
     m, cold = n, first
+    # from here on a flow exists: a failure is a ConvergenceError naming the scan's verdict
+    first = ConvergenceError(
+        f"steady solver did not converge although shooting finds a solution — "
+        f"{verdict.reason}; tried Newton from the isothermal cold start ({cold})"
+    )
     while verdict.solution is not None and m <= (n_max if verdict.physical else n):
         # sharp dense bands need more nodes than n to be represented: double until it works
         # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
