@@ -105,12 +105,12 @@ def solve_steady(
     verdict = steady_existence(theta, nu0, model, nu_top=nu_top, min_thickness=min_thickness)
     if not verdict.exists:
         raise NoSteadyFlowError(verdict.reason)
-    m, cold = n, first
     # from here on a flow exists: a failure is a ConvergenceError naming the scan's verdict
-    first = ConvergenceError(
+    tried = (
         f"steady solver did not converge although shooting finds a solution — "
-        f"{verdict.reason}; tried Newton from the isothermal cold start ({cold})"
+        f"{verdict.reason}; tried Newton from the isothermal cold start ({first})"
     )
+    m, first = n, ConvergenceError(tried)
     while verdict.solution is not None and m <= (n_max if verdict.physical else n):
         # sharp dense bands need more nodes than n to be represented: double until it works
         # (a thin layer, rejected anyway, gets one try: it is kept only as ThinLayerError.flow)
@@ -121,11 +121,7 @@ def solve_steady(
         except ThinLayerError:
             raise
         except (NoSteadyFlowError, ConvergenceError) as exc:
-            first = ConvergenceError(
-                f"steady solver did not converge although shooting finds a solution — "
-                f"{verdict.reason}; tried Newton from the isothermal cold start ({cold}) and "
-                f"from the shooting profile starting at n = {n} … {m} ({exc})"
-            )
+            first = ConvergenceError(f"{tried} and from the shooting profile at n = {n} … {m} ({exc})")
         m *= 2
     if not verdict.physical:
         raise NoSteadyFlowError(verdict.reason)
