@@ -39,7 +39,7 @@ def test_stages_belong_to_the_default_paper():
     assert DEFAULT_PAPERS == ("mitarai2004",) and set(DEFAULT_PAPERS) <= set(PAPERS)
     assert load_stages() == {}
     names = [s.name for s in registered_stages(DEFAULT_PAPERS)]
-    assert names == ["steady", "stability", "diagrams", "reduced", "transverse", "dns"]
+    assert names == ["steady", "stability", "diagrams", "reduced", "waves", "transverse", "dns"]
     assert {s.paper for s in registered_stages(DEFAULT_PAPERS)} == {"mitarai2004"}
     with pytest.raises(ParameterError, match="unknown paper"):
         load_paper("nope")

@@ -17,6 +17,7 @@ STAGE_MODULES: tuple[str, ...] = (
     "stability",
     "diagrams",
     "reduced",
+    "waves",
     "transverse",
     "dns",
 )
