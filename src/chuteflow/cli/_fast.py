@@ -51,6 +51,7 @@ JSON_KEYS = (
     "residual",
     "iterations",
     "spectral_tail",
+    "converged",
 )
 
 _ROWS = (
@@ -77,7 +78,9 @@ def steady_command(theta: float, nu0: float, model: ChuteModel, nu_top: float, a
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top)
+        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
+    if not flow.converged:
+        print(f"warning: {flow.precision_warning()}", file=sys.stderr, flush=True)
     summary = flow.summary()
     if as_json:
         print(json.dumps({k: summary[k] for k in JSON_KEYS}), flush=True)

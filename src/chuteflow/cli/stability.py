@@ -135,7 +135,10 @@ def _steady(console, theta, nu0, model, nu_top):
     with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            return solve_steady(theta, nu0, model, nu_top=nu_top)
+            flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
+    if not flow.converged:
+        _warn(flow.precision_warning())
+    return flow
 
 
 def _params(flow) -> dict:

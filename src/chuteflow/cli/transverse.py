@@ -63,7 +63,10 @@ def _flow(theta, nu0, model, nu_top):
     limit_blas_threads(1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        return solve_steady(theta, nu0, model, nu_top=nu_top)
+        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
+    if not flow.converged:
+        typer.echo(f"warning: {flow.precision_warning()}", err=True)
+    return flow
 
 
 def _check_positive(name, value):

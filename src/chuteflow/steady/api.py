@@ -43,6 +43,7 @@ def solve_steady(
     guess: SteadyFlow | None = None,
     min_thickness: float = 1.0,
     continuation: bool = True,
+    strict: bool = True,
 ) -> SteadyFlow:
     """Steady flow at inclination ``theta`` (degrees) and floor density ``nu0`` (paper §3).
 
@@ -68,6 +69,14 @@ def solve_steady(
     continuation : bool
         If the cold start and the shooting start both fail, follow the branch in θ from an
         anchor angle (see Notes). False: fail after the shooting start.
+    strict : bool
+        True (default): raise :class:`ConvergenceError` where no road reaches ``rtol``.
+        False: where Newton converged at every resolution but the change between the last
+        two stayed above ``rtol`` (at ``n_max``, or at Newton's round-off floor, e.g.
+        nearly packed bands near the upper existence boundary), return the flow with the
+        smallest such change instead, flagged: ``converged`` False and ``convergence`` the
+        estimate (the guide's rule: a result that misses the precision comes with its
+        estimate). Where no road gives a flow at all, the error is raised either way.
 
     Notes
     -----
@@ -88,18 +97,36 @@ def solve_steady(
         No steady flow exists here: the angle is too small (the layer collapses below one
         diameter) or too large (the decay length diverges).
     ConvergenceError
-        The solver failed to converge or to reach ``rtol``.
+        The solver failed to converge or (with ``strict``) to reach ``rtol``.
     """
     model = model or ChuteModel()
     theta, nu0 = validate_point(theta, nu0, model, nu_top)
+    unresolved: list[SteadyFlow] = []  # flows of the roads that missed rtol (strict=False)
+
+    def keep(exc: Exception) -> None:
+        f = getattr(exc, "flow", None)
+        if isinstance(exc, ResolutionError) and f is not None and f.h >= min_thickness:
+            unresolved.append(f)
+
+    def fail(exc: Exception) -> SteadyFlow:
+        # every road failed: the flagged flow with the smallest change, or the error
+        if strict or not unresolved:
+            raise exc
+        return min(unresolved, key=lambda f: f.convergence)
+
     if guess is not None:
         start = state_of(guess)
-        return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
+        try:
+            return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, start, min_thickness)
+        except ResolutionError as exc:
+            keep(exc)
+            return fail(exc)
     try:
         return solve_point(theta, nu0, model, nu_top, n, rtol, n_max, None, min_thickness)
     except ThinLayerError:
         raise
     except (NoSteadyFlowError, ConvergenceError) as exc:
+        keep(exc)
         first = exc
     # --- existence by shooting (existence.py): a definitive verdict, or a Newton start ---
     verdict = steady_existence(theta, nu0, model, nu_top=nu_top, min_thickness=min_thickness)
@@ -121,14 +148,18 @@ def solve_steady(
         except ThinLayerError:
             raise
         except (NoSteadyFlowError, ConvergenceError) as exc:
+            keep(exc)
             first = ConvergenceError(f"{tried} and from the shooting profile at n = {n} … {m} ({exc})")
         m *= 2
     if not verdict.physical:
         raise NoSteadyFlowError(verdict.reason)
     if not continuation:
-        raise first
+        return fail(first)
     # --- end of the shooting hook ---
-    flow = _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first)
+    try:
+        flow = _theta_continuation(theta, nu0, model, nu_top, n, rtol, n_max, first)
+    except ConvergenceError as exc:
+        return fail(exc)
     if flow.h < min_thickness:
         raise ThinLayerError(_thin_message(theta, nu0, model, flow.h, min_thickness), flow)
     return flow
@@ -323,13 +354,6 @@ def solve_point(
         ):
             break
         n, st, q, prev = n2, st2, q2, change
-    if change > rtol:
-        raise ResolutionError(
-            f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
-            f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
-            f"(n_max = {n_max}{', round-off floor' if n2 < n_max else ''})",
-            h=float(q2["h"]),
-        )
     flow = SteadyFlow(
         theta=theta,
         nu0=nu0,
@@ -345,8 +369,17 @@ def solve_point(
         convergence=float(change),
         spectral_tail=spectral_tail(st2.s, st2.u, st2.T),
         grid_map=st2.grid_map,
+        converged=bool(change <= rtol),
         **q2,
     )
+    if change > rtol:
+        raise ResolutionError(
+            f"steady flow at theta = {theta:g}, nu0 = {nu0:g} did not converge to rtol = "
+            f"{rtol:g}: relative change {change:.2e} between n = {n} and n = {n2} "
+            f"(n_max = {n_max}{', round-off floor' if n2 < n_max else ''})",
+            h=float(q2["h"]),
+            flow=flow,
+        )
     dX = newton_tangent(st2)
     if dX is not None:
         _BETA_TANGENTS[flow] = dX
@@ -377,11 +410,13 @@ def newton_tangent(st: NewtonState) -> np.ndarray | None:
 
 class ResolutionError(ConvergenceError):
     """Newton converged at every resolution up to ``n_max``, but the scalars still changed
-    by more than ``rtol`` between the last two; ``.h`` is the thickness at the finest."""
+    by more than ``rtol`` between the last two; ``.h`` is the thickness at the finest and
+    ``.flow`` the flow there (``converged`` False, ``convergence`` the last change)."""
 
-    def __init__(self, message, h=float("nan")):
+    def __init__(self, message, h=float("nan"), flow: SteadyFlow | None = None):
         super().__init__(message)
         self.h = h
+        self.flow = flow
 
 
 class ThinLayerError(NoSteadyFlowError):

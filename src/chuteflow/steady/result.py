@@ -97,6 +97,11 @@ class SteadyFlow:
         (ξ_c, ξ_w): the nodes are clustered by a sinh map around y = ξ_c y_max with width
         ξ_w y_max (:func:`steady_grid`; the layer's edge, where the dense layer meets the
         cold dilute top); None: plain Chebyshev nodes. :attr:`grid` is the grid either way.
+    converged : bool
+        False where the resolution ladder ended (at ``n_max``, or at Newton's round-off
+        floor) before the change between two resolutions fell to the requested ``rtol``;
+        ``convergence`` is then the estimate of the error. Only
+        :func:`~chuteflow.steady.solve_steady` with ``strict=False`` returns such a flow.
     """
 
     theta: float
@@ -124,6 +129,7 @@ class SteadyFlow:
     convergence: float = float("nan")
     spectral_tail: float = float("nan")
     grid_map: tuple[float, float] | None = None
+    converged: bool = True
 
     def __eq__(self, other):
         if other is self:
@@ -198,6 +204,7 @@ class SteadyFlow:
             "iterations",
             "convergence",
             "spectral_tail",
+            "converged",
         ):
             v = getattr(self, k)
             d[k] = (
@@ -206,6 +213,18 @@ class SteadyFlow:
                 else (int(v) if isinstance(v, (int, np.integer)) else float(v))
             )
         return d
+
+    def precision_warning(self) -> str:
+        """One line saying how far from converged the flow is ('' when ``converged``): for
+        results returned with ``strict=False`` (:func:`~chuteflow.steady.solve_steady`)."""
+        if self.converged:
+            return ""
+        return (
+            f"the steady flow at theta = {self.theta:g} deg, nu0 = {self.nu0:g} is not converged to "
+            f"the requested tolerance: its quantities change by {self.convergence:.1e} (relative) "
+            f"between the last two resolutions (n = {self.n}); results from it carry about that "
+            "relative error"
+        )
 
     def to_xarray(self):
         """Profiles as an :class:`xarray.Dataset` on the nodes, scalars as attributes."""
