@@ -33,6 +33,13 @@ def _reference(n: int):
     return x, D, w
 
 
+def reference_nodes(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Chebyshev–Lobatto nodes x_j = −cos(πj/n) on [−1, 1], the differentiation matrix d/dx
+    there and the Clenshaw–Curtis weights (cached, read-only): what every grid of n
+    intervals, mapped or not, is built from by the chain rule."""
+    return _reference(n)
+
+
 @functools.lru_cache(maxsize=8)
 def _reference_d2(n: int) -> np.ndarray:
     """D_x @ D_x of :func:`_reference` (read-only): the O(n³) part of a mapped grid's D2,

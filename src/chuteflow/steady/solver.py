@@ -29,7 +29,7 @@ import numpy as np
 
 from ..equations import TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid, _reference
+from ..spectral import ChebyshevGrid, reference_nodes
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
@@ -544,7 +544,7 @@ def _u_basis_ref(n: int) -> tuple[np.ndarray, np.ndarray]:
     x ∈ [−1, 1], M_x = [e_0; D_x rows 1…n]: u = M_x⁻¹ (u(x_0), du/dx at x_1…x_n), exactly
     for polynomials of degree n. Any grid of n + 1 nodes y(x_j) (mapped or not) has
     D1 = diag(1/y'(x_j)) D_x, hence M⁻¹ = M_x⁻¹ diag(1, y'(x_1), …): one inverse per n."""
-    Dx = _reference(n)[1]
+    Dx = reference_nodes(n)[1]
     Minv = np.linalg.inv(np.vstack([np.eye(1, n + 1), Dx[1:]]))
     Minv[0] = np.eye(1, n + 1)[0]  # u(0) = u(0): exact
     g = Dx[0] @ Minv
