@@ -41,6 +41,10 @@ def test_stages_belong_to_the_default_paper():
     names = [s.name for s in registered_stages(DEFAULT_PAPERS)]
     assert names == ["steady", "stability", "diagrams", "reduced", "waves", "transverse", "dns"]
     assert {s.paper for s in registered_stages(DEFAULT_PAPERS)} == {"mitarai2004"}
+    # the stages that read nothing from the others run in the second process (reduced reads
+    # the diagrams' sweeps; waves, issue 9, does not and must stay off the main path)
+    independent = {s.name for s in registered_stages(DEFAULT_PAPERS) if s.independent}
+    assert independent == {"stability", "waves", "transverse", "dns"}
     with pytest.raises(ParameterError, match="unknown paper"):
         load_paper("nope")
 
