@@ -115,3 +115,18 @@ def test_unresolved_flow_is_printed_with_a_warning():
         assert d["convergence"] > 1e-8
         assert r.stderr.startswith("warning: the steady flow at theta = 16.2712 deg")
         assert len(r.stderr.strip().splitlines()) == 1
+
+
+def test_strict_option_makes_an_unresolved_flow_an_error():
+    """``--strict``: the same flow (change 3.6e-8 > 1e-8) is a one-line error, exit 2 —
+    through typer and through the fast path of a plain call (``fast_main``)."""
+    from chuteflow.cli._fast import fast_main
+
+    argv = ["steady", "--theta", "16.2712", "--nu0", "0.25", "--json", "--strict"]
+    r = CliRunner().invoke(app, argv)
+    code = fast_main(argv)
+    if r.exit_code == 0:  # resolved after all (then both paths print it)
+        assert json.loads(r.stdout)["converged"] is True and code == 0
+    else:
+        assert r.exit_code == 2 and code == 2
+        assert "did not converge" in r.stderr and "Traceback" not in r.stderr

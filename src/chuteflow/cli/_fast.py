@@ -72,13 +72,17 @@ _ROWS = (
 )
 
 
-def steady_command(theta: float, nu0: float, model: ChuteModel, nu_top: float, as_json: bool) -> None:
-    """Solve the steady flow at (θ, ν0(0)) and print it (one JSON object, or a table)."""
+def steady_command(
+    theta: float, nu0: float, model: ChuteModel, nu_top: float, as_json: bool, strict: bool = False
+) -> None:
+    """Solve the steady flow at (θ, ν0(0)) and print it (one JSON object, or a table); a
+    flow that misses the tolerance is printed flagged with a warning line, or with
+    ``strict`` raises (:func:`~chuteflow.steady.solve_steady`)."""
     from chuteflow.steady import solve_steady
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
+        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=strict)
     if not flow.converged:
         print(f"warning: {flow.precision_warning()}", file=sys.stderr, flush=True)
     summary = flow.summary()
@@ -105,13 +109,17 @@ def _parse_steady(args: Sequence[str]) -> dict | None:
     floats = {"--theta": "theta", "--nu0": "nu0", "--nu-top": "nu_top"}
     floats.update({"--" + p.replace("_", "-"): p for p in PARAMETERS})
     names = {"--" + c.replace("_", "-"): c for c in CLOSURES}
-    out: dict = {"nu_top": 1e-9, "as_json": False, "model": {}}
+    out: dict = {"nu_top": 1e-9, "as_json": False, "strict": False, "model": {}}
     i = 0
     while i < len(args):
         a = args[i]
         key, eq, value = a.partition("=")
         if a == "--json":
             out["as_json"] = True
+            i += 1
+            continue
+        if a in ("--strict", "--no-strict"):
+            out["strict"] = a == "--strict"
             i += 1
             continue
         if key not in floats and key not in names:
@@ -150,7 +158,12 @@ def fast_main(argv: Sequence[str]) -> int | None:
         return None
     try:
         steady_command(
-            opts["theta"], opts["nu0"], ChuteModel(**opts["model"]), opts["nu_top"], opts["as_json"]
+            opts["theta"],
+            opts["nu0"],
+            ChuteModel(**opts["model"]),
+            opts["nu_top"],
+            opts["as_json"],
+            strict=opts["strict"],
         )
     except (ChuteflowError, ValueError) as exc:
         if os.environ.get("CHUTEFLOW_DEBUG"):

@@ -20,6 +20,12 @@ def steady(
     model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top", help="Density where the domain ends (paper: 1e-9)."),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    strict: bool = typer.Option(
+        False,
+        "--strict/--no-strict",
+        help="Fail (exit 2) where the flow misses the tolerance 1e-8 between two resolutions, "
+        "or print it, flagged converged = false, with a warning (default).",
+    ),
 ) -> None:
     """Solve for the steady flow at (θ, ν0(0)) and print its quantities."""
-    steady_command(theta, nu0, model, nu_top, as_json)
+    steady_command(theta, nu0, model, nu_top, as_json, strict=strict)

@@ -110,9 +110,18 @@ def solve_steady(
 
     def fail(exc: Exception) -> SteadyFlow:
         # every road failed: the flagged flow with the smallest change, or the error
-        if strict or not unresolved:
+        if not unresolved:
             raise exc
-        return min(unresolved, key=lambda f: f.convergence)
+        best = min(unresolved, key=lambda f: f.convergence)
+        if strict and getattr(exc, "flow", None) is best:
+            raise exc  # its own message says it
+        if strict:
+            raise ConvergenceError(
+                f"{exc}; closest: a flow (h = {best.h:.6g}) whose quantities change by "
+                f"{best.convergence:.1e} between the last two resolutions (n = {best.n}), "
+                "which strict=False returns flagged"
+            ) from exc
+        return best
 
     if guess is not None:
         start = state_of(guess)
