@@ -130,3 +130,22 @@ def test_strict_option_makes_an_unresolved_flow_an_error():
     else:
         assert r.exit_code == 2 and code == 2
         assert "did not converge" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_transverse_at_an_unresolved_flow_prints_one_warning():
+    """``chuteflow transverse`` on that flow (α2z ≈ −490, no k_z computed past the lost
+    branch): the flagged flow's warning is the only line on stderr — no numpy RuntimeWarning
+    from the empty dispersion (its drift/tail maxima are JSON null)."""
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        r = CliRunner().invoke(app, ["transverse", "--theta", "16.2712", "--nu0", "0.25", "--json"])
+    assert r.exit_code == 0, r.output
+    assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    d = json.loads(r.stdout)
+    assert d["alpha2_z"] < 0
+    if d["kz_computed"] == 0:
+        assert d["drift_max"] is None and d["tail_max"] is None
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) <= 1 and all(x.startswith("warning: the steady flow") for x in lines)

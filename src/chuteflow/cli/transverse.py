@@ -55,18 +55,11 @@ def _plain(value):
 
 
 def _flow(theta, nu0, model, nu_top):
-    import warnings
+    """The steady flow as every stability command solves it (flagged with a warning line
+    where it misses the tolerance): :func:`chuteflow.cli.stability._steady`."""
+    from .stability import _console, _steady
 
-    from chuteflow._threads import limit_blas_threads
-    from chuteflow.steady import solve_steady
-
-    limit_blas_threads(1)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
-    if not flow.converged:
-        typer.echo(f"warning: {flow.precision_warning()}", err=True)
-    return flow
+    return _steady(_console(), theta, nu0, model, nu_top)
 
 
 def _check_positive(name, value):

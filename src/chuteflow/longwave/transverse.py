@@ -324,8 +324,9 @@ class TransverseResult:
             "kz_computed": int(np.isfinite(d.alpha_re).sum()),
             "branch_lost_at": d.branch_lost_at,
             "method": self.method,
-            "drift_max": float(np.nanmax(d.drift)),
-            "tail_max": float(np.nanmax(d.tail)),
+            # NaN (JSON null) where no k_z was computed (the branch lost at the first step)
+            "drift_max": float(np.nanmax(d.drift)) if not np.isnan(d.drift).all() else math.nan,
+            "tail_max": float(np.nanmax(d.tail)) if not np.isnan(d.tail).all() else math.nan,
             "all_physical": bool(d.physical[np.isfinite(d.alpha_re)].all()),
             **(self.model.to_dict() if self.model is not None else {}),
         }
