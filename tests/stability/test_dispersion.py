@@ -182,3 +182,27 @@ def test_non_strict_dispersion_flags_instead_of_raising(flows):
     ds = dispersion(flows("P4"), [1e-3, 0.05], n_max=100, strict=False)
     assert ds["physical"].values.tolist() == [True, False]
     assert ds["alpha_re"].values[0] > 0
+
+
+def test_first_step_from_k0_is_halved_until_alpha1_k_predicts_it():
+    """θ = 16.475°, ν0(0) = 0.02 (dilute, a sampled point of the φ = 0.05 diagrams): the k²
+    regime ends near k ~ 1e-6 (Re α/k² = 2.2 at k = 1e-7, 0.99 at 1e-5), so the first step
+    1e-5 lands 41 % of the step off α1 k. Accepting it gave the next predictor the slope α1
+    at k = 0, every shorter step missed by the same 41 %, and the branch was "lost" at
+    k = 1e-5 (the growth metric gave no value; ``chuteflow dispersion`` ran > 10 min in
+    dense QZ fallbacks). Checked against the dense QZ spectrum (the independent method, the
+    same N): the one resolved eigenvalue there with Re α > 0."""
+    from chuteflow.stability.modes import spectrum
+
+    flow = solve_steady(16.475, 0.02)
+    tracker = BranchTracker(flow, 80, n_max=80)
+    mode = tracker.mode(1e-4)
+    assert mode.physical
+    qz = spectrum(flow, 1e-4, n=80)
+    ref = min(qz, key=lambda m: abs(m.alpha - mode.alpha))
+    # measured α(1e-4) = 6.7911e-4 − 6.1612e-4i, drift 1.8e-12 against N' = 64
+    assert abs(mode.alpha - ref.alpha) < 1e-9 * abs(ref.alpha) + 1e-12
+    assert ref.alpha.real > 6e-4 and ref.alpha.real == max(m.alpha.real for m in qz)
+    # and the branch starts on α1 k: at k = 1e-7 the first step hits the predictor
+    a = BranchTracker(flow, 80, n_max=80).mode(1e-7).alpha
+    assert abs(a - tracker.alpha1 * 1e-7) < 0.02 * abs(tracker.alpha1) * 1e-7

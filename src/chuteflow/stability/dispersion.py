@@ -48,6 +48,18 @@ from .policy import DEFAULT_POLICY, RejectionPolicy
 
 #: First continuation step from k = 0.
 FIRST_STEP = 1e-5
+#: Smallest first step that must pass the predictor test. From k = 0 the predictor is α1 k
+#: (eq. (B 2)), good while |α2| k² ≪ |α1| k. Where the k² regime is narrower than
+#: :data:`FIRST_STEP` the first step is halved until α1 k predicts it (θ = 16.475°, ν0(0) =
+#: 0.02, φ = 0.05: α = 9.86e-5 + 9.95e-5i at k = 1e-5 against α1 k = 1.94e-4i, the
+#: k² regime ends near k ~ 1e-6); accepting the first point off the prediction left the
+#: next predictor (the quadratic with slope α1 at k = 0) with the wrong slope, every
+#: shorter step missed by the same 41 % of the step, and the branch was "lost" at k = 1e-5.
+#: Below this step (1e-5/2¹⁰ ≈ 1e-8), or where α1 = 0 (a wavevector along z: no
+#: advection), the nearest resolved eigenvector is accepted as before.
+FIRST_STEP_MIN = FIRST_STEP / 1024
+#: |α1| k below this is no predictor: the eigenvalue's round-off near α = 0 is ~1e-12.
+FIRST_PREDICTOR_MIN = 1e-9
 #: Resolution of the coarse continuation that seeds single-k solves.
 COARSE_N = 48
 #: Largest Chebyshev tail a tracked eigenvector may have (the physical test is stricter;
@@ -260,9 +272,13 @@ class BranchTracker:
         except ConvergenceError:  # no eigenvalue settled near the prediction
             return None
         ratio = abs(alpha - pred) / max(abs(pred - a_prev), 1e-300)
-        if len(self.history) == 1:
-            # from k = 0 the predictor α1 k may vanish (k along z: no advection); the
-            # nearest resolved eigenvector is the branch, as the continuum fails the tail
+        if len(self.history) == 1 and (
+            s - s_prev <= FIRST_STEP_MIN or abs(pred - a_prev) < FIRST_PREDICTOR_MIN
+        ):
+            # from k = 0 the predictor α1 k may vanish (k along z: no advection), or miss at
+            # the shortest first step; the nearest resolved eigenvector is the branch, as
+            # the continuum fails the tail. Above it the first step must hit like any other
+            # (FIRST_STEP_MIN: the next predictor's slope at k = 0 is α1)
             ratio = min(ratio, 0.25)
         if ratio > 0.25:
             return None
@@ -448,6 +464,56 @@ def near_continuum_branch(
         )
         return dataclasses.replace(mode, method="branch (relaxed)", note=note)
     return None
+
+
+def follow_relaxed(
+    flow: SteadyFlow,
+    ks,
+    *,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    lost: str = "",
+) -> list[Mode]:
+    """The α(0) = 0 branch at the increasing wavenumbers ``ks`` (along x) and N, followed
+    once from k = 0 with the tail threshold relaxed to :data:`RELAXED_TAIL`: the fallback of
+    a k grid after :class:`BranchTracker` lost the branch.
+
+    One continuation passes through every k in turn (where :func:`near_continuum_branch`
+    starts afresh from k = 0 for each k), and stops at the first k it does not reach, or
+    where the drift exceeds :data:`RELAXED_DRIFT` |α| (no eigenvalue at N' continues it).
+    Each mode is judged by ``policy`` (flagged where it fails the paper's tests), with
+    ``method = "branch (relaxed)"`` and a note headed by ``lost``.
+
+    Returns
+    -------
+    list of Mode
+        The modes at ``ks[:len(result)]``: a prefix of the grid, empty when not even the
+        first k is reached.
+    """
+    policy = resolve_policy(policy)
+    relaxed = policy.replace(track_tail_tol=max(RELAXED_TAIL, policy.track_tail_tol), n_start=n, n_max=n)
+    out: list[Mode] = []
+    tr = BranchTracker(flow, n, policy=relaxed, cache=cache)
+    u = tr._operator(n).base["u"]
+    u_lo, u_hi = float(np.min(u)), float(np.max(u))
+    for k in ks:
+        k = float(k)
+        try:
+            alpha, w = tr.advance(k)
+            drift, n2 = drift_of(flow, alpha, w, n, k, 0.0, False, cache=cache)
+        except ConvergenceError:
+            break
+        if not drift <= RELAXED_DRIFT * abs(alpha):
+            break
+        mode = make_mode(tr._pencil(k), alpha, w, drift, n2, policy)
+        note = (
+            f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
+            f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = "
+            f"{-alpha.imag / k:.4g} against u0 in [{u_lo:.4g}, {u_hi:.4g}]"
+        )
+        out.append(dataclasses.replace(mode, method="branch (relaxed)", note=join_notes(lost, note)))
+    return out
 
 
 #: ARPACK restarts (per Krylov size) of one continuation step of the branch tracker. Where

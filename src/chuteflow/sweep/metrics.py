@@ -23,7 +23,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
-from ..stability.dispersion import after_lost_branch
+from ..stability.dispersion import after_lost_branch, follow_relaxed
 from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
@@ -137,22 +137,27 @@ class GrowthMetric(PointFunction):
     (relative tolerance 1e-6). Points that miss the paper's drift and tail tests at
     N = ``n_max`` are kept with their estimate (``growth_converged`` = 0, the largest drift
     in ``growth_drift``, a note in the point's message); where the tracker loses the branch
-    near the continuum of the dilute top, the rest of the k grid gets what
-    :func:`~chuteflow.stability.least_stable` answers there
-    (:func:`chuteflow.stability.dispersion.after_lost_branch`: the branch followed with the
-    tail threshold relaxed, and past ``RejectionPolicy.relaxed_k_max`` picked out of the band
-    or replaced by a resolved direct mode; flagged the same way; version 4: the same values
-    as version 3 for k_max ≤ 0.1; version 5: the branch tracker's smallest step,
-    :data:`~chuteflow.stability.dispersion.TRACK_MIN_STEP`). Only where that fails too are the values missing
-    (``dispersion_sampled`` = 1, the reason in the message; the largest k of the grid is
-    tried first, so the message names it when it is not reached).
+    near the continuum of the dilute top, the rest of the k grid is followed once more from
+    k = 0 with the tail threshold relaxed
+    (:func:`chuteflow.stability.dispersion.follow_relaxed`), up to the first k it does not
+    reach (past ``RejectionPolicy.relaxed_k_max`` each k as
+    :func:`~chuteflow.stability.least_stable` answers there,
+    :func:`~chuteflow.stability.dispersion.after_lost_branch`). The k beyond are missing:
+    there the branch has dissolved into the continuum (strongly damped, e.g. Re α = −0.2 at
+    k = 0.017 for θ = 15.36°, ν0(0) = 0.12), ``growth_k_reached`` says how far it was
+    followed, the maximum and k_c are those of the part reached, flagged
+    ``growth_converged`` = 0 (version 6; version 5 dropped every value where the largest k
+    was not reached, and version 6 also fixes the first step from k = 0, see
+    :data:`~chuteflow.stability.dispersion.FIRST_STEP_MIN`). Only where not even the first
+    k is reached are the values missing (``dispersion_sampled`` = 1, the reason in the
+    message).
     Evaluated at the sampled points (every ``stride``-th point in θ
     and in ν0, and every marked point) and, if ``unstable_points``, at every point with
     Re α2 > 0 (about 5 s a point: off by default for diagrams).
     """
 
     name = "growth"
-    version = "5"
+    version = "6"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
     defaults = {
@@ -189,6 +194,12 @@ class GrowthMetric(PointFunction):
             "1",
             "every k of the grid passed the paper's drift and tail tests (§4.1)",
             kind="flag",
+        ),
+        Variable(
+            "growth_k_reached",
+            "1/sigma",
+            "largest k of the grid where the branch was reached (below k_max: the branch "
+            "dissolved into the continuum of the dilute top there, larger k are missing)",
         ),
         Variable(
             "dispersion_sampled",
@@ -230,58 +241,68 @@ class GrowthMetric(PointFunction):
         # an own operator cache: the flow's operators are dropped when the point is done
         cache = OperatorCache(2)  # N and N′ (the drift check; the next rung reuses N)
         policy = RejectionPolicy(n_max=int(o["n_max"]))
-        modes = []
+        modes: list = []  # one per k of the grid; None where the branch was not reached
+        lost_note = ""
         try:
             tr = BranchTracker(flow, int(o["n"]), policy=policy, cache=cache)
             for k in ks:
                 try:
                     modes.append(tr.mode(k))
                 except ConvergenceError as exc:
-                    # lost near the continuum: the rest of the grid as least_stable answers
-                    # there (after_lost_branch: the relaxed tail threshold, and past
-                    # policy.relaxed_k_max the band search and the direct mode), at the
-                    # tracker's last N (None: not reached either)
+                    # lost near the continuum: the rest of the grid followed once more from
+                    # k = 0 with the relaxed tail threshold, up to the first k it does not
+                    # reach (follow_relaxed); past policy.relaxed_k_max, where the branch lies
+                    # in a band of critical-layer eigenvalues, each k as least_stable answers
+                    # there (after_lost_branch: the band search and the direct mode)
                     lost = str(exc).split(" (theta")[0]
                     rest = [float(kk) for kk in ks[len(modes) :]]
-                    # the largest k first: each k is followed afresh from k = 0 (the same
-                    # answer in any order), and where one k is not reached the values stay
-                    # missing; the farthest is the likeliest to fail, and after it the
-                    # nearer ones are not worth computing
-                    order = rest[-1:] + rest[:-1]
-                    found = {}
-                    for kk in order:
-                        m = after_lost_branch(flow, kk, n=tr.n, policy=policy, cache=cache, lost=lost)
-                        if m is None:
-                            raise ConvergenceError(
-                                f"{lost}; not reached with the relaxed tail threshold either "
-                                f"(k = {kk:.3g}, N = {tr.n})"
-                            ) from None
-                        found[kk] = m
-                    modes.extend(found[kk] for kk in rest)
-                    point.note(f"growth: {lost}; followed with the relaxed tail threshold from there")
+                    below = [kk for kk in rest if kk <= policy.relaxed_k_max]
+                    found = follow_relaxed(flow, below, n=tr.n, policy=policy, cache=cache, lost=lost)
+                    modes.extend(found)
+                    modes.extend([None] * (len(below) - len(found)))
+                    for kk in rest[len(below) :]:
+                        modes.append(
+                            after_lost_branch(flow, kk, n=tr.n, policy=policy, cache=cache, lost=lost)
+                        )
+                    reached = [float(kk) for kk, m in zip(ks, modes) if m is not None]
+                    lost_note = f"growth: {lost}; followed with the relaxed tail threshold from there"
+                    if len(reached) < len(ks):
+                        lost_note += (
+                            f", up to k = {reached[-1]:.3g} ({len(ks) - len(reached)} of {len(ks)} k "
+                            f"not reached: their values are missing)"
+                            if reached
+                            else f", not reached at any k of the grid (N = {tr.n})"
+                        )
+                    point.note(lost_note)
                     break
         except ConvergenceError as exc:
             # sampled, but no trustworthy branch: the values stay missing, the message says why
             point.note(f"growth: {exc}")
             return {"dispersion_sampled": True}
-        bad = [m for m in modes if not m.physical]
+        got = [m for m in modes if m is not None]
+        if not got:
+            return {"dispersion_sampled": True}
+        bad = [m for m in got if not m.physical]
         if bad:
             m = bad[0]
             point.note(
-                f"growth: {len(bad)} of {len(modes)} k not converged to the paper's thresholds, "
+                f"growth: {len(bad)} of {len(ks)} k not converged to the paper's thresholds, "
                 f"first at k = {m.k:.3g}, N = {m.n} (drift {m.drift:.1e}, tail {m.tail:.1e})"
             )
-        re = np.array([m.alpha.real for m in modes])
-        imax = int(np.argmax(re))
+        re = np.array([np.nan if m is None else m.alpha.real for m in modes])
+        imax = int(np.nanargmax(re))
         out = {
             "dispersion_sampled": True,
             "growth_max": float(re[imax]),
             "k_growth_max": float(ks[imax]),
-            "growth_n": max(m.n for m in modes),
-            "growth_drift": max(m.drift for m in modes),
-            "growth_converged": not bad,
+            "growth_n": max(m.n for m in got),
+            "growth_drift": max(m.drift for m in got),
+            "growth_converged": not bad and len(got) == len(ks),
+            "growth_k_reached": max(m.k for m in got),
         }
         for i in range(len(ks) - 1):
+            if modes[i] is None or modes[i + 1] is None:
+                continue
             if re[i] > 0 >= re[i + 1]:
                 try:
                     out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
