@@ -206,3 +206,27 @@ def test_first_step_from_k0_is_halved_until_alpha1_k_predicts_it():
     # and the branch starts on α1 k: at k = 1e-7 the first step hits the predictor
     a = BranchTracker(flow, 80, n_max=80).mode(1e-7).alpha
     assert abs(a - tracker.alpha1 * 1e-7) < 0.02 * abs(tracker.alpha1) * 1e-7
+
+
+@pytest.mark.slow
+def test_dispersion_past_a_dissolved_branch_is_resolved_cheaply():
+    """θ = 15.3559°, ν0(0) = 0.11983: the branch dissolves into the continuum near
+    k = 0.003 (critical layer). The larger k are followed once with relaxed tails, and a
+    resolved, less damped direct mode outranks the flagged relaxed value (as in
+    least_stable); k not reached are solved directly along the policy's ladder from its
+    first rung. Before, each k was followed afresh from k = 0 (at k = 0.05 the answer was a
+    relaxed value α = −0.0290 − 0.346i with drift 1.4e-3, at k = 0.0447 −0.699 − 0.337i
+    with drift 3.3e-2, while a mode at −0.0215 − 0.257i passes both tests), the direct
+    solves started at the tracker's last N (256), and ``chuteflow dispersion --k-max 0.05
+    --num 20`` took 217 s (now 33 s)."""
+    flow = solve_steady(15.35593220339, 0.119830508475)
+    ks = [0.0026, 0.0079, 0.05]
+    ds = dispersion(flow, ks, strict=False)
+    assert ds.attrs["branch_lost_at"] == pytest.approx(0.0079)
+    for i in (1, 2):
+        assert bool(ds["direct"].values[i]) and ds["n"].values[i] <= 100
+        assert ds["drift"].values[i] < 1e-7
+    # measured −0.0214659 − 0.2570957i at N = 80 (drift 2.9e-8 against N' = 64)
+    assert complex(ds.alpha_re.values[2], ds.alpha_im.values[2]) == pytest.approx(
+        complex(-0.0214659, -0.2570957), abs=1e-6
+    )

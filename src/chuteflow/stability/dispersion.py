@@ -640,10 +640,14 @@ def dispersion(
         Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
         the branch is lost (default); otherwise return such points flagged
         ``physical = False``. Where the continuation loses the branch (non-strict), that
-        and every larger k are followed with the relaxed tail threshold
-        (:func:`near_continuum_branch`, judged by the paper's tests); where that does not
-        reach k either, solved directly at k (least-stable physical mode by dense QZ with
-        the rejection tests, :func:`least_stable` with ``method="qz"``), flagged
+        and every larger k up to ``policy.relaxed_k_max`` are followed once more from k = 0
+        with the relaxed tail threshold (:func:`follow_relaxed`, judged by the paper's
+        tests), where a direct mode that passes both tests and is less damped outranks a
+        rejected relaxed value (:meth:`RejectionPolicy.direct_outranks_relaxed`, as in
+        :func:`least_stable`); beyond ``relaxed_k_max`` each k as :func:`after_lost_branch`
+        answers; where none of these reaches k, solved directly at k (least-stable physical
+        mode by dense QZ with the rejection tests along the policy's ladder,
+        :func:`least_stable` with ``method="qz"``). Direct answers are flagged
         ``direct = True`` and ``physical = False`` (a direct solve is not known to lie on
         the branch); the attribute ``branch_lost_at`` is the k where the branch was lost.
 
@@ -672,7 +676,8 @@ def dispersion(
     phys = np.zeros(len(ks), dtype=bool)
     direct = np.zeros(len(ks), dtype=bool)
     lost_at = None
-    for i in order:
+    followed: dict[int, Mode] = {}  # the relaxed continuation's modes, by index into ks
+    for pos, i in enumerate(order):
         if lost_at is None:
             try:
                 mode = _zero_mode(tr) if ks[i] == 0.0 else tr.mode(ks[i])
@@ -680,21 +685,50 @@ def dispersion(
                 if strict:
                     raise
                 lost_at = float(ks[i])
-        if lost_at is not None:
-            # branch lost: this and the larger k followed with the relaxed tail threshold
-            # (on the branch, flagged by the paper's tests), else solved directly at k
-            relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
+                # this and the larger k up to policy.relaxed_k_max: followed once more from
+                # k = 0 with the relaxed tail threshold, up to the first k not reached
+                below = [int(j) for j in order[pos:] if ks[j] <= policy.relaxed_k_max]
+                reached = follow_relaxed(
+                    flow, [float(ks[j]) for j in below], n=tr.n, policy=policy, cache=cache
+                )
+                followed = dict(zip(below, reached))
+        if lost_at is not None and i in followed:
+            mode = followed[i]
+            if not mode.physical:
+                # as least_stable below policy.relaxed_k_max: a direct mode that passes both
+                # of the paper's tests and is less damped outranks the flagged relaxed value
+                # (one dense solve at the ladder's first rung: where the relaxed value is
+                # rejected, the branch has dissolved and is strongly damped, e.g. Re α =
+                # −0.023 with drift 8e-5 at k = 0.0079 against a resolved −0.0046 for θ =
+                # 15.36°, ν0(0) = 0.12)
+                cand = direct_mode(flow, float(ks[i]), n=policy.n_start, policy=policy, cache=cache)
+                if cand is not None and policy.direct_outranks_relaxed(
+                    float(ks[i]), cand.alpha.real, cand.drift, cand.tail, mode.alpha.real, mode.drift
+                ):
+                    mode = dataclasses.replace(
+                        cand,
+                        method="qz (branch lost)",
+                        note=join_notes(
+                            mode.note,
+                            f"the branch followed with relaxed tails reaches α = {mode.alpha:.6g} "
+                            f"with drift {mode.drift:.1e} (rejected by the paper's tests); this "
+                            "mode passes both and is less damped",
+                        ),
+                    )
+                    direct[i] = True
+        elif lost_at is not None:
+            # branch lost and not reached by the relaxed continuation: past
+            # policy.relaxed_k_max as least_stable answers there (after_lost_branch: the band
+            # search and the direct mode); else solved directly at k (dense QZ along the
+            # policy's ladder from its first rung: the resolved modes there need no more)
+            relaxed = None
+            if ks[i] > policy.relaxed_k_max:
+                relaxed = after_lost_branch(flow, float(ks[i]), n=tr.n, policy=policy, cache=cache)
             if relaxed is not None:
                 mode = relaxed
                 direct[i] = relaxed.method != "branch (relaxed)"
             else:
-                mode = least_stable(
-                    flow,
-                    ks[i],
-                    method="qz",
-                    policy=policy.replace(n_start=min(tr.n, policy.n_max)),
-                    cache=cache,
-                )
+                mode = least_stable(flow, ks[i], method="qz", policy=policy, cache=cache)
                 direct[i] = True
         if strict and not mode.physical:
             raise ConvergenceError(
