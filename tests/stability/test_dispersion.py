@@ -218,7 +218,7 @@ def test_dispersion_past_a_dissolved_branch_is_resolved_cheaply():
     relaxed value α = −0.0290 − 0.346i with drift 1.4e-3, at k = 0.0447 −0.699 − 0.337i
     with drift 3.3e-2, while a mode at −0.0215 − 0.257i passes both tests), the direct
     solves started at the tracker's last N (256), and ``chuteflow dispersion --k-max 0.05
-    --num 20`` took 217 s (now 33 s)."""
+    --num 20`` took 217 s (now 36 s)."""
     flow = solve_steady(15.35593220339, 0.119830508475)
     ks = [0.0026, 0.0079, 0.05]
     ds = dispersion(flow, ks, strict=False)

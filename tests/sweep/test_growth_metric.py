@@ -71,7 +71,7 @@ def losing(monkeypatch):
     calls: list[list[float]] = []
 
     def install(reached_up_to):
-        monkeypatch.setattr(metrics, "follow_relaxed", _fake_follow_relaxed(calls, reached_up_to))
+        monkeypatch.setattr(metrics, "relaxed_branch_modes", _fake_follow_relaxed(calls, reached_up_to))
         monkeypatch.setattr(GrowthMetric, "_refine", staticmethod(lambda flow, ma, mb, cache=None: 0.02))
         return calls
 

@@ -516,6 +516,40 @@ def follow_relaxed(
     return out
 
 
+def relaxed_branch_modes(
+    flow: SteadyFlow,
+    ks,
+    *,
+    n: int,
+    policy: RejectionPolicy | None = None,
+    cache: OperatorCache | None = None,
+    lost: str = "",
+) -> list[Mode]:
+    """The α(0) = 0 branch at the increasing wavenumbers ``ks`` (along x) and N after
+    :class:`BranchTracker` lost it: how far it reaches from :func:`follow_relaxed` (one
+    continuation), each value that fails the paper's tests from :func:`near_continuum_branch`
+    (its own continuation from k = 0).
+
+    Near a critical layer the relaxed branch runs through a band of unresolved eigenvalues,
+    and which one a continuation lands on depends on its steps: one continuation through a
+    k grid lands farther from the branch than a continuation from k = 0 to each k, with a
+    drift that hides its error (θ = 16.5°, ν0(0) = 0.13, φ = 0.08, Φ = 0.30, k = 0.006
+    against N = 244: from k = 0 at N = 80, 100, 125 errors 2.0e-4, 3.2e-4, 4.0e-4 with drifts
+    1.4e-4 … 2.1e-4; through 12 k of a grid 1.8e-3, 2.6e-3, 7.2e-4 with drifts ~1e-4). A
+    value that passes both tests is resolved and kept as followed. Stops at the first k
+    not reached by either; returns the modes at ``ks[:len(result)]``.
+    """
+    out: list[Mode] = []
+    for m in follow_relaxed(flow, ks, n=n, policy=policy, cache=cache, lost=lost):
+        if not m.physical:
+            again = near_continuum_branch(flow, m.k, n=n, policy=policy, cache=cache)
+            if again is None:
+                break
+            m = dataclasses.replace(again, note=join_notes(lost, again.note))
+        out.append(m)
+    return out
+
+
 #: ARPACK restarts (per Krylov size) of one continuation step of the branch tracker. Where
 #: inverse iteration from the previous step's eigenvector does not settle, the prediction
 #: usually sits in the continuum of the dilute top, and a failed step is only halved: the
@@ -688,7 +722,7 @@ def dispersion(
                 # this and the larger k up to policy.relaxed_k_max: followed once more from
                 # k = 0 with the relaxed tail threshold, up to the first k not reached
                 below = [int(j) for j in order[pos:] if ks[j] <= policy.relaxed_k_max]
-                reached = follow_relaxed(
+                reached = relaxed_branch_modes(
                     flow, [float(ks[j]) for j in below], n=tr.n, policy=policy, cache=cache
                 )
                 followed = dict(zip(below, reached))

@@ -23,7 +23,7 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
-from ..stability.dispersion import after_lost_branch, follow_relaxed
+from ..stability.dispersion import after_lost_branch, relaxed_branch_modes
 from ..stability.modes import check_n
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
@@ -138,9 +138,10 @@ class GrowthMetric(PointFunction):
     N = ``n_max`` are kept with their estimate (``growth_converged`` = 0, the largest drift
     in ``growth_drift``, a note in the point's message); where the tracker loses the branch
     near the continuum of the dilute top, the rest of the k grid is followed once more from
-    k = 0 with the tail threshold relaxed
-    (:func:`chuteflow.stability.dispersion.follow_relaxed`), up to the first k it does not
-    reach (past ``RejectionPolicy.relaxed_k_max`` each k as
+    k = 0 with the tail threshold relaxed, up to the first k it does not reach, and the
+    values there that fail the paper's tests are recomputed each by its own continuation
+    from k = 0 (:func:`chuteflow.stability.dispersion.relaxed_branch_modes`), as version 5
+    did for every k (past ``RejectionPolicy.relaxed_k_max`` each k as
     :func:`~chuteflow.stability.least_stable` answers there,
     :func:`~chuteflow.stability.dispersion.after_lost_branch`). The k beyond are missing:
     there the branch has dissolved into the continuum (strongly damped, e.g. Re α = −0.2 at
@@ -250,14 +251,14 @@ class GrowthMetric(PointFunction):
                     modes.append(tr.mode(k))
                 except ConvergenceError as exc:
                     # lost near the continuum: the rest of the grid followed once more from
-                    # k = 0 with the relaxed tail threshold, up to the first k it does not
-                    # reach (follow_relaxed); past policy.relaxed_k_max, where the branch lies
+                    # k = 0 with the relaxed tail threshold, up to the first k not reached
+                    # (relaxed_branch_modes); past policy.relaxed_k_max, where the branch lies
                     # in a band of critical-layer eigenvalues, each k as least_stable answers
                     # there (after_lost_branch: the band search and the direct mode)
                     lost = str(exc).split(" (theta")[0]
                     rest = [float(kk) for kk in ks[len(modes) :]]
                     below = [kk for kk in rest if kk <= policy.relaxed_k_max]
-                    found = follow_relaxed(flow, below, n=tr.n, policy=policy, cache=cache, lost=lost)
+                    found = relaxed_branch_modes(flow, below, n=tr.n, policy=policy, cache=cache, lost=lost)
                     modes.extend(found)
                     modes.extend([None] * (len(below) - len(found)))
                     for kk in rest[len(below) :]:
