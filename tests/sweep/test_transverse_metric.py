@@ -80,3 +80,26 @@ def test_winner_figure(p1_sweep, tmp_path):
     _, ds, _ = p1_sweep
     path = winner_figure(ds, tmp_path / "w.png")
     assert path.stat().st_size > 5_000
+
+
+def test_thick_dilute_flow_unstable_both_ways_has_a_winner():
+    """θ = 16.475°, ν0(0) = 0.02 (h = 52): unstable along and across the slope. Version 3 lost
+    the longitudinal branch at k = 1e-5 (the tracker's first step accepted off α1 k) and
+    named no winner, like 55 of the 178 such points of the 40 × 40 φ = 0.05 diagram. The
+    longitudinal maximum is checked against the dense QZ spectrum at its k (the independent
+    method: the largest Re α of all modes, N = 80)."""
+    from chuteflow.stability.modes import spectrum
+    from chuteflow.steady import solve_steady
+    from chuteflow.sweep.metrics import LongWaveMetric
+    from chuteflow.sweep.points import Point
+
+    flow = solve_steady(16.475, 0.02)
+    point = Point(-1, -1, 16.475, 0.02)
+    point.values.update(LongWaveMetric().compute(flow, point))
+    out = TransverseMetric().compute(flow, point)
+    assert out["winner"] == 3 and out["fastest"] == 1 and not point.notes
+    k, growth = out["longitudinal_kx_max"], out["longitudinal_growth_max"]
+    # measured: 1.93618e-3 at k_x = 1.437e-3 against the transverse 5.39e-4 at k_z = 1.92e-3
+    assert growth > 2 * out["transverse_growth_max"]
+    qz = max(m.alpha.real for m in spectrum(flow, k, n=80))
+    assert growth == pytest.approx(qz, rel=1e-7)

@@ -61,7 +61,9 @@ class TransverseMetric(PointFunction):
     """
 
     name = "transverse"
-    version = "3"
+    # 4: the longitudinal branch's first step from k = 0 must hit α1 k
+    # (chuteflow.stability.dispersion.FIRST_STEP_MIN): in dilute flows it was "lost" at k = 1e-5
+    version = "4"
     requires = ("steady", "longwave")
     defaults = {"kz_max": 3.0, "k_max": 0.05, "ratio": PEAK_RATIO, "n": 80, "n_track": 48, "n_max": 160}
     variables = (

@@ -28,29 +28,30 @@ WINNER_GRID = {
 }
 #: The answer to §5.3 on the 40 × 40 diagrams over the paper's ranges (DIAGRAM_RANGES), from
 #: ``chuteflow diagram --roughness PHI --grid 40x40 --theta-range … --nu0-range …
-#: --metrics steady,longwave,transverse`` (metric ``transverse`` version 3); recorded here,
-#: not recomputed by this stage (18 and 27 min on 2 heavily loaded cores; φ = 0.05 rerun with
-#: the steady solver's mapped grid in 164 s wall on 2 quiet cores: 49 more flows resolved,
-#: all longitudinal only, the other counts and the "both" breakdown unchanged; φ = 0.10
-#: rerun likewise in 413 s wall on 2 cores shared with other jobs (load 3–4.5, niced): 50
-#: more flows, 10 stable and 40 longitudinal only, the other counts and the "both" breakdown
-#: unchanged). Counts are of the grid points with a steady flow.
+#: --metrics steady,longwave,transverse`` (metric ``transverse`` version 4); recorded here,
+#: not recomputed by this stage (128.5 s and 106.9 s wall on 2 quiet cores). Version 3 lost
+#: the longitudinal branch at k ~ 1e-5 in thick dilute flows (the tracker's first step from
+#: k = 0 off α1 k, chuteflow.stability.dispersion.FIRST_STEP_MIN) and named no winner at 55
+#: (φ = 0.05) and 15 (φ = 0.10) of the points unstable both ways; every one has a verdict
+#: now. Counts are of the grid points with a steady flow.
 SWEEP_ANSWER_40x40 = {
-    0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1167 flows): stable 681, longitudinal only 298, "
+    0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1168 flows): stable 681, longitudinal only 299, "
     "transverse only 10, both 178. Where both occur the longitudinal instability grows faster "
-    "at 100 points (median 14×, 1.1× to ~1e8×; λx = 2750–32000 σ, 80–1800 h; h = 12–54) and the "
-    "transverse one at 23 thick dilute flows (θ = 16.9–18°, ν̄ = 0.012–0.025, h = 21–54; by "
-    "1.02–44×, median 2.5×, growth 1.6e-4–4.0e-3, λz = 750–1510 σ ≈ 17–71 h); at 55 points "
-    "(ν0(0) ≤ 0.028, h = 24–159) the longitudinal branch is lost at k ~ 1e-5 and no winner "
-    "is named. The 10 transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 "
-    "(h = 19–31) just outside the longitudinal unstable region (Re α2 < 0, α2z > 0).",
-    0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 1040 flows): stable 721, longitudinal only 257, "
+    "at 142 points (median 8.1×, 1.03× to ~3e8×; λx = 2750–32000 σ, 64–1830 h; h = 12–147) and "
+    "the transverse one at 36 thick dilute flows (θ = 16.9–18°, ν̄ = 0.003–0.025, h = 21–159; by "
+    "1.0–44×, median 1.8×, growth 1.6e-4–4.0e-3, λz = 750–2970 σ ≈ 16–71 h). The 10 "
+    "transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 (h = 19–31) just "
+    "outside the longitudinal unstable region (Re α2 < 0, α2z > 0). At 36 longitudinal-only "
+    "points (θ = 16–18°, ν0(0) = 0.09–0.25, h = 6–11) the longitudinal growth rate is not "
+    "known (its eigenvector is not resolved at N = 48 and 60).",
+    0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 1039 flows): stable 721, longitudinal only 256, "
     "transverse only 2, both 60. Where both occur the longitudinal instability grows faster at "
-    "39 points (median 15×, 1.06× to 4e4×; λx = 5800–33000 σ, 105–1700 h; h = 19–69) and the "
-    "transverse one at 6 thick dilute flows (θ = 22.0–22.5°, ν̄ = 0.007–0.011, h = 37–64; by "
-    "1.01–395×, median 2.4×, growth 1.4e-4–1.1e-3, λz = 1200–1900 σ ≈ 23–51 h); 15 points "
-    "(ν0(0) ≤ 0.017, h = 42–142) have no verdict. The 2 transverse-only points: θ = 22.3–22.5°, "
-    "ν0(0) = 0.040 (h = 42–44).",
+    "54 points (median 8.5×, 1.06× to 4e4×; λx = 5770–32600 σ, 89–1670 h; h = 19–142) and the "
+    "transverse one at 6 thick dilute flows (θ = 22.0–22.5°, ν̄ = 0.007–0.012, h = 37–64; by "
+    "1.01–395×, median 2.4×, growth 1.4e-4–1.1e-3, λz = 1200–1890 σ ≈ 23–51 h). The 2 "
+    "transverse-only points: θ = 22.3–22.5°, ν0(0) = 0.040 (h = 42–44). At 33 "
+    "longitudinal-only points (θ = 20.3–22.3°, ν0(0) = 0.10–0.30, h = 8–16) the longitudinal "
+    "growth rate is not known.",
 }
 #: Round-off of the assembled operator, relative to its largest entry.
 OPERATOR_TOL = 1e-12
@@ -230,7 +231,7 @@ def _run(ctx: StageContext) -> None:
     recorded = [txt for txt in SWEEP_ANSWER_40x40.values() if txt]
     if recorded:
         rep.add_note(
-            "§5.3 on the 40 × 40 diagrams (recorded from the sweep metric 'transverse', version 3, "
+            "§5.3 on the 40 × 40 diagrams (recorded from the sweep metric 'transverse', version 4, "
             "not recomputed here): " + " ".join(recorded)
         )
     rep.check(
