@@ -103,3 +103,22 @@ def test_thick_dilute_flow_unstable_both_ways_has_a_winner():
     assert growth > 2 * out["transverse_growth_max"]
     qz = max(m.alpha.real for m in spectrum(flow, k, n=80))
     assert growth == pytest.approx(qz, rel=1e-7)
+
+
+def test_dense_thin_flow_longitudinal_growth_at_the_third_rung():
+    """θ = 16°, ν0(0) = 0.25 (h = 6): the longitudinal branch's eigenvector is not resolved
+    at N = 48 and 60 (tails 1.8e-4, 1.8e-5 against the tracking threshold 1e-5), and the
+    scan gave up after two rungs lost before its first point (a rule meant for the dilute
+    flows of the first-step loss): 36 longitudinal-only points of the 40 × 40 φ = 0.05
+    diagram had no growth rate. At N = 75 it is followed; checked against the dense QZ
+    spectrum at N = 100 (measured 7.05707e-4 against 7.05708e-4)."""
+    from chuteflow.longwave.transverse import longitudinal_peak
+    from chuteflow.stability import RejectionPolicy
+    from chuteflow.stability.modes import spectrum
+    from chuteflow.steady import solve_steady
+
+    flow = solve_steady(16.0, 0.25)
+    peak = longitudinal_peak(flow, k_max=0.05, policy=RejectionPolicy(n_start=48, n_max=160))
+    assert peak.physical and peak.growth > 0
+    qz = max(m.alpha.real for m in spectrum(flow, peak.k, n=100))
+    assert peak.growth == pytest.approx(qz, rel=1e-5)

@@ -546,11 +546,13 @@ NUDGE = 1.04
 #: Step halvings of the continuation allowed per scan point (the tracker's default 16 costs
 #: tens of seconds where the branch is lost at k ~ 1e-5, and the scan's points are close).
 SCAN_HALVINGS = 8
-#: Resolutions of the ladder tried by :func:`longitudinal_peak` before it gives up (two where
-#: the branch is lost before the first scan point): where
+#: Resolutions of the ladder tried by :func:`longitudinal_peak` before it gives up: where
 #: the branch is lost before its maximum at N = 48, 60 and 75 it is lost at every N of the
-#: old 20-point scan up to 160 too (thick dilute flows, θ = 17.5°, ν0(0) = 0.02 at φ = 0.05:
-#: Re α/k² ≈ 4e6 already at k = 2e-6 and the branch lost near k = 5e-6).
+#: old 20-point scan up to 160 too. (Thick dilute flows, e.g. θ = 17.5°, ν0(0) = 0.02 at
+#: φ = 0.05, where the branch was lost near k = 1e-5 at every N, were the tracker's first
+#: step from k = 0 accepted off α1 k, FIRST_STEP_MIN; a rule that gave up after two rungs
+#: lost before the first scan point was dropped with it: dense thin flows, θ = 16°,
+#: ν0(0) = 0.25, need N = 75, eigenvector tails 1.8e-4 and 1.8e-5 at N = 48 and 60.)
 LONGITUDINAL_RUNGS = 3
 
 
@@ -574,8 +576,7 @@ def longitudinal_peak(
     the scan is refined by parabolic interpolation in ln k (to 2 % in k), and only the mode
     there is judged (drift at N' = 0.8 N and tail), N raised along ``policy``'s ladder
     while it is not physical. If the branch is lost before its maximum the scan is redone
-    at the next N (at most :data:`LONGITUDINAL_RUNGS` resolutions; two where it is lost
-    before k_min).
+    at the next N (at most :data:`LONGITUDINAL_RUNGS` resolutions).
 
     Raises
     ------
@@ -584,7 +585,7 @@ def longitudinal_peak(
     """
     policy = policy or RejectionPolicy(n_start=n, n_max=160)
     last_exc: Exception | None = None
-    misses, tried = 0, []
+    tried: list[int] = []
     for n_t in policy.ladder(n)[:LONGITUDINAL_RUNGS]:
         tried.append(n_t)
         tr = BranchTracker(flow, n_t, policy=policy, cache=cache)
@@ -622,10 +623,6 @@ def longitudinal_peak(
         g = np.array([a.real for a in alphas])
         if len(g) and not (lost and int(np.argmax(g)) == len(g) - 1):
             return _peak_2d(flow, tr, ks, alphas, vecs, policy, cache)
-        if not ks:
-            misses += 1
-            if misses == 2:
-                break  # lost before the first scan point twice: dilute thick flows (NUDGE)
     raise ConvergenceError(
         f"longitudinal branch at theta = {flow.theta:g}, nu0 = {flow.nu0:g} lost before its "
         f"maximum at N = {tried} ({last_exc})"

@@ -29,7 +29,7 @@ WINNER_GRID = {
 #: The answer to §5.3 on the 40 × 40 diagrams over the paper's ranges (DIAGRAM_RANGES), from
 #: ``chuteflow diagram --roughness PHI --grid 40x40 --theta-range … --nu0-range …
 #: --metrics steady,longwave,transverse`` (metric ``transverse`` version 4); recorded here,
-#: not recomputed by this stage (128.5 s and 106.9 s wall on 2 quiet cores). Version 3 lost
+#: not recomputed by this stage (145.2 s and 113.6 s wall on 2 quiet cores). Version 3 lost
 #: the longitudinal branch at k ~ 1e-5 in thick dilute flows (the tracker's first step from
 #: k = 0 off α1 k, chuteflow.stability.dispersion.FIRST_STEP_MIN) and named no winner at 55
 #: (φ = 0.05) and 15 (φ = 0.10) of the points unstable both ways; every one has a verdict
@@ -41,16 +41,16 @@ SWEEP_ANSWER_40x40 = {
     "the transverse one at 36 thick dilute flows (θ = 16.9–18°, ν̄ = 0.003–0.025, h = 21–159; by "
     "1.0–44×, median 1.8×, growth 1.6e-4–4.0e-3, λz = 750–2970 σ ≈ 16–71 h). The 10 "
     "transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 (h = 19–31) just "
-    "outside the longitudinal unstable region (Re α2 < 0, α2z > 0). At 36 longitudinal-only "
-    "points (θ = 16–18°, ν0(0) = 0.09–0.25, h = 6–11) the longitudinal growth rate is not "
-    "known (its eigenvector is not resolved at N = 48 and 60).",
+    "outside the longitudinal unstable region (Re α2 < 0, α2z > 0). At 10 longitudinal-only "
+    "points (θ = 16.3–17.8°, ν0(0) = 0.10–0.24, h = 8–11) the longitudinal growth rate is not "
+    "known (its eigenvector is not resolved at N = 48, 60 and 75).",
     0.10: "φ = 0.10 (θ 16.5–22.5°, ν0(0) 0.01–0.30; 1039 flows): stable 721, longitudinal only 256, "
     "transverse only 2, both 60. Where both occur the longitudinal instability grows faster at "
     "54 points (median 8.5×, 1.06× to 4e4×; λx = 5770–32600 σ, 89–1670 h; h = 19–142) and the "
     "transverse one at 6 thick dilute flows (θ = 22.0–22.5°, ν̄ = 0.007–0.012, h = 37–64; by "
     "1.01–395×, median 2.4×, growth 1.4e-4–1.1e-3, λz = 1200–1890 σ ≈ 23–51 h). The 2 "
-    "transverse-only points: θ = 22.3–22.5°, ν0(0) = 0.040 (h = 42–44). At 33 "
-    "longitudinal-only points (θ = 20.3–22.3°, ν0(0) = 0.10–0.30, h = 8–16) the longitudinal "
+    "transverse-only points: θ = 22.3–22.5°, ν0(0) = 0.040 (h = 42–44). At 12 "
+    "longitudinal-only points (θ = 20.3–22.0°, ν0(0) = 0.12–0.30, h = 9–15) the longitudinal "
     "growth rate is not known.",
 }
 #: Round-off of the assembled operator, relative to its largest entry.
