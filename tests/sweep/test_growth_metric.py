@@ -50,8 +50,8 @@ def _mode(k):
     )
 
 
-def _fake_follow_relaxed(calls, reached_up_to):
-    def follow_relaxed(flow, ks, *, n, policy=None, cache=None, lost=""):
+def _fake_relaxed_branch_modes(calls, reached_up_to):
+    def relaxed_branch_modes(flow, ks, *, n, policy=None, cache=None, lost=""):
         calls.append(list(ks))
         out = []
         for k in ks:
@@ -60,7 +60,7 @@ def _fake_follow_relaxed(calls, reached_up_to):
             out.append(_mode(k))
         return out
 
-    return follow_relaxed
+    return relaxed_branch_modes
 
 
 @pytest.fixture
@@ -71,7 +71,7 @@ def losing(monkeypatch):
     calls: list[list[float]] = []
 
     def install(reached_up_to):
-        monkeypatch.setattr(metrics, "relaxed_branch_modes", _fake_follow_relaxed(calls, reached_up_to))
+        monkeypatch.setattr(metrics, "relaxed_branch_modes", _fake_relaxed_branch_modes(calls, reached_up_to))
         monkeypatch.setattr(GrowthMetric, "_refine", staticmethod(lambda flow, ma, mb, cache=None: 0.02))
         return calls
 

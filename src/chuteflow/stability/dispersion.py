@@ -456,64 +456,18 @@ def near_continuum_branch(
             continue
         mode = make_mode(pencil, alpha, w, drift, n2, policy)
         u = tr._operator(n).base["u"]
-        c = -alpha.imag / kk
-        note = (
-            f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
-            f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = {c:.4g} "
-            f"against u0 in [{float(np.min(u)):.4g}, {float(np.max(u)):.4g}]"
-        )
+        note = _relaxed_note(alpha, kk, (float(np.min(u)), float(np.max(u))), policy)
         return dataclasses.replace(mode, method="branch (relaxed)", note=note)
     return None
 
 
-def follow_relaxed(
-    flow: SteadyFlow,
-    ks,
-    *,
-    n: int,
-    policy: RejectionPolicy | None = None,
-    cache: OperatorCache | None = None,
-    lost: str = "",
-) -> list[Mode]:
-    """The α(0) = 0 branch at the increasing wavenumbers ``ks`` (along x) and N, followed
-    once from k = 0 with the tail threshold relaxed to :data:`RELAXED_TAIL`: the fallback of
-    a k grid after :class:`BranchTracker` lost the branch.
-
-    One continuation passes through every k in turn (where :func:`near_continuum_branch`
-    starts afresh from k = 0 for each k), and stops at the first k it does not reach, or
-    where the drift exceeds :data:`RELAXED_DRIFT` |α| (no eigenvalue at N' continues it).
-    Each mode is judged by ``policy`` (flagged where it fails the paper's tests), with
-    ``method = "branch (relaxed)"`` and a note headed by ``lost``.
-
-    Returns
-    -------
-    list of Mode
-        The modes at ``ks[:len(result)]``: a prefix of the grid, empty when not even the
-        first k is reached.
-    """
-    policy = resolve_policy(policy)
-    relaxed = policy.replace(track_tail_tol=max(RELAXED_TAIL, policy.track_tail_tol), n_start=n, n_max=n)
-    out: list[Mode] = []
-    tr = BranchTracker(flow, n, policy=relaxed, cache=cache)
-    u = tr._operator(n).base["u"]
-    u_lo, u_hi = float(np.min(u)), float(np.max(u))
-    for k in ks:
-        k = float(k)
-        try:
-            alpha, w = tr.advance(k)
-            drift, n2 = drift_of(flow, alpha, w, n, k, 0.0, False, cache=cache)
-        except ConvergenceError:
-            break
-        if not drift <= RELAXED_DRIFT * abs(alpha):
-            break
-        mode = make_mode(tr._pencil(k), alpha, w, drift, n2, policy)
-        note = (
-            f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
-            f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = "
-            f"{-alpha.imag / k:.4g} against u0 in [{u_lo:.4g}, {u_hi:.4g}]"
-        )
-        out.append(dataclasses.replace(mode, method="branch (relaxed)", note=join_notes(lost, note)))
-    return out
+def _relaxed_note(alpha: complex, k: float, u_range: tuple[float, float], policy: RejectionPolicy) -> str:
+    """The note of a branch value followed with the relaxed tail threshold."""
+    return (
+        f"branch followed with eigenvector tails up to {RELAXED_TAIL:g} (the tracking "
+        f"threshold {policy.track_tail_tol:g} lost it): phase velocity −Im α/k = "
+        f"{-alpha.imag / k:.4g} against u0 in [{u_range[0]:.4g}, {u_range[1]:.4g}]"
+    )
 
 
 def relaxed_branch_modes(
@@ -526,28 +480,76 @@ def relaxed_branch_modes(
     lost: str = "",
 ) -> list[Mode]:
     """The α(0) = 0 branch at the increasing wavenumbers ``ks`` (along x) and N after
-    :class:`BranchTracker` lost it: how far it reaches from :func:`follow_relaxed` (one
-    continuation), each value that fails the paper's tests from :func:`near_continuum_branch`
-    (its own continuation from k = 0).
+    :class:`BranchTracker` lost it: the fallback of a k grid.
 
-    Near a critical layer the relaxed branch runs through a band of unresolved eigenvalues,
-    and which one a continuation lands on depends on its steps: one continuation through a
-    k grid lands farther from the branch than a continuation from k = 0 to each k, with a
+    How far the branch reaches comes from one continuation from k = 0 through every k in
+    turn with the tail threshold relaxed to :data:`RELAXED_TAIL`; it stops at the first k
+    not reached, or where the drift exceeds :data:`RELAXED_DRIFT` |α| (no eigenvalue at N'
+    continues it). A value that passes the paper's tests there is resolved and kept; each
+    value that fails them is recomputed by its own continuation from k = 0
+    (:func:`near_continuum_branch`), and where that does not reach k the list ends. Near a
+    critical layer the relaxed branch runs through a band of unresolved eigenvalues, and
+    which one a continuation lands on depends on its steps: one continuation through a k
+    grid lands farther from the branch than a continuation from k = 0 to each k, with a
     drift that hides its error (θ = 16.5°, ν0(0) = 0.13, φ = 0.08, Φ = 0.30, k = 0.006
     against N = 244: from k = 0 at N = 80, 100, 125 errors 2.0e-4, 3.2e-4, 4.0e-4 with drifts
-    1.4e-4 … 2.1e-4; through 12 k of a grid 1.8e-3, 2.6e-3, 7.2e-4 with drifts ~1e-4). A
-    value that passes both tests is resolved and kept as followed. Stops at the first k
-    not reached by either; returns the modes at ``ks[:len(result)]``.
+    1.4e-4 … 2.1e-4; through 12 k of a grid 1.8e-3, 2.6e-3, 7.2e-4 with drifts ~1e-4).
+
+    Returns
+    -------
+    list of Mode
+        The modes at ``ks[:len(result)]`` (a prefix of the grid, empty when not even the
+        first k is reached), judged by ``policy``, ``method = "branch (relaxed)"``, notes
+        headed by ``lost``.
     """
+    policy = resolve_policy(policy)
+    relaxed = policy.replace(track_tail_tol=max(RELAXED_TAIL, policy.track_tail_tol), n_start=n, n_max=n)
     out: list[Mode] = []
-    for m in follow_relaxed(flow, ks, n=n, policy=policy, cache=cache, lost=lost):
-        if not m.physical:
-            again = near_continuum_branch(flow, m.k, n=n, policy=policy, cache=cache)
+    tr = BranchTracker(flow, n, policy=relaxed, cache=cache)
+    u = tr._operator(n).base["u"]
+    u_range = (float(np.min(u)), float(np.max(u)))
+    for k in ks:
+        k = float(k)
+        try:
+            alpha, w = tr.advance(k)
+            drift, n2 = drift_of(flow, alpha, w, n, k, 0.0, False, cache=cache)
+        except ConvergenceError:
+            break
+        if not drift <= RELAXED_DRIFT * abs(alpha):
+            break
+        mode = make_mode(tr._pencil(k), alpha, w, drift, n2, policy)
+        if not mode.physical:
+            again = near_continuum_branch(flow, k, n=n, policy=policy, cache=cache)
             if again is None:
                 break
-            m = dataclasses.replace(again, note=join_notes(lost, again.note))
-        out.append(m)
+            mode = again
+        else:
+            mode = dataclasses.replace(
+                mode, method="branch (relaxed)", note=_relaxed_note(alpha, k, u_range, policy)
+            )
+        out.append(dataclasses.replace(mode, note=join_notes(lost, mode.note)))
     return out
+
+
+def _outranked(relaxed: Mode, cand: Mode | None, k: float, policy: RejectionPolicy, where: str = "") -> Mode:
+    """``cand``, a direct solve's mode, in place of the flagged relaxed branch value where
+    :meth:`RejectionPolicy.direct_outranks_relaxed` says so (``method = "qz (branch lost)"``,
+    the relaxed value and its drift in the note); else ``relaxed``."""
+    if cand is None or not policy.direct_outranks_relaxed(
+        k, cand.alpha.real, cand.drift, cand.tail, relaxed.alpha.real, relaxed.drift
+    ):
+        return relaxed
+    return dataclasses.replace(
+        cand,
+        method="qz (branch lost)",
+        note=join_notes(
+            relaxed.note,
+            f"the branch, near the continuum of the dilute top, followed with relaxed tails "
+            f"reaches α = {relaxed.alpha:.6g} with drift {relaxed.drift:.1e}{where} (rejected by "
+            "the paper's tests); this mode passes both and is less damped",
+            cand.note,
+        ),
+    )
 
 
 #: ARPACK restarts (per Krylov size) of one continuation step of the branch tracker. Where
@@ -675,7 +677,7 @@ def dispersion(
         the branch is lost (default); otherwise return such points flagged
         ``physical = False``. Where the continuation loses the branch (non-strict), that
         and every larger k up to ``policy.relaxed_k_max`` are followed once more from k = 0
-        with the relaxed tail threshold (:func:`follow_relaxed`, judged by the paper's
+        with the relaxed tail threshold (:func:`relaxed_branch_modes`, judged by the paper's
         tests), where a direct mode that passes both tests and is less damped outranks a
         rejected relaxed value (:meth:`RejectionPolicy.direct_outranks_relaxed`, as in
         :func:`least_stable`); beyond ``relaxed_k_max`` each k as :func:`after_lost_branch`
@@ -736,20 +738,8 @@ def dispersion(
                 # −0.023 with drift 8e-5 at k = 0.0079 against a resolved −0.0046 for θ =
                 # 15.36°, ν0(0) = 0.12)
                 cand = direct_mode(flow, float(ks[i]), n=policy.n_start, policy=policy, cache=cache)
-                if cand is not None and policy.direct_outranks_relaxed(
-                    float(ks[i]), cand.alpha.real, cand.drift, cand.tail, mode.alpha.real, mode.drift
-                ):
-                    mode = dataclasses.replace(
-                        cand,
-                        method="qz (branch lost)",
-                        note=join_notes(
-                            mode.note,
-                            f"the branch followed with relaxed tails reaches α = {mode.alpha:.6g} "
-                            f"with drift {mode.drift:.1e} (rejected by the paper's tests); this "
-                            "mode passes both and is less damped",
-                        ),
-                    )
-                    direct[i] = True
+                mode = _outranked(mode, cand, float(ks[i]), policy)
+                direct[i] = mode.method != "branch (relaxed)"
         elif lost_at is not None:
             # branch lost and not reached by the relaxed continuation: past
             # policy.relaxed_k_max as least_stable answers there (after_lost_branch: the band
@@ -1122,26 +1112,7 @@ def least_stable(
                         # below the continuum: a resolved, less damped mode outranks the
                         # flagged relaxed value (RejectionPolicy.direct_outranks_relaxed)
                         seed = _direct_candidate(flow, k, kz, nn, seed, policy, cache)
-                        if seed is not None and policy.direct_outranks_relaxed(
-                            kk,
-                            seed.alpha.real,
-                            seed.drift,
-                            seed.tail,
-                            mode.alpha.real,
-                            mode.drift,
-                        ):
-                            mode = dataclasses.replace(
-                                seed,
-                                method="qz (branch lost)",
-                                note=join_notes(
-                                    mode.note,
-                                    f"the branch, near the continuum of the dilute top, followed "
-                                    f"with relaxed tails reaches α = {mode.alpha:.6g} with drift "
-                                    f"{mode.drift:.1e} at N = {nn} (rejected by the paper's "
-                                    "tests); this mode passes both and is less damped",
-                                    seed.note,
-                                ),
-                            )
+                        mode = _outranked(mode, seed, kk, policy, f" at N = {nn}")
                 else:
                     # not even the relaxed continuation reaches k: a direct solve at k
                     how = "qz"

@@ -243,7 +243,6 @@ class GrowthMetric(PointFunction):
         cache = OperatorCache(2)  # N and N′ (the drift check; the next rung reuses N)
         policy = RejectionPolicy(n_max=int(o["n_max"]))
         modes: list = []  # one per k of the grid; None where the branch was not reached
-        lost_note = ""
         try:
             tr = BranchTracker(flow, int(o["n"]), policy=policy, cache=cache)
             for k in ks:
