@@ -121,3 +121,27 @@ def test_growth_plane_small(p1_flow):
     assert ds.attrs["growth_max"] == pytest.approx(a2d.real, rel=1e-7)
     assert float(ds.alpha_im.sel(kx=0.002, kz=0.0)) == pytest.approx(a2d.imag, rel=1e-7)
     assert bool(ds.physical.all())
+
+
+@pytest.mark.parametrize("eps", [1e-15, -1e-15, -3e-15])
+def test_p1_branch_followed_past_its_maximum_whatever_the_round_off(eps):
+    """P1 with ν0(0) moved by round-off (1e-15 relative): the steady flow differs by
+    round-off, and the branch must still be followed over its flat maximum (α = 6.18e-5 at
+    k_z ≈ 1.9e-3) to the cut-off. Before, the tracker's acceptance (miss below a quarter of
+    the predicted change, which vanishes at the maximum, plus 1e-3 |α|) needed more than
+    its 6 step halvings there: at these three flows the branch was "lost" at k_z = 1.93e-3,
+    with no cut-off and growth_max 6.1802e-5 (1.3e-5 relative off), while the unperturbed
+    flow gave the cut-off 3.2539e-3. Against that cut-off (Brent to 0.1 %, the reference of
+    test_transverse_reference.py) and growth maximum (to its drift, 1e-12, plus round-off)."""
+    from chuteflow.closures import ChuteModel
+    from chuteflow.steady import solve_steady
+
+    from ._transverse_reference import REFERENCE
+
+    theta, nu0, phi = REFERENCE["P1"]["flow"]
+    ref = REFERENCE["P1"]["summary"]
+    flow = solve_steady(theta, nu0 * (1.0 + eps), ChuteModel(roughness=phi))
+    s = transverse(flow, num=25).summary()
+    assert s["kz_cutoff"] == pytest.approx(ref["kz_cutoff"], rel=1e-3)
+    assert s["growth_max"] == pytest.approx(ref["growth_max"], abs=1e-11)
+    assert s["branch_lost_at"] > s["kz_cutoff"]

@@ -83,7 +83,11 @@ def _check_point(name):
     assert s["stationary"] == rs["stationary"]
     # the cut-off: Brent's method to 0.1 %
     assert s["kz_cutoff"] == pytest.approx(rs["kz_cutoff"], rel=1e-3)
-    assert s["branch_lost_at"] == pytest.approx(rs["branch_lost_at"], rel=1e-9)
+    # where the continuation could not step on: the end of its step halvings, 10 since
+    # the tracker was made to cross the flat maximum of α(k_z) whatever the round-off (see
+    # test_transverse.py::test_p1_branch_followed_past_its_maximum_whatever_the_round_off),
+    # 6 in the reference code; the loss point moves by 0.41 % at P1 (measured)
+    assert s["branch_lost_at"] == pytest.approx(rs["branch_lost_at"], rel=1e-2)
     a2 = float(transverse_longwave(flow).alpha2_z.real)
     _compare(transverse_dispersion(flow, KZ50, alpha2z=a2, beyond=True), ref["beyond50"])
 

@@ -122,3 +122,26 @@ def test_dense_thin_flow_longitudinal_growth_at_the_third_rung():
     assert peak.physical and peak.growth > 0
     qz = max(m.alpha.real for m in spectrum(flow, peak.k, n=100))
     assert peak.growth == pytest.approx(qz, rel=1e-5)
+
+
+def test_transverse_branch_followed_over_its_flat_start():
+    """θ = 17.846°, ν0(0) = 0.02846, φ = 0.05 (a point of the 40 × 40 diagram): version 4
+    "lost" the (real) transverse branch after its first point, k_z = 1e-5 (growth 2.05e-7
+    there reported as the maximum, no cut-off): where Re α is flat, the tracker's
+    acceptance (a miss below a quarter of the predicted change, plus 1e-3 |α|) needed more
+    than its 6 step halvings. With 10 it follows the branch to its maximum, which is
+    checked against the dense spectrum of the k_x = 0 pencil at its k_z (the independent
+    method: QZ, N = 100; measured 3.3950426e-3 against 3.3950425e-3, drift 1e-8)."""
+    from chuteflow.closures import ChuteModel
+    from chuteflow.longwave.transverse import transverse_longwave, transverse_peak
+    from chuteflow.stability import RejectionPolicy
+    from chuteflow.stability.transverse import dense_modes
+    from chuteflow.steady import solve_steady
+
+    flow = solve_steady(17.846153846154, 0.028461538462, ChuteModel(roughness=0.05))
+    a2z = float(transverse_longwave(flow, 80).alpha2_z.real)
+    peak = transverse_peak(flow, alpha2z=a2z, policy=RejectionPolicy(n_start=48, n_max=160))
+    assert peak.physical and peak.cutoff is not None and peak.k > 1e-3
+    modes, _ = dense_modes(flow, 0.0, peak.k, n=100)
+    qz = max(m.alpha.real for m in modes if m.physical)
+    assert peak.growth == pytest.approx(qz, abs=peak.mode.drift + 1e-12)

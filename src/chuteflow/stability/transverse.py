@@ -688,9 +688,17 @@ class TransverseTracker:
         self.history.append(_Point(float(kz), complex(alpha), v, self.n))
         return True
 
-    def advance(self, kz: float, max_halvings: int = 6) -> _Point | None:
+    def advance(self, kz: float, max_halvings: int = 10) -> _Point | None:
         """Continue the branch to k_z (≥ the last point); None once it is lost (the reason:
-        :attr:`lost_at`, the k_z where the continuation could not step on)."""
+        :attr:`lost_at`, the k_z where the continuation could not step on).
+
+        A rejected step is halved in ln k_z, at most ``max_halvings`` times. The branch is
+        real and its step's acceptance (a miss below a quarter of the predicted change plus
+        1e-3 |α|) tightens where Re α is flat, at its maximum: the miss falls with the step
+        and the threshold to 1e-3 |α|, so short steps pass. With 6 halvings, flows a
+        round-off apart were followed over P1's maximum (k_z ≈ 1.9e-3) or "lost" there; 10
+        cross it whatever the round-off
+        (tests/stability/test_transverse.py::test_p1_branch_followed_past_its_maximum_whatever_the_round_off)."""
         if self.lost_at is not None and kz >= self.lost_at:
             return None
         while self.history[-1].kz < kz:

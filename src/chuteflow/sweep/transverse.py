@@ -63,8 +63,11 @@ class TransverseMetric(PointFunction):
     name = "transverse"
     # 4: the longitudinal branch's first step from k = 0 must hit α1 k
     # (chuteflow.stability.dispersion.FIRST_STEP_MIN): in dilute flows it was "lost" at k = 1e-5;
-    # and longitudinal_peak tries N = 75 also where the branch is lost before k_min at 48, 60
-    version = "4"
+    # and longitudinal_peak tries N = 75 also where the branch is lost before k_min at 48, 60.
+    # 5: the transverse branch is followed over its flat maximum whatever the round-off (10
+    # step halvings of TransverseTracker.advance instead of 6: P1 was "lost" at k_z = 1.93e-3
+    # for flows a round-off apart)
+    version = "5"
     requires = ("steady", "longwave")
     defaults = {"kz_max": 3.0, "k_max": 0.05, "ratio": PEAK_RATIO, "n": 80, "n_track": 48, "n_max": 160}
     variables = (

@@ -28,8 +28,10 @@ WINNER_GRID = {
 }
 #: The answer to §5.3 on the 40 × 40 diagrams over the paper's ranges (DIAGRAM_RANGES), from
 #: ``chuteflow diagram --roughness PHI --grid 40x40 --theta-range … --nu0-range …
-#: --metrics steady,longwave,transverse`` (metric ``transverse`` version 4); recorded here,
-#: not recomputed by this stage (145.2 s and 113.6 s wall on 2 quiet cores). Version 3 lost
+#: --metrics steady,longwave,transverse`` (metric ``transverse`` version 5); recorded here,
+#: not recomputed by this stage (179.4 s and 150.7 s wall on 2 cores). Version 4 lost the
+#: (real) transverse branch at its flat maximum in 3 flows at φ = 0.05 (growth ~1e-8 instead
+#: of 4e-4 … 3e-3; TransverseTracker.advance's step halvings, 6 then, 10 now). Version 3 lost
 #: the longitudinal branch at k ~ 1e-5 in thick dilute flows (the tracker's first step from
 #: k = 0 off α1 k, chuteflow.stability.dispersion.FIRST_STEP_MIN) and named no winner at 55
 #: (φ = 0.05) and 15 (φ = 0.10) of the points unstable both ways; every one has a verdict
@@ -37,8 +39,8 @@ WINNER_GRID = {
 SWEEP_ANSWER_40x40 = {
     0.05: "φ = 0.05 (θ 12–18°, ν0(0) 0.01–0.25; 1168 flows): stable 681, longitudinal only 299, "
     "transverse only 10, both 178. Where both occur the longitudinal instability grows faster "
-    "at 142 points (median 8.1×, 1.03× to ~3e8×; λx = 2750–32000 σ, 64–1830 h; h = 12–147) and "
-    "the transverse one at 36 thick dilute flows (θ = 16.9–18°, ν̄ = 0.003–0.025, h = 21–159; by "
+    "at 141 points (median 7.6×, 1.03× to ~3e8×; λx = 2750–32000 σ, 64–1830 h; h = 12–147) and "
+    "the transverse one at 37 thick dilute flows (θ = 16.9–18°, ν̄ = 0.003–0.025, h = 21–159; by "
     "1.0–44×, median 1.8×, growth 1.6e-4–4.0e-3, λz = 750–2970 σ ≈ 16–71 h). The 10 "
     "transverse-only points lie on a line θ = 16.8–18°, ν0(0) = 0.047–0.072 (h = 19–31) just "
     "outside the longitudinal unstable region (Re α2 < 0, α2z > 0). At 10 longitudinal-only "
@@ -231,7 +233,7 @@ def _run(ctx: StageContext) -> None:
     recorded = [txt for txt in SWEEP_ANSWER_40x40.values() if txt]
     if recorded:
         rep.add_note(
-            "§5.3 on the 40 × 40 diagrams (recorded from the sweep metric 'transverse', version 4, "
+            "§5.3 on the 40 × 40 diagrams (recorded from the sweep metric 'transverse', version 5, "
             "not recomputed here): " + " ".join(recorded)
         )
     rep.check(
