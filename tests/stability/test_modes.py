@@ -107,3 +107,23 @@ def test_spanwise_perturbation_matches_qz(p1_flow):
     by_qz = spectrum(p1_flow, 0.0, kz=kz, n=64)[0]
     assert set(by_branch.fields) == {"nu", "u", "v", "w", "T"}
     assert abs(by_branch.alpha - by_qz.alpha) < 1e-10
+
+
+def test_spectrum_on_a_ladder_reuses_the_rung_below_as_its_check(p1_flow):
+    """On the policy's ladder N' = 0.8 N is the rung below: ``spectrum`` at N = 100 after
+    N = 80 takes the check eigenvalues at N' = 80 from that call (QZ with eigenvectors)
+    instead of a second QZ without them. The modes are those of a fresh computation, bit
+    for bit (the same QZ iteration on the same pencil; measured), and the memo is what was
+    used: replacing it by a sentinel moves every drift."""
+    from chuteflow.stability import OperatorCache
+
+    ladder, fresh = OperatorCache(), OperatorCache()
+    spectrum(p1_flow, 0.5, n=80, physical_only=False, cache=ladder)
+    got = spectrum(p1_flow, 0.5, n=100, physical_only=False, cache=ladder)
+    ref = spectrum(p1_flow, 0.5, n=100, physical_only=False, cache=fresh)
+    assert [(m.alpha, m.drift, m.tail) for m in got] == [(m.alpha, m.drift, m.tail) for m in ref]
+    op80 = stability_operator(p1_flow, 80, cache=ladder)
+    assert (0.5, 0.0) in op80.qz_eigenvalues
+    op80.qz_eigenvalues[(0.5, 0.0)] = np.array([1e3 + 0j])
+    moved = spectrum(p1_flow, 0.5, n=100, physical_only=False, cache=ladder)
+    assert all(m.drift > 1e2 for m in moved)

@@ -969,13 +969,32 @@ def crossings(
     )
 
 
+#: :func:`least_stable` checks a direct solve's physical mode past the continuum once more
+#: near the top of the ladder (:func:`_check_above_continuum`), at its first rung of at least
+#: this fraction of the top (244 of the default 80 … 244, 256), and only when the mode passed
+#: below that rung. Within 10 % of the top, a dense spectrum already shows every eigenvalue
+#: the top would resolve above the answer: one with a tail below 1e-7 at the top has a tail
+#: below the tracking threshold 1e-5 at ≤ 10 % fewer nodes (a Chebyshev tail falls by far
+#: less than 100× over 25 nodes), where :func:`~chuteflow.stability.modes.direct_mode`
+#: returns it as the flagged least-stable candidate. The check's N' = 0.8 N is then the rung
+#: below, whose eigenvalues the ladder may have computed already. P1, k = 3: the check at
+#: N = 256 after the mode passed at 244 cost 41 of 107 s.
+TOP_CHECK_BELOW = 0.9
+
+
+def _top_check_n(ladder: list[int]) -> int:
+    """The rung of :data:`TOP_CHECK_BELOW`."""
+    return next(r for r in ladder if r >= TOP_CHECK_BELOW * ladder[-1])
+
+
 def _check_above_continuum(flow, k, kz, n_top, mode: Mode, policy, cache, lost: str) -> Mode:
     """A direct solve's physical mode past the continuum (k > ``policy.relaxed_k_max``) with
-    unresolved eigenvalues above it, checked once more at the ladder's last rung: there a
-    branch in the band of critical-layer eigenvalues may be nearly resolved and less damped
-    (P4, k = 0.5: −2.51 − 0.87i passes both tests at N = 80, but the branch at
-    −0.0300 − 0.8172i is picked out at N = 256, drift 2e-4, tail 5e-6). The less damped
-    answer wins, flagged if it does not pass the tests."""
+    unresolved eigenvalues above it, checked once more near the top of the ladder (at
+    ``n_top``, :data:`TOP_CHECK_BELOW`): there a branch in the band of critical-layer
+    eigenvalues may be nearly resolved and less damped (P4, k = 0.5: −2.51 − 0.87i passes
+    both tests at N = 80, but the branch at −0.0300 − 0.8172i is picked out at N = 244 and
+    256, drift ~1e-4, tail ~4e-6). The less damped answer wins, flagged if it does not pass
+    the tests."""
     top = direct_mode(flow, k, kz=kz, n=n_top, policy=policy, cache=cache)
     if top is None or top.alpha.real <= mode.alpha.real + max(mode.drift, top.drift):
         return mode
@@ -1126,9 +1145,9 @@ def least_stable(
                 mode.method.startswith("qz")
                 and mode.continuum_re > mode.alpha.real  # False when NaN
                 and math.hypot(k, kz) > policy.relaxed_k_max
-                and nn < ns[-1]
+                and nn < _top_check_n(ns)
             ):
-                mode = _check_above_continuum(flow, k, kz, ns[-1], mode, policy, cache, lost or "")
+                mode = _check_above_continuum(flow, k, kz, _top_check_n(ns), mode, policy, cache, lost or "")
             return mode
         if mode is not None and _better(mode, best, policy):
             best = mode

@@ -463,11 +463,18 @@ def spectrum(
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
     n = validate_n(policy.n_start if n is None else n)
     three_d = bool(kz)
-    p1 = stability_operator(flow, n, three_d, cache=cache).pencil(k, kz)
+    op1 = stability_operator(flow, n, three_d, cache=cache)
+    p1 = op1.pencil(k, kz)
     n2 = check_n(n)
-    p2 = stability_operator(flow, n2, three_d, cache=cache).pencil(k, kz)
+    op2 = stability_operator(flow, n2, three_d, cache=cache)
     w1, V1 = qz(*p1.equilibrated())
-    w2, _ = qz(*p2.equilibrated(), vectors=False)
+    op1.remember_eigenvalues(k, kz, w1)
+    # on the policy's ladder (80, 100, 125, …: factors 1.25) N' is the rung below, whose
+    # eigenvalues the previous call computed: the check's QZ is not repeated
+    w2 = op2.qz_eigenvalues.get((float(k), float(kz)))
+    if w2 is None:
+        w2, _ = qz(*op2.pencil(k, kz).equilibrated(), vectors=False)
+        op2.remember_eigenvalues(k, kz, w2)
     modes = []
     for j, a in enumerate(w1):
         drift = float(np.abs(w2 - a).min()) if len(w2) else math.inf

@@ -341,6 +341,16 @@ class StabilityOperator:
         self.fields = FIELDS_3D if three_d else FIELDS_2D
         self.grid = stability_grid(flow, n, self.mapped)
         self._assemble()
+        #: finite eigenvalues of this operator's pencils by (k, kz), from dense QZ
+        #: (:func:`~chuteflow.stability.modes.spectrum`): on a ladder of resolutions the
+        #: drift check at N' = 0.8 N is the rung below, whose eigenvalues are known
+        self.qz_eigenvalues: dict[tuple[float, float], np.ndarray] = {}
+
+    def remember_eigenvalues(self, k: float, kz: float, w: np.ndarray) -> None:
+        """Keep the finite eigenvalues ``w`` of the pencil at (k, kz) (the last 8 pairs)."""
+        if len(self.qz_eigenvalues) >= 8:
+            self.qz_eigenvalues.pop(next(iter(self.qz_eigenvalues)))
+        self.qz_eigenvalues[(float(k), float(kz))] = w
 
     @property
     def size(self) -> int:
