@@ -145,3 +145,23 @@ def test_transverse_branch_followed_over_its_flat_start():
     modes, _ = dense_modes(flow, 0.0, peak.k, n=100)
     qz = max(m.alpha.real for m in modes if m.physical)
     assert peak.growth == pytest.approx(qz, abs=peak.mode.drift + 1e-12)
+
+
+def test_metric_keeps_no_operator_past_its_flow():
+    """The metric's operators come from a cache of its own, dropped with the flow: the
+    module's cache (six operators; a three-dimensional one at N = 195 holds ~110 MB) kept
+    those of earlier flows, and a worker of the 40 × 40 §5.3 diagram reached 577 MiB
+    (measured on an 8 × 12 sweep of the same range: peak 640 → 569 MiB, the same values)."""
+    from chuteflow.stability import OPERATORS
+    from chuteflow.steady import solve_steady
+    from chuteflow.sweep.metrics import LongWaveMetric
+    from chuteflow.sweep.points import Point
+
+    p1_flow = solve_steady(16.0, 0.05)
+    OPERATORS.clear()
+    point = Point(-1, -1, 16.0, 0.05)
+    point.values.update(LongWaveMetric().compute(p1_flow, point))
+    n_before = len(OPERATORS)
+    out = TransverseMetric().compute(p1_flow, point)
+    assert out["winner"] == 3
+    assert len(OPERATORS) == n_before

@@ -115,9 +115,15 @@ class TransverseLongWave:
 
 
 def transverse_longwave(
-    flow: SteadyFlow, n: int = 100, *, rtol: float = 1e-3, n_max: int = 320
+    flow: SteadyFlow,
+    n: int = 100,
+    *,
+    rtol: float = 1e-3,
+    n_max: int = 320,
+    cache: OperatorCache | None = None,
 ) -> TransverseLongWave:
-    """α2z by bordered perturbation theory, n raised by 25 % until it changes < ``rtol``.
+    """α2z by bordered perturbation theory, n raised by 25 % until it changes < ``rtol``;
+    the three-dimensional operators come from ``cache`` (default: the module's).
 
     Raises
     ------
@@ -127,9 +133,9 @@ def transverse_longwave(
     tangent = steady_tangent(flow)
     ladder = RejectionPolicy(n_start=n, n_max=n_max)
     n2 = max(24, (4 * n) // 5)
-    _, b2 = directional_coefficients(stability_operator(flow, n2, True), tangent)
+    _, b2 = directional_coefficients(stability_operator(flow, n2, True, cache=cache), tangent)
     while True:
-        a1, a2 = directional_coefficients(stability_operator(flow, n, True), tangent)
+        a1, a2 = directional_coefficients(stability_operator(flow, n, True, cache=cache), tangent)
         c2 = abs(a2 - b2) / max(abs(a2), 1e-300)
         if c2 <= rtol or n >= n_max:
             break

@@ -36,7 +36,7 @@ import numpy as np
 from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.transverse import PEAK_RATIO, longitudinal_peak, transverse_longwave, transverse_peak
-from ..stability import RejectionPolicy
+from ..stability import OperatorCache, RejectionPolicy
 from .points import PointFunction, Variable, register_point_function
 
 __all__ = ["TransverseMetric", "WINNER_CODES"]
@@ -110,12 +110,21 @@ class TransverseMetric(PointFunction):
         o = self.options
         out: dict = {}
         policy = RejectionPolicy(n_start=int(o["n_track"]), n_max=int(o["n_max"]))
-        a2z = float(transverse_longwave(flow, int(o["n"])).alpha2_z.real)
+        # this flow's operators only, dropped with it: the module's cache keeps six, and
+        # three-dimensional ones at N = 160 hold ~70 MB each (a worker of the 40 × 40 §5.3
+        # diagram reached 577 MiB)
+        cache = OperatorCache(2)
+        a2z = float(transverse_longwave(flow, int(o["n"]), cache=cache).alpha2_z.real)
         out["alpha2_z"] = a2z
         t_unstable = a2z > 0
         if t_unstable:
             tp = transverse_peak(
-                flow, alpha2z=a2z, kz_max=float(o["kz_max"]), ratio=float(o["ratio"]), policy=policy
+                flow,
+                alpha2z=a2z,
+                kz_max=float(o["kz_max"]),
+                ratio=float(o["ratio"]),
+                policy=policy,
+                cache=cache,
             )
             if math.isfinite(tp.growth):
                 out["transverse_growth_max"] = tp.growth
@@ -134,7 +143,7 @@ class TransverseMetric(PointFunction):
         if l_unstable:
             try:
                 lp = longitudinal_peak(
-                    flow, k_max=float(o["k_max"]), ratio=float(o["ratio"]), policy=_policy2d(o)
+                    flow, k_max=float(o["k_max"]), ratio=float(o["ratio"]), policy=_policy2d(o), cache=cache
                 )
                 out["longitudinal_growth_max"], out["longitudinal_kx_max"] = lp.growth, lp.k
                 l_unstable = lp.growth > 0
