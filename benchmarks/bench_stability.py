@@ -20,6 +20,11 @@ best of a few repetitions after a warm-up (sympy compilation is excluded).
   sinh-mapped grid (ladder from 48) against the same on the plain grid with the old ladder
   (80, 100, 125, …), measured in the same run; ratio = plain / mapped time; the note gives
   both N and |Δα|.
+- ``large_k_direct_P1_3`` (full run only, one repetition): ``least_stable(P1, k = 3)``, the
+  direct solve past the continuum (dense QZ up the ladder 80 … 244), against the same with
+  a second QZ for every rung's check at N' (no eigenvalues kept by the operators) and the
+  check past the continuum at the top rung N = 256 (``TOP_CHECK_BELOW`` = 1): the code
+  before issue 9's ladder reuse, in the same run; the answers must agree.
 """
 
 from __future__ import annotations
@@ -160,7 +165,41 @@ def run(quick: bool = False) -> list[dict]:
                 f"{mp.drift:.0e}); |Δα|/|α| = {abs(mm.alpha - mp.alpha) / abs(mp.alpha):.1e}",
             }
         )
+    if not quick:
+        rows.append(_large_k())
     return rows
+
+
+def _large_k() -> dict:
+    """Row ``large_k_direct_P1_3`` (module docstring)."""
+    import importlib
+    from unittest import mock
+
+    from chuteflow.stability import OperatorCache, least_stable
+    from chuteflow.stability.operator import StabilityOperator
+    from chuteflow.steady import solve_steady
+
+    # the module (chuteflow.stability.dispersion is also the name of a function there)
+    disp = importlib.import_module("chuteflow.stability.dispersion")
+    f = solve_steady(THETA, NU0)
+    t0 = time.perf_counter()
+    new = least_stable(f, 3.0, cache=OperatorCache(4))
+    t_new = time.perf_counter() - t0
+    with (
+        mock.patch.object(StabilityOperator, "remember_eigenvalues", lambda self, k, kz, w: None),
+        mock.patch.object(disp, "TOP_CHECK_BELOW", 1.0),
+    ):
+        t0 = time.perf_counter()
+        old = least_stable(f, 3.0, cache=OperatorCache(4))
+        t_old = time.perf_counter() - t0
+    return {
+        "name": "large_k_direct_P1_3",
+        "seconds": t_new,
+        "baseline_seconds": t_old,
+        "ratio": t_old / t_new,
+        "note": f"α = {new.alpha:.10g} at N = {new.n} (drift {new.drift:.1e}); baseline (a QZ per "
+        f"check, the check at 256): α = {old.alpha:.10g} at N = {old.n}; same: {new.alpha == old.alpha}",
+    }
 
 
 def main(argv=None):
