@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -531,24 +532,36 @@ def relaxed_branch_modes(
     return out
 
 
-def _outranked(relaxed: Mode, cand: Mode | None, k: float, policy: RejectionPolicy, where: str = "") -> Mode:
+def _outranked(
+    relaxed: Mode,
+    cand: Mode | None,
+    k: float,
+    policy: RejectionPolicy,
+    where: str = "",
+    *,
+    base: str | None = None,
+    why: Callable[[Mode], str] | None = None,
+) -> Mode:
     """``cand``, a direct solve's mode, in place of the flagged relaxed branch value where
     :meth:`RejectionPolicy.direct_outranks_relaxed` says so (``method = "qz (branch lost)"``,
-    the relaxed value and its drift in the note); else ``relaxed``."""
+    the relaxed value and its drift in the note); else ``relaxed``. The note starts with
+    ``base`` (default: the relaxed value's note), then ``why(cand)`` (default: below the
+    continuum, the relaxed value rejected by the paper's tests), then ``cand``'s note."""
     if cand is None or not policy.direct_outranks_relaxed(
         k, cand.alpha.real, cand.drift, cand.tail, relaxed.alpha.real, relaxed.drift
     ):
         return relaxed
+    text = (
+        why(cand)
+        if why is not None
+        else f"the branch, near the continuum of the dilute top, followed with relaxed tails "
+        f"reaches α = {relaxed.alpha:.6g} with drift {relaxed.drift:.1e}{where} (rejected by "
+        "the paper's tests); this mode passes both and is less damped"
+    )
     return dataclasses.replace(
         cand,
         method="qz (branch lost)",
-        note=join_notes(
-            relaxed.note,
-            f"the branch, near the continuum of the dilute top, followed with relaxed tails "
-            f"reaches α = {relaxed.alpha:.6g} with drift {relaxed.drift:.1e}{where} (rejected by "
-            "the paper's tests); this mode passes both and is less damped",
-            cand.note,
-        ),
+        note=join_notes(relaxed.note if base is None else base, text, cand.note),
     )
 
 
@@ -627,19 +640,16 @@ def after_lost_branch(
                 ),
             )
     direct = direct_mode(flow, k, kz=kz, n=n, policy=policy, cache=cache, modes=modes)
-    if direct is None or not policy.direct_outranks_relaxed(
-        kk, direct.alpha.real, direct.drift, direct.tail, relaxed.alpha.real, relaxed.drift
-    ):
-        return relaxed
-    return dataclasses.replace(
+    return _outranked(
+        relaxed,
         direct,
-        method="qz (branch lost)",
-        note=join_notes(
-            lost,
-            f"the branch followed with relaxed tails reaches α = {relaxed.alpha:.6g} with drift "
-            f"{relaxed.drift:.1e} (|k| > {policy.relaxed_k_max:g}); the direct solve's mode is "
-            f"less damped and drifts {direct.drift:.1e}",
-            direct.note,
+        kk,
+        policy,
+        base=lost,
+        why=lambda d: (
+            f"the branch followed with relaxed tails reaches α = {relaxed.alpha:.6g} with "
+            f"drift {relaxed.drift:.1e} (|k| > {policy.relaxed_k_max:g}); the direct solve's mode is "
+            f"less damped and drifts {d.drift:.1e}"
         ),
     )
 
