@@ -105,3 +105,33 @@ def test_mapped_grid_clusters_at_the_centre_and_tends_to_the_plain_grid():
     assert wide.with_n(32).n == 32 and wide.with_n(32).width == 1e6
     with pytest.raises(ValueError, match="width"):
         MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 0.0)
+
+
+# -- interpolation: barycentric inside the interval, Clenshaw outside ----------------------
+@pytest.mark.parametrize("n", [8, 64, 145])
+def test_barycentric_interpolation_is_the_interpolating_polynomial(n):
+    """The barycentric formula (few points) and Clenshaw's recurrence on the coefficients
+    (many points, or outside [−1, 1]) give the same polynomial: a random polynomial of degree
+    n is reproduced to round-off by both, nodes exactly, stacked and complex series alike."""
+    from chuteflow.spectral import _evaluate, barycentric, coefficients
+
+    rng = np.random.default_rng(n)
+    c = rng.standard_normal((2, n + 1)) / (1.0 + np.arange(n + 1))
+    xj = -np.cos(np.pi * np.arange(n + 1) / n)
+    f = np.polynomial.chebyshev.chebval(xj, c.T, tensor=True)
+    assert np.allclose(coefficients(f), c, atol=1e-13)
+    x = np.concatenate([rng.uniform(-1.0, 1.0, n), xj[[0, n // 3, n]]])
+    exact = np.polynomial.chebyshev.chebval(x, c.T, tensor=True)
+    b = barycentric(f, n, x)
+    assert b.shape == (2, len(x))
+    assert np.abs(b - exact).max() < 1e-13 * np.abs(f).max() * n
+    assert (b[:, -3:] == f[:, [0, n // 3, n]]).all()  # at a node: the nodal value itself
+    z = barycentric(f[0] + 1j * f[1], n, x[:5])
+    assert np.allclose(z, exact[0, :5] + 1j * exact[1, :5], rtol=0, atol=1e-12)
+    # many points, and points outside [−1, 1]: Clenshaw, the same polynomial
+    for xs in (np.linspace(-1.0, 1.0, 8 * n + 1), np.array([-1.0, 0.3, 1.0 + 1e-9])):
+        out = _evaluate(f, n, xs)
+        assert np.abs(out - np.polynomial.chebyshev.chebval(xs, c.T, tensor=True)).max() < 1e-12 * n
+    # a scalar height gives a scalar per series
+    g = ChebyshevGrid(n, 0.0, 2.0)
+    assert g.interpolate(f[0], np.array(0.7)).shape == ()
