@@ -136,10 +136,11 @@ def test_sweep_sign_agrees_with_longwave_unstable(name):
     es = eigen_sign(flow)
     vals, conv, _ = eigen_coefficient(flow)
     # P4: Re α(1e-5) ≈ 4.4e-9 lies next to the continuum, and its change between N = 204
-    # and 256 is round-off: 2.1e-3, 4.8e-3 and 3.3e-2 with steady flows and closures that
-    # differ by round-off only (numpy's and the compiled closures; dense and eliminated
-    # Newton steps), Re α/k² = 43.1 … 44.5 in all three; elsewhere ≤ 1e-2
-    assert es.converged and conv < (5e-2 if name == "P4" else 1e-2)
+    # and 256 is round-off: 2.1e-3, 4.8e-3, 3.3e-2 and 7.7e-2 with steady flows and closures
+    # that differ by round-off only (numpy's and the compiled closures; dense and eliminated
+    # Newton steps; Clenshaw and barycentric interpolation), Re α/k² = 42.8 … 44.5 in all
+    # four (eigen_sign: 44.08 in the last two); elsewhere ≤ 1e-2
+    assert es.converged and conv < (0.1 if name == "P4" else 1e-2)
     assert es.coefficient == pytest.approx(vals[1], rel=0.05)  # eigen_sign stops at rtol 0.05
     assert es.unstable == (vals[1] > 0)
     if name in PAPER_UNSTABLE:
