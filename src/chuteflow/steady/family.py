@@ -408,7 +408,9 @@ def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict 
         errors.append(f"n = {m}: {p.error}")
         m *= 2
     if not v.physical:
-        return _Point("no_steady_flow", None, v.reason), v
+        # the scan's solution is thinner than min_thickness: a thin layer, as where Newton
+        # resolves it (the label must not depend on which of the two found it)
+        return _Point("thin", None, v.reason), v
     if v.h < 1.0:
         # accepted by min_thickness < 1, but thinner than a diameter: outside the
         # hydrodynamics and not examined by the paper (§3.2, figure 6: h < 1)

@@ -289,7 +289,10 @@ def existence_limit(
         ended before ``margin`` degrees beyond the map).
     """
     st = ds.status.values
-    usable = (st == "ok") | (st == "thin")
+    # thin layers count, where Newton resolved them (a thin layer only the shooting scan
+    # found has no flow to follow)
+    has_flow = np.array([[f is not None for f in row] for row in flows], dtype=bool).reshape(st.shape)
+    usable = ((st == "ok") | (st == "thin")) & has_flow
     ths, nus = ds.theta.values, ds.nu0.values
     per_col = []
     for j in range(usable.shape[1]):
