@@ -135,3 +135,18 @@ def test_barycentric_interpolation_is_the_interpolating_polynomial(n):
     # a scalar height gives a scalar per series
     g = ChebyshevGrid(n, 0.0, 2.0)
     assert g.interpolate(f[0], np.array(0.7)).shape == ()
+
+
+def test_end_nodes_off_by_round_off_are_the_ends():
+    """Another grid's end node that maps to |x| = 1 + O(eps) is interpolated as the end
+    (the nodal value, by the barycentric formula), not sent to Clenshaw as a point outside."""
+    from unittest import mock
+
+    from chuteflow import spectral
+
+    f = np.sin(np.arange(65.0))
+    x = np.array([-1.0 - 2e-16, 0.25, 1.0 + 2.2e-16])
+    with mock.patch.object(spectral, "barycentric", wraps=spectral.barycentric) as bary:
+        out = spectral._evaluate(f, 64, x)
+    assert bary.call_count == 1
+    assert out[0] == f[0] and out[-1] == f[-1]

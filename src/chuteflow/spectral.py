@@ -278,6 +278,9 @@ def barycentric(f: np.ndarray, n: int, x: np.ndarray) -> np.ndarray:
     return out.reshape(f.shape[:-1] + xs.shape)
 
 
+#: Round-off of a computational variable at the interval's ends, taken as the end itself.
+_ENDS = 1e-13
+
 #: Entries (points × nodes) of one block of :func:`barycentric`: its temporaries stay below
 #: glibc's mmap threshold (128 KiB), which would fault fresh pages in at every call.
 _BARY_BLOCK = 12288
@@ -295,10 +298,12 @@ def _lobatto_weights(n: int) -> np.ndarray:
 def _evaluate(f: np.ndarray, n: int, x: np.ndarray) -> np.ndarray:
     """Interpolant of nodal values ``f`` at computational points ``x`` (see
     :meth:`ChebyshevGrid.interpolate`)."""
-    if 0 < x.size <= 2 * (n + 1) and np.all(np.abs(x) <= 1.0):
+    if 0 < x.size <= 2 * (n + 1) and np.all(np.abs(x) <= 1.0 + _ENDS):
         # a few points (another grid's nodes, one height): barycentric, 3–10× faster; for
-        # many points (a fine sampling) Clenshaw's n passes over them cost as little
-        return barycentric(f, n, x)
+        # many points (a fine sampling) Clenshaw's n passes over them cost as little. An end
+        # node of another grid can map to |x| = 1 + 2e-16 (1 of 57 sinh maps tried): it is
+        # the end, not a point outside
+        return barycentric(f, n, np.clip(x, -1.0, 1.0))
     c = coefficients(f)
     if c.ndim > 1:
         c = np.moveaxis(c, -1, 0)
