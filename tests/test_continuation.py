@@ -96,6 +96,24 @@ def test_subdivide_succeeds_through_substeps():
     assert res.reached and res.state == 1.0
 
 
+def test_final_failure_stops_at_once():
+    """A failure marked final (the solver knows no shorter step passes it) ends the
+    continuation there, in both retry modes, where a plain failure would be retried."""
+    tried = []
+
+    def solve(state, s):
+        tried.append(s)
+        return Trial(s <= 0.5, s, final=s > 0.5)
+
+    res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=1.0, max_halvings=8), h=0.5)
+    assert tried == [0.5, 1.0]  # not halved to 0.75, 0.625, …
+    assert res.reason == "final" and not res.reached and res.s == 0.5 and res.state == 0.5
+    tried.clear()
+    res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(retry="subdivide", max_depth=3))
+    assert tried == [1.0]  # no finer subdivision is tried
+    assert res.reason == "final" and res.state == 0.0
+
+
 def test_march_stops_at_first_failure():
     out = march(lambda st, i: Trial(i < 3, st + i), 0, range(1, 6))
     assert out == [(1, 1), (2, 3)]

@@ -15,7 +15,8 @@ the caller's: a tangent predictor for the steady flows, a quadratic extrapolatio
   ``max_step``, and at most ``max_step_ratio`` times the distance from ``origin``; after a
   failure it is multiplied by ``shrink``. The continuation stops, unreached, when the step
   falls below ``min_step``, after more than ``max_halvings`` consecutive failures of one
-  step, or after ``max_attempts`` attempts in all.
+  step, after ``max_attempts`` attempts in all, or at a failure the solver marks
+  :attr:`Trial.final` (no shorter step can pass it).
 * ``retry="subdivide"``: the whole interval in one step; if it fails, again from the start
   in 2, then 4, … equal steps (at most ``2**max_depth``), each attempt of a depth stopping at
   its first failure.
@@ -121,11 +122,16 @@ class Trial:
     quality : float or None
         Optional measure of an accepted step for :attr:`StepRules.grow` (e.g. the miss of
         the predictor relative to the step).
+    final : bool
+        A failure that no shorter step can mend (the solver knows the solution cannot be
+        continued past the accepted state): the continuation stops at once, reason
+        ``"final"``, instead of shrinking the step.
     """
 
     ok: bool
     value: Any = None
     quality: float | None = None
+    final: bool = False
 
 
 @dataclass(frozen=True)
@@ -155,8 +161,8 @@ class Continuation:
     reached : bool
         Whether ``s`` is the target.
     reason : str
-        ``"reached"``, ``"min_step"``, ``"max_halvings"``, ``"max_attempts"`` or
-        ``"max_depth"`` (why it stopped).
+        ``"reached"``, ``"min_step"``, ``"max_halvings"``, ``"max_attempts"``,
+        ``"max_depth"`` or ``"final"`` (a :attr:`Trial.final` failure) (why it stopped).
     h : float
         Step to continue with (``"halve"``): pass it as ``h`` to the next call.
     steps : list of Step
@@ -249,6 +255,9 @@ def continue_to(
             steps.append(Step(s_new, h, bool(trial.ok), trial.value))
             if trial.ok:
                 break
+            if trial.final:
+                h_next = h
+                return stop("final")
             failures += 1
             if rules.max_halvings is not None and failures > rules.max_halvings:
                 h_next = h
@@ -271,6 +280,8 @@ def _subdivide(solve, state, s0, target, rules) -> Continuation:
             s_new = target if j == k else s0 + (target - s0) * (j / k)
             trial = solve(cur, s_new)
             steps.append(Step(s_new, s_new - s, bool(trial.ok), trial.value))
+            if not trial.ok and trial.final:
+                return Continuation(state, s0, s0 == target, "final", abs(target - s0), steps)
             if not trial.ok:
                 break
             cur, s = trial.value, s_new

@@ -315,6 +315,7 @@ def test_null_vectors_move_a_shift_that_is_an_exact_eigenvalue(monkeypatch, p1_f
         init(self, A, B, sigma, **kw)
 
     monkeypatch.setattr(shift_invert, "__init__", singular_at_zero)
+    op.memo.clear()  # null_vectors keeps its answer on the operator: solve again
     nv = null_vectors(op)
     assert shifts == [0, 1e-14 * (1 + 1j)]
     assert abs(nv.alpha0) < 1e-9

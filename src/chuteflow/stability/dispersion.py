@@ -128,6 +128,8 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
     """
     import scipy.linalg as sla
 
+    if "null_vectors" in op.memo:  # a deterministic function of the operator
+        return op.memo["null_vectors"]
     p = op.pencil(0.0)
     A, B = p.equilibrated()
     # nudged where α0 = 0 to the last bit (an exact zero pivot: a flow of the 60 × 60
@@ -144,7 +146,11 @@ def null_vectors(op: StabilityOperator) -> NullVectors:
     r = r / r[np.argmax(np.abs(r))]
     left = op.row_eq * ell  # ℓᴴ R A C = 0  ⇒  (R ℓ)ᴴ A = 0
     left = left / np.conj(np.vdot(left, op.B @ r))  # lᴴ B r = 1
-    return NullVectors(complex(a0), r, left)
+    nv = NullVectors(complex(a0), r, left)
+    for a in (nv.right, nv.left):
+        a.flags.writeable = False  # shared by every tracker on this operator
+    op.memo["null_vectors"] = nv
+    return nv
 
 
 def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) -> complex:
@@ -167,6 +173,79 @@ def first_order(op: StabilityOperator, nv: NullVectors, direction=(1.0, 0.0)) ->
     if "w" in r:
         flux = flux + kz * (w @ (nu0 * r["w"]))
     return complex(-1j * flux / (w @ r["nu"]))
+
+
+#: The tail test's crossing rule (:meth:`BranchTracker._step`): a step rejected by the tail
+#: alone, its eigenvalue on the prediction, from an accepted point whose tail is above
+#: ``CROSSING_NEAR`` × the threshold, with a tail below ``CROSSING_JUMP`` × that point's,
+#: is the branch's own eigenvector becoming unresolved (its tail rising through the
+#: threshold), not a neighbour of the continuum (tails ≳ 10× the branch's): no shorter step
+#: passes it, and the continuation stops there. Without the rule the steps crept up to the
+#: crossing, halving until they fell below :data:`TRACK_MIN_STEP`: θ = 14.75°, ν0(0) = 0.217,
+#: φ = 0.05 (growth metric, N = 48 … 160, tails 0.99e-5 … 1.2e-5 against 1e-5, and relaxed
+#: 1.0e-3 against 1e-3): 193 of its 271 continuation steps, all rejected or crept.
+CROSSING_NEAR = 0.5
+CROSSING_JUMP = 2.0
+#: The predictor's stall rule (:meth:`BranchTracker._step`): a step rejected because the
+#: eigenvalue misses the prediction, :data:`STALL_REJECTIONS` times in a row with the miss
+#: (relative to the step) falling by less than a factor ``STALL_FACTOR`` at each halving, is
+#: a predictor that does not converge as the step shrinks (for a smooth branch the miss falls
+#: as the step squared): the last accepted point is not on the branch's continuation, and no
+#: shorter step passes. θ = 17.19°, ν0(0) = 0.144, φ = 0.05, N = 60 … 160: misses 0.36 …
+#: 0.41 of the step at every step from 2.4e-9 down to 1.2e-9, 14 halvings per rung.
+STALL_REJECTIONS = 3
+STALL_FACTOR = 0.9
+
+#: Largest memory (bytes of eigenvectors) that the continuation steps memoised on one
+#: operator may hold (:class:`_Steps`); past it steps are solved without being kept.
+STEP_MEMO_BYTES = 16 * 2**20
+
+
+class _Steps:
+    """The eigen-solves tried from one point of a continuation from k = 0, by the s tried.
+
+    A continuation from k = 0 is a deterministic function of the operator, the direction,
+    and its targets: :func:`~chuteflow.continuation.continue_to` picks each step from the
+    steps before, and each solve (shift-invert from the predictor of the points accepted so
+    far, started from the last eigenvector) depends on nothing else. Two continuations of
+    the same branch therefore try the same steps until their targets or tail thresholds
+    make them decide differently — after the branch is lost, the relaxed fallbacks
+    (:func:`near_continuum_branch`, :func:`relaxed_branch_modes`) go from k = 0 again to
+    each k of a grid, and every rung of :func:`~chuteflow.longwave.theory.eigen_sign` that
+    loses it does so once strictly and twice relaxed. The solves are kept in a tree on the
+    operator (``operator.memo``): a node per accepted point, its children by the s tried
+    from it, each with the eigenpair found (None where none settled) and its child node.
+    Replaying a tried step returns the same numbers bit for bit; only the acceptance test,
+    which depends on the policy's tail threshold, is applied again. A tracker whose history
+    is not a continuation from k = 0 (after :meth:`BranchTracker._raise_n`) keeps a private
+    tree.
+    """
+
+    __slots__ = ("tried", "budget")
+
+    def __init__(self, budget: list[int]):
+        self.tried: dict[float, _Tried] = {}
+        self.budget = budget  # [bytes left], shared by the tree of one operator
+
+
+@dataclass(eq=False)
+class _Tried:
+    """One memoised solve of :class:`_Steps`: the eigenpair (None if none settled), its
+    eigenvector's tail by number of tail terms, and the node of the accepted point."""
+
+    alpha: complex | None
+    w: np.ndarray | None
+    tails: dict = field(default_factory=dict)
+    next: _Steps | None = None
+
+
+def _step_root(op: StabilityOperator, direction) -> _Steps:
+    """The root of the memoised steps from k = 0 along ``direction`` on ``op``."""
+    roots = op.memo.setdefault("branch_steps", {})
+    if direction not in roots:
+        budget = op.memo.setdefault("branch_steps_budget", [STEP_MEMO_BYTES])
+        roots[direction] = _Steps(budget)
+    return roots[direction]
 
 
 class BranchTracker:
@@ -238,6 +317,13 @@ class BranchTracker:
         self.history = [(0.0, complex(nv.alpha0), nv.right / op.col_eq)]
         self._h = math.inf
         self.n = n
+        # the memoised solves from the last accepted point (a continuation from k = 0)
+        self._node = _step_root(op, self.direction)
+        # tail of the last accepted point's eigenvector (the crossing rule; 0: unknown)
+        self._last_tail = tail(nv.right, len(op.fields), self.policy.tail_terms)
+        self._misses: list[float] = []  # predictor misses of the rejections since then
+        self._final: str | None = None  # why no shorter step can pass (a final failure)
+        self._final_at = 0.0  # and near which k
 
     def _pencil(self, s, n=None):
         kx, kz = self.direction
@@ -267,11 +353,26 @@ class BranchTracker:
         near-neutral continuum of the dilute top has Chebyshev tails ~1e-4)."""
         s_prev, a_prev, v_prev = self.history[-1]
         pred = self._predict(s)
-        pencil = self._pencil(s)
-        try:
-            alpha, w = nearest_eigenpair(pencil, pred, v0=v_prev, restarts=TRACK_RESTARTS)
-        except ConvergenceError:  # no eigenvalue settled near the prediction
+        node = self._node
+        tried = node.tried.get(s)
+        if tried is None:
+            try:
+                alpha, w = nearest_eigenpair(self._pencil(s), pred, v0=v_prev, restarts=TRACK_RESTARTS)
+            except ConvergenceError:  # no eigenvalue settled near the prediction
+                alpha, w = None, None
+            if w is not None:
+                w = np.ascontiguousarray(w)
+                w.flags.writeable = False  # shared by the trackers that replay this step
+            tried = _Tried(alpha, w)
+            size = 0 if w is None else w.nbytes
+            if node.budget[0] >= size:
+                node.budget[0] -= size
+                node.tried[s] = tried
+        self._tried = tried
+        if tried.alpha is None:
+            self._misses = []
             return None
+        alpha, w = tried.alpha, tried.w
         ratio = abs(alpha - pred) / max(abs(pred - a_prev), 1e-300)
         if len(self.history) == 1 and (
             s - s_prev <= FIRST_STEP_MIN or abs(pred - a_prev) < FIRST_PREDICTOR_MIN
@@ -282,9 +383,39 @@ class BranchTracker:
             # (FIRST_STEP_MIN: the next predictor's slope at k = 0 is α1)
             ratio = min(ratio, 0.25)
         if ratio > 0.25:
+            self._misses.append(ratio)
+            m = self._misses[-STALL_REJECTIONS:]
+            if len(m) == STALL_REJECTIONS and all(b > STALL_FACTOR * a for a, b in zip(m, m[1:])):
+                self._final_at = s_prev
+                self._final = (
+                    f"the eigenvalue misses the prediction by {ratio:.2g} of the step however short the step"
+                )
             return None
-        if tail(pencil.unscale(w), len(pencil.fields), self.policy.tail_terms) > self.policy.track_tail_tol:
+        terms = self.policy.tail_terms
+        if terms not in tried.tails:
+            op = self._operator(self.n)
+            tried.tails[terms] = tail(op.col_eq * w, len(op.fields), terms)
+        t, tol = tried.tails[terms], self.policy.track_tail_tol
+        if t > tol:
+            self._misses = []
+            t_a = self._last_tail
+            if t_a > tol and t < CROSSING_JUMP * t_a:
+                # (only from k = 0, whose null vector is accepted by construction)
+                self._final_at = s_prev
+                self._final = (
+                    f"its eigenvector is not resolved at k = {s_prev:.4g} (Chebyshev tail "
+                    f"{t_a:.1e} above the tracking threshold {tol:g})"
+                )
+            elif t_a > CROSSING_NEAR * tol and t < CROSSING_JUMP * t_a:
+                # the branch's own tail rises through the threshold between s_prev and s:
+                # log-linear estimate of the crossing (see CROSSING_NEAR)
+                self._final_at = s_prev + (s - s_prev) * math.log(tol / t_a) / math.log(t / t_a)
+                self._final = (
+                    f"its eigenvector's Chebyshev tail rises through the tracking threshold {tol:g} there"
+                )
             return None
+        self._last_tail = t
+        self._misses = []
         return alpha, w, ratio
 
     def _solve(self, state, s) -> Trial:
@@ -292,9 +423,13 @@ class BranchTracker:
         predictor's memory)."""
         res = self._step(s)
         if res is None:
-            return Trial(False)
+            return Trial(False, final=self._final is not None)
         alpha, w, ratio = res
         self.history.append((s, complex(alpha), w))
+        tried = self._tried
+        if tried.next is None:
+            tried.next = _Steps(self._node.budget)
+        self._node = tried.next
         return Trial(True, s, ratio)
 
     def advance(self, s_target: float, max_halvings: int = 16) -> tuple[complex, np.ndarray]:
@@ -316,6 +451,12 @@ class BranchTracker:
                 self._solve, s_last, s_last, s_target, _track_rules(max_halvings, s_target), h=h, origin=0.0
             )
             self._h = res.h
+            if res.reason == "final":
+                why, self._final, self._misses = self._final, None, []
+                raise ConvergenceError(
+                    f"lost the branch near k = {self._final_at:.4g} (theta = {self.flow.theta:g}, "
+                    f"nu0 = {self.flow.nu0:g}, N = {self.n}): {why}"
+                )
             if not res.reached:
                 raise ConvergenceError(
                     f"lost the branch near k = {res.steps[-1].s:.4g} (theta = "
@@ -354,6 +495,10 @@ class BranchTracker:
             pencil = self._pencil(s)
             alpha, v2 = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, n_old, n_new))
             self.history.append((s, complex(alpha), v2))
+        if old:  # no longer a continuation from k = 0 on this grid: steps not shared
+            self._node = _Steps([STEP_MEMO_BYTES])
+            # (the re-solved points' tails are not measured: the crossing rule waits for
+            # the next accepted point)
 
 
 def branch_mode(

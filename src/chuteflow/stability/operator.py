@@ -345,6 +345,10 @@ class StabilityOperator:
         #: (:func:`~chuteflow.stability.modes.spectrum`): on a ladder of resolutions the
         #: drift check at N' = 0.8 N is the rung below, whose eigenvalues are known
         self.qz_eigenvalues: dict[tuple[float, float], np.ndarray] = {}
+        #: results that solvers memoise on this operator (deterministic functions of it:
+        #: the k = 0 null vectors, the branch tracker's continuation steps from k = 0; see
+        #: :class:`~chuteflow.stability.BranchTracker`), dropped with the operator
+        self.memo: dict = {}
 
     def remember_eigenvalues(self, k: float, kz: float, w: np.ndarray) -> None:
         """Keep the finite eigenvalues ``w`` of the pencil at (k, kz) (the last 8 pairs)."""

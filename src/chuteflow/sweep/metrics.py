@@ -149,7 +149,13 @@ class GrowthMetric(PointFunction):
     followed, the maximum and k_c are those of the part reached, flagged
     ``growth_converged`` = 0 (version 6; version 5 dropped every value where the largest k
     was not reached, and version 6 also fixes the first step from k = 0, see
-    :data:`~chuteflow.stability.dispersion.FIRST_STEP_MIN`). Only where not even the first
+    :data:`~chuteflow.stability.dispersion.FIRST_STEP_MIN`; version 7: the tracker gives up
+    at once where no shorter step can pass — an eigenvector unresolved at k = 0, the
+    branch's own tail rising through the threshold, a predictor that misses by a fixed
+    fraction of any step, see :data:`~chuteflow.stability.dispersion.CROSSING_NEAR` and
+    :data:`~chuteflow.stability.dispersion.STALL_REJECTIONS` — so it no longer carries a
+    point accepted off the branch at N = 60 up the ladder: θ = 17.19°, ν0(0) = 0.144 was
+    lost at N = 160 and is now tracked, converged, at N = 118). Only where not even the first
     k is reached are the values missing (``dispersion_sampled`` = 1, the reason in the
     message).
     Evaluated at the sampled points (every ``stride``-th point in θ
@@ -158,7 +164,7 @@ class GrowthMetric(PointFunction):
     """
 
     name = "growth"
-    version = "6"
+    version = "7"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
     defaults = {
