@@ -310,20 +310,40 @@ class BranchTracker:
 
     def _start(self, n):
         op = self._operator(n)
-        nv = null_vectors(op)
-        self.nv = nv
-        self.alpha1 = first_order(op, nv, self.direction)
+        nv = self._null_vectors(n)
         # (s, α, eigenvector of the equilibrated pencil at N)
-        self.history = [(0.0, complex(nv.alpha0), nv.right / op.col_eq)]
-        self._h = math.inf
-        self.n = n
+        self._reset(n, [(0.0, complex(nv.alpha0), nv.right / op.col_eq)])
         # the memoised solves from the last accepted point (a continuation from k = 0)
         self._node = _step_root(op, self.direction)
-        # tail of the last accepted point's eigenvector (the crossing rule; 0: unknown)
+        # tail of the last accepted point's eigenvector (the crossing rule)
         self._last_tail = tail(nv.right, len(op.fields), self.policy.tail_terms)
+
+    def _reset(self, n, history):
+        self.history = history
+        self.n = n
+        self._h = math.inf
         self._misses: list[float] = []  # predictor misses of the rejections since then
         self._final: str | None = None  # why no shorter step can pass (a final failure)
         self._final_at = 0.0  # and near which k
+
+    def _null_vectors(self, n) -> NullVectors:
+        if getattr(self, "_nv_n", None) != n:
+            op = self._operator(n)
+            self._nv = null_vectors(op)
+            self._alpha1 = first_order(op, self._nv, self.direction)
+            self._nv_n = n
+        return self._nv
+
+    @property
+    def nv(self) -> NullVectors:
+        """The k = 0 null vectors at the current resolution N (:func:`null_vectors`)."""
+        return self._null_vectors(self.n)
+
+    @property
+    def alpha1(self) -> complex:
+        """α1 = dα/ds at s = 0 at the current resolution N (:func:`first_order`)."""
+        self._null_vectors(self.n)
+        return self._alpha1
 
     def _pencil(self, s, n=None):
         kx, kz = self.direction
@@ -488,17 +508,24 @@ class BranchTracker:
         predictor needs) are re-solved there; earlier points are dropped."""
         n_new = self.policy.next_n(self.n)
         old = self.history[1:][-2:]
-        n_old = self.n
-        nf = len(self._pencil(0.0).fields)
-        self._start(n_new)
+        if len(old) < 2:  # the predictor needs the k = 0 point's slope α1: start afresh
+            n_old, a0 = self.n, None
+            self._start(n_new)
+        else:
+            # the predictor is the quadratic through k = 0 and the two points: the null
+            # vectors at N_new are not needed (computed on demand: nv, alpha1), and the
+            # k = 0 point keeps α0 ≈ 0 of the coarser grid (round-off, ~1e-9)
+            n_old, a0 = self.n, self.history[0][1]
+            self._reset(n_new, [(0.0, a0, None)])
+        op = self._operator(n_new)
+        nf = len(op.fields)
         for s, a, v in old:
             pencil = self._pencil(s)
             alpha, v2 = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, n_old, n_new))
             self.history.append((s, complex(alpha), v2))
         if old:  # no longer a continuation from k = 0 on this grid: steps not shared
             self._node = _Steps([STEP_MEMO_BYTES])
-            # (the re-solved points' tails are not measured: the crossing rule waits for
-            # the next accepted point)
+            self._last_tail = tail(op.col_eq * self.history[-1][2], nf, self.policy.tail_terms)
 
 
 def branch_mode(
@@ -963,8 +990,8 @@ def dispersion(
 
 def _zero_mode(tr: BranchTracker) -> Mode:
     """The k = 0 point: the null vector, with its own drift and tail."""
-    a0 = tr.history[0][1]
-    v = tr.history[0][2]
+    a0 = tr.nv.alpha0
+    v = tr.nv.right / tr._operator(tr.n).col_eq
     pencil = tr._pencil(0.0)
     drift, n2 = drift_of(tr.flow, a0, v, tr.n, 0.0, 0.0, tr.three_d, cache=tr.cache)
     return make_mode(pencil, a0, v, drift, n2, tr.policy)

@@ -292,6 +292,12 @@ class Pencil:
         return (self.operator.col_eq * W.T).T
 
 
+def _nodal(c, m: int) -> np.ndarray:
+    """A coefficient as m nodal values (constants broadcast; arrays as they are, cheaply)."""
+    a = np.asarray(c, dtype=float)
+    return a if a.shape == (m,) else np.broadcast_to(a, (m,))
+
+
 class StabilityOperator:
     """The linear operator of one steady flow on one collocation grid, for any wavevector.
 
@@ -368,7 +374,7 @@ class StabilityOperator:
         base = base_on_grid(flow, g.y)
         part = flow.model.evaluate(base["nu"], base["T"])
         eqs = compiled_equations()
-        dmat = (np.eye(m), g.D, g.D2)
+        dmat = (None, g.D, g.D2)  # undifferentiated terms: diagonal (add)
         col = {f: slice(i * m, (i + 1) * m) for i, f in enumerate(self.fields)}
         pieces: dict[tuple[int, int], np.ndarray] = {(0, 0): np.zeros((M, M))}
         B = np.zeros((M, M))
@@ -401,30 +407,43 @@ class StabilityOperator:
             if name not in cache:
                 res, coefs = eqs[name].evaluate(base, part, sin, cos)
                 self.residuals[name] = np.broadcast_to(res, (m,)).copy()
-                cache[name] = [np.broadcast_to(np.asarray(c, dtype=float), (m,)) for c in coefs]
+                cache[name] = [_nodal(c, m) for c in coefs]
             return cache[name]
 
+        nodes_of = np.arange(m)
+        rows_of = np.arange(M)
+
         def add(name, nodes, scale, rows, keep_alpha):
+            diag = None  # (row, column) indices of an undifferentiated term's diagonal
             for t, cf in zip(eqs[name].terms, coefficients(name)):
                 if t.field not in col or (t.d and not self.three_d):
                     continue
-                blk = (cf[nodes] * scale)[:, None] * dmat[t.c][nodes]
+                if t.c == 0:
+                    # the identity's rows: only the diagonal (the same sums as the dense
+                    # block, whose other entries add zeros)
+                    if diag is None:
+                        diag = (rows_of[rows], nodes_of[nodes])
+                    blk = cf[nodes] * scale
+                    at = (diag[0], col[t.field].start + diag[1])
+                else:
+                    blk = (cf[nodes] * scale)[:, None] * dmat[t.c][nodes]
+                    at = (rows, col[t.field])
                 if t.a:
                     if (t.a, t.b, t.c, t.d, t.k) != (1, 0, 0, 0, 0):
                         raise NotImplementedError(f"α enters {name} as {t}: not a pencil")
                     if keep_alpha:
-                        B[rows, col[t.field]] -= blk
+                        B[at] -= blk
                     continue
                 if t.k:
                     if (t.k, t.b, t.d) != (1, 0, 0):
                         raise NotImplementedError(f"|k| enters {name} as {t}: not linear")
-                    K[rows, col[t.field]] += blk
+                    K[at] += blk
                     k_rows.update(range(M)[rows])
                     continue
                 key = (t.b, t.d)
                 if key not in pieces:
                     pieces[key] = np.zeros((M, M))
-                pieces[key][rows, col[t.field]] += blk
+                pieces[key][at] += blk
 
         inner = slice(1, m - 1)
         for i, f in enumerate(self.fields):
