@@ -148,3 +148,19 @@ def test_separatrix():
     sp = separatrix(xtol=0.05)
     assert 14.0 < sp["theta"] < 15.0
     assert abs(sp["h"] - 7.0) < 0.3 * 7.0
+
+
+def test_steady_row_is_steady_family_without_the_table():
+    """steady_row (the sweep's rows) makes the same solves as steady_family: the same
+    statuses, errors and flows bit for bit."""
+    from chuteflow.steady import steady_family, steady_row
+
+    nus = [0.01, 0.03, 0.05, 0.3, 0.55]
+    ds, flows = steady_family(16.0, nus, tangent=False, return_flows=True)
+    row = steady_row(16.0, nus)
+    assert [r[0] for r in row] == list(ds["status"].values)
+    assert [r[2] for r in row] == list(ds["error"].values)
+    for (_, f, _), g in zip(row, flows):
+        assert (f is None) == (g is None)
+        if f is not None:
+            assert np.array_equal(f.u, g.u) and np.array_equal(f.T, g.T) and f.y_max == g.y_max

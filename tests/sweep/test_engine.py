@@ -312,9 +312,10 @@ def test_tasks_cover_grid_once_and_hash_is_stable():
 
 
 def test_steady_family_statuses_map_to_point_status(monkeypatch):
-    """The steady flows of a task come from steady_family (continuation in ν0); its statuses
-    become the points' status, its messages their message: no_steady_flow and thin → no
-    steady flow, not_converged → not_converged, unreached → not_converged 'not attempted'."""
+    """The steady flows of a task come from steady_row (continuation in ν0, the solves of
+    steady_family); its statuses become the points' status, its messages their message:
+    no_steady_flow and thin → no steady flow, not_converged → not_converged, unreached →
+    not_converged 'not attempted'."""
     import types
 
     import chuteflow.sweep.runner as runner
@@ -325,23 +326,15 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
 
     def fake(theta, nu0_values, model, **kw):
         seen.update(kw, theta=theta, nus=list(nu0_values))
-        ds = xr.Dataset(
-            {
-                "status": ("nu0", np.array(fam_status)),
-                "error": ("nu0", np.array([f"why {s}" for s in fam_status])),
-            }
-        )
-        flows = [types.SimpleNamespace(h=1.5) if s == "ok" else None for s in fam_status]
-        return ds, flows
+        return [(s, types.SimpleNamespace(h=1.5) if s == "ok" else None, f"why {s}") for s in fam_status]
 
-    monkeypatch.setattr(runner, "steady_family", fake)
+    monkeypatch.setattr(runner, "steady_row", fake)
     cfg = SweepConfig(
         theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},), min_thickness=0.5, nu_top=1e-10
     )
     ds = run_sweep(cfg, workers=1)
     assert seen["nus"] == list(nus) and seen["theta"] == 16.0
     assert seen["min_thickness"] == 0.5 and seen["nu_top"] == 1e-10
-    assert seen["return_flows"] is True
     st, msg = ds["status"].values[0], ds["message"].values[0]
     assert list(st) == [
         STATUS["not_converged"],

@@ -2,7 +2,7 @@
 
 from .api import solve_steady, steady_tangent
 from .existence import ExistenceVerdict, steady_existence
-from .family import flux_minimum, steady_family
+from .family import flux_minimum, steady_family, steady_row
 from .maps import steady_map
 from .result import SteadyFlow
 
@@ -11,6 +11,7 @@ __all__ = [
     "solve_steady",
     "steady_tangent",
     "steady_family",
+    "steady_row",
     "steady_map",
     "flux_minimum",
     "steady_existence",

@@ -773,11 +773,8 @@ def steady_family(
     import xarray as xr
 
     model = model or ChuteModel()
-    theta = validate_point(theta, 0.5 * model.nu_max, model, 1e-9)[0]
-    nus = check_nu0(nu0_values, model)
     opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=tangent)
-    validate_point(theta, nus[0], model, nu_top)
-    pts = continue_row(theta, nus, model, opts)
+    theta, nus, pts = _row(theta, nu0_values, model, opts)
     arr = row_arrays(pts)
     ds = xr.Dataset(
         {k: ("nu0", v, variable_attrs(k)) for k, v in arr.items()},
@@ -787,6 +784,37 @@ def steady_family(
     if return_flows:
         return ds, [p.flow if p.status == "ok" else None for p in pts]
     return ds
+
+
+def _row(theta, nu0_values, model: ChuteModel, opts: Options):
+    theta = validate_point(theta, 0.5 * model.nu_max, model, 1e-9)[0]
+    nus = check_nu0(nu0_values, model)
+    validate_point(theta, nus[0], model, opts.nu_top)
+    return theta, nus, continue_row(theta, nus, model, opts)
+
+
+def steady_row(
+    theta: float,
+    nu0_values,
+    model: ChuteModel | None = None,
+    *,
+    nu_top: float = 1e-9,
+    n: int = 64,
+    rtol: float = 1e-8,
+    n_max: int = 384,
+    min_thickness: float = 1.0,
+) -> list[tuple[str, SteadyFlow | None, str]]:
+    """The solves of :func:`steady_family` without the Dataset: (status, flow, error) per
+    floor density, the flow None unless the status is ``"ok"``.
+
+    For callers that need the flows only (a sweep's rows: no table of derived scalars, and
+    no xarray in a worker process). Same arguments as :func:`steady_family` (without the
+    family tangent); the same solves, so the same flows bit for bit.
+    """
+    model = model or ChuteModel()
+    opts = Options(nu_top=nu_top, n=n, rtol=rtol, n_max=n_max, min_thickness=min_thickness, tangent=False)
+    pts = _row(theta, nu0_values, model, opts)[2]
+    return [(p.status, p.flow if p.status == "ok" else None, p.error) for p in pts]
 
 
 def variable_attrs(k):

@@ -10,8 +10,8 @@
   ``ds.chute.model``, the model a Dataset was computed with.
 """
 
+from .._imports import when_imported
 from . import metrics  # noqa: F401  (registers the built-in stability metrics)
-from .accessor import ChuteAccessor
 from .classify import classify
 from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid, resolve_model
 from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep, write_dataset
@@ -25,6 +25,24 @@ from .points import (
 )
 from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
+
+
+def _register_accessor() -> None:
+    from . import accessor  # noqa: F401  (registers ds.chute)
+
+
+# ``ds.chute`` is registered as soon as xarray is imported (now, if it already is), and not
+# earlier: xarray and pandas add ~44 MiB to every process, sweep workers included
+when_imported("xarray", _register_accessor)
+
+
+def __getattr__(name: str):
+    if name == "ChuteAccessor":
+        from .accessor import ChuteAccessor
+
+        return ChuteAccessor
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "SweepConfig",

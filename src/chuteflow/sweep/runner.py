@@ -20,7 +20,7 @@ from .._memory import release_free_memory
 from .._threads import limit_blas_threads
 from ..equations import compiled_equations
 from ..errors import ChuteflowError, ConvergenceError, NoSteadyFlowError
-from ..steady import solve_steady, steady_family
+from ..steady import solve_steady, steady_row
 from .points import Point
 
 if TYPE_CHECKING:
@@ -105,14 +105,14 @@ _FAMILY_STATUS = {
 
 
 def _steady_chunk(config, theta: float, nus, model):
-    """Steady flows along one chunk of a θ row: :func:`chuteflow.steady.steady_family`
+    """Steady flows along one chunk of a θ row: :func:`chuteflow.steady.steady_row`
     (continuation in ν0 along the exact family tangent, intermediate steps where a step fails,
     a few spread-out cold starts where there is nothing to continue from).
 
     Returns a list over the chunk of (flow or None, status name, message).
     """
 
-    fam, flows = steady_family(
+    row = steady_row(
         theta,
         list(nus),
         model,
@@ -120,13 +120,9 @@ def _steady_chunk(config, theta: float, nus, model):
         rtol=config.steady_rtol,
         n_max=config.n_max,
         min_thickness=config.min_thickness,
-        tangent=False,
-        return_flows=True,
     )
     out = []
-    for k, flow in enumerate(flows):
-        st = str(fam["status"].values[k])
-        msg = str(fam["error"].values[k]) if "error" in fam else ""
+    for st, flow, msg in row:
         if st == "unreached":
             msg = f"steady: not attempted: {msg}"
         elif st != "ok":
