@@ -1,7 +1,7 @@
 """Probe (issue 9, item 4): the work of the diagram's stability metrics, flow by flow.
 
     PYTHONPATH=src python benchmarks/probes/metric_work.py [growth|longwave] [STRIDE]
-        [--size=60] [--roughness=0.05] [--out=FILE.json] [--top=10]
+        [--size=60] [--roughness=0.05] [--out=FILE.json] [--top=10] [--lw-n=48 ...]
 
 On the SIZE × SIZE diagram grid of the given roughness (the configuration of
 ``bench_sweep.py``'s ``sweep_phi005_60x60`` row), at the points the growth metric samples
@@ -13,7 +13,8 @@ shifted pencils by size (:func:`chuteflow.stability.eigen.factor_shifted`), the 
 solves, and the flows that cost most. The counts do not depend on the machine's load (CPU
 times of two processes side by side differ by up to ±15 % on the 2-core development
 machine), so two versions are compared by their counts and by the values, which ``--out``
-writes (JSON, one record per flow) for a point-by-point comparison:
+writes (JSON, one record per flow) for a point-by-point comparison (``--lw-OPTION=VALUE``: an
+option of the long-wave metric, e.g. ``--lw-n=60``):
 ``PYTHONPATH=/other/checkout/src python benchmarks/probes/metric_work.py growth --out=b.json``.
 """
 
@@ -54,7 +55,8 @@ def main(argv: list[str]) -> None:
     from chuteflow.sweep.points import Point
 
     cfg = SweepConfig.grid(roughness, shape=(size, size), markers=())
-    lw, gm = LongWaveMetric(), GrowthMetric(stride=stride)
+    lw_opts = {k[3:]: float(v) if "." in v else int(v) for k, v in opts.items() if k.startswith("lw-")}
+    lw, gm = LongWaveMetric(**lw_opts), GrowthMetric(stride=stride)
     lus: collections.Counter = collections.Counter()
     qz: collections.Counter = collections.Counter()
     factor = eigen.factor_shifted
