@@ -4,8 +4,15 @@ against the paper's method (dense QZ per point and k), peak memory against grid 
 ``run(quick)`` returns rows with keys name, seconds, baseline_seconds, ratio, note (the
 interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_sweep.py [--quick]``.
 
+Every sweep runs in a fresh interpreter, as ``chuteflow diagram`` runs it (forked workers
+inherit the parent's pages: a parent that has imported xarray adds ~44 MiB to each).
+
 - ``sweep_phi005_<grid>``: the φ = 0.05 diagram (default metrics) with 2 worker processes;
-  baseline = the same sweep in one process; ratio = speed-up (2 is linear).
+  baseline = the 60 s target.
+- ``speedup_2_workers_<grid>``: a 16 × 16 grid of the same ranges in 2 worker processes
+  against one; ratio = speed-up (2 is linear).
+- ``metric_seconds_per_flow``: the workers' time per metric and per point with a flow, and
+  their peak RSS.
 - ``point_vs_dense_qz``: mean compute time per grid point with a steady flow (all metrics,
   from the workers' own timers) against the paper's method at the same points: dense QZ
   (``scipy.linalg.eig``, eigenvectors, N = 100, and again at N' = 110 for the drift test,
@@ -26,14 +33,45 @@ if __package__ in (None, ""):
 
 import numpy as np
 
+_FRESH = """
+import json, sys, time
+from chuteflow.sweep import Sweep, SweepConfig
+kw = json.loads(sys.argv[1])
+cfg = SweepConfig.grid(kw.pop("roughness"), **kw)
+sw = Sweep(cfg, None)
+t0 = time.perf_counter()
+ds = sw.run(workers=int(sys.argv[2]), progress=False)
+wall = time.perf_counter() - t0
+st = sw.stats
+print(json.dumps({
+    "wall": wall, "task_seconds": st.task_seconds, "max_rss_mib": st.max_rss_mib,
+    "metric_seconds": st.metric_seconds, "point_seconds": [float(x) for x in st.point_seconds],
+    "ok": int((ds["status"].values == 0).sum()), "size": cfg.size,
+}))
+"""
 
-def _sweep(cfg, workers, tmp=None):
-    from chuteflow.sweep import Sweep
 
-    sw = Sweep(cfg, None)
-    t0 = time.perf_counter()
-    ds = sw.run(workers=workers)
-    return ds, sw.stats, time.perf_counter() - t0
+def _sweep(workers: int, roughness: float = 0.05, **grid) -> dict:
+    """One sweep ``SweepConfig.grid(roughness, **grid)`` in a fresh interpreter, as
+    ``chuteflow diagram`` runs it: forked workers inherit the parent's pages, and a parent
+    that has imported xarray (this benchmark builds Datasets) gives every worker ~44 MiB
+    more. Returns the run's statistics (wall time of ``Sweep.run``, worker time and peak
+    RSS, metric and point times, points with a flow)."""
+    import json
+    import subprocess
+
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (src, env.get("PYTHONPATH", "")) if p)
+    kw = {"roughness": roughness, **{k: list(v) if isinstance(v, tuple) else v for k, v in grid.items()}}
+    done = subprocess.run(
+        [sys.executable, "-c", _FRESH, json.dumps(kw), str(workers)],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def _dense_qz_seconds(flows, nks, n=100, n_check=110):
@@ -60,27 +98,24 @@ def run(quick: bool = False) -> list[dict]:
 
     limit_blas_threads(1)
     rows = []
-    # peak memory of the workers against the grid size (same region, 4x the points), first:
-    # forked workers count the parent's pages, which the big sweep below would inflate. The
-    # peak is set by the largest dense problem (N ≤ 160 for the default metrics since the
-    # sinh-mapped grid; it was the long-wave operators at N up to 480 before).
+    # peak memory of the workers against the grid size (same region, 4x the points); every
+    # sweep runs in a fresh interpreter (_sweep), as chuteflow diagram does. The peak is set
+    # by the largest dense problem (N ≤ 160 for the default metrics since the sinh-mapped
+    # grid; it was the long-wave operators at N up to 480 before).
     region = dict(theta_range=(15.0, 16.5), nu0_range=(0.04, 0.12), markers=())
-    small = SweepConfig.grid(0.05, shape=(8, 8), **region)
-    large = SweepConfig.grid(0.05, shape=(16, 16), **region)
-    _, sts, _ = _sweep(small, 2)
-    _, stl, _ = _sweep(large, 2)
+    sts = _sweep(2, shape=(8, 8), **region)
+    stl = _sweep(2, shape=(16, 16), **region)
     memory_row = {
         "name": "peak_memory_grid",
-        "seconds": stl.max_rss_mib,
-        "baseline_seconds": sts.max_rss_mib,
-        "ratio": stl.max_rss_mib / sts.max_rss_mib,
+        "seconds": stl["max_rss_mib"],
+        "baseline_seconds": sts["max_rss_mib"],
+        "ratio": stl["max_rss_mib"] / sts["max_rss_mib"],
         "note": "'seconds' columns hold MiB: worker peak RSS for 16x16 vs 8x8 grid",
     }
     # the diagram at full size with 2 workers, against the 60 s target
     shape = (20, 20) if quick else (60, 60)
-    cfg = SweepConfig.grid(0.05, shape=shape, markers=())
-    ds2, st2, t2 = _sweep(cfg, 2)
-    ok = int((ds2["status"].values == 0).sum())
+    st2 = _sweep(2, shape=shape, markers=())
+    t2, ok = st2["wall"], st2["ok"]
     rows.append(
         {
             "name": f"sweep_phi005_{shape[0]}x{shape[1]}",
@@ -88,16 +123,16 @@ def run(quick: bool = False) -> list[dict]:
             "baseline_seconds": 60.0,
             "ratio": 60.0 / t2,
             "note": f"2 workers; baseline = the 60 s target (ratio > 1 meets it); {ok} of "
-            f"{cfg.size} points with a steady flow",
+            f"{st2['size']} points with a steady flow",
         }
     )
     # speed-up 1 → 2 workers on a smaller grid of the same ranges
-    sub = SweepConfig.grid(0.05, shape=(8, 8) if quick else (16, 16), markers=())
-    _, _, t1 = _sweep(sub, 1)
-    _, _, t2s = _sweep(sub, 2)
+    sub = (8, 8) if quick else (16, 16)
+    t1 = _sweep(1, shape=sub, markers=())["wall"]
+    t2s = _sweep(2, shape=sub, markers=())["wall"]
     rows.append(
         {
-            "name": f"speedup_2_workers_{sub.shape[0]}x{sub.shape[1]}",
+            "name": f"speedup_2_workers_{sub[0]}x{sub[1]}",
             "seconds": t2s,
             "baseline_seconds": t1,
             "ratio": t1 / t2s,
@@ -105,21 +140,22 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     # where the time goes: the workers' timers per metric, per point with a flow
-    ms = st2.metric_seconds
+    ms = st2["metric_seconds"]
     rows.append(
         {
             "name": "metric_seconds_per_flow",
             "seconds": sum(ms.values()) / max(ok, 1),
-            "baseline_seconds": float(st2.task_seconds) / max(ok, 1),
-            "ratio": sum(ms.values()) / max(float(st2.task_seconds), 1e-9),
+            "baseline_seconds": float(st2["task_seconds"]) / max(ok, 1),
+            "ratio": sum(ms.values()) / max(float(st2["task_seconds"]), 1e-9),
             "note": "per point with a flow: "
             + ", ".join(f"{k} {v / max(ok, 1) * 1e3:.0f} ms" for k, v in ms.items())
-            + f"; worker peak RSS {st2.max_rss_mib:.0f} MiB",
+            + f"; worker peak RSS {st2['max_rss_mib']:.0f} MiB",
         }
     )
     # cost per point of the full diagram: the workers' own timers, per point with a flow
-    pts = np.array(st2.point_seconds)
-    per_point = float(st2.task_seconds) / max(ok, 1)
+    pts = np.array(st2["point_seconds"])
+    per_point = float(st2["task_seconds"]) / max(ok, 1)
+    cfg = SweepConfig.grid(0.05, shape=shape, markers=())
     growth = [f for f in cfg.point_functions() if f.name == "growth"]
     nks = int(growth[0].options["num"]) if growth else 24
     sample = [(16.0, 0.05), (14.0, 0.05), (17.0, 0.10)]
