@@ -1327,9 +1327,9 @@ def least_stable(
                 mode.method.startswith("qz")
                 and mode.continuum_re > mode.alpha.real  # False when NaN
                 and math.hypot(k, kz) > policy.relaxed_k_max
-                and nn < _top_check_n(ns)
+                and nn < (n_top := _top_check_n(ns))
             ):
-                mode = _check_above_continuum(flow, k, kz, _top_check_n(ns), mode, policy, cache, lost or "")
+                mode = _check_above_continuum(flow, k, kz, n_top, mode, policy, cache, lost or "")
             return mode
         if mode is not None and _better(mode, best, policy):
             best = mode

@@ -292,6 +292,13 @@ class Pencil:
         return (self.operator.col_eq * W.T).T
 
 
+def _scaled(P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """P * r * c (row and column scales) with one temporary instead of two."""
+    out = np.multiply(P, r)
+    out *= c
+    return out
+
+
 def _nodal(c, m: int) -> np.ndarray:
     """A coefficient as m nodal values (constants broadcast; arrays as they are, cheaply)."""
     a = np.asarray(c, dtype=float)
@@ -468,8 +475,8 @@ class StabilityOperator:
         self.col_eq = np.ones(M)
         self.col_eq[:m] = base["nu"]
         r, c = self.row_eq[:, None], self.col_eq[None, :]
-        self._pieces_eq = {key: P * r * c for key, P in pieces.items()}
-        self.B_eq = B * r * c
+        self._pieces_eq = {key: _scaled(P, r, c) for key, P in pieces.items()}
+        self.B_eq = _scaled(B, r, c)
         # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
         tops = np.array(sorted(k_rows), dtype=int)
         ti, kc = np.nonzero(K[tops])
