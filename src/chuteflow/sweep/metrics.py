@@ -46,9 +46,9 @@ class LongWaveMetric(PointFunction):
     (default 0.05: the sign has a margin of 20) or N = ``n_max``. N starts at 60 (version 6;
     48 before): on the 60 × 60 φ = 0.05 diagram 76 % of the flows need N ≥ 60, and for them
     the rung N = 38 was computed for nothing (their values are the same); the 24 % that
-    passed at N = 48 now report the value at N = 60 (relative change ≤ 7.3 %, no sign
-    changed: 663 flows, ``benchmarks/probes/metric_work.py longwave 2 --lw-n=60``), and the
-    metric costs 11 % less. The strict Taylor α2
+    passed at N = 48 now report the value at N = 60 (relative change ≤ 9 %, no sign changed
+    at any of the 2645 flows; ``benchmarks/probes/metric_work.py longwave 2 --lw-n=60``), and
+    the metric costs 11 % less. The strict Taylor α2
     (which feels the dilute top's continuum and converges only algebraically, docs/errata.md)
     is reported as ``alpha2_taylor_re`` at the same N, not used. α1 = −i dQ0/dρ̄0 (eq. (B 2))
     comes from the exact steady tangent (as accurate as the steady flow, ~1e-9), not from
