@@ -508,15 +508,14 @@ class BranchTracker:
         predictor needs) are re-solved there; earlier points are dropped."""
         n_new = self.policy.next_n(self.n)
         old = self.history[1:][-2:]
+        n_old = self.n
         if len(old) < 2:  # the predictor needs the k = 0 point's slope α1: start afresh
-            n_old, a0 = self.n, None
             self._start(n_new)
         else:
             # the predictor is the quadratic through k = 0 and the two points: the null
             # vectors at N_new are not needed (computed on demand: nv, alpha1), and the
             # k = 0 point keeps α0 ≈ 0 of the coarser grid (round-off, ~1e-9)
-            n_old, a0 = self.n, self.history[0][1]
-            self._reset(n_new, [(0.0, a0, None)])
+            self._reset(n_new, [(0.0, self.history[0][1], None)])
         op = self._operator(n_new)
         nf = len(op.fields)
         for s, a, v in old:
