@@ -253,6 +253,20 @@ def test_k_expansion_pieces_rebuild_the_operator(p1_flow):
     assert np.allclose(B[1 : m - 1], 1.0)  # mass rows: ∂_t ν̂ with coefficient 1
 
 
+def test_series_products_are_the_series_times_a_vector(p1_flow):
+    """series_products (the long-wave theory's P1 x, P2 x from the real pieces and K's
+    entries) equals i A1 x and −A2 x of series() to round-off, for real and complex x."""
+    op = StabilityOperator(p1_flow, 40, mapped=True)
+    A0, A1, A2 = op.series()
+    B0, p1, p2 = op.series_products()
+    assert np.array_equal(A0, B0)
+    rng = np.random.default_rng(7)
+    for x in (rng.standard_normal(op.size), rng.standard_normal(op.size) + 1j * rng.standard_normal(op.size)):
+        for P, p in ((1j * A1, p1), (-A2, p2)):
+            ref = P @ x
+            assert np.abs(p(x) - ref).max() <= 1e-14 * np.abs(P).sum(axis=1).max() * np.abs(x).max()
+
+
 def test_three_dimensional_operator_reduces_at_kz_zero(p1_flow):
     """With ŵ and z-momentum added, kz = 0 leaves the 2D eigenvalue unchanged (same mapped
     grid as the solvers' 2D operators); an oblique

@@ -383,14 +383,16 @@ def fixed_height_tangent(flow, tangent: dict, y: np.ndarray) -> dict[str, np.nda
 
 def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:
     """(α1, α2) of one discretised operator by bordered perturbation theory."""
-    A0, A1, A2 = op.series()
-    return bordered_coefficients(op, tangent, A0, 1j * A1, -A2)
+    return bordered_coefficients(op, tangent, *op.series_products())
 
 
 def bordered_coefficients(
-    op: StabilityOperator, tangent: dict, A0: np.ndarray, P1: np.ndarray, P2: np.ndarray
+    op: StabilityOperator, tangent: dict, A0: np.ndarray, P1, P2
 ) -> tuple[complex, complex]:
     """(α1, α2) of A(s) = A0 + s P1 + s² P2 + … (A(s)V = αBV, α = α1 s + α2 s² + …).
+
+    P1 and P2 are matrices or functions x ↦ P x
+    (:meth:`~chuteflow.stability.operator.StabilityOperator.series_products`).
 
     Bordered perturbation theory at s = 0: the null vector V0 = ∂X0/∂β normalised by
     ∫ ν̂ dy = 1, one LU of the bordered (equilibrated) matrix [A0, −BV0; c, 0] and two
@@ -425,8 +427,11 @@ def _bordered(op, tangent, A0, P1, P2):
         x *= cs
         return x[:M], x[M]
 
-    V1, a1 = solve(-(P1 @ V0))
-    _, a2 = solve(a1 * (B @ V1) - P1 @ V1 - P2 @ V0)
+    def times(P, x):  # P a matrix or a function x ↦ P x (StabilityOperator.series_products)
+        return P(x) if callable(P) else P @ x
+
+    V1, a1 = solve(-times(P1, V0))
+    _, a2 = solve(a1 * (B @ V1) - times(P1, V1) - times(P2, V0))
     return complex(a1), complex(a2), V0, V1
 
 
@@ -482,8 +487,7 @@ def branch_point(
     ``v0`` (the branch at k on another grid, ``v0`` on this one), the shift is ``guess``
     and the answer must lie within 5 % of it.
     """
-    A0, A1, A2 = op.series()
-    a1, a2, V0, V1 = _bordered(op, tangent, A0, 1j * A1, -A2)
+    a1, a2, V0, V1 = _bordered(op, tangent, *op.series_products())
     pencil = op.pencil(k)
     if guess is None:
         pred, start = a1 * k, (V0 + k * V1) / op.col_eq

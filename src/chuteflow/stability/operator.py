@@ -544,6 +544,36 @@ class StabilityOperator:
         A2 = self.pieces.get((2, 0), z).astype(complex)
         return A0, A1, A2
 
+    def series_products(self):
+        """(A0, P1, P2) of the expansion A(s) = A0 + s P1 + s² P2 along k_x = s, without
+        dense complex copies: A0 the real k = 0 matrix itself (read it, do not modify it),
+        P1 = i A1 and P2 = −A2 of :meth:`series` as functions x ↦ P x. P1 = i R1 + K with
+        R1 the real coefficient of (ik) and K the |k| entries, P2 = −R2 with R2 that of
+        (ik)²: real matrix products and the few entries of K (the perturbation theory of
+        :mod:`chuteflow.longwave.theory` needs three products per grid, and :meth:`series`
+        costs four complex copies of the matrix)."""
+        M = self.size
+        R1, R2 = self.pieces.get((1, 0)), self.pieces.get((2, 0))
+        rows, cols, vals = self._K_sparse
+
+        def real_times(R, x):
+            x = np.asarray(x)
+            if R is None:
+                return np.zeros(M, dtype=complex)
+            if np.iscomplexobj(x):
+                return (R @ x.real) + 1j * (R @ x.imag)
+            return (R @ x).astype(complex)
+
+        def p1(x):
+            y = 1j * real_times(R1, x)
+            np.add.at(y, rows, vals * np.asarray(x)[cols])
+            return y
+
+        def p2(x):
+            return -real_times(R2, x)
+
+        return self.pieces[(0, 0)], p1, p2
+
 
 def validate_n(n) -> int:
     """``n`` as an int, or a :class:`~chuteflow.errors.ParameterError` if outside ``N_RANGE``."""
