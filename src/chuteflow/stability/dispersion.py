@@ -217,8 +217,8 @@ class _Steps:
     from it, each with the eigenpair found (None where none settled) and its child node.
     Replaying a tried step returns the same numbers bit for bit; only the acceptance test,
     which depends on the policy's tail threshold, is applied again. A tracker whose history
-    is not a continuation from k = 0 (after :meth:`BranchTracker._raise_n`) keeps a private
-    tree.
+    is not a continuation from k = 0 (after :meth:`BranchTracker._raise_n`) memoises nothing:
+    no other tracker can reach its steps.
     """
 
     __slots__ = ("tried", "budget")
@@ -293,6 +293,7 @@ class BranchTracker:
         self.flow = flow
         self.n = validate_n(self.policy.n_start if n is None else n)
         self.n_max = self.policy.n_max
+        self._nv_n: int | None = None  # the resolution of _nv, _alpha1
         self._start(self.n)
 
     @property
@@ -314,7 +315,7 @@ class BranchTracker:
         # (s, α, eigenvector of the equilibrated pencil at N)
         self._reset(n, [(0.0, complex(nv.alpha0), nv.right / op.col_eq)])
         # the memoised solves from the last accepted point (a continuation from k = 0)
-        self._node = _step_root(op, self.direction)
+        self._node: _Steps | None = _step_root(op, self.direction)
         # tail of the last accepted point's eigenvector (the crossing rule)
         self._last_tail = tail(nv.right, len(op.fields), self.policy.tail_terms)
 
@@ -327,7 +328,7 @@ class BranchTracker:
         self._final_at = 0.0  # and near which k
 
     def _null_vectors(self, n) -> NullVectors:
-        if getattr(self, "_nv_n", None) != n:
+        if self._nv_n != n:
             op = self._operator(n)
             self._nv = null_vectors(op)
             self._alpha1 = first_order(op, self._nv, self.direction)
@@ -373,8 +374,8 @@ class BranchTracker:
         near-neutral continuum of the dilute top has Chebyshev tails ~1e-4)."""
         s_prev, a_prev, v_prev = self.history[-1]
         pred = self._predict(s)
-        node = self._node
-        tried = node.tried.get(s)
+        node = self._node  # None: not a continuation from k = 0, nothing to share
+        tried = None if node is None else node.tried.get(s)
         if tried is None:
             try:
                 alpha, w = nearest_eigenpair(self._pencil(s), pred, v0=v_prev, restarts=TRACK_RESTARTS)
@@ -385,7 +386,7 @@ class BranchTracker:
                 w.flags.writeable = False  # shared by the trackers that replay this step
             tried = _Tried(alpha, w)
             size = 0 if w is None else w.nbytes
-            if node.budget[0] >= size:
+            if node is not None and node.budget[0] >= size:
                 node.budget[0] -= size
                 node.tried[s] = tried
         self._tried = tried
@@ -446,10 +447,11 @@ class BranchTracker:
             return Trial(False, final=self._final is not None)
         alpha, w, ratio = res
         self.history.append((s, complex(alpha), w))
-        tried = self._tried
-        if tried.next is None:
-            tried.next = _Steps(self._node.budget)
-        self._node = tried.next
+        tried, node = self._tried, self._node
+        if node is not None:
+            if tried.next is None:
+                tried.next = _Steps(node.budget)
+            self._node = tried.next
         return Trial(True, s, ratio)
 
     def advance(self, s_target: float, max_halvings: int = 16) -> tuple[complex, np.ndarray]:
@@ -522,8 +524,8 @@ class BranchTracker:
             pencil = self._pencil(s)
             alpha, v2 = nearest_eigenpair(pencil, a, v0=interp_vector(v, nf, n_old, n_new))
             self.history.append((s, complex(alpha), v2))
-        if old:  # no longer a continuation from k = 0 on this grid: steps not shared
-            self._node = _Steps([STEP_MEMO_BYTES])
+        if old:  # no longer a continuation from k = 0 on this grid: steps not memoised
+            self._node = None
             self._last_tail = tail(op.col_eq * self.history[-1][2], nf, self.policy.tail_terms)
 
 
