@@ -9,13 +9,17 @@ the range in four (down to the first row, up to the middle between the two, down
 up to the last). The chains are independent: with ``workers=2`` they run in two processes
 (one BLAS thread each); four chains share the two more evenly than two, because rows cost
 very different amounts (near the upper existence boundary a row of the paper's φ = 0.05
-map costs 10× one near the lower). A second pass then continues each row from its other
-neighbour as well.
+map costs 10× one near the lower). The two start rows of a large map are searched for
+independently (each search sees the shooting scan's proofs of its own rows only), so
+the processes solve them at once too, while the calling process imports xarray for the
+result. A second pass then continues each row from its other neighbour as well.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 from typing import Any
 
 import numpy as np
@@ -72,20 +76,50 @@ def _first_good(ths, nus, model, opts, fracs, proofs, cold):
     return best[0], best[1]
 
 
-def _start_rows(ths, nus, model, opts, start_theta, proofs):
+def _first_good_alone(args):
+    """:func:`_first_good` on its own: (index, good, cold rows, proofs); the proofs are
+    those of its own rows only."""
+    ths, nus, model, opts, fracs = args
+    proofs: list = []
+    cold: dict = {}
+    k, good = _first_good(ths, nus, model, opts, fracs, proofs, cold)
+    return k, good, cold, proofs
+
+
+def _first_good_worker(args):
+    limit_blas_threads(1)
+    return _first_good_alone(args)
+
+
+def _start_rows(ths, nus, model, opts, start_theta, proofs, pool=None):
     """Rows where the chains start, solved on their own: {index: row}.
 
     ``start_theta``: that row alone. Maps of fewer than :data:`TWO_STARTS` rows: one row,
     the first good of the middle, 65 %, 35 %, 80 % and 20 % of the range (or the best of
     them). Larger maps: the first good of 25 %, 35 %, 15 % and of 75 %, 65 %, 85 % — two
-    rows when both are good, otherwise the single start as for a small map."""
+    rows when both are good, otherwise the single start as for a small map. The two
+    searches of a large map are independent (each sees only its own rows' proofs), so that
+    ``pool`` (a process pool, or None: in line) runs them at once with the same results.
+    ``proofs`` receives the proofs of every row solved here."""
     cold: dict = {}
     if start_theta is not None:
         k = int(np.argmin(np.abs(ths - start_theta)))
         return {k: continue_row(ths[k], nus, model, opts, proofs=proofs)}
     if len(ths) >= TWO_STARTS:
-        k1, good1 = _first_good(ths, nus, model, opts, (0.25, 0.35, 0.15), proofs, cold)
-        k2, good2 = _first_good(ths, nus, model, opts, (0.75, 0.65, 0.85), proofs, cold)
+        tasks = [(ths, nus, model, opts, fracs) for fracs in ((0.25, 0.35, 0.15), (0.75, 0.65, 0.85))]
+        if pool is not None:
+            futures = [pool.submit(_first_good_worker, t) for t in tasks]
+            if "xarray" not in sys.modules:
+                # the map's Dataset needs xarray (~0.4 s to import): now, while the pool's
+                # processes (already forked without it) solve the start rows
+                import xarray  # noqa: F401
+            found = [f.result() for f in futures]
+        else:
+            found = [_first_good_alone(t) for t in tasks]
+        (k1, good1, cold1, p1), (k2, good2, cold2, p2) = found
+        cold.update(cold1)
+        cold.update(cold2)
+        proofs += p1 + [q for q in p2 if q not in p1]
         if good1 and good2 and k1 < k2:
             return {k1: cold[k1], k2: cold[k2]}
     k, _ = _first_good(ths, nus, model, opts, (0.5, 0.65, 0.35, 0.8, 0.2), proofs, cold)
@@ -165,9 +199,9 @@ def steady_map(
     tangent : bool
         Also compute dQ0/dρ̄0 etc. from the exact family tangent (about 2 ms per point).
     workers : int or None
-        1: one process. 2 or more: the chains of rows (θ upwards and downwards from each
-        start row; two or four chains) in that many processes, the same numbers. None: 2 if
-        the machine has at least two cores.
+        1: one process. 2 or more: the start rows and then the chains of rows (θ upwards
+        and downwards from each start row; two or four chains) in that many processes, the
+        same numbers. None: 2 if the machine has at least two cores.
     return_flows : bool
         Also return the converged flows (thin ones included) as a nested list [θ][ν0],
         None where there is none.
@@ -188,8 +222,6 @@ def steady_map(
         Dims (theta, nu0): the variables of :func:`~chuteflow.steady.steady_family`
         (NaN and a status string where there is no physical steady flow).
     """
-    import xarray as xr
-
     model = model or ChuteModel()
     ths = np.atleast_1d(np.asarray(theta_values, dtype=float))
     if ths.ndim != 1 or len(ths) == 0 or (len(ths) > 1 and not np.all(np.diff(ths) > 0)):
@@ -215,24 +247,34 @@ def steady_map(
         decide=decide,
     )
     proofs: list = []
-    starts = _start_rows(ths, nus, model, opts, start_theta, proofs)
-    chains = _chains(len(ths), sorted(starts))
-    tasks = [([ths[i] for i in rows], nus, model, opts, starts[k], list(proofs)) for k, rows in chains]
     if workers is None:
         workers = 2 if (os.cpu_count() or 1) >= 2 else 1
-    if workers >= 2 and len(chains) >= 2:
-        import multiprocessing as mp
-        from concurrent.futures import ProcessPoolExecutor
+    with contextlib.ExitStack() as stack:
+        pool = None
+        if workers >= 2 and len(ths) >= 2:
+            import multiprocessing as mp
+            from concurrent.futures import ProcessPoolExecutor
 
-        ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-        # the sympy-compiled closures and equations are already built (start rows):
-        # forked children inherit them. The chains go out from the top of the range first.
-        with ProcessPoolExecutor(max_workers=min(workers, len(chains)), mp_context=ctx) as pool:
+            from ..equations import compiled_equations
+
+            # forked processes inherit the sympy-compiled closures and equations (built
+            # here once; a process forks at the first task submitted to it)
+            compiled_equations()
+            model.evaluate(np.array([0.1]), np.array([1.0]), compiled=True)
+            ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
+            pool = stack.enter_context(ProcessPoolExecutor(max_workers=workers, mp_context=ctx))
+        starts = _start_rows(ths, nus, model, opts, start_theta, proofs, pool=pool)
+        chains = _chains(len(ths), sorted(starts))
+        tasks = [([ths[i] for i in rows], nus, model, opts, starts[k], list(proofs)) for k, rows in chains]
+        if pool is not None and len(chains) >= 2:
+            # the chains go out from the top of the range first
             futures = [pool.submit(_sweep_worker, t) for t in reversed(tasks)]
+            if "xarray" not in sys.modules:
+                import xarray  # noqa: F401  (for the Dataset below, while the chains run)
             done = [f.result() for f in futures][::-1]
-    else:
-        # the same work as with several processes (identical statuses and numbers)
-        done = [(_sweep(*t), t[-1]) for t in tasks]
+        else:
+            # the same work as with several processes (identical statuses and numbers)
+            done = [(_sweep(*t), t[-1]) for t in tasks]
     rows: list = [None] * len(ths)
     for k, row in starts.items():
         rows[k] = row
@@ -243,6 +285,8 @@ def steady_map(
     for _rows, chain_proofs in reversed(done[:-1]):
         merged += [q for q in chain_proofs if q not in merged]
     rows = _sweep_back(ths, nus, model, opts, rows, chains, merged)
+    import xarray as xr
+
     arrays = [row_arrays(r) for r in rows]
     data = {}
     for key in arrays[0]:
