@@ -204,21 +204,6 @@ def _steady_terms(ce) -> tuple[tuple[int, str, int, int], ...]:
     )
 
 
-def _solve_in_place(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """A⁻¹ B by LAPACK's dgesv, overwriting A (its LU) and B (the solution): the routine
-    :func:`numpy.linalg.solve` calls, without copying column-major arguments (A and B are
-    Fortran-ordered). Raises :class:`numpy.linalg.LinAlgError` for a singular A, as numpy
-    does."""
-    from scipy.linalg.lapack import dgesv  # scipy.linalg is loaded by then (start-up: not here)
-
-    _lu, _piv, x, info = dgesv(A, B, overwrite_a=1, overwrite_b=1)
-    if info > 0:
-        raise np.linalg.LinAlgError("Singular matrix")
-    if info < 0:
-        raise ValueError(f"dgesv: illegal value in argument {-info}")
-    return x
-
-
 class SteadyNewton:
     """Residual and exact Jacobian of the steady free-boundary problem on n + 1 nodes."""
 
@@ -427,9 +412,10 @@ class SteadyNewton:
         if not (np.all(np.isfinite(a)) and np.all(a != 0)):
             Y = np.linalg.solve(JT, B)
         else:
-            # S and the right-hand side in LAPACK's (column-major) order, factorised in
-            # place (dgesv, as numpy.linalg.solve calls it, without its copies)
-            S = np.empty((r, r), order="F")
+            # (scipy's dgesv on column-major S in place would save numpy.linalg.solve's
+            # copies, ~10 % of the LU, but the steady command must not import scipy:
+            # tests/test_codegen.py::test_warm_steady_skips_typer_and_scipy)
+            S = np.empty((r, r))
             S[: m + 1, : m + 1], S[: m + 1, m + 1 :] = JT[: m + 1, : m + 1], JT[: m + 1, 2 * m :]
             S[m + 1 :, : m + 1], S[m + 1 :, m + 1 :] = JT[2 * m :, : m + 1], JT[2 * m :, 2 * m :]
             Z = np.empty((n, r))  # w = b_w/a − Z y
@@ -437,7 +423,7 @@ class SteadyNewton:
             np.divide(JT[w, : m + 1], ai, out=Z[:, : m + 1])
             np.divide(JT[w, 2 * m :], ai, out=Z[:, m + 1 :])
             bw = B[w] / ai
-            rhs = np.empty((r, B.shape[1]), order="F")
+            rhs = np.empty((r, B.shape[1]))
             rhs[: m + 1], rhs[m + 1 :] = B[: m + 1], B[2 * m :]
 
             def rest(i):  # row i of J as a row of S (rows m+1 … 2m−1 are eliminated)
@@ -454,7 +440,7 @@ class SteadyNewton:
             for i in full:
                 S[rest(i)] -= JT[i, w] @ Z
                 rhs[rest(i)] -= JT[i, w] @ bw
-            y = _solve_in_place(S, rhs)
+            y = np.linalg.solve(S, rhs)
             Y = np.empty_like(B)
             Y[: m + 1], Y[2 * m :] = y[: m + 1], y[m + 1 :]
             Y[w] = bw - Z @ y
