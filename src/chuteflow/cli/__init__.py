@@ -58,6 +58,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if code is not None:
         return code
     cli = _application()
+    # the command line's own process (sweeps in one process, reproduce, …): see
+    # chuteflow._memory.keep_freed_memory (the fast path above allocates too little to care)
+    from .._memory import keep_freed_memory
+
+    keep_freed_memory()
     try:
         cli.app(args=args, prog_name="chuteflow")
     except SystemExit as exc:

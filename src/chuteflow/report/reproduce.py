@@ -146,11 +146,13 @@ def _run_detached_stages(names: list[str], out: Path, quick: bool) -> list[Secti
     own; their sections go back to the parent. At the lowest priority (nice 19): they take
     the cores that the other stages leave idle (their serial parts) and do not slow down
     the parallel ones."""
+    from chuteflow._memory import keep_freed_memory
     from chuteflow._threads import limit_blas_threads
 
     from .registry import get_stage
 
     limit_blas_threads(1)
+    keep_freed_memory()
     if hasattr(os, "nice"):
         try:
             os.nice(19)

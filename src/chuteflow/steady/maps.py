@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .._memory import keep_freed_memory
 from .._threads import limit_blas_threads
 from ..closures import ChuteModel
 from ..errors import ParameterError
@@ -88,6 +89,7 @@ def _first_good_alone(args):
 
 def _first_good_worker(args):
     limit_blas_threads(1)
+    keep_freed_memory()
     return _first_good_alone(args)
 
 
@@ -163,6 +165,7 @@ def _sweep_back(thetas, nus, model, opts, rows, chains, proofs):
 
 def _sweep_worker(args):
     limit_blas_threads(1)
+    keep_freed_memory()
     thetas, nus, model, opts, seed_row, proofs = args
     return _sweep(thetas, nus, model, opts, seed_row, proofs), proofs
 

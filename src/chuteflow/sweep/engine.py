@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._memory import keep_freed_memory
 from .._threads import limit_blas_threads
 from .._version import __version__
 from ..errors import ParameterError
@@ -265,6 +266,7 @@ def _run_serial(cfg, todo, finished, keep_flows=False):
 
 def _init_worker():
     limit_blas_threads(1)
+    keep_freed_memory()
     # Ctrl-C reaches the whole process group: the parent handles it, workers just stop
     import signal
 

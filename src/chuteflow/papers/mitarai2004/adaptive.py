@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._memory import keep_freed_memory
 from ..._threads import limit_blas_threads
 from ...errors import ChuteflowError, ParameterError
 from ...steady import solve_steady
@@ -166,7 +167,7 @@ def refine_longwave(ds, config, *, workers: int = 2, progress=None, flows=None) 
         from concurrent.futures import ProcessPoolExecutor
 
         ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
-        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=workers, mp_context=ctx, initializer=keep_freed_memory) as pool:
             results = list(pool.map(_fine_point, jobs, chunksize=max(1, len(jobs) // (8 * workers))))
     else:
         results = [_fine_point(job) for job in jobs]
