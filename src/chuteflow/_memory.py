@@ -19,15 +19,16 @@ from collections.abc import Callable
 
 
 @functools.cache
-def _malloc_trim() -> Callable[[int], int] | None:
-    """glibc's ``malloc_trim`` from the process's C library, or None (not Linux, not glibc)."""
+def _glibc(name: str, *argtypes) -> Callable[..., int] | None:
+    """The C library function ``name`` (returning int, taking ``argtypes``) of this
+    process, or None where it has none (not Linux, or not glibc: e.g. musl)."""
     if not sys.platform.startswith("linux"):
         return None
     try:
-        fn = ctypes.CDLL(None).malloc_trim
-    except (OSError, AttributeError):  # not glibc (e.g. musl)
+        fn = getattr(ctypes.CDLL(None), name)
+    except (OSError, AttributeError):
         return None
-    fn.argtypes = [ctypes.c_size_t]
+    fn.argtypes = list(argtypes)
     fn.restype = ctypes.c_int
     return fn
 
@@ -38,7 +39,7 @@ def release_free_memory() -> bool:
     Returns whether anything could be asked (False where the C library has no
     ``malloc_trim``). Costs about a millisecond; live objects are untouched.
     """
-    fn = _malloc_trim()
+    fn = _glibc("malloc_trim", ctypes.c_size_t)
     if fn is None:
         return False
     fn(0)
@@ -52,19 +53,6 @@ MMAP_THRESHOLD = 32 * 2**20
 #: Free memory at the top of the heap kept for the next allocations (not returned to the
 #: operating system before it exceeds this; :func:`release_free_memory` returns it anyway).
 TRIM_THRESHOLD = 256 * 2**20
-
-
-@functools.cache
-def _mallopt() -> Callable[[int, int], int] | None:
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        fn = ctypes.CDLL(None).mallopt
-    except (OSError, AttributeError):  # not glibc
-        return None
-    fn.argtypes = [ctypes.c_int, ctypes.c_int]
-    fn.restype = ctypes.c_int
-    return fn
 
 
 def keep_freed_memory() -> bool:
@@ -88,7 +76,7 @@ def keep_freed_memory() -> bool:
     adaptive refinement) and by its command line, never on a caller's own process. Returns
     whether glibc took both settings (False elsewhere: macOS, musl, Windows).
     """
-    fn = _mallopt()
+    fn = _glibc("mallopt", ctypes.c_int, ctypes.c_int)
     if fn is None:
         return False
     return bool(fn(_M_MMAP_THRESHOLD, MMAP_THRESHOLD)) & bool(fn(_M_TRIM_THRESHOLD, TRIM_THRESHOLD))
