@@ -235,6 +235,14 @@ class Pointwise:
         self._fun(n, ptrs, params.ctypes.data, out.ctypes.data)
         return out.reshape((self.n_out, *shape))
 
+    def raw(self, n: int, pointers, params, out) -> None:
+        """The kernel at ``n`` points without any checks (hot loops): ``pointers`` a numpy
+        array of dtype ``uintp`` holding the addresses of the ``n_arrays`` float arrays
+        (each C-contiguous, length ``n``), ``params`` a float array of the parameters and
+        ``out`` a C-contiguous float array of at least ``n_out × n`` elements, written in
+        place. The caller keeps every array alive during the call."""
+        self._fun(n, pointers.ctypes.data, params.ctypes.data, out.ctypes.data)
+
 
 def cached_pointwise(
     name: str, key: str, build_exprs: Callable[[], tuple], n_arrays: int, *, sources: Iterable[Any] = ()

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ..closures import ChuteModel
+from ..closures.model import FUNCTIONS
 from ..spectral import ChebyshevGrid, MappedChebyshevGrid, coefficients, tail
 from ._roots import brent_root
 
@@ -290,6 +291,22 @@ def _root_near(g, yf: np.ndarray, j: int, xtol: float) -> float:
     raise ValueError(f"no sign change near y = {yf[j]:.6g}")
 
 
+_P = FUNCTIONS.index("p")
+
+
+def _pressure(model: ChuteModel, nu: float, T: float) -> float:
+    """p(ν, T) at one point by the closures' scalar code (:meth:`ChuteModel.scalar_evaluator`,
+    ~50× cheaper than :meth:`ChuteModel.evaluate` on a scalar; the same number to
+    round-off), or by ``evaluate`` where the scalar code fails (outside its domain)."""
+    try:
+        v = model.scalar_evaluator(((0, 0),))(nu, T)[_P]
+        if isinstance(v, float):
+            return v
+    except (ValueError, ZeroDivisionError, OverflowError):
+        pass
+    return float(model.evaluate(nu, T)["p"][(0, 0)])
+
+
 def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteModel):
     """h, ν̄, ρ̄0, Q0, T̄0, monotonicity and the density peak of a solved profile.
 
@@ -299,7 +316,7 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     """
     c = math.cos(math.radians(theta))
     nu = np.exp(log_nu)
-    p_top = float(model.evaluate(nu[-1], T[-1])["p"][(0, 0)])
+    p_top = _pressure(model, float(nu[-1]), float(T[-1]))
     tail_rho = p_top / c
     rho_bar = grid.integrate(nu) + tail_rho
     Q = grid.integrate(nu * u) + u[-1] * tail_rho

@@ -23,13 +23,14 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..equations import TOP_OF, arguments, compiled_equations
+from ..closures.model import FUNCTIONS, ORDERS
+from ..equations import BASE, TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid, reference_nodes
+from ..spectral import ChebyshevGrid, barycentric, reference_nodes
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
@@ -220,37 +221,22 @@ class SteadyNewton:
         self._last: tuple[np.ndarray, dict] | None = None  # see evaluate
         #: Newton also solves for dX/dβ (β = ν0(0)) with each LU (see _solve)
         self.tangents = False
-        m = n + 1
-        # (equation, rows of the system, nodes it is imposed at, row-scaling kind)
-        self._layout = (
-            ("ymom", slice(1, m), slice(1, m), "nu"),
-            ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
-            ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
-            ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
-            # T0' = 0 on top (eq. 3.13)
-            (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"),
-        )
-        if integrated:
-            # x-momentum in its once-integrated form, eq. (3.7): Σxy = −tanθ Σyy, i.e.
-            # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from
-            # y to ∞ with the stresses vanishing at infinity (eq. 2.15) gives it exactly,
-            # so the weight of the dilute tail above y_max is kept: the result does not
-            # depend on where the domain ends (a stress-free top at y_max instead would make
-            # an O(ν_top) error, 1e-7 relative at ν_top = 1e-9). Being first order in u0 it
-            # also avoids the D2 round-off (∝ n⁴) of (μ u0')' that otherwise sets the
-            # residual floor.
-            self._layout += (("xmom_integrated", slice(m + 1, 2 * m), slice(1, m), "u"),)
-        else:
-            # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
-            # the cold start, where its residual does not favour the collapsed layer (the
-            # integrated form's does: every term vanishes with T0)
-            self._layout += (
-                ("xmom", slice(m + 1, m + n), slice(1, n), "u"),
-                (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
-            )
-        #: where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
-        self._w_pattern = _u_prime_pattern(self._layout, self.eqs) if integrated else None
+        # (equation, rows of the system, nodes it is imposed at, row-scaling kind), and
+        # where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
+        self._layout, self._w_pattern = _layout(n, integrated)
         self.eliminate = self._w_pattern is not None
+        #: the compiled road (:mod:`._newton_kernel`): (closures' kernel, rows' kernel, index
+        #: plan, closure parameters, row parameters), or None: the numpy road
+        parts = _road_parts(n, integrated, model.closures)
+        self._fast = (
+            None
+            if parts is None
+            else (
+                *parts,
+                np.array(model._params, dtype=float),
+                np.array([self.sin, self.cos, 1.0 / nu0]),
+            )
+        )
 
     def evaluate(self, st: NewtonState, jac=True):
         """Scaled residual R and (if ``jac``) its exact Jacobian J (None otherwise).
@@ -260,14 +246,75 @@ class SteadyNewton:
         Jacobian only of the accepted trial, and only when another step is needed) compute
         the closures and equations once for that state."""
         ctx = self._context(st)
-        return ctx["R"].copy(), (self._jacobian(ctx) if jac else None)
+        return ctx["R"].copy(), (self._jacobian_of(ctx) if jac else None)
+
+    def _jacobian_of(self, ctx: dict, g0: np.ndarray | None = None) -> np.ndarray:
+        return self._jacobian(ctx, g0) if "out" not in ctx else self._jacobian_compiled(ctx, g0)
 
     def _context(self, st: NewtonState) -> dict:
         """The residual's pieces of ``st``, kept for the last state evaluated."""
         X = st.pack()
         if self._last is None or not np.array_equal(self._last[0], X):
-            self._last = (X, self._residual(st))
+            self._last = (X, self._residual(st) if self._fast is None else self._residual_compiled(st))
         return self._last[1]
+
+    def _residual_compiled(self, st: NewtonState) -> dict:
+        """:meth:`_residual` by the compiled rows (:func:`._newton_kernel.row_kernel`): the
+        scaled residual, and the Jacobian's coefficients kept for :meth:`_jacobian`."""
+        n, m, L = self.n, self.n + 1, st.L
+        closures, rows, plan, cparams, rparams = self._fast
+        D1, D2 = self.ref.D / L, self.ref.D2 / L**2
+        X = np.empty((plan.n_args, m))  # the kernel's arguments: BASE jets, then partials
+        nu = X[0]
+        np.exp(st.s, out=nu)
+        s1, s2 = D1 @ st.s, D2 @ st.s
+        np.multiply(nu, s1, out=X[1])
+        np.multiply(nu, s2 + s1**2, out=X[2])
+        X[3], X[4], X[5] = st.u, D1 @ st.u, D2 @ st.u
+        X[6], X[7], X[8] = st.T, D1 @ st.T, D2 @ st.T
+        ptrs = plan.offsets + np.uintp(X.ctypes.data)
+        closures.raw(m, ptrs[plan.closure_args], cparams, X[plan.n_base :])
+        out = np.empty(plan.n_out + 1)  # the last element: the zero that rows without a term read
+        out[-1] = 0.0
+        rows.raw(m, ptrs, rparams, out)
+        R = out[plan.gather[0]]
+        # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
+        R[0] = st.s[0] - self.ln0
+        R[-1] = st.s[n] - self.lntop
+        return {"R": R, "L": L, "out": out}
+
+    def _jacobian_compiled(self, ctx: dict, g0: np.ndarray | None = None) -> np.ndarray:
+        """:meth:`_jacobian` from the compiled rows' coefficients (the same matrix to
+        round-off): each row block's field block is diag(d) + diag(e1) D1 + diag(e2) D2,
+        the products only where the equation has such a term (:func:`_row_plan`)."""
+        n, m, L = self.n, self.n + 1, ctx["L"]
+        plan = self._fast[2]
+        V = ctx["out"][plan.gather]  # (outputs, rows)
+        N = 3 * m + 1
+        J = np.zeros((N, N))
+        Jf = J.reshape(-1)
+        D1, D2 = self.ref.D, self.ref.D2
+        per = (0.0, 1.0 / L, 1.0 / L**2)
+        for r0, r1, j0, j1, k, c, first in plan.products if g0 is None else plan.products_w:
+            e = (V[2 + 3 * k + c, r0:r1] * per[c])[:, None]
+            blk = J[r0:r1, k * m : (k + 1) * m]
+            M = D1 if c == 1 else D2
+            if first:
+                np.multiply(M[j0:j1], e, out=blk)
+            else:
+                blk += M[j0:j1] * e
+        for k in (0, 2) if g0 is not None else (0, 1, 2):
+            Jf[plan.diagonal[k]] += V[2 + 3 * k][plan.rows]
+        if g0 is not None:
+            # in (u0(0), w): u0 at node 0 is u0(0) (column m), u0' at node j ≥ 1 is w_j,
+            # u0' at node 0 is g0 · (u0(0), w) (see _u_basis)
+            J[:, m] += V[5]
+            Jf[plan.diagonal_w] += V[6][plan.bulk]
+            J[plan.floor, m : 2 * m] += V[6][plan.floor][:, None] * g0
+        J[:, -1] = (-1.0 / L) * V[1]
+        J[0, 0] = 1.0
+        J[-1, n] = 1.0
+        return J
 
     def _residual(self, st: NewtonState) -> dict:
         n, m, L = self.n, self.n + 1, st.L
@@ -401,10 +448,10 @@ class SteadyNewton:
         Schur complement costs O(n²). Otherwise, a dense LU of J."""
         ctx = self._context(st)
         if self._w_pattern is None:
-            return np.linalg.solve(self._jacobian(ctx), B)
+            return np.linalg.solve(self._jacobian_of(ctx), B)
         n, m = self.n, self.n + 1
         q, g = _u_basis(n, self.grid_map, ctx["L"])
-        JT = self._jacobian(ctx, g)
+        JT = self._jacobian_of(ctx, g)
         # rows of eq. (3.7) at nodes 1…n and the columns of w_j: the block m+1 … 2m−1;
         # the rest (r = 2m + 2 rows and columns) is the block before and the block after
         w, r = slice(m + 1, 2 * m), 2 * m + 2
@@ -519,6 +566,42 @@ class SteadyNewton:
         raise _NewtonFailure(st, hist)
 
 
+@functools.lru_cache(maxsize=32)
+def _layout(n: int, integrated: bool) -> tuple[tuple, Any]:
+    """The rows of :class:`SteadyNewton` at n: ((equation, rows of the system, nodes it is
+    imposed at, row-scaling kind), ...), and :func:`_u_prime_pattern` of them (None where
+    u0' is not eliminated)."""
+    m = n + 1
+    # (equation, rows of the system, nodes it is imposed at, row-scaling kind)
+    layout: tuple[tuple[str, slice, slice, str], ...] = (
+        ("ymom", slice(1, m), slice(1, m), "nu"),
+        ("floor_x", slice(m, m + 1), slice(0, 1), "u"),
+        ("floor_energy", slice(2 * m, 2 * m + 1), slice(0, 1), "T"),
+        ("energy", slice(2 * m + 1, 2 * m + n), slice(1, n), "T"),
+        # T0' = 0 on top (eq. 3.13)
+        (TOP_OF["T"], slice(2 * m + n, 2 * m + n + 1), slice(n, n + 1), "one"),
+    )
+    if integrated:
+        # x-momentum in its once-integrated form, eq. (3.7): Σxy = −tanθ Σyy, i.e.
+        # μ u0' = tanθ p at nodes 1..n. Integrating the x- and y-momentum balances from
+        # y to ∞ with the stresses vanishing at infinity (eq. 2.15) gives it exactly,
+        # so the weight of the dilute tail above y_max is kept: the result does not
+        # depend on where the domain ends (a stress-free top at y_max instead would make
+        # an O(ν_top) error, 1e-7 relative at ν_top = 1e-9). Being first order in u0 it
+        # also avoids the D2 round-off (∝ n⁴) of (μ u0')' that otherwise sets the
+        # residual floor.
+        layout += (("xmom_integrated", slice(m + 1, 2 * m), slice(1, m), "u"),)
+    else:
+        # second-order form (μ u0')' + ν0 sinθ = 0 inside, u0' = 0 on top: used only for
+        # the cold start, where its residual does not favour the collapsed layer (the
+        # integrated form's does: every term vanishes with T0)
+        layout += (
+            ("xmom", slice(m + 1, m + n), slice(1, n), "u"),
+            (TOP_OF["u"], slice(m + n, m + n + 1), slice(n, n + 1), "one"),
+        )
+    return layout, (_u_prime_pattern(layout, compiled_equations()) if integrated else None)
+
+
 def _u_prime_pattern(layout, eqs):
     """Where u0' enters the steady rows once it is an unknown (:meth:`SteadyNewton.step`):
     (diagonal, full), ``diagonal`` the (rows, first node) of the rows at nodes ≥ 1 other than
@@ -571,6 +654,96 @@ def _u_basis(n: int, grid_map, L: float) -> tuple[np.ndarray, np.ndarray]:
     return q, g_x * q / dydx[0]
 
 
+class _RowPlan(NamedTuple):
+    """Index arrays of the compiled road of :class:`SteadyNewton` for one layout and n."""
+
+    products: tuple  # (r0, r1, j0, j1, field k, order c, first) of the terms c ≥ 1
+    products_w: tuple  # the same without those of u0 (eliminated: SteadyNewton.step)
+    n_base: int  # base jets among the kernel's arguments
+    n_args: int  # all its arguments (jets and closures' partials)
+    n_out: int  # its outputs (layout × OUTPUTS, per node)
+    offsets: np.ndarray  # byte offsets of the argument rows (uintp)
+    closure_args: np.ndarray  # the rows of ν and T (the closures' arguments)
+    gather: np.ndarray  # (OUTPUTS, rows) indices into the outputs (the appended zero: none)
+    node: np.ndarray  # the node of each row (0 for the unknowns' own conditions)
+    rows: np.ndarray  # rows of equations
+    diagonal: tuple  # flat indices of (row, field k's column at the row's node), rows ``rows``
+    bulk: np.ndarray  # rows of equations at nodes ≥ 1
+    diagonal_w: np.ndarray  # flat indices of (row, w at its node), rows ``bulk``
+    floor: np.ndarray  # rows of equations at node 0
+
+
+@functools.lru_cache(maxsize=16)
+def _row_plan(layout_key: tuple, n: int) -> _RowPlan:
+    from ._newton_kernel import OUTPUTS
+
+    m = n + 1
+    N, K = 3 * m + 1, len(OUTPUTS)
+    n_base, n_args = len(BASE), len(BASE) + len(FUNCTIONS) * len(ORDERS)
+    n_out = len(layout_key) * K * m
+    gather = np.full((K, N), n_out, dtype=np.intp)
+    node = np.zeros(N, dtype=np.intp)
+    has = np.zeros(N, dtype=bool)
+    products: list[tuple[int, int, int, int, int, int, bool]] = []
+    for r0, r1, j0, j1, orders in layout_key:
+        for k, c in orders:
+            if c:
+                first = not any(p[:2] == (r0, r1) and p[4] == k for p in products)
+                products.append((r0, r1, j0, j1, k, c, first))
+    products_w = tuple(p for p in products if p[4] != 1)
+    for e, (r0, r1, j0, j1, _orders) in enumerate(layout_key):
+        r, j = np.arange(r0, r1), np.arange(j0, j1)
+        node[r], has[r] = j, True
+        for k in range(K):
+            gather[k, r] = (e * K + k) * m + j
+    rows = np.nonzero(has)[0]
+    bulk = np.nonzero(has & (node >= 1))[0]
+    floor = np.nonzero(has & (node == 0))[0]
+    return _RowPlan(
+        tuple(products),
+        products_w,
+        n_base,
+        n_args,
+        n_out,
+        np.arange(n_args, dtype=np.uintp) * np.uintp(8 * m),
+        np.array([BASE.index("nu"), BASE.index("T")]),
+        gather,
+        node,
+        rows,
+        tuple(rows * N + k * m + node[rows] for k in range(3)),
+        bulk,
+        bulk * N + m + node[bulk],
+        floor,
+    )
+
+
+def _orders(ce) -> tuple[tuple[int, int], ...]:
+    """(field block, derivative order) of the unknowns s = ln ν0, u0, T0 that the rows of
+    ``ce`` hold (:mod:`._newton_kernel`: through ν = e^s, d^c ν/dy^c brings s's orders
+    0…c)."""
+    out = set()
+    for _i, fname, k, c in _steady_terms(ce):
+        out |= {(k, cc) for cc in range(c + 1)} if fname == "nu" else {(k, c)}
+    return tuple(sorted(out))
+
+
+@functools.lru_cache(maxsize=32)
+def _road_parts(n: int, integrated: bool, closures: tuple):
+    """(closures' kernel, rows' kernel, plan) of the compiled road of :class:`SteadyNewton`
+    for the closure objects ``closures``, or None where compiled kernels are unavailable."""
+    from ..closures.model import _compiled_c
+    from ._newton_kernel import row_kernel
+
+    layout = _layout(n, integrated)[0]
+    rows = row_kernel(tuple((name, kind) for name, _r, _s, kind in layout))
+    kernel = _compiled_c(*closures) if rows is not None else None
+    if rows is None or kernel is None:
+        return None
+    eqs = compiled_equations()
+    key = tuple((r.start, r.stop, sl.start, sl.stop, _orders(eqs[name])) for name, r, sl, _kind in layout)
+    return kernel, rows, _row_plan(key, n)
+
+
 class _NewtonFailure(Exception):
     def __init__(self, state, history):
         super().__init__("Newton did not converge")
@@ -586,10 +759,22 @@ def _resample(st: NewtonState, n: int, grid_map: Any = _SAME) -> NewtonState:
     gm = st.grid_map if grid_map is _SAME else grid_map
     if st.n == n and gm == st.grid_map:
         return NewtonState(n, st.s.copy(), st.u.copy(), st.T.copy(), st.L, gm)
-    old = st.ref
-    new = reference_grid(n, gm).y
-    v = old.interpolate(np.stack([st.s, st.u, st.T]), new)
+    if gm == st.grid_map:
+        # the same map: the new nodes are the Chebyshev nodes of n in the computational
+        # variable, whatever the map (one cached interpolation matrix per pair of n)
+        v = np.stack([st.s, st.u, st.T]) @ _node_interpolation(st.n, n)
+    else:
+        v = st.ref.interpolate(np.stack([st.s, st.u, st.T]), reference_grid(n, gm).y)
     return NewtonState(n, v[0].copy(), v[1].copy(), v[2].copy(), st.L, gm)
+
+
+@functools.lru_cache(maxsize=16)
+def _node_interpolation(n_old: int, n_new: int) -> np.ndarray:
+    """M with f(x_new) = f(x_old) @ M: the interpolant on the n_old + 1 Chebyshev nodes at
+    the n_new + 1 ones (barycentric formula; read-only)."""
+    M = barycentric(np.eye(n_old + 1), n_old, reference_nodes(n_new)[0])
+    M.flags.writeable = False
+    return M
 
 
 def solve_state(
