@@ -31,9 +31,13 @@ from ..closures.model import FUNCTIONS, ORDERS
 from ..equations import BASE, TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from ..spectral import ChebyshevGrid, barycentric, reference_nodes
+from ._newton_kernel import OUTPUTS, SLOT, row_kernel
 from .result import steady_grid
 
 _FIELDS = ("nu", "u", "T")
+#: Rows of the compiled outputs (:data:`._newton_kernel.SLOT`) by unknown (s = ln ν0, u0, T0:
+#: the Jacobian's blocks 0, 1, 2) and derivative order.
+_SLOTS = tuple(tuple(SLOT[(f, c)] for c in range(3)) for f in ("s", "u", "T"))
 
 #: Width of the steady grid's sinh map in units of the dilute top's scale height T0(h)/cos θ
 #: (the same choice as the stability operator's map, :func:`chuteflow.stability.layer_map`).
@@ -263,21 +267,14 @@ class SteadyNewton:
         scaled residual, and the Jacobian's coefficients kept for :meth:`_jacobian`."""
         n, m, L = self.n, self.n + 1, st.L
         closures, rows, plan, cparams, rparams = self._fast
-        D1, D2 = self.ref.D / L, self.ref.D2 / L**2
         X = np.empty((plan.n_args, m))  # the kernel's arguments: BASE jets, then partials
-        nu = X[0]
-        np.exp(st.s, out=nu)
-        s1, s2 = D1 @ st.s, D2 @ st.s
-        np.multiply(nu, s1, out=X[1])
-        np.multiply(nu, s2 + s1**2, out=X[2])
-        X[3], X[4], X[5] = st.u, D1 @ st.u, D2 @ st.u
-        X[6], X[7], X[8] = st.T, D1 @ st.T, D2 @ st.T
+        self._jets(st, X)
         ptrs = plan.offsets + np.uintp(X.ctypes.data)
         closures.raw(m, ptrs[plan.closure_args], cparams, X[plan.n_base :])
         out = np.empty(plan.n_out + 1)  # the last element: the zero that rows without a term read
         out[-1] = 0.0
         rows.raw(m, ptrs, rparams, out)
-        R = out[plan.gather[0]]
+        R = out[plan.gather[SLOT["R"]]]
         # the unknowns' own conditions: ν(0) = ν0; free boundary ln ν(y_max) = ln ν_top
         R[0] = st.s[0] - self.ln0
         R[-1] = st.s[n] - self.lntop
@@ -296,7 +293,7 @@ class SteadyNewton:
         D1, D2 = self.ref.D, self.ref.D2
         per = (0.0, 1.0 / L, 1.0 / L**2)
         for r0, r1, j0, j1, k, c, first in plan.products if g0 is None else plan.products_w:
-            e = (V[2 + 3 * k + c, r0:r1] * per[c])[:, None]
+            e = (V[_SLOTS[k][c], r0:r1] * per[c])[:, None]
             blk = J[r0:r1, k * m : (k + 1) * m]
             M = D1 if c == 1 else D2
             if first:
@@ -304,35 +301,38 @@ class SteadyNewton:
             else:
                 blk += M[j0:j1] * e
         for k in (0, 2) if g0 is not None else (0, 1, 2):
-            Jf[plan.diagonal[k]] += V[2 + 3 * k][plan.rows]
+            Jf[plan.diagonal[k]] += V[_SLOTS[k][0]][plan.rows]
         if g0 is not None:
             # in (u0(0), w): u0 at node 0 is u0(0) (column m), u0' at node j ≥ 1 is w_j,
             # u0' at node 0 is g0 · (u0(0), w) (see _u_basis)
-            J[:, m] += V[5]
-            Jf[plan.diagonal_w] += V[6][plan.bulk]
-            J[plan.floor, m : 2 * m] += V[6][plan.floor][:, None] * g0
-        J[:, -1] = (-1.0 / L) * V[1]
+            J[:, m] += V[_SLOTS[1][0]]
+            Jf[plan.diagonal_w] += V[_SLOTS[1][1]][plan.bulk]
+            J[plan.floor, m : 2 * m] += V[_SLOTS[1][1]][plan.floor][:, None] * g0
+        J[:, -1] = (-1.0 / L) * V[SLOT["Lsum"]]
         J[0, 0] = 1.0
         J[-1, n] = 1.0
         return J
 
+    def _jets(self, st: NewtonState, X: np.ndarray) -> tuple:
+        """The base jets of ``st`` (:data:`~chuteflow.equations.BASE`: ν0, u0, T0 and their
+        first two y-derivatives, ν0's through ν0 = e^s) into rows 0…8 of ``X``; returns
+        (D1, D2, s', s'')."""
+        D1, D2 = self.ref.D / st.L, self.ref.D2 / st.L**2
+        nu = X[0]
+        np.exp(st.s, out=nu)
+        s1, s2 = D1 @ st.s, D2 @ st.s
+        np.multiply(nu, s1, out=X[1])
+        np.multiply(nu, s2 + s1**2, out=X[2])
+        X[3], X[4], X[5] = st.u, D1 @ st.u, D2 @ st.u
+        X[6], X[7], X[8] = st.T, D1 @ st.T, D2 @ st.T
+        return D1, D2, s1, s2
+
     def _residual(self, st: NewtonState) -> dict:
         n, m, L = self.n, self.n + 1, st.L
-        D1, D2 = self.ref.D / L, self.ref.D2 / L**2
-        nu = np.exp(st.s)
-        s1, s2 = D1 @ st.s, D2 @ st.s
-        u1, u2, T1, T2 = D1 @ st.u, D2 @ st.u, D1 @ st.T, D2 @ st.T
-        base = {
-            "nu": nu,
-            "nu_y": nu * s1,
-            "nu_yy": nu * (s2 + s1**2),
-            "u": st.u,
-            "u_y": u1,
-            "u_yy": u2,
-            "T": st.T,
-            "T_y": T1,
-            "T_yy": T2,
-        }
+        X = np.empty((len(BASE), m))
+        D1, D2, s1, s2 = self._jets(st, X)
+        base = dict(zip(BASE, X))
+        nu, u1, u2, T1, T2 = base["nu"], base["u_y"], base["u_yy"], base["T_y"], base["T_yy"]
         part = self.model.evaluate(nu, st.T, compiled=True)
         R = np.empty(3 * m + 1)
         kap = part["kappa"]
@@ -675,8 +675,6 @@ class _RowPlan(NamedTuple):
 
 @functools.lru_cache(maxsize=16)
 def _row_plan(layout_key: tuple, n: int) -> _RowPlan:
-    from ._newton_kernel import OUTPUTS
-
     m = n + 1
     N, K = 3 * m + 1, len(OUTPUTS)
     n_base, n_args = len(BASE), len(BASE) + len(FUNCTIONS) * len(ORDERS)
@@ -732,7 +730,6 @@ def _road_parts(n: int, integrated: bool, closures: tuple):
     """(closures' kernel, rows' kernel, plan) of the compiled road of :class:`SteadyNewton`
     for the closure objects ``closures``, or None where compiled kernels are unavailable."""
     from ..closures.model import _compiled_c
-    from ._newton_kernel import row_kernel
 
     layout = _layout(n, integrated)[0]
     rows = row_kernel(tuple((name, kind) for name, _r, _s, kind in layout))
