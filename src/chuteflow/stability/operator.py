@@ -41,11 +41,12 @@ from functools import cached_property
 
 import numpy as np
 
-from ..equations import TOP_OF, Term, compiled_equations
+from ..equations import TOP_OF, Term, arguments, compiled_equations
 from ..errors import ParameterError
 from ..spectral import ChebyshevGrid, MappedChebyshevGrid
 from ..steady import SteadyFlow
 from ..steady.result import cached_per_flow
+from ._assembly import BULK, FLOOR, scatter_kernel, term_plan
 
 FIELDS_2D = ("nu", "u", "v", "T")
 FIELDS_3D = ("nu", "u", "v", "w", "T")
@@ -299,6 +300,13 @@ def _scaled(P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
     return out
 
 
+def _equilibrated(kernel, P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """:func:`_scaled` (P · r_i) · c_j by the compiled kernel (:mod:`._assembly`), in one pass."""
+    out = np.empty_like(P)
+    kernel.equilibrate(P.shape[0], P.ctypes.data, r.ctypes.data, c.ctypes.data, out.ctypes.data)
+    return out
+
+
 def _nodal(c, m: int) -> np.ndarray:
     """A coefficient as m nodal values (constants broadcast; arrays as they are, cheaply)."""
     a = np.asarray(c, dtype=float)
@@ -380,12 +388,6 @@ class StabilityOperator:
         sin, cos = math.sin(th), math.cos(th)
         base = base_on_grid(flow, g.y)
         part = flow.model.evaluate(base["nu"], base["T"])
-        eqs = compiled_equations()
-        dmat = (None, g.D, g.D2)  # undifferentiated terms: diagonal (add)
-        col = {f: slice(i * m, (i + 1) * m) for i, f in enumerate(self.fields)}
-        pieces: dict[tuple[int, int], np.ndarray] = {(0, 0): np.zeros((M, M))}
-        B = np.zeros((M, M))
-        K = np.zeros((M, M))
         scale_all = np.ones(M)
         mu, kap = part["mu"][(0, 0)], part["kappa"][(0, 0)]
         # Rows divided by the diffusion coefficient stay O(D²) up to the dilute top. Dividing
@@ -407,6 +409,88 @@ class StabilityOperator:
             "floor_energy": 1.0 / kap[0],
         }
         self.residuals = {}
+        kernel = scatter_kernel()
+        if kernel is not None:
+            pieces, B, K, k_rows = self._scatter(kernel, base, part, sin, cos, bulk_scale, floor_scale)
+        else:
+            pieces, B, K, k_rows = self._add_terms(base, part, sin, cos, bulk_scale, floor_scale)
+        inner = slice(1, m - 1)
+        for i, f in enumerate(self.fields):
+            r0 = i * m
+            scale_all[r0 + 1 : r0 + m - 1] = bulk_scale[BULK_OF[f]][inner]
+            scale_all[r0] = floor_scale[FLOOR_OF[f]]
+        self.pieces, self.B = pieces, B
+        self.row_scale, self.base = scale_all, base
+        # Equilibration used by the solvers (an exact diagonal similarity, not part of the
+        # public operator): mass rows divided by ν0 and ν̂ columns multiplied by ν0, i.e.
+        # unknown ν̂/ν0. Without it the dilute top's mass rows, −(ν0 v̂)' ~ 1e-9 D v̂, are
+        # numerically zero rows: A − σB is singular to round-off in several directions at
+        # once and shift-invert fails near the continuum (and at k = 0).
+        self.row_eq = np.ones(M)
+        self.row_eq[1 : m - 1] = 1.0 / base["nu"][1 : m - 1]
+        self.col_eq = np.ones(M)
+        self.col_eq[:m] = base["nu"]
+        if kernel is not None:
+            r, c = self.row_eq, self.col_eq
+            self._pieces_eq = {key: _equilibrated(kernel, P, r, c) for key, P in pieces.items()}
+            self.B_eq = _equilibrated(kernel, B, r, c)
+        else:
+            r, c = self.row_eq[:, None], self.col_eq[None, :]
+            self._pieces_eq = {key: _scaled(P, r, c) for key, P in pieces.items()}
+            self.B_eq = _scaled(B, r, c)
+        # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
+        tops = np.array(sorted(k_rows), dtype=int)
+        ti, kc = np.nonzero(K[tops])
+        kr = tops[ti]
+        kv = K[kr, kc]
+        self._K_eq = (kr, kc, kv * self.row_eq[kr] * self.col_eq[kc])
+        self._K_sparse = (kr, kc, kv)
+
+    def _scatter(self, kernel, base, part, sin, cos, bulk_scale, floor_scale):
+        """(pieces, B, K, rows of K) by the compiled scatter (:mod:`._assembly`): the same
+        products and sums as :meth:`_add_terms`, in the same order, bit for bit."""
+        g = self.grid
+        m, M = self.n + 1, self.size
+        plan = term_plan(self.n, self.fields, tuple(sorted(BULK_OF.items())), tuple(sorted(FLOOR_OF.items())))
+        eqs = compiled_equations()
+        args = arguments(base, part, sin, cos)
+        coef = np.empty((plan.n_coef, m))
+        for name, off in zip(plan.equations, plan.offsets):
+            res, coefs = eqs[name].evaluate_arguments(args)
+            self.residuals[name] = np.broadcast_to(res, (m,)).copy()
+            for i, c in enumerate(coefs):
+                coef[off + i] = c
+        scale = np.empty((len(plan.uses), m))
+        for row, (name, kind, _node) in enumerate(plan.uses):
+            scale[row] = bulk_scale[name] if kind == BULK else floor_scale[name] if kind == FLOOR else 1.0
+        targets = [np.zeros((M, M)) for _ in range(len(plan.keys) + 2)]
+        D1, D2 = np.ascontiguousarray(g.D, dtype=float), np.ascontiguousarray(g.D2, dtype=float)
+        ptrs = np.array([t.ctypes.data for t in targets], dtype=np.uintp)
+        entries = plan.entries
+        kernel.scatter(
+            len(entries),
+            entries.ctypes.data,
+            coef.ctypes.data,
+            scale.ctypes.data,
+            D1.ctypes.data,
+            D2.ctypes.data,
+            m,
+            M,
+            ptrs.ctypes.data,
+        )
+        pieces = dict(zip(plan.keys, targets))
+        return pieces, targets[-2], targets[-1], set(plan.k_rows)
+
+    def _add_terms(self, base, part, sin, cos, bulk_scale, floor_scale):
+        """(pieces, B, K, rows of K), term by term in numpy (the road without a C compiler)."""
+        g = self.grid
+        m, M = self.n + 1, self.size
+        eqs = compiled_equations()
+        dmat = (None, g.D, g.D2)  # undifferentiated terms: diagonal (add)
+        col = {f: slice(i * m, (i + 1) * m) for i, f in enumerate(self.fields)}
+        pieces: dict[tuple[int, int], np.ndarray] = {(0, 0): np.zeros((M, M))}
+        B = np.zeros((M, M))
+        K = np.zeros((M, M))
         cache = {}
         k_rows: set[int] = set()  # rows with |k| terms (the top conditions)
 
@@ -457,33 +541,11 @@ class StabilityOperator:
             r0 = i * m
             name = BULK_OF[f]
             add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
-            scale_all[r0 + 1 : r0 + m - 1] = bulk_scale[name][inner]
             name = FLOOR_OF[f]
             add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
-            scale_all[r0] = floor_scale[name]
             # far field: ν̂' = −(cos θ/T0) ν̂ (ν̂ ∝ ν0), f̂' = −|k| f̂ for û, v̂, ŵ, T̂
             add(TOP_OF[f], slice(m - 1, m), 1.0, slice(r0 + m - 1, r0 + m), False)
-        self.pieces, self.B = pieces, B
-        self.row_scale, self.base = scale_all, base
-        # Equilibration used by the solvers (an exact diagonal similarity, not part of the
-        # public operator): mass rows divided by ν0 and ν̂ columns multiplied by ν0, i.e.
-        # unknown ν̂/ν0. Without it the dilute top's mass rows, −(ν0 v̂)' ~ 1e-9 D v̂, are
-        # numerically zero rows: A − σB is singular to round-off in several directions at
-        # once and shift-invert fails near the continuum (and at k = 0).
-        self.row_eq = np.ones(M)
-        self.row_eq[1 : m - 1] = 1.0 / base["nu"][1 : m - 1]
-        self.col_eq = np.ones(M)
-        self.col_eq[:m] = base["nu"]
-        r, c = self.row_eq[:, None], self.col_eq[None, :]
-        self._pieces_eq = {key: _scaled(P, r, c) for key, P in pieces.items()}
-        self.B_eq = _scaled(B, r, c)
-        # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
-        tops = np.array(sorted(k_rows), dtype=int)
-        ti, kc = np.nonzero(K[tops])
-        kr = tops[ti]
-        kv = K[kr, kc]
-        self._K_eq = (kr, kc, kv * self.row_eq[kr] * self.col_eq[kc])
-        self._K_sparse = (kr, kc, kv)
+        return pieces, B, K, k_rows
 
     @property
     def K(self) -> np.ndarray:

@@ -504,13 +504,20 @@ class SteadyNewton:
         """Damped Newton. Converged when the scaled residual is below ``tol``, or when the
         relative Newton step falls below 1e-11 with the residual at its round-off floor.
         Fails when the backtracking step would fall below ``lam_min`` (a continuation
-        guess that needs heavy damping is on the wrong side of a fold: fail fast).
+        guess that needs heavy damping is on the wrong side of a fold: fail fast), or when
+        :data:`_CRAWL` steps in a row were accepted only at the two smallest step lengths
+        allowed (λ < 4 ``lam_min``): each of them lowers the residual by less than
+        0.1 λ, a crawl that does not reach Newton's quadratic phase within the iterations
+        of a continuation attempt. On the 60 × 60 paper steady map and the diagram's
+        steady rows no solve that converged had more than two such steps in a row, while
+        ~120 failing continuation attempts crawled on to ``maxiter`` (issue 9, stop 32).
 
         The round-off floor of the residual grows like n⁴ (second derivatives near the ends),
         so ``tol`` is raised accordingly above n = 64; the accuracy of a result is checked
         independently by the change between two resolutions (:func:`solve_steady`)."""
         tol = max(tol, 1e-11 * (self.n / 64.0) ** 4)
         hist = []
+        crawl = 0  # steps in a row accepted at λ < 4 lam_min
         R, _ = self.evaluate(st, jac=False)
         res = np.abs(R).max()
         for it in range(maxiter):
@@ -557,6 +564,9 @@ class SteadyNewton:
                         break
                 lam *= 0.5
             else:
+                break
+            crawl = crawl + 1 if lam < 4.0 * lam_min else 0
+            if crawl >= _CRAWL:
                 break
         else:
             if res < 1e-7 and len(hist) >= min_iter:
@@ -739,6 +749,11 @@ def _road_parts(n: int, integrated: bool, closures: tuple):
     eqs = compiled_equations()
     key = tuple((r.start, r.stop, sl.start, sl.stop, _orders(eqs[name])) for name, r, sl, _kind in layout)
     return kernel, rows, _row_plan(key, n)
+
+
+#: Steps in a row accepted at the two smallest step lengths after which Newton gives up
+#: (:meth:`SteadyNewton._solve`).
+_CRAWL = 3
 
 
 class _NewtonFailure(Exception):
