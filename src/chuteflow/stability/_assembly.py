@@ -13,11 +13,16 @@ field's own node) or ``+= e · D_c[node, j]`` for every column j (``-=`` for the
 which go to B with a minus sign), and the equilibrated copy as (P · r_i) · c_j. Every
 product and every sum is the one numpy computes, in the same order, without contraction
 (``-ffp-contract=off``): the pieces are the numpy road's bit for bit
-(tests/stability/test_assembly.py). The numpy road stays where no C compiler is available
-(or ``CHUTEFLOW_CCODE=off``): :func:`scatter_kernel` then returns None.
+(tests/stability/test_assembly.py; also those of the term-by-term assembly this replaced,
+checked on 84 operators). The numpy road stays where no C compiler is available (or
+``CHUTEFLOW_CCODE=off``): :func:`scatter_kernel` then returns None.
 
-The plan (which coefficient goes where) depends only on the equations' term structure, the
-fields and N: :func:`term_plan` builds it once per (N, three_d).
+The plan (which coefficient goes where, :func:`term_plan`) depends only on the equations'
+term structure, the fields and N; it is built once per (N, fields) and is the one statement
+of where each term goes: both roads execute it (the numpy one through
+:attr:`TermPlan.where`). That the plan routes each term correctly is checked independently
+of it, by an eigenvector of the assembled pencil satisfying every compiled equation term by
+term (tests/stability/test_operator.py).
 """
 
 from __future__ import annotations
@@ -106,6 +111,7 @@ class TermPlan(NamedTuple):
     keys: tuple[tuple[int, int], ...]  # the pieces A_{b,d}, in order of first appearance
     entries: np.ndarray  # (terms, 9) int: see the C source
     k_rows: tuple[int, ...]  # rows holding |k| terms (the top conditions), sorted
+    where: tuple  # per entry: (coefficient row, scale row, nodes, target, sign, index, order)
 
 
 #: Scale kinds of a row equation: interior nodes (an array over the nodes), the floor row
@@ -172,6 +178,20 @@ def term_plan(n: int, fields: tuple[str, ...], bulk_of: tuple, floor_of: tuple) 
     index["B"], index["K"] = len(keys), len(keys) + 1
     entries = np.array([(*r[:3], index[r[3]], *r[4:]) for r in raw], dtype=C_LONG).reshape(-1, 9)
     entries.flags.writeable = False
+    where = []  # the numpy road's view of the entries (stability.operator._scatter_numpy)
+    for cr, sr, c, t, sign, row0, nrow, node0, col0 in entries.tolist():
+        if c == 0:  # the field's own node: the diagonal of the block
+            at: tuple = (np.arange(row0, row0 + nrow), col0 + np.arange(node0, node0 + nrow))
+        else:
+            at = (slice(row0, row0 + nrow), slice(col0, col0 + m))
+        where.append((cr, sr, slice(node0, node0 + nrow), t, sign, at, c))
     return TermPlan(
-        tuple(equations), tuple(offsets), total, tuple(uses), tuple(keys), entries, tuple(sorted(k_rows))
+        tuple(equations),
+        tuple(offsets),
+        total,
+        tuple(uses),
+        tuple(keys),
+        entries,
+        tuple(sorted(k_rows)),
+        tuple(where),
     )

@@ -41,7 +41,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ..equations import TOP_OF, Term, arguments, compiled_equations
+from ..equations import Term, arguments, compiled_equations
 from ..errors import ParameterError
 from ..spectral import ChebyshevGrid, MappedChebyshevGrid
 from ..steady import SteadyFlow
@@ -300,17 +300,25 @@ def _scaled(P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
     return out
 
 
+def _scatter_numpy(where, coef, scale, D1, D2, targets) -> None:
+    """The compiled scatter's loop (:mod:`._assembly`) in numpy, term by term (the plan's
+    :attr:`~chuteflow.stability._assembly.TermPlan.where`): e = coefficient × row scale at
+    the term's nodes, added (subtracted for the α terms) at the field's own node (c = 0) or
+    as e · D_c[node] across the field's columns."""
+    for cr, sr, nodes, t, sign, at, c in where:
+        e = coef[cr, nodes] * scale[sr, nodes]
+        blk = e if c == 0 else e[:, None] * (D1 if c == 1 else D2)[nodes]
+        if sign > 0:
+            targets[t][at] += blk
+        else:
+            targets[t][at] -= blk
+
+
 def _equilibrated(kernel, P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
     """:func:`_scaled` (P · r_i) · c_j by the compiled kernel (:mod:`._assembly`), in one pass."""
     out = np.empty_like(P)
     kernel.equilibrate(P.shape[0], P.ctypes.data, r.ctypes.data, c.ctypes.data, out.ctypes.data)
     return out
-
-
-def _nodal(c, m: int) -> np.ndarray:
-    """A coefficient as m nodal values (constants broadcast; arrays as they are, cheaply)."""
-    a = np.asarray(c, dtype=float)
-    return a if a.shape == (m,) else np.broadcast_to(a, (m,))
 
 
 class StabilityOperator:
@@ -410,10 +418,7 @@ class StabilityOperator:
         }
         self.residuals = {}
         kernel = scatter_kernel()
-        if kernel is not None:
-            pieces, B, K, k_rows = self._scatter(kernel, base, part, sin, cos, bulk_scale, floor_scale)
-        else:
-            pieces, B, K, k_rows = self._add_terms(base, part, sin, cos, bulk_scale, floor_scale)
+        pieces, B, K, k_rows = self._scatter(kernel, base, part, sin, cos, bulk_scale, floor_scale)
         inner = slice(1, m - 1)
         for i, f in enumerate(self.fields):
             r0 = i * m
@@ -447,8 +452,10 @@ class StabilityOperator:
         self._K_sparse = (kr, kc, kv)
 
     def _scatter(self, kernel, base, part, sin, cos, bulk_scale, floor_scale):
-        """(pieces, B, K, rows of K) by the compiled scatter (:mod:`._assembly`): the same
-        products and sums as :meth:`_add_terms`, in the same order, bit for bit."""
+        """(pieces, B, K, rows of K): every term of the row equations put where the plan
+        (:func:`~chuteflow.stability._assembly.term_plan`) says, by the compiled kernel or,
+        without one (``kernel`` None), term by term in numpy (:func:`_scatter_numpy`), with
+        the same products and sums in the same order."""
         g = self.grid
         m, M = self.n + 1, self.size
         plan = term_plan(self.n, self.fields, tuple(sorted(BULK_OF.items())), tuple(sorted(FLOOR_OF.items())))
@@ -465,87 +472,23 @@ class StabilityOperator:
             scale[row] = bulk_scale[name] if kind == BULK else floor_scale[name] if kind == FLOOR else 1.0
         targets = [np.zeros((M, M)) for _ in range(len(plan.keys) + 2)]
         D1, D2 = np.ascontiguousarray(g.D, dtype=float), np.ascontiguousarray(g.D2, dtype=float)
-        ptrs = np.array([t.ctypes.data for t in targets], dtype=np.uintp)
-        entries = plan.entries
-        kernel.scatter(
-            len(entries),
-            entries.ctypes.data,
-            coef.ctypes.data,
-            scale.ctypes.data,
-            D1.ctypes.data,
-            D2.ctypes.data,
-            m,
-            M,
-            ptrs.ctypes.data,
-        )
+        if kernel is None:
+            _scatter_numpy(plan.where, coef, scale, D1, D2, targets)
+        else:
+            ptrs = np.array([t.ctypes.data for t in targets], dtype=np.uintp)
+            kernel.scatter(
+                len(plan.entries),
+                plan.entries.ctypes.data,
+                coef.ctypes.data,
+                scale.ctypes.data,
+                D1.ctypes.data,
+                D2.ctypes.data,
+                m,
+                M,
+                ptrs.ctypes.data,
+            )
         pieces = dict(zip(plan.keys, targets))
         return pieces, targets[-2], targets[-1], set(plan.k_rows)
-
-    def _add_terms(self, base, part, sin, cos, bulk_scale, floor_scale):
-        """(pieces, B, K, rows of K), term by term in numpy (the road without a C compiler)."""
-        g = self.grid
-        m, M = self.n + 1, self.size
-        eqs = compiled_equations()
-        dmat = (None, g.D, g.D2)  # undifferentiated terms: diagonal (add)
-        col = {f: slice(i * m, (i + 1) * m) for i, f in enumerate(self.fields)}
-        pieces: dict[tuple[int, int], np.ndarray] = {(0, 0): np.zeros((M, M))}
-        B = np.zeros((M, M))
-        K = np.zeros((M, M))
-        cache = {}
-        k_rows: set[int] = set()  # rows with |k| terms (the top conditions)
-
-        def coefficients(name):
-            if name not in cache:
-                res, coefs = eqs[name].evaluate(base, part, sin, cos)
-                self.residuals[name] = np.broadcast_to(res, (m,)).copy()
-                cache[name] = [_nodal(c, m) for c in coefs]
-            return cache[name]
-
-        nodes_of = np.arange(m)
-        rows_of = np.arange(M)
-
-        def add(name, nodes, scale, rows, keep_alpha):
-            diag = None  # (row, column) indices of an undifferentiated term's diagonal
-            for t, cf in zip(eqs[name].terms, coefficients(name)):
-                if t.field not in col or (t.d and not self.three_d):
-                    continue
-                if t.c == 0:
-                    # the identity's rows: only the diagonal (the same sums as the dense
-                    # block, whose other entries add zeros)
-                    if diag is None:
-                        diag = (rows_of[rows], nodes_of[nodes])
-                    blk = cf[nodes] * scale
-                    at = (diag[0], col[t.field].start + diag[1])
-                else:
-                    blk = (cf[nodes] * scale)[:, None] * dmat[t.c][nodes]
-                    at = (rows, col[t.field])
-                if t.a:
-                    if (t.a, t.b, t.c, t.d, t.k) != (1, 0, 0, 0, 0):
-                        raise NotImplementedError(f"α enters {name} as {t}: not a pencil")
-                    if keep_alpha:
-                        B[at] -= blk
-                    continue
-                if t.k:
-                    if (t.k, t.b, t.d) != (1, 0, 0):
-                        raise NotImplementedError(f"|k| enters {name} as {t}: not linear")
-                    K[at] += blk
-                    k_rows.update(range(M)[rows])
-                    continue
-                key = (t.b, t.d)
-                if key not in pieces:
-                    pieces[key] = np.zeros((M, M))
-                pieces[key][at] += blk
-
-        inner = slice(1, m - 1)
-        for i, f in enumerate(self.fields):
-            r0 = i * m
-            name = BULK_OF[f]
-            add(name, inner, bulk_scale[name][inner], slice(r0 + 1, r0 + m - 1), True)
-            name = FLOOR_OF[f]
-            add(name, slice(0, 1), floor_scale[name], slice(r0, r0 + 1), False)
-            # far field: ν̂' = −(cos θ/T0) ν̂ (ν̂ ∝ ν0), f̂' = −|k| f̂ for û, v̂, ŵ, T̂
-            add(TOP_OF[f], slice(m - 1, m), 1.0, slice(r0 + m - 1, r0 + m), False)
-        return pieces, B, K, k_rows
 
     @property
     def K(self) -> np.ndarray:
