@@ -10,13 +10,18 @@ the dense eigenproblem of (A' − σB')⁻¹B'), not which: the solver of each p
 its verdict are the same, and every value agrees within its own convergence estimate.
 
 Tolerance of Re α and |Im α| at each k_z: the larger of the two drifts |α(N) − α(N')| (the
-stated estimate) plus a round-off floor 2e-11 (1 + |α|). On the tracked branch at P1 the
+stated estimate) plus a round-off floor 5e-11 (1 + |α|). On the tracked branch at P1 the
 drifts (1e-16 to 4e-13) are themselves round-off: two computations that differ only by
 round-off move α by up to 6.3e-13 there and 8.2e-12 past it, where |α| reaches 39 (the same
 A' assembled in another order, measured when the fast path came). A steady flow that
 differs only by round-off (relative 5e-12: Newton's solves with a second right-hand side,
 or another machine's BLAS kernels) moves α past the branch by up to 4.6e-11 at |α| = 2.6
 (T2, k_z = 1.07) and 1.2e-11 at |α| = 1.6 (P1, k_z = 0.38; measured), hence the floor.
+The compiled rows of the steady Newton solver (issue 9, stop 31) changed T2's flow at that
+level and moved α at k_z = 1.07 by 8.2e-11 = 2.3e-11 (1 + |α|); the same flow solved at
+ν0(0) (1 + ε), ε = ±1e-15, ±3e-15, ±1e-14 (round-off of the input), moves it by up to
+2.6e-11 (1 + |α|) against the reference, with the same solver, N and verdict at every k_z
+(stop 32, measured): the floor is 5e-11 (1 + |α|), twice that spread.
 The drifts and tails agree to half their value plus that floor (measured: the drifts of
 resolved modes to 37 %, T2 at k_z = 2.3, |α| = 30).
 """
@@ -39,7 +44,7 @@ KZ50 = np.geomspace(1e-5, 3.0, 50)
 
 
 def _floor(alpha_re):
-    return 2e-11 * (1.0 + np.abs(np.nan_to_num(alpha_re)))
+    return 5e-11 * (1.0 + np.abs(np.nan_to_num(alpha_re)))
 
 
 def _compare(got, stored):
