@@ -20,6 +20,12 @@ best of a few repetitions after a warm-up (sympy compilation is excluded).
   sinh-mapped grid (ladder from 48) against the same on the plain grid with the old ladder
   (80, 100, 125, …), measured in the same run; ratio = plain / mapped time; the note gives
   both N and |Δα|.
+- ``operator_assembly_N<n>`` (issue 9, stop 32): building one ``StabilityOperator`` of P1
+  (mapped grid, N = 48; also N = 96 in the full run) with the terms scattered by the
+  compiled loop (:mod:`chuteflow.stability._assembly`) against the numpy road of the same
+  plan (``scatter_kernel`` disabled), in the same run, medians of 100 builds of each,
+  interleaved; the pieces must be equal bit for bit. Memory as in the sweep workers
+  (``keep_freed_memory``).
 - ``large_k_direct_P1_3`` (full run only, one repetition): ``least_stable(P1, k = 3)``, the
   direct solve past the continuum (dense QZ up the ladder 80 … 244), against the same with
   a second QZ for every rung's check at N' (no eigenvalues kept by the operators) and the
@@ -165,9 +171,52 @@ def run(quick: bool = False) -> list[dict]:
                 f"{mp.drift:.0e}); |Δα|/|α| = {abs(mm.alpha - mp.alpha) / abs(mp.alpha):.1e}",
             }
         )
+    rows += _assembly(flow, (48,) if quick else (48, 96))
     if not quick:
         rows.append(_large_k())
     return rows
+
+
+def _assembly(flow, sizes, repeat: int = 100) -> list[dict]:
+    import importlib
+
+    from chuteflow._memory import keep_freed_memory
+
+    keep_freed_memory()  # as in the sweep workers: fresh pages for every operator otherwise
+    operator = importlib.import_module("chuteflow.stability.operator")
+    kernel = operator.scatter_kernel
+    out = []
+    for n in sizes:
+        # interleaved, medians: one build after another, as a solver builds them (a tight
+        # loop of one road alone keeps its arrays in cache and flatters both)
+        times: dict = {"compiled": [], "numpy": []}
+        ops = {}
+        for _ in range(repeat):
+            for road in ("compiled", "numpy"):
+                operator.scatter_kernel = kernel if road == "compiled" else (lambda: None)
+                try:
+                    t0 = time.perf_counter()
+                    ops[road] = operator.StabilityOperator(flow, n, mapped=True)
+                    times[road].append(time.perf_counter() - t0)
+                finally:
+                    operator.scatter_kernel = kernel
+        op_c, op_p = ops["compiled"], ops["numpy"]
+        same = all(np.array_equal(op_c.pieces[k], op_p.pieces[k]) for k in op_p.pieces) and np.array_equal(
+            op_c.B_eq, op_p.B_eq
+        )
+        t_c, t_p = float(np.median(times["compiled"])), float(np.median(times["numpy"]))
+        out.append(
+            {
+                "name": f"operator_assembly_N{n}",
+                "seconds": t_c,
+                "baseline_seconds": t_p,
+                "ratio": t_p / t_c,
+                "note": f"P1, mapped grid, M = {op_c.size}; compiled scatter vs the numpy road of the "
+                f"same plan, medians of {repeat} interleaved builds; bit for bit: {same}"
+                + ("" if kernel() is not None else " (no C compiler: both the numpy road)"),
+            }
+        )
+    return out
 
 
 def _large_k() -> dict:
