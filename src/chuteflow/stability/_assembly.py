@@ -120,19 +120,20 @@ BULK, FLOOR, TOP = "bulk", "floor", "top"
 
 
 @functools.lru_cache(maxsize=32)
-def term_plan(n: int, fields: tuple[str, ...], bulk_of: tuple, floor_of: tuple) -> TermPlan:
+def term_plan(n: int, fields: tuple[str, ...], rows_of: tuple[tuple, tuple]) -> TermPlan:
     """The scatter plan of the operator on N = ``n`` with ``fields``: for each term of each
     row equation, in the order the operator was always assembled in, its coefficient row,
     scale row, order, target (0 … len(keys) − 1 the pieces, then B, then K), sign and rows,
-    nodes and columns.
+    nodes and columns. ``rows_of``: the (field, equation) pairs of the bulk rows and of the
+    floor rows (:data:`chuteflow.stability.operator.BULK_OF`, ``FLOOR_OF``).
 
-    Each field's block has its bulk equation (``bulk_of``) on the interior nodes, α terms to
-    B with a minus sign (residuals are N(X) − B ∂_t X); its floor row (``floor_of``) and its
+    Each field's block has its bulk equation on the interior nodes, α terms to
+    B with a minus sign (residuals are N(X) − B ∂_t X); its floor row and its
     top row, the far-field condition (ν̂' = −(cos θ/T0) ν̂, f̂' = −|k| f̂ for the others, whose
     |k| terms go to K), without α terms. An undifferentiated term (c = 0) holds the field's
     own node only. Raises NotImplementedError where a term does not fit the pencil."""
     eqs = compiled_equations()
-    bulk, floor = dict(bulk_of), dict(floor_of)
+    bulk, floor = dict(rows_of[0]), dict(rows_of[1])
     m = n + 1
     three_d = "w" in fields
     col = {f: i * m for i, f in enumerate(fields)}

@@ -55,6 +55,9 @@ BULK_OF = {"nu": "mass", "u": "xmom", "v": "ymom", "w": "zmom", "T": "energy"}
 #: Floor row of each block (the ν̂ block carries the y-momentum balance at the floor).
 FLOOR_OF = {"nu": "ymom", "u": "floor_x", "v": "floor_v", "w": "floor_z", "T": "floor_energy"}
 
+#: The row equations of each block, as :func:`~chuteflow.stability._assembly.term_plan` takes them.
+_ROWS_OF = (tuple(sorted(BULK_OF.items())), tuple(sorted(FLOOR_OF.items())))
+
 N_RANGE = (8, 1000)
 
 #: Width of the sinh map's clustered region in units of the density scale height
@@ -293,10 +296,16 @@ class Pencil:
         return (self.operator.col_eq * W.T).T
 
 
-def _scaled(P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """P * r * c (row and column scales) with one temporary instead of two."""
-    out = np.multiply(P, r)
-    out *= c
+def _scaled(kernel, P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(P · r_i) · c_j (row and column scales): by the compiled kernel in one pass
+    (:mod:`._assembly`), or without one (``kernel`` None) in numpy with one temporary instead
+    of two; the same numbers."""
+    if kernel is None:
+        out = np.multiply(P, r[:, None])
+        out *= c[None, :]
+        return out
+    out = np.empty_like(P)
+    kernel.equilibrate(P.shape[0], P.ctypes.data, r.ctypes.data, c.ctypes.data, out.ctypes.data)
     return out
 
 
@@ -312,13 +321,6 @@ def _scatter_numpy(where, coef, scale, D1, D2, targets) -> None:
             targets[t][at] += blk
         else:
             targets[t][at] -= blk
-
-
-def _equilibrated(kernel, P: np.ndarray, r: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """:func:`_scaled` (P · r_i) · c_j by the compiled kernel (:mod:`._assembly`), in one pass."""
-    out = np.empty_like(P)
-    kernel.equilibrate(P.shape[0], P.ctypes.data, r.ctypes.data, c.ctypes.data, out.ctypes.data)
-    return out
 
 
 class StabilityOperator:
@@ -435,14 +437,9 @@ class StabilityOperator:
         self.row_eq[1 : m - 1] = 1.0 / base["nu"][1 : m - 1]
         self.col_eq = np.ones(M)
         self.col_eq[:m] = base["nu"]
-        if kernel is not None:
-            r, c = self.row_eq, self.col_eq
-            self._pieces_eq = {key: _equilibrated(kernel, P, r, c) for key, P in pieces.items()}
-            self.B_eq = _equilibrated(kernel, B, r, c)
-        else:
-            r, c = self.row_eq[:, None], self.col_eq[None, :]
-            self._pieces_eq = {key: _scaled(P, r, c) for key, P in pieces.items()}
-            self.B_eq = _scaled(B, r, c)
+        r, c = self.row_eq, self.col_eq
+        self._pieces_eq = {key: _scaled(kernel, P, r, c) for key, P in pieces.items()}
+        self.B_eq = _scaled(kernel, B, r, c)
         # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
         tops = np.array(sorted(k_rows), dtype=int)
         ti, kc = np.nonzero(K[tops])
@@ -458,7 +455,7 @@ class StabilityOperator:
         the same products and sums in the same order."""
         g = self.grid
         m, M = self.n + 1, self.size
-        plan = term_plan(self.n, self.fields, tuple(sorted(BULK_OF.items())), tuple(sorted(FLOOR_OF.items())))
+        plan = term_plan(self.n, self.fields, _ROWS_OF)
         eqs = compiled_equations()
         args = arguments(base, part, sin, cos)
         coef = np.empty((plan.n_coef, m))
