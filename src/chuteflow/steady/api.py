@@ -391,7 +391,7 @@ def solve_point(
         )
     dX = newton_tangent(st2)
     if dX is not None:
-        _BETA_TANGENTS[flow] = dX
+        _BETA_TANGENTS.put(flow, dX)
     if keep is not None:
         keep["coarse"], keep["fine"] = st, st2
     if q2["h"] < min_thickness:
@@ -403,9 +403,39 @@ def solve_point(
 #: :func:`steady_tangent` to use it (otherwise it factorises the Jacobian at the flow).
 #: The tangent's error is of the order of that step (measured: tests/steady/test_solver.py).
 TANGENT_STEP = 1e-10
-#: dX/dβ from Newton's last LU (solve_point), by flow, while the flow lives (weak keys: a
-#: cache never keeps a flow, with its grid, alive).
-_BETA_TANGENTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+class _PerObject:
+    """Values by object identity while the object lives (a weak reference: never keeps it
+    alive). Unlike a ``WeakKeyDictionary``, flows equal in value do not share an entry, so
+    one flow dying does not take the entry of another equal one."""
+
+    def __init__(self):
+        self._items: dict[int, tuple] = {}
+
+    def put(self, obj, value) -> None:
+        key = id(obj)
+
+        def drop(_ref, key=key, items=self._items):
+            items.pop(key, None)
+
+        self._items[key] = (weakref.ref(obj, drop), value)
+
+    def get(self, obj):
+        """The value stored for ``obj``, or None."""
+        item = self._items.get(id(obj))
+        return None if item is None or item[0]() is not obj else item[1]
+
+    def take(self, obj):
+        """The value stored for ``obj``, removed; None if there is none."""
+        value = self.get(obj)
+        if value is not None:
+            self._items.pop(id(obj), None)
+        return value
+
+
+#: dX/dβ from Newton's last LU (solve_point), by flow object, while the flow lives.
+_BETA_TANGENTS = _PerObject()
 
 
 def newton_tangent(st: NewtonState) -> np.ndarray | None:
@@ -461,8 +491,15 @@ def steady_tangent(flow: SteadyFlow) -> dict:
 def _cached_tangent(flow: SteadyFlow) -> dict:
     """The tangent of one flow, computed once while the flow lives: several sweep metrics of
     the same point (``kinematic``, the 1D criterion, the long-wave theory) need it. Its
-    arrays are made read-only so that no caller can alter the cached copy."""
-    dX = _BETA_TANGENTS.pop(flow, None)
+    arrays are made read-only so that no caller can alter the cached copy.
+
+    Newton's dX/dβ is kept by flow object (:data:`_BETA_TANGENTS`), not by value as the
+    cache is: two flows equal in value (a marked point on the grid, solved from the same
+    cold start by two tasks in the threads of one Dask worker) each find their own, so the
+    tangent does not depend on which of them dies or asks first (with one entry for both,
+    the second factorised instead, and its dQ0/dρ̄0 differed by ~TANGENT_STEP: 2e-10 in
+    tests/sweep/test_dask.py, in one run of three)."""
+    dX = _BETA_TANGENTS.take(flow)
     out = tangent_from(flow, dX if dX is not None else tangent_vectors(flow, theta=False)[0])
     for v in out.values():
         if isinstance(v, np.ndarray):
