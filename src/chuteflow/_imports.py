@@ -14,7 +14,7 @@ import importlib.util
 import sys
 from collections.abc import Callable
 
-__all__ = ["when_imported"]
+__all__ = ["when_imported", "warm_xarray"]
 
 
 class _AfterImport(importlib.abc.MetaPathFinder):
@@ -48,3 +48,18 @@ def when_imported(name: str, callback: Callable[[], None]) -> None:
         callback()
     else:
         sys.meta_path.insert(0, _AfterImport(name, callback))
+
+
+def warm_xarray() -> None:
+    """Import xarray and build one tiny Dataset, so that the next Dataset is cheap.
+
+    Importing xarray costs ~0.3 s, and its first Dataset as much again: that is when xarray
+    looks for chunked-array libraries and imports dask's array modules if dask is installed
+    (~350 modules). A parent process whose workers are busy (a steady map, a sweep) does both
+    while it waits, instead of after the last result, when they would add to the wall time.
+    Call it only after the workers are forked (they need no xarray, see the module docstring).
+    """
+    import numpy as np
+    import xarray as xr
+
+    xr.Dataset({"warm": (("x",), np.zeros(1))}, coords={"x": ("x", np.zeros(1))})

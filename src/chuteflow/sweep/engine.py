@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from .._imports import warm_xarray
 from .._memory import keep_freed_memory
 from .._threads import limit_blas_threads
 from .._version import __version__
@@ -283,6 +284,9 @@ def _run_pool(cfg, todo, finished, n, keep_flows=False):
     ex = ProcessPoolExecutor(max_workers=n, mp_context=ctx, initializer=_init_worker)
     try:
         pending = {ex.submit(run_task, cfg, t, keep_flows=keep_flows) for t in todo}
+        # the workers are forked (without xarray): the Dataset's imports now, not after the
+        # last task
+        warm_xarray()
         while pending:
             done, pending = wait(pending, return_when=FIRST_COMPLETED)
             for fut in done:
