@@ -349,12 +349,19 @@ def _secant_event(g, rhs, state_at, t_old, t_ev, t_step):
 
 def _hermite_output(t, zs, fs):
     """Dense output through the accepted steps: the piecewise cubic Hermite interpolant of
-    states ``zs`` and derivatives ``fs`` (both steps × 4), called as ``sol(y)`` → 4 × len(y)."""
-    from scipy.interpolate import CubicHermiteSpline
+    states ``zs`` and derivatives ``fs`` (both steps × 4), called as ``sol(y)`` → 4 × len(y).
 
-    spline = CubicHermiteSpline(t, zs, fs, axis=0, extrapolate=True)
+    The spline is built at the first call: of the ~20 trials of a scan's bisection, each
+    with its dense output, only the one closest to the root is evaluated (building scipy's
+    spline for every trial cost a quarter of a scan)."""
+    spline = None
 
     def sol(yy):
+        nonlocal spline
+        if spline is None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            spline = CubicHermiteSpline(t, zs, fs, axis=0, extrapolate=True)
         return np.asarray(spline(yy)).T
 
     return sol
