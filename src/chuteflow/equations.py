@@ -333,6 +333,21 @@ def compiled_equations() -> dict[str, CompiledEquation]:
     }
 
 
+def warm_up(model=None) -> None:
+    """Build the generated code once in this process, so that processes forked from it
+    inherit it instead of each building it again: :func:`compiled_equations` and, for a
+    :class:`~chuteflow.closures.ChuteModel`, its closures' partial derivatives (the generated
+    numpy code and, where a compiler is available, the compiled kernel that the steady
+    solver uses) and the pair ``f``. Used by :func:`chuteflow.steady.steady_map` and the
+    sweep's process pool before they fork."""
+    compiled_equations()
+    if model is not None:
+        nu, T = np.array([0.1]), np.array([1.0])
+        model.evaluate(nu, T)
+        model.evaluate(nu, T, compiled=True)
+        model.f(nu)
+
+
 def _derive_compiled():
     """Residual and nonzero coefficients of each equation at a y-dependent base state.
 

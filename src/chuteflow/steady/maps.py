@@ -277,12 +277,11 @@ def steady_map(
             import multiprocessing as mp
             from concurrent.futures import ProcessPoolExecutor
 
-            from ..equations import compiled_equations
+            from ..equations import warm_up
 
-            # forked processes inherit the sympy-compiled closures and equations (built
-            # here once; a process forks at the first task submitted to it)
-            compiled_equations()
-            model.evaluate(np.array([0.1]), np.array([1.0]), compiled=True)
+            # forked processes inherit the generated closures and equations (built here
+            # once; a process forks at the first task submitted to it)
+            warm_up(model)
             ctx = mp.get_context("fork") if "fork" in mp.get_all_start_methods() else None
             pool = stack.enter_context(ProcessPoolExecutor(max_workers=workers, mp_context=ctx))
         starts, first = _start_rows(ths, nus, model, opts, start_theta, proofs, pool=pool)

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._memory import release_free_memory
 from .._threads import limit_blas_threads
-from ..equations import compiled_equations
+from ..equations import warm_up as _warm_up
 from ..errors import ChuteflowError, ConvergenceError, NoSteadyFlowError
 from ..steady import solve_steady, steady_row
 from .points import Point
@@ -70,12 +70,9 @@ def _single_thread():
 
 
 def warm_up(config=None) -> None:
-    """Compile the symbolic equations and closures once (forked workers inherit them)."""
-    compiled_equations()
-    model = config.model if config is not None else None
-    if model is not None:
-        model.evaluate(np.array([0.1]), np.array([1.0]))
-        model.f(np.array([0.1]))
+    """Compile the symbolic equations and the configuration's closures once (forked workers
+    inherit them): :func:`chuteflow.equations.warm_up`."""
+    _warm_up(config.model if config is not None else None)
 
 
 def _clip(msg: str) -> str:
