@@ -107,7 +107,7 @@ class TermPlan(NamedTuple):
     equations: tuple[str, ...]  # distinct equations, in order of first use
     offsets: tuple[int, ...]  # first coefficient row of each equation
     n_coef: int  # coefficient rows in all
-    uses: tuple[tuple[str, str, int], ...]  # (equation, scale kind, first node) per scale row
+    uses: tuple[tuple[str, str], ...]  # (equation, scale kind) per scale row
     keys: tuple[tuple[int, int], ...]  # the pieces A_{b,d}, in order of first appearance
     entries: np.ndarray  # (terms, 9) int: see the C source
     k_rows: tuple[int, ...]  # rows holding |k| terms (the top conditions), sorted
@@ -142,7 +142,7 @@ def term_plan(n: int, fields: tuple[str, ...], rows_of: tuple[tuple, tuple]) -> 
     total = 0
     keys: list[tuple[int, int]] = [(0, 0)]
     raw: list[tuple] = []  # (coef row, scale row, c, target key, sign, row0, nrow, node0, col0)
-    uses: list[tuple[str, str, int]] = []
+    uses: list[tuple[str, str]] = []
     k_rows: set[int] = set()
 
     def add(name, kind, node0, nrow, row0, keep_alpha):
@@ -153,7 +153,7 @@ def term_plan(n: int, fields: tuple[str, ...], rows_of: tuple[tuple, tuple]) -> 
             total += len(eqs[name].terms)
         off = offsets[equations.index(name)]
         s_row = len(uses)
-        uses.append((name, kind, node0))
+        uses.append((name, kind))
         for i, t in enumerate(eqs[name].terms):  # coefficient i of the compiled output
             if t.field not in col or (t.d and not three_d):
                 continue

@@ -441,7 +441,7 @@ class StabilityOperator:
         self._pieces_eq = {key: _scaled(kernel, P, r, c) for key, P in pieces.items()}
         self.B_eq = _scaled(kernel, B, r, c)
         # K has entries on a few rows only (the top conditions): kept as (rows, columns, values)
-        tops = np.array(sorted(k_rows), dtype=int)
+        tops = np.array(k_rows, dtype=int)  # sorted (the plan's)
         ti, kc = np.nonzero(K[tops])
         kr = tops[ti]
         kv = K[kr, kc]
@@ -449,7 +449,7 @@ class StabilityOperator:
         self._K_sparse = (kr, kc, kv)
 
     def _scatter(self, kernel, base, part, sin, cos, bulk_scale, floor_scale):
-        """(pieces, B, K, rows of K): every term of the row equations put where the plan
+        """(pieces, B, K, rows of K, sorted): every term of the row equations put where the plan
         (:func:`~chuteflow.stability._assembly.term_plan`) says, by the compiled kernel or,
         without one (``kernel`` None), term by term in numpy (:func:`_scatter_numpy`), with
         the same products and sums in the same order."""
@@ -465,7 +465,7 @@ class StabilityOperator:
             for i, c in enumerate(coefs):
                 coef[off + i] = c
         scale = np.empty((len(plan.uses), m))
-        for row, (name, kind, _node) in enumerate(plan.uses):
+        for row, (name, kind) in enumerate(plan.uses):
             scale[row] = bulk_scale[name] if kind == BULK else floor_scale[name] if kind == FLOOR else 1.0
         targets = [np.zeros((M, M)) for _ in range(len(plan.keys) + 2)]
         D1, D2 = np.ascontiguousarray(g.D, dtype=float), np.ascontiguousarray(g.D2, dtype=float)
@@ -485,7 +485,7 @@ class StabilityOperator:
                 ptrs.ctypes.data,
             )
         pieces = dict(zip(plan.keys, targets))
-        return pieces, targets[-2], targets[-1], set(plan.k_rows)
+        return pieces, targets[-2], targets[-1], plan.k_rows
 
     @property
     def K(self) -> np.ndarray:

@@ -126,7 +126,8 @@ def _start_rows(ths, nus, model, opts, start_theta, proofs, pool=None):
             futures = [pool.submit(_first_good_worker, t) for t in tasks]
             k1, good1, cold1, p1 = futures[0].result()
             if good1 and k1 > 0:
-                early = pool.submit(_sweep_worker, _down_task(ths, nus, model, opts, k1, cold1[k1], p1))
+                down = _chains(len(ths), [k1])[0][1]  # the chain from k1 down to the first row
+                early = pool.submit(_sweep_worker, _task(ths, down, nus, model, opts, cold1[k1], p1))
             found = [(k1, good1, cold1, p1), futures[1].result()]
         else:
             found = [_first_good_alone(t) for t in tasks]
@@ -142,9 +143,10 @@ def _start_rows(ths, nus, model, opts, start_theta, proofs, pool=None):
     return {k: cold[k]}, None
 
 
-def _down_task(ths, nus, model, opts, k, row, proofs):
-    """Arguments of :func:`_sweep_worker` for the chain from row ``k`` down to the first."""
-    return [ths[i] for i in range(k - 1, -1, -1)], nus, model, opts, row, list(proofs)
+def _task(ths, rows, nus, model, opts, seed, proofs):
+    """Arguments of :func:`_sweep` (and :func:`_sweep_worker`) for the chain of ``rows``
+    seeded by the row ``seed``, with a copy of ``proofs``."""
+    return [ths[i] for i in rows], nus, model, opts, seed, list(proofs)
 
 
 def _chains(n, starts):
@@ -286,14 +288,13 @@ def steady_map(
             pool = stack.enter_context(ProcessPoolExecutor(max_workers=workers, mp_context=ctx))
         starts, first = _start_rows(ths, nus, model, opts, start_theta, proofs, pool=pool)
         chains = _chains(len(ths), sorted(starts))
-        tasks = [([ths[i] for i in rows], nus, model, opts, starts[k], list(proofs)) for k, rows in chains]
         early = None
+        own = [proofs] * len(chains)
         if first is not None and chains[0][1][0] < chains[0][0]:
             # the chain down from the lower start row: that search's proofs only (in both
             # roads, so that one process and several give the same numbers)
-            k1 = chains[0][0]
-            tasks[0] = _down_task(ths, nus, model, opts, k1, starts[k1], first[0])
-            early = first[1]
+            own[0], early = first[0], first[1]
+        tasks = [_task(ths, rows, nus, model, opts, starts[k], p) for (k, rows), p in zip(chains, own)]
         if pool is not None and len(chains) >= 2:
             # the chains go out from the top of the range first. Where the chain down from
             # the lower start row runs already (a short one, at the cheap end), the other
