@@ -98,8 +98,8 @@ def test_derived_rows_equal_hand_written(theta, nu0, integrated):
 @pytest.mark.parametrize("theta, nu0", CASES)
 def test_same_newton_iterates_as_hand_written(theta, nu0):
     """Cold start and polish with the derived and with the hand-written rows: the same
-    number of iterations, residual histories that agree to round-off (absolute ~1e-12, the
-    floor of the scaled residual) and the same solution."""
+    number of iterations, residual histories that agree to round-off (absolute a few 1e-12,
+    the floor of the scaled residual) and the same solution."""
     model = ChuteModel(roughness=0.10 if theta == 20.0 else 0.05)
     out = []
     for cls in (SteadyNewton, _HandWrittenNewton):
@@ -114,8 +114,11 @@ def test_same_newton_iterates_as_hand_written(theta, nu0):
     assert (a0, a1) == (b0, b1)
     for ha, hb in ((ha0, hb0), (ha1, hb1)):
         assert len(ha) == len(hb)
-        # scaled residuals carry absolute round-off ~1e-13 (terms of O(1) cancelling)
-        assert np.allclose(ha, hb, rtol=1e-8, atol=1e-12)
+        # scaled residuals carry absolute round-off ~1e-13 … 1e-12 (terms of O(1)
+        # cancelling; derivatives (D_ξ f)/L in the derived rows, (D_ξ/L) f in the
+        # hand-written ones, which round differently): the last entry, after Newton's
+        # final step, lies at that floor (2.1e-12 and 0.9e-12 at θ = 16°, ν0(0) = 0.15)
+        assert np.allclose(ha, hb, rtol=1e-8, atol=5e-12)
     assert np.abs(X - Y).max() <= 1e-10 * np.abs(Y).max()
 
 

@@ -79,9 +79,9 @@ def _row(theta, nus, model, opts):
         colds.append(p.usable)
         return p
 
-    def counted_attempt(theta, nu0, model, opts, start, n, cold=False):
+    def counted_attempt(theta, nu0, model, opts, start, n, cold=False, **kw):
         starts.append((nu0, n))
-        return attempt(theta, nu0, model, opts, start, n, cold)
+        return attempt(theta, nu0, model, opts, start, n, cold, **kw)
 
     with (
         np.errstate(all="ignore"),

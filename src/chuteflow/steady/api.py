@@ -309,6 +309,9 @@ def solve_point(
     lam_min=1e-6,
     noise_exit=False,
     keep: dict | None = None,
+    chord: bool = False,
+    inherit: dict | None = None,
+    inherit_fine: bool = False,
 ):
     """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start).
 
@@ -318,7 +321,11 @@ def solve_point(
     taken within :data:`TANGENT_STEP` (relative) of the result. With ``keep`` (a dict),
     the states at the two accepted resolutions are stored there (``"coarse"``, ``"fine"``)
     with their :attr:`~chuteflow.steady.solver.NewtonState.tangents` (continuation
-    predictors: :mod:`chuteflow.steady.family`).
+    predictors: :mod:`chuteflow.steady.family`). With ``chord``, Newton reuses an LU for
+    chord steps while they contract fast (:attr:`~chuteflow.steady.solver.SteadyNewton.chord`),
+    starting from ``inherit`` ({n: a neighbour's :attr:`~chuteflow.steady.solver.NewtonState.lu`})
+    at the first rung and, with ``inherit_fine``, at the finer ones (otherwise a finer rung
+    factorises, and its dX/dβ is exact); the accepted states' ``lu`` are then in ``keep``.
 
     With ``noise_exit`` the resolution ladder gives up (:class:`ResolutionError`) before
     n_max when the change between resolutions is at the solver's round-off floor, which
@@ -328,7 +335,17 @@ def solve_point(
     tail is below :data:`_NOISE_TAIL` × rtol (the truncation error is far below the change).
     """
     st, it, res = solve_state(
-        theta, nu0, model, nu_top, n, guess=start, maxiter=maxiter, lam_min=lam_min, tangents=True
+        theta,
+        nu0,
+        model,
+        nu_top,
+        n,
+        guess=start,
+        maxiter=maxiter,
+        lam_min=lam_min,
+        tangents=True,
+        chord=chord,
+        inherit=inherit.get(n) if inherit else None,
     )
     _, q = _quantities(theta, st, model)
     change = prev = math.inf
@@ -349,6 +366,8 @@ def solve_point(
             min_iter=1,
             grid_map=st.grid_map,
             tangents=True,
+            chord=chord,
+            inherit=inherit.get(n2) if inherit and inherit_fine else None,
         )
         it += it2
         g2, q2 = _quantities(theta, st2, model)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -88,6 +89,14 @@ class Options:
     change between resolutions is at the solver's round-off floor, which grows with n, instead
     of climbing to n_max (:func:`~chuteflow.steady.api.solve_point`); on the 40 × 40 quick
     stability diagrams of both φ this changes no status and no value.
+
+    Continuation steps take Newton's chord steps from the LUs of the row's last solve
+    (:func:`_continue`) at the first rung of their ladder; ``beta_tangents`` (the default)
+    keeps a fresh LU at the finer rungs, whose exact dX/dβ each flow then carries for
+    :func:`~chuteflow.steady.api.steady_tangent` (the long-wave theory and the sweep's
+    metrics of the same flows use it). A map, whose flows are only summarised, sets it
+    False: every rung starts from the neighbour's LU (no factorisation where its chord
+    steps converge), and steady_tangent would factorise.
     """
 
     nu_top: float = 1e-9
@@ -103,6 +112,7 @@ class Options:
     lam_min: float = _CONT_LAM_MIN
     decide: bool = True
     noise_exit: bool = True
+    beta_tangents: bool = True
 
 
 @dataclass
@@ -126,9 +136,31 @@ _UNREACHED = "unreached"
 
 
 def _attempt(
-    theta, nu0, model, opts: Options, start: NewtonState | None, n: int, cold: bool = False
+    theta,
+    nu0,
+    model,
+    opts: Options,
+    start: NewtonState | None,
+    n: int,
+    cold: bool = False,
+    inherit: dict | None = None,
+    lu_out: dict | None = None,
 ) -> _Point:
-    kw = {} if cold else {"maxiter": opts.maxiter, "lam_min": opts.lam_min}
+    """Solve at (θ, ν0) from ``start`` (None: cold start) with the ladder from n. Except
+    for a cold start, Newton takes chord steps (:attr:`~chuteflow.steady.solver.SteadyNewton.chord`),
+    from the start with ``inherit`` ({n: LU} of a neighbour's solve); ``lu_out`` (a dict)
+    receives those of this solve, {n: LU} at its two accepted resolutions, if it gives a flow."""
+    kw: dict[str, Any] = (
+        {}
+        if cold
+        else {
+            "maxiter": opts.maxiter,
+            "lam_min": opts.lam_min,
+            "chord": True,
+            "inherit": inherit,
+            "inherit_fine": not opts.beta_tangents,
+        }
+    )
     keep: dict = {}
     try:
         flow = solve_point(
@@ -145,9 +177,9 @@ def _attempt(
             keep=keep,
             **kw,
         )
-        return _newton_vectors(_Point("ok", flow), keep, opts)
+        return _newton_vectors(_Point("ok", flow), _lu_out(keep, lu_out), opts)
     except ThinLayerError as exc:
-        return _newton_vectors(_Point("thin", exc.flow, str(exc)), keep, opts)
+        return _newton_vectors(_Point("thin", exc.flow, str(exc)), _lu_out(keep, lu_out), opts)
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
     except ResolutionError as exc:
@@ -165,6 +197,14 @@ def _attempt(
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         return _Point("not_converged", None, f"{type(exc).__name__}: {exc}")
+
+
+def _lu_out(keep: dict, lu_out: dict | None) -> dict:
+    if lu_out is not None:
+        for st in keep.values():
+            if st.lu is not None:
+                lu_out[st.n] = st.lu
+    return keep
 
 
 def _newton_vectors(point: _Point, keep: dict, opts: Options) -> _Point:
@@ -274,6 +314,12 @@ def _with_tangent(point: _Point, opts: Options) -> _Point:
     return point
 
 
+#: Key of ``memo`` (:func:`_continue`) for the LUs of the row's last successful solve:
+#: (its point, {n: LU}). One slot, so that a row keeps O(1) factorisations alive; a walk
+#: along ν0 continues from the point it solved last.
+_LU_SLOT = "lu"
+
+
 def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options, memo: dict | None = None) -> _Point:
     """Solve at (θ, ν0) from the converged neighbour ``nb``; on failure retry through
     2, then 4, … (up to 2**``opts.substeps``) equal steps on the straight path from the
@@ -305,12 +351,19 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options, memo: 
         assert cur.flow is not None  # continue_to steps only from accepted (usable) points
         pred = _predict(cur, th, nu)
         n_low, n_old = _resolved_n(cur.flow, opts), _start_n(cur.flow, opts)
-        q = _attempt(th, nu, model, opts, pred, n_low)
+        # the LUs of the last solve (memo's one slot), if it was this start point's: Newton's
+        # chord steps start with them (a neighbour's Jacobian, at the same n)
+        slot = memo.get(_LU_SLOT) if memo is not None else None
+        inherit = slot[1] if slot is not None and slot[0] is cur else None
+        lus: dict = {}
+        q = _attempt(th, nu, model, opts, pred, n_low, inherit=inherit, lu_out=lus)
         if not q.usable and n_low < n_old:
             # failed from the coarser grid (Newton on a layer it does not resolve, or a
             # ladder whose last change is at Newton's round-off floor): the neighbour's own
             # resolution, as before
-            q = _attempt(th, nu, model, opts, pred, n_old)
+            q = _attempt(th, nu, model, opts, pred, n_old, inherit=inherit, lu_out=lus)
+        if memo is not None and q.usable:
+            memo[_LU_SLOT] = (q, lus)
         if q.usable and s != 1.0:
             q = _with_tangent(q, opts)
         return Trial(q.usable, q)

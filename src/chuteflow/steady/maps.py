@@ -269,6 +269,8 @@ def steady_map(
         tangent=tangent,
         substeps=0,
         decide=decide,
+        # the map's flows are summarised, not kept: their exact dX/dβ only with ``tangent``
+        beta_tangents=tangent,
     )
     proofs: list = []
     if workers is None:

@@ -263,13 +263,15 @@ def _chebval1(c: list[float], x: float) -> float:
     return c0 + c1 * x
 
 
-@functools.lru_cache(maxsize=2)
-def _fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The fine sampling of :func:`derived_quantities` for a series of degree n: the points
+@functools.lru_cache(maxsize=4)
+def fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The fine sampling of :func:`derived_quantities` and of
+    :func:`~chuteflow.steady.solver.layer_grid_map` for a series of degree n: the points
     x = linspace(−1, 1, 8n + 1) and the matrix of T_0 … T_n there (one product per series
     instead of a Clenshaw recurrence over n vector operations); cached, read-only. 12 MiB
-    at n = 432: the last two degrees are kept (a flow and its drift check use two; a
-    rebuild costs ~4 ms at n = 432)."""
+    at n = 432: the last four degrees are kept (a ladder's two rungs and the next
+    continuation step's: 5 MiB for n = 64 … 216; a rebuild costs ~0.8 ms at n = 96,
+    ~4 ms at n = 432)."""
     xf = np.linspace(-1.0, 1.0, 8 * n + 1)
     V = np.polynomial.chebyshev.chebvander(xf, n)
     xf.flags.writeable = False
@@ -277,18 +279,18 @@ def _fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
     return xf, V
 
 
-def _root_near(g, yf: np.ndarray, j: int, xtol: float) -> float:
-    """Root of ``g`` between the samples ``yf[j − 1]`` and ``yf[j]``, where the sampled
-    values (a matrix product, :func:`_fine_sampling`) change sign. ``g`` is the Clenshaw sum,
+def _root_near(g, xf: np.ndarray, j: int, xtol: float) -> float:
+    """Root x of ``g`` between the samples ``xf[j − 1]`` and ``xf[j]``, where the sampled
+    values (a matrix product, :func:`fine_sampling`) change sign. ``g`` is the Clenshaw sum,
     which differs from the product by round-off: where that flips the sign of a sample lying
     on the root, the neighbouring intervals hold it."""
     for a, b in ((j - 1, j), (j - 2, j - 1), (j, j + 1)):
-        if 0 <= a and b < len(yf):
+        if 0 <= a and b < len(xf):
             try:
-                return brent_root(g, yf[a], yf[b], xtol=xtol)
+                return brent_root(g, float(xf[a]), float(xf[b]), xtol=xtol)
             except ValueError:
                 continue
-    raise ValueError(f"no sign change near y = {yf[j]:.6g}")
+    raise ValueError(f"no sign change near x = {xf[j]:.6g}")
 
 
 _P = FUNCTIONS.index("p")
@@ -325,26 +327,27 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     # Chebyshev coefficients are computed once (x ∈ [-1, 1] ↔ y ∈ [0, y_max])
     c_s = coefficients(log_nu)
     c_ds = coefficients(grid.D @ log_nu)
-    xf, V = _fine_sampling(grid.n)
-    yf = grid.from_computational(xf)
+    # the roots are found in x (the series' own variable; no map to invert a step) to
+    # 1e-15, i.e. in y to ~1e-15 y'(x) ≲ 1e-13
+    xf, V = fine_sampling(grid.n)
     dsf = V @ c_ds
-    to_x = grid.to_computational
     if (dsf <= 0).all():
-        monotonic, y_peak = True, 0.0
+        monotonic, y_peak, x_peak = True, 0.0, -1.0
     else:
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
         cds = c_ds.tolist()
-        y_peak = 0.0
+        y_peak, x_peak = 0.0, -1.0
         if len(idx):
-            y_peak = _root_near(lambda y: _chebval1(cds, float(to_x(y))), yf, int(idx[0]) + 1, 1e-13)
+            x_peak = _root_near(lambda x: _chebval1(cds, x), xf, int(idx[0]) + 1, 1e-15)
+            y_peak = float(grid.from_computational(x_peak))
     cs = c_s.tolist()
-    s_peak = _chebval1(cs, float(to_x(y_peak)))
+    s_peak = _chebval1(cs, x_peak)
     target = s_peak + math.log(0.01)
     sf = V @ c_s
-    above = np.nonzero((yf >= y_peak) & (sf <= target))[0]
+    above = np.nonzero((xf >= x_peak) & (sf <= target))[0]
     j = above[0]
-    h = _root_near(lambda y: _chebval1(cs, float(to_x(y))) - target, yf, int(j), 1e-14)
+    h = float(grid.from_computational(_root_near(lambda x: _chebval1(cs, x) - target, xf, int(j), 1e-15)))
     return {
         "h": h,
         "nu_mean": rho_bar / h,

@@ -30,9 +30,9 @@ import numpy as np
 from ..closures.model import FUNCTIONS, ORDERS
 from ..equations import BASE, TOP_OF, arguments, compiled_equations
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..spectral import ChebyshevGrid, barycentric, reference_nodes
+from ..spectral import ChebyshevGrid, barycentric, coefficients, reference_nodes
 from ._newton_kernel import OUTPUTS, SLOT, row_kernel
-from .result import steady_grid
+from .result import fine_sampling, steady_grid
 
 _FIELDS = ("nu", "u", "T")
 #: Rows of the compiled outputs (:data:`._newton_kernel.SLOT`) by unknown (s = ln ν0, u0, T0:
@@ -72,6 +72,10 @@ class NewtonState:
     #: (dX/dβ, relative size of the last Newton step), the family tangent (β = ν0(0))
     #: solved with the last Jacobian, which was taken at the state before that step.
     tangents: tuple | None = field(default=None, repr=False, compare=False)
+    #: Set by Newton with chord steps (:attr:`SteadyNewton.chord`) on the state it returns:
+    #: J⁻¹ B from the last LU it used (:meth:`SteadyNewton.factored_step`), for the chord
+    #: steps of a neighbour's solve at the same n (:attr:`SteadyNewton.inherit`).
+    lu: Any = field(default=None, repr=False, compare=False)
 
     @property
     def nu(self):
@@ -100,22 +104,25 @@ def layer_grid_map(st: NewtonState, theta_deg: float) -> tuple[float, float] | N
     from the band's profile to that slope within a few scale heights, which a plain Chebyshev
     grid on [0, y_max] resolves only with n ≈ 500 (its nodes crowd the floor and the top
     instead). The map of :class:`~chuteflow.spectral.MappedChebyshevGrid` centred at the
-    thickness h (ν0 at 1 % of its maximum) with width ε = :data:`MAP_WIDTH` T0(h)/cos θ puts
-    a fixed number of nodes across that bend; the converged flow does not depend on it
-    (the ladder of :func:`~chuteflow.steady.api.solve_point` checks the resolution).
+    thickness h (ν0 at 1 % of its maximum, to the spacing of 8n + 1 samples equidistant in
+    the grid's variable x) with width ε = :data:`MAP_WIDTH` T0(h)/cos θ puts a fixed number
+    of nodes across that bend; the converged flow does not depend on it (the ladder of
+    :func:`~chuteflow.steady.api.solve_point` checks the resolution).
 
     Returns None (plain grid) where the width exceeds half the domain or the profile has
     no edge (a state far from converged).
     """
     try:
         ref = st.ref
-        xi = np.linspace(0.0, 1.0, 8 * st.n + 1)
-        s = ref.interpolate(st.s, xi)
+        # sampled at 8n + 1 points equidistant in the grid's own variable x (the series'
+        # variable: one matrix product, :func:`~chuteflow.steady.result.fine_sampling`)
+        xf, V = fine_sampling(st.n)
+        s = V @ coefficients(st.s)
         k = int(np.argmax(s))
         below = np.nonzero(s[k:] <= s[k] + math.log(0.01))[0]
         if not len(below):
             return None
-        xc = float(xi[k + below[0]])
+        xc = float(ref.from_computational(xf[k + below[0]]))
         T_h = float(ref.interpolate(st.T, np.array([xc]))[0])
         xw = MAP_WIDTH * T_h / math.cos(math.radians(theta_deg)) / st.L
     except (ValueError, ArithmeticError, IndexError):
@@ -225,6 +232,11 @@ class SteadyNewton:
         self._last: tuple[np.ndarray, dict] | None = None  # see evaluate
         #: Newton also solves for dX/dβ (β = ν0(0)) with each LU (see _solve)
         self.tangents = False
+        #: Newton reuses its last LU for chord steps while they contract fast (see _solve)
+        self.chord = False
+        #: with chord: a neighbour's LU at this n (:attr:`NewtonState.lu`), for chord steps
+        #: from the start (continuation: the Jacobian of a nearby flow)
+        self.inherit = None
         # (equation, rows of the system, nodes it is imposed at, row-scaling kind), and
         # where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
         self._layout, self._w_pattern = _layout(n, integrated)
@@ -316,21 +328,27 @@ class SteadyNewton:
     def _jets(self, st: NewtonState, X: np.ndarray) -> tuple:
         """The base jets of ``st`` (:data:`~chuteflow.equations.BASE`: ν0, u0, T0 and their
         first two y-derivatives, ν0's through ν0 = e^s) into rows 0…8 of ``X``; returns
-        (D1, D2, s', s'')."""
-        D1, D2 = self.ref.D / st.L, self.ref.D2 / st.L**2
+        (s', s'')."""
+        Dx, Dxx = self.ref.D, self.ref.D2  # on y ∈ [0, 1]: y-derivatives are these / L, / L²
+        c1 = 1.0 / st.L
+        c2 = c1 * c1
         nu = X[0]
         np.exp(st.s, out=nu)
-        s1, s2 = D1 @ st.s, D2 @ st.s
+        s1, s2 = (Dx @ st.s) * c1, (Dxx @ st.s) * c2
         np.multiply(nu, s1, out=X[1])
         np.multiply(nu, s2 + s1**2, out=X[2])
-        X[3], X[4], X[5] = st.u, D1 @ st.u, D2 @ st.u
-        X[6], X[7], X[8] = st.T, D1 @ st.T, D2 @ st.T
-        return D1, D2, s1, s2
+        X[3], X[6] = st.u, st.T
+        np.multiply(Dx @ st.u, c1, out=X[4])
+        np.multiply(Dxx @ st.u, c2, out=X[5])
+        np.multiply(Dx @ st.T, c1, out=X[7])
+        np.multiply(Dxx @ st.T, c2, out=X[8])
+        return s1, s2
 
     def _residual(self, st: NewtonState) -> dict:
         n, m, L = self.n, self.n + 1, st.L
         X = np.empty((len(BASE), m))
-        D1, D2, s1, s2 = self._jets(st, X)
+        s1, s2 = self._jets(st, X)
+        D1, D2 = self.ref.D / L, self.ref.D2 / L**2
         base = dict(zip(BASE, X))
         nu, u1, u2, T1, T2 = base["nu"], base["u_y"], base["u_yy"], base["T_y"], base["T_yy"]
         part = self.model.evaluate(nu, st.T, compiled=True)
@@ -446,53 +464,94 @@ class SteadyNewton:
         (a diagonal block), and so do the energy rows; eliminating w leaves a dense system of
         2(n + 1) + 1 instead of 3(n + 1) + 1 unknowns (a third of the LU's work), whose
         Schur complement costs O(n²). Otherwise, a dense LU of J."""
+        return self._step(st, B, keep=False)[0]
+
+    def factored_step(self, st: NewtonState, B: np.ndarray) -> tuple[np.ndarray, Any]:
+        """(J⁻¹ B, solve) as :meth:`step`, with ``solve(B2)`` = J⁻¹ B2 for the same J from
+        its kept LU factors (O(n²) a right-hand side: Newton's chord steps, :meth:`solve`
+        with :attr:`chord`). Uses scipy's LU (``lu_factor``, imported here)."""
+        return self._step(st, B, keep=True)
+
+    def _step(self, st: NewtonState, B: np.ndarray, keep: bool) -> tuple[np.ndarray, Any]:
         ctx = self._context(st)
         if self._w_pattern is None:
-            return np.linalg.solve(self._jacobian_of(ctx), B)
+            J = self._jacobian_of(ctx)
+            if not keep:
+                return np.linalg.solve(J, B), None
+            lu = _lu_factor(J)
+            return _lu_solve(lu, B), functools.partial(_lu_solve, lu)
         n, m = self.n, self.n + 1
         q, g = _u_basis(n, self.grid_map, ctx["L"])
         JT = self._jacobian_of(ctx, g)
+        Mq = _u_basis_ref(n)[0] * q
+
+        def to_u(Y):  # u0 = M⁻¹ (u0(0), w)
+            Y[m : 2 * m] = Mq @ Y[m : 2 * m]
+            return Y
+
         # rows of eq. (3.7) at nodes 1…n and the columns of w_j: the block m+1 … 2m−1;
         # the rest (r = 2m + 2 rows and columns) is the block before and the block after
         w, r = slice(m + 1, 2 * m), 2 * m + 2
         a = np.diagonal(JT[w, w]).copy()
         if not (np.all(np.isfinite(a)) and np.all(a != 0)):
-            Y = np.linalg.solve(JT, B)
-        else:
-            # (scipy's dgesv on column-major S in place would save numpy.linalg.solve's
-            # copies, ~10 % of the LU, but the steady command must not import scipy:
-            # tests/test_codegen.py::test_warm_steady_skips_typer_and_scipy)
-            S = np.empty((r, r))
-            S[: m + 1, : m + 1], S[: m + 1, m + 1 :] = JT[: m + 1, : m + 1], JT[: m + 1, 2 * m :]
-            S[m + 1 :, : m + 1], S[m + 1 :, m + 1 :] = JT[2 * m :, : m + 1], JT[2 * m :, 2 * m :]
-            Z = np.empty((n, r))  # w = b_w/a − Z y
-            ai = a[:, None]
-            np.divide(JT[w, : m + 1], ai, out=Z[:, : m + 1])
-            np.divide(JT[w, 2 * m :], ai, out=Z[:, m + 1 :])
+            if not keep:
+                return to_u(np.linalg.solve(JT, B)), None
+            lu = _lu_factor(JT)
+            return to_u(_lu_solve(lu, B)), lambda B2: to_u(_lu_solve(lu, B2))
+        # (scipy's dgesv on column-major S in place would save numpy.linalg.solve's
+        # copies, ~10 % of the LU, but the steady command must not import scipy:
+        # tests/test_codegen.py::test_warm_steady_skips_typer_and_scipy)
+        S = np.empty((r, r))
+        S[: m + 1, : m + 1], S[: m + 1, m + 1 :] = JT[: m + 1, : m + 1], JT[: m + 1, 2 * m :]
+        S[m + 1 :, : m + 1], S[m + 1 :, m + 1 :] = JT[2 * m :, : m + 1], JT[2 * m :, 2 * m :]
+        Z = np.empty((n, r))  # w = b_w/a − Z y
+        ai = a[:, None]
+        np.divide(JT[w, : m + 1], ai, out=Z[:, : m + 1])
+        np.divide(JT[w, 2 * m :], ai, out=Z[:, m + 1 :])
+
+        def rest(i):  # row i of J as a row of S (rows m+1 … 2m−1 are eliminated)
+            return i if i <= m else i - n
+
+        # S = A_rr − A_rw Z (and the right-hand side alike), with A_rw's pattern
+        diagonal, full = self._w_pattern
+        couplings = []  # (rows of S, values of A_rw, rows of Z) of the diagonal blocks
+        for rows, j0 in diagonal:
+            k = rows.stop - rows.start
+            vals = np.diagonal(JT[rows, m + j0 : m + j0 + k]).copy()[:, None]
+            rs = slice(rest(rows.start), rest(rows.start) + k)
+            zs = slice(j0 - 1, j0 - 1 + k)
+            S[rs] -= vals * Z[zs]
+            couplings.append((rs, vals, zs))
+        dense = [(rest(i), JT[i, w].copy()) for i in full]  # (copies: JT is not kept)
+        for ri, row in dense:
+            S[ri] -= row @ Z
+
+        def reduce(B):  # (b_w/a, the right-hand side of S)
             bw = B[w] / ai
             rhs = np.empty((r, B.shape[1]))
             rhs[: m + 1], rhs[m + 1 :] = B[: m + 1], B[2 * m :]
+            for rs, vals, zs in couplings:
+                rhs[rs] -= vals * bw[zs]
+            for ri, row in dense:
+                rhs[ri] -= row @ bw
+            return bw, rhs
 
-            def rest(i):  # row i of J as a row of S (rows m+1 … 2m−1 are eliminated)
-                return i if i <= m else i - n
-
-            # S = A_rr − A_rw Z (and the right-hand side alike), with A_rw's pattern
-            diagonal, full = self._w_pattern
-            for rows, j0 in diagonal:
-                k = rows.stop - rows.start
-                vals = np.diagonal(JT[rows, m + j0 : m + j0 + k])[:, None]
-                rs = slice(rest(rows.start), rest(rows.start) + k)
-                S[rs] -= vals * Z[j0 - 1 : j0 - 1 + k]
-                rhs[rs] -= vals * bw[j0 - 1 : j0 - 1 + k]
-            for i in full:
-                S[rest(i)] -= JT[i, w] @ Z
-                rhs[rest(i)] -= JT[i, w] @ bw
-            y = np.linalg.solve(S, rhs)
-            Y = np.empty_like(B)
+        def expand(y, bw):
+            Y = np.empty((len(JT), y.shape[1]))
             Y[: m + 1], Y[2 * m :] = y[: m + 1], y[m + 1 :]
             Y[w] = bw - Z @ y
-        Y[m : 2 * m] = (_u_basis_ref(n)[0] * q) @ Y[m : 2 * m]  # u0 = M⁻¹ (u0(0), w)
-        return Y
+            return to_u(Y)
+
+        bw, rhs = reduce(B)
+        if not keep:
+            return expand(np.linalg.solve(S, rhs), bw), None
+        lu = _lu_factor(S)
+
+        def again(B2):
+            bw2, rhs2 = reduce(B2)
+            return expand(_lu_solve(lu, rhs2), bw2)
+
+        return expand(_lu_solve(lu, rhs), bw), again
 
     def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
         # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
@@ -518,14 +577,55 @@ class SteadyNewton:
         tol = max(tol, 1e-11 * (self.n / 64.0) ** 4)
         hist = []
         crawl = 0  # steps in a row accepted at λ < 4 lam_min
+        steps = 0  # corrections taken (Newton and chord)
+        # with chord: J⁻¹ B from the last LU (after a full step only, or a neighbour's);
+        # the relative distance from the state of that Jacobian, and its dX/dβ
+        again = latest = self.inherit if self.chord else None
+        walked, tangent = math.inf, None
         R, _ = self.evaluate(st, jac=False)
         res = np.abs(R).max()
-        for it in range(maxiter):
+        for _ in range(maxiter):
             hist.append(res)
             if not np.isfinite(res):
                 break
-            if res < tol and it >= min_iter:
-                return st, it, res, hist
+            if res < tol and steps >= min_iter:
+                st.lu = latest
+                return st, steps, res, hist
+            while again is not None:
+                # chord step: the last LU (its Jacobian a Newton step or a few back), kept
+                # while it lowers the residual at least 1/_CHORD_RATIO times, down to
+                # _CHORD_RATIO tol (a full Newton step ends well below tol; stopping just
+                # below it would leave Newton's error larger than before) or to the
+                # round-off floor (a step below tol that no longer contracts)
+                X0 = st.pack()
+                dX = -again(R[:, None])[:, 0]
+                trial = NewtonState.unpack(self.n, X0 + dX, self.grid_map)
+                rt = math.inf
+                if (trial.T > 0).all() and 0 < trial.L < y_cap:
+                    Rt, _ = self.evaluate(trial, jac=False)
+                    rt = np.abs(Rt).max()
+                # (a correction that keeps the residual below tol counts for min_iter: the
+                # finer rung of a ladder from a neighbour's LU)
+                contracts = rt < _CHORD_RATIO * res
+                if not (contracts or (steps < min_iter and rt < tol)):
+                    again = None
+                    break
+                walked += np.abs(dX).max() / max(np.abs(X0).max(), 1.0)
+                if self.tangents:
+                    if tangent is None:  # a neighbour's LU: its dX/dβ here (approximate)
+                        Bb = np.zeros((len(R), 1))
+                        Bb[0, 0] = 1.0 / self.nu0
+                        tangent = again(Bb)[:, 0]
+                    trial.tangents = (tangent, walked)
+                st, R, res = trial, Rt, rt
+                steps += 1
+                hist.append(res)
+                if res < tol and steps >= min_iter and (res < _CHORD_RATIO * tol or not contracts):
+                    st.lu = latest
+                    return st, steps, res, hist
+            if res < tol and steps >= min_iter:
+                st.lu = latest
+                return st, steps, res, hist
             # with ``tangents``, dX/dβ as a second right-hand side of the same LU (O(n²)):
             # J dX/dβ = −∂R/∂β, and β = ν0(0) enters only through R[0] = ln ν(0) − ln β
             if self.tangents:
@@ -536,7 +636,11 @@ class SteadyNewton:
             try:
                 # the Jacobian only now that a step is needed (the residual's pieces of this
                 # state are kept by evaluate)
-                sol = self.step(st, B)
+                if self.chord:
+                    sol, again = self.factored_step(st, B)
+                    latest = again
+                else:
+                    sol = self.step(st, B)
             except (ValueError, np.linalg.LinAlgError):
                 break
             dX = -sol[:, 0]
@@ -546,10 +650,11 @@ class SteadyNewton:
             # stalled residual when the Newton step is at noise level too; the accuracy of
             # the result is checked independently by the change between two resolutions
             stalled = len(hist) > 2 and res > 0.5 * hist[-2] and (res < 1e-7 or (step < 1e-7 and res < 1e-4))
-            if ((step < 1e-11 and res < 1e-6) or stalled) and it >= min_iter:
+            if ((step < 1e-11 and res < 1e-6) or stalled) and steps >= min_iter:
                 if self.tangents:  # this Jacobian was taken at st itself
                     st.tangents = (sol[:, 1].copy(), 0.0)
-                return st, it, res, hist
+                st.lu = latest
+                return st, steps, res, hist
             lam = 1.0
             while lam >= lam_min:
                 trial = NewtonState.unpack(self.n, X0 + lam * dX, self.grid_map)
@@ -559,19 +664,25 @@ class SteadyNewton:
                     better = rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)
                     if np.isfinite(rt) and better:
                         if self.tangents:
-                            trial.tangents = (sol[:, 1].copy(), lam * step)
+                            tangent = sol[:, 1].copy()
+                            trial.tangents = (tangent, lam * step)
                         st, R, res = trial, Rt, rt
+                        steps += 1
                         break
                 lam *= 0.5
             else:
                 break
+            walked = lam * step
+            if lam < 1.0:
+                again = None  # damped: not yet in Newton's quadratic phase
             crawl = crawl + 1 if lam < 4.0 * lam_min else 0
             if crawl >= _CRAWL:
                 break
         else:
             if res < 1e-7 and len(hist) >= min_iter:
                 # iterations used up at the round-off floor (residual still creeping down)
-                return st, maxiter, res, hist
+                st.lu = latest
+                return st, steps, res, hist
         hist.append(res)
         raise _NewtonFailure(st, hist)
 
@@ -754,6 +865,34 @@ def _road_parts(n: int, integrated: bool, closures: tuple):
 #: Steps in a row accepted at the two smallest step lengths after which Newton gives up
 #: (:meth:`SteadyNewton._solve`).
 _CRAWL = 3
+#: A chord step (:attr:`SteadyNewton.chord`) is kept when it lowers the residual at least
+#: this much (relative); otherwise Newton factorises the Jacobian where it stands.
+_CHORD_RATIO = 0.1
+
+
+@functools.cache
+def _lapack() -> tuple:
+    # scipy only where chord steps are asked for (not at the steady command's start)
+    from scipy.linalg.lapack import dgetrf, dgetrs
+
+    return dgetrf, dgetrs
+
+
+def _lu_factor(A: np.ndarray) -> tuple:
+    """LU factors of the C-ordered ``A`` (overwritten): LAPACK's dgetrf on Aᵀ, which is
+    Fortran-ordered as it stands (no copy); :func:`_lu_solve` solves with its transpose."""
+    lu, piv, info = _lapack()[0](A.T, overwrite_a=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("singular Jacobian")
+    return lu, piv
+
+
+def _lu_solve(f: tuple, B: np.ndarray) -> np.ndarray:
+    """A⁻¹ B from :func:`_lu_factor`'s factors of A (dgetrs on (Aᵀ)ᵀ)."""
+    x, info = _lapack()[1](f[0], f[1], B, trans=1)
+    if info != 0:
+        raise np.linalg.LinAlgError("bad LU factors")
+    return x
 
 
 class _NewtonFailure(Exception):
@@ -802,6 +941,8 @@ def solve_state(
     min_iter=0,
     grid_map: Any = "auto",
     tangents: bool = False,
+    chord: bool = False,
+    inherit: Any = None,
 ):
     """Solve the steady problem; returns (state, iterations, residual). Raises on failure.
 
@@ -810,7 +951,9 @@ def solve_state(
     The grid is ``grid_map`` ((ξ_c, ξ_w) or None: plain Chebyshev nodes); by default
     (``"auto"``) the map of :func:`layer_grid_map` for the starting state (cold start or
     ``guess``). ``tangents`` sets the state's :attr:`NewtonState.tangents` (dX/dβ from
-    Newton's last Jacobian).
+    Newton's last Jacobian). ``chord``: Newton reuses its last LU while that contracts
+    fast (:attr:`SteadyNewton.chord`; imports scipy.linalg), from the start with
+    ``inherit`` (:attr:`SteadyNewton.inherit`: a neighbour's LU at n) if given.
     """
     it0 = 0
     if guess is None:
@@ -820,6 +963,8 @@ def solve_state(
     guess.s = guess.s + (math.log(nu0) - guess.s[0])  # exact floor value, same shape
     newton = SteadyNewton(n, theta, nu0, model, nu_top, grid_map=gm)
     newton.tangents = tangents
+    newton.chord = chord
+    newton.inherit = inherit
     try:
         st, it, res, _ = newton.solve(guess, tol=tol, maxiter=maxiter, lam_min=lam_min, min_iter=min_iter)
     except _NewtonFailure as fail:
