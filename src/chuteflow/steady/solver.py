@@ -498,9 +498,9 @@ class SteadyNewton:
                 return to_u(np.linalg.solve(JT, B)), None
             lu = _lu_factor(JT)
             return to_u(_lu_solve(lu, B)), lambda B2: to_u(_lu_solve(lu, B2))
-        # (scipy's dgesv on column-major S in place would save numpy.linalg.solve's
-        # copies, ~10 % of the LU, but the steady command must not import scipy:
-        # tests/test_codegen.py::test_warm_steady_skips_typer_and_scipy)
+        # (the chord road factorises S in place with LAPACK, :func:`_lu_factor`; the plain
+        # road keeps numpy.linalg.solve and its copies, ~10 % of the LU, because the steady
+        # command must not import scipy: tests/test_codegen.py::test_warm_steady_skips_typer_and_scipy)
         S = np.empty((r, r))
         S[: m + 1, : m + 1], S[: m + 1, m + 1 :] = JT[: m + 1, : m + 1], JT[: m + 1, 2 * m :]
         S[m + 1 :, : m + 1], S[m + 1 :, m + 1 :] = JT[2 * m :, : m + 1], JT[2 * m :, 2 * m :]
@@ -601,6 +601,7 @@ class SteadyNewton:
                 dX = -again(R[:, None])[:, 0]
                 trial = NewtonState.unpack(self.n, X0 + dX, self.grid_map)
                 rt = math.inf
+                kept = self._last  # st's residual pieces, for its Jacobian if this step fails
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
                     Rt, _ = self.evaluate(trial, jac=False)
                     rt = np.abs(Rt).max()
@@ -608,7 +609,7 @@ class SteadyNewton:
                 # finer rung of a ladder from a neighbour's LU)
                 contracts = rt < _CHORD_RATIO * res
                 if not (contracts or (steps < min_iter and rt < tol)):
-                    again = None
+                    again, self._last = None, kept
                     break
                 walked += np.abs(dX).max() / max(np.abs(X0).max(), 1.0)
                 if self.tangents:
