@@ -17,7 +17,7 @@ from numpy.polynomial.chebyshev import chebval
 
 from chuteflow.closures import ChuteModel
 from chuteflow.steady import api, family
-from chuteflow.steady.result import _chebval1
+from chuteflow.steady.result import _chebval1, _series
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 17, 217])
@@ -26,6 +26,18 @@ def test_chebval1_is_chebval(n):
     c = rng.standard_normal(n) * np.exp(-np.arange(n) / 20)
     for x in rng.uniform(-1, 1, 50):
         assert _chebval1(c.tolist(), float(x)) == float(chebval(np.asarray(x), c))
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 17, 217])
+def test_compiled_chebval1_is_the_same_float(n):
+    """The series evaluator of derived_quantities (compiled where a C compiler is
+    available, ``-ffp-contract=off``) gives :func:`_chebval1`'s float, bit for bit: h and
+    the density peak do not depend on which road ran."""
+    rng = np.random.default_rng(100 + n)
+    c = rng.standard_normal(n) * np.exp(-np.arange(n) / 20)
+    f = _series(c)
+    for x in rng.uniform(-1, 1, 50):
+        assert f(float(x)) == _chebval1(c.tolist(), float(x))
 
 
 #: Rows near the lower existence boundary whose ladders reach the round-off floor. Which

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import math
 import weakref
@@ -263,6 +264,52 @@ def _chebval1(c: list[float], x: float) -> float:
     return c0 + c1 * x
 
 
+#: :func:`_chebval1` in C: the same Clenshaw recurrence, operation for operation and without
+#: contraction (``-ffp-contract=off``), hence the same float (tests/steady/test_ladder_cost.py).
+_CHEBVAL_SOURCE = """
+double cf_chebval1(const double *c, long len, double x) {
+    if (len == 1) return c[0];
+    if (len == 2) return c[0] + c[1] * x;
+    double x2 = 2 * x;
+    double c0 = c[len - 2], c1 = c[len - 1];
+    for (long i = 3; i <= len; ++i) {
+        double previous = c0;
+        c0 = c[len - i] - c1;
+        c1 = previous + c1 * x2;
+    }
+    return c0 + c1 * x;
+}
+"""
+
+
+@functools.cache
+def _chebval_kernel():
+    """The compiled :func:`_chebval1` (a ctypes function), or None (no compiler, or
+    ``CHUTEFLOW_CCODE=off``: the Python recurrence)."""
+    from .._ccode import C_HEAD, cached_library
+
+    lib = cached_library("chebval1", "v1", lambda: C_HEAD + _CHEBVAL_SOURCE, sources=(__name__,))
+    if lib is None:
+        return None
+    f = lib.cf_chebval1
+    f.argtypes = [ctypes.c_void_p, ctypes.c_long, ctypes.c_double]
+    f.restype = ctypes.c_double
+    return f
+
+
+def _series(c: np.ndarray):
+    """x ↦ the Chebyshev series ``c`` at one point x, as :func:`_chebval1` computes it: in C
+    where compiled kernels are available (~1 µs a call instead of ~0.3 µs a coefficient:
+    the root finding of :func:`derived_quantities`), else in Python."""
+    kernel = _chebval_kernel()
+    if kernel is None:
+        coef = [float(v) for v in c]
+        return lambda x: _chebval1(coef, x)
+    arr = np.ascontiguousarray(c, dtype=float)
+    ptr, size = arr.ctypes.data, len(arr)
+    return lambda x, arr=arr: kernel(ptr, size, x)  # (arr kept alive with the function)
+
+
 @functools.lru_cache(maxsize=4)
 def fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The fine sampling of :func:`derived_quantities` and of
@@ -336,18 +383,17 @@ def derived_quantities(theta, grid: ChebyshevGrid, log_nu, u, T, model: ChuteMod
     else:
         monotonic = False
         idx = np.nonzero((dsf[:-1] > 0) & (dsf[1:] <= 0))[0]
-        cds = c_ds.tolist()
         y_peak, x_peak = 0.0, -1.0
         if len(idx):
-            x_peak = _root_near(lambda x: _chebval1(cds, x), xf, int(idx[0]) + 1, 1e-15)
+            x_peak = _root_near(_series(c_ds), xf, int(idx[0]) + 1, 1e-15)
             y_peak = float(grid.from_computational(x_peak))
-    cs = c_s.tolist()
-    s_peak = _chebval1(cs, x_peak)
+    s_at = _series(c_s)
+    s_peak = s_at(x_peak)
     target = s_peak + math.log(0.01)
     sf = V @ c_s
     above = np.nonzero((xf >= x_peak) & (sf <= target))[0]
     j = above[0]
-    h = float(grid.from_computational(_root_near(lambda x: _chebval1(cs, x) - target, xf, int(j), 1e-15)))
+    h = float(grid.from_computational(_root_near(lambda x: s_at(x) - target, xf, int(j), 1e-15)))
     return {
         "h": h,
         "nu_mean": rho_bar / h,
