@@ -552,7 +552,7 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
 def state_tangent_vectors(theta_deg, nu0, model, nu_top, st: NewtonState, theta: bool = True):
     """:func:`tangent_vectors` at a solution given as a :class:`NewtonState` (any n)."""
     newton = SteadyNewton(st.n, theta_deg, nu0, model, nu_top, grid_map=st.grid_map)
-    rhs = np.zeros((3 * st.n + 4, 2 if theta else 1))
+    rhs = np.zeros((st.pack().size, 2 if theta else 1))
     rhs[0, 0] = -1.0 / nu0
     if theta:
         eps = 1e-3

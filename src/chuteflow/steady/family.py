@@ -177,9 +177,9 @@ def _attempt(
             keep=keep,
             **kw,
         )
-        return _newton_vectors(_Point("ok", flow), _lu_out(keep, lu_out), opts)
+        point = _Point("ok", flow)
     except ThinLayerError as exc:
-        return _newton_vectors(_Point("thin", exc.flow, str(exc)), _lu_out(keep, lu_out), opts)
+        point = _Point("thin", exc.flow, str(exc))
     except NoSteadyFlowError as exc:
         return _Point("no_steady_flow", None, str(exc))
     except ResolutionError as exc:
@@ -197,14 +197,9 @@ def _attempt(
         return _Point("not_converged", None, str(exc))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         return _Point("not_converged", None, f"{type(exc).__name__}: {exc}")
-
-
-def _lu_out(keep: dict, lu_out: dict | None) -> dict:
     if lu_out is not None:
-        for st in keep.values():
-            if st.lu is not None:
-                lu_out[st.n] = st.lu
-    return keep
+        lu_out.update({st.n: st.lu for st in keep.values() if st.lu is not None})
+    return _newton_vectors(point, keep, opts)
 
 
 def _newton_vectors(point: _Point, keep: dict, opts: Options) -> _Point:

@@ -237,6 +237,7 @@ class SteadyNewton:
         #: with chord: a neighbour's LU at this n (:attr:`NewtonState.lu`), for chord steps
         #: from the start (continuation: the Jacobian of a nearby flow)
         self.inherit = None
+        self._latest = None  # the last LU a chord solve used (see solve)
         # (equation, rows of the system, nodes it is imposed at, row-scaling kind), and
         # where u0' enters the rows once eliminated (:meth:`step`; None: not eliminable)
         self._layout, self._w_pattern = _layout(n, integrated)
@@ -557,7 +558,9 @@ class SteadyNewton:
         # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
         # is handled by the line search, so numpy's warnings about it are noise
         with np.errstate(all="ignore"):
-            return self._solve(st, tol, maxiter, y_cap, lam_min, min_iter)
+            out = self._solve(st, tol, maxiter, y_cap, lam_min, min_iter)
+        out[0].lu = self._latest  # the last LU used (with chord), for a neighbour's solve
+        return out
 
     def _solve(self, st, tol, maxiter, y_cap, lam_min, min_iter):
         """Damped Newton. Converged when the scaled residual is below ``tol``, or when the
@@ -580,7 +583,7 @@ class SteadyNewton:
         steps = 0  # corrections taken (Newton and chord)
         # with chord: J⁻¹ B from the last LU (after a full step only, or a neighbour's);
         # the relative distance from the state of that Jacobian, and its dX/dβ
-        again = latest = self.inherit if self.chord else None
+        again = self._latest = self.inherit if self.chord else None
         walked, tangent = math.inf, None
         R, _ = self.evaluate(st, jac=False)
         res = np.abs(R).max()
@@ -589,7 +592,6 @@ class SteadyNewton:
             if not np.isfinite(res):
                 break
             if res < tol and steps >= min_iter:
-                st.lu = latest
                 return st, steps, res, hist
             while again is not None:
                 # chord step: the last LU (its Jacobian a Newton step or a few back), kept
@@ -622,10 +624,8 @@ class SteadyNewton:
                 steps += 1
                 hist.append(res)
                 if res < tol and steps >= min_iter and (res < _CHORD_RATIO * tol or not contracts):
-                    st.lu = latest
                     return st, steps, res, hist
             if res < tol and steps >= min_iter:
-                st.lu = latest
                 return st, steps, res, hist
             # with ``tangents``, dX/dβ as a second right-hand side of the same LU (O(n²)):
             # J dX/dβ = −∂R/∂β, and β = ν0(0) enters only through R[0] = ln ν(0) − ln β
@@ -639,7 +639,7 @@ class SteadyNewton:
                 # state are kept by evaluate)
                 if self.chord:
                     sol, again = self.factored_step(st, B)
-                    latest = again
+                    self._latest = again
                 else:
                     sol = self.step(st, B)
             except (ValueError, np.linalg.LinAlgError):
@@ -654,7 +654,6 @@ class SteadyNewton:
             if ((step < 1e-11 and res < 1e-6) or stalled) and steps >= min_iter:
                 if self.tangents:  # this Jacobian was taken at st itself
                     st.tangents = (sol[:, 1].copy(), 0.0)
-                st.lu = latest
                 return st, steps, res, hist
             lam = 1.0
             while lam >= lam_min:
@@ -682,7 +681,6 @@ class SteadyNewton:
         else:
             if res < 1e-7 and len(hist) >= min_iter:
                 # iterations used up at the round-off floor (residual still creeping down)
-                st.lu = latest
                 return st, steps, res, hist
         hist.append(res)
         raise _NewtonFailure(st, hist)
