@@ -18,7 +18,7 @@ residuals of four steps from the Euler predictor: chord steps with J_a, Broyden'
 J_a (Kelley's "brsola" form; one residual and one back-solve a step, as the chord) and full
 Newton. A chord that is to replace the factorisation (~0.5 ms at n = 64: Jacobian, elimination
 and LU, against ~0.12 ms for a residual and a back-solve) would need ρ ≲ 0.01; measured
-ρ = 0.1 … 1.7.
+ρ = 0.08 … 1.9 (docs/numerics.md).
 """
 
 from __future__ import annotations
