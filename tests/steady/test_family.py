@@ -164,3 +164,45 @@ def test_steady_row_is_steady_family_without_the_table():
         assert (f is None) == (g is None)
         if f is not None:
             assert np.array_equal(f.u, g.u) and np.array_equal(f.T, g.T) and f.y_max == g.y_max
+
+
+def test_no_step_up_from_a_layer_at_the_top_changes_no_answer():
+    """family._TOP_GAP: a flow whose dense layer ends within 0.1 h of the top of the domain
+    is not continued to a larger ν0(0) (those steps fail: 107 of 107 on the two 60 × 60
+    paper maps). On a row that crosses the upper existence boundary (θ = 17°, φ = 0.05)
+    the rule skips such steps, takes fewer continuation attempts, and gives the same
+    statuses and the same flows (to their convergence estimates; here to the last bit) as
+    the row with every step tried."""
+    from unittest import mock
+
+    from chuteflow.steady import family, steady_row
+
+    nus = list(np.geomspace(0.12, 0.2, 10))
+    skips, attempts = [], {"rule": 0, "all": 0}
+    top_bound, attempt = family._top_bound, family._attempt
+
+    def counting_top_bound(point):
+        out = top_bound(point)
+        skips.append(out)
+        return out
+
+    def counting_attempt(key):
+        def run(*args, **kwargs):
+            attempts[key] += 1
+            return attempt(*args, **kwargs)
+
+        return run
+
+    with mock.patch.multiple(family, _top_bound=counting_top_bound, _attempt=counting_attempt("rule")):
+        rule = steady_row(17.0, nus)
+    with mock.patch.multiple(family, _TOP_GAP=0.0, _attempt=counting_attempt("all")):
+        every = steady_row(17.0, nus)
+    assert sum(skips) >= 1
+    assert attempts["rule"] < attempts["all"]
+    assert [s for s, _, _ in rule] == [s for s, _, _ in every]
+    assert {s for s, _, _ in rule} >= {"ok", "no_steady_flow"}  # the row crosses the boundary
+    for (_, a, _), (_, b, _) in zip(rule, every):
+        if a is not None:
+            tol = 2 * max(a.convergence, b.convergence) + 1e-14
+            for q in ("Q", "h", "rho_bar"):
+                assert getattr(a, q) == pytest.approx(getattr(b, q), rel=tol)
