@@ -84,9 +84,10 @@ _ATTRS = {
 #: steps are shorter, 91 of 111 (4.7 s of CPU, against 2.8 s for the 20 that converged).
 #: Skipping them leaves the maps bit for bit the same and the diagram with every status and
 #: stability label (13 flows reached by another road moved by ≤ 4.4e-10, within their
-#: estimates; their dQ0/dρ̄0 by ≤ 1.2e-7), with 7–11 % less Newton work in its rows. The point is still tried from its other neighbours
-#: and decided by the shooting scan: the rule changes the road, never the answer. (At 0.3
-#: the maps still lose no step, but the diagram's rows lose 53 more that converge.)
+#: estimates; their dQ0/dρ̄0 by ≤ 1.2e-7), with 7–11 % less Newton work in its rows. The
+#: point is still tried from its other neighbours and decided by the shooting scan: the
+#: rule changes the road, never the answer. (At 0.3 the maps still lose no step, but the
+#: diagram's rows lose 53 more that converge.)
 _TOP_GAP = 0.1
 
 #: Newton settings from a continuation guess (a good guess needs 2–5 full steps): failing
@@ -571,8 +572,10 @@ def continue_row(
 
     A point is started from a converged neighbour: the one below or above in ν0 (predicted
     along the exact tangent), or the same ν0 in ``previous`` (the neighbouring θ row of a
-    map; predicted along dX/dθ). Each source is tried once per point. Walks along ν0 go
-    first; when they stall, one point is seeded from ``previous`` and the walks resume.
+    map; predicted along dX/dθ). Each source is tried once per point; a step up in ν0 from a
+    flow whose layer reaches the top of its domain is not taken (:data:`_TOP_GAP`). Walks
+    along ν0 go first; when they stall, one point is seeded from ``previous`` and the walks
+    resume.
     When nothing more can be reached, a cold start is tried at a spread-out point not yet
     attempted (at most ``opts.max_cold`` per row, ``opts.max_cold_seeded`` if ``previous``
     is given: in a map the existence region is reached from the neighbouring rows).
