@@ -646,10 +646,8 @@ def continue_row(
                 below = pts[i - 1]
                 if open_(i) and below is not None and below.usable and "below" not in tried[i]:
                     if _top_bound(below):
-                        # counted as tried: as a failed step, without its cost (_TOP_GAP)
-                        tried[i].add("below")
-                        if pts[i] is None:
-                            pts[i] = _Point("not_converged", None, _TOP_BOUND_MESSAGE)
+                        # recorded as a failed step, without its cost (_TOP_GAP)
+                        attempt(i, "below", lambda: _Point("not_converged", None, _TOP_BOUND_MESSAGE))
                         continue
                     attempt(i, "below", functools.partial(_continue, below, theta, nus[i], model, opts, memo))
                     walked = True
