@@ -404,7 +404,7 @@ def test_unresolved_flow_is_not_called_no_flow():
 
 def test_unresolved_flow_is_returned_flagged_without_strict():
     """The same point: Newton from the shooting profile converges at every resolution, but
-    the change between the last two (n = 288 → 432) stays at 3.6e-8 > rtol = 1e-8 (a nearly
+    the change between the last two (n = 288 → 384) stays at 3.4e-8 > rtol = 1e-8 (a nearly
     packed band, Newton's round-off floor). ``strict=False`` returns that flow flagged
     (``converged`` False, ``convergence`` its estimate) instead of raising (the guide: a
     result that misses the precision comes with its estimate); ``strict=True`` (default)
@@ -429,3 +429,15 @@ def test_unresolved_flow_is_returned_flagged_without_strict():
     # a converged flow says so and has no warning
     g = solve_steady(16.0, 0.05, model, strict=False)
     assert g.converged and g.precision_warning() == "" and g.summary()["converged"] is True
+
+
+@pytest.mark.parametrize("n_max", [100, 130])
+def test_resolution_ladder_ends_at_n_max(n_max):
+    """``n_max`` is the largest resolution tried (solve_steady's docstring): the ladder
+    n → n + n/2 ends at n_max itself, not one rung beyond it (64 → 96 → 144 with n_max =
+    100 before; on the 60 × 60 paper map 8 flows were accepted at n = 432 and 486 with
+    n_max = 384). rtol = 1e-14 is below the round-off floor, so the ladder runs to its end
+    and the flow is returned flagged, with the change between its last two rungs."""
+    f = solve_steady(16.0, 0.05, n_max=n_max, rtol=1e-14, strict=False)
+    assert f.n == n_max
+    assert not f.converged and 0 < f.convergence < 1e-9

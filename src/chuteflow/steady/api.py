@@ -351,6 +351,8 @@ def solve_point(
     change = prev = math.inf
     while True:
         n2 = n + max(n // 2, 8)
+        if n < n_max:  # the last rung is n_max itself (not up to 1.5 n_max)
+            n2 = min(n2, n_max)
         # at least one Newton correction on the finer grid, so that the change measures
         # the discretisation even when the interpolated coarse solution already passes tol
         # on the same grid map as n: the change then measures the resolution of one grid
