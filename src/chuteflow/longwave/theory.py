@@ -180,17 +180,27 @@ def eigen_sign(
 
     :func:`branch_point` at N and N' = round(0.8 N) on the (sinh-mapped) stability grid,
     N raised along the ladder N → round(1.25 N) (each rung's N' is the previous rung, so it
-    is reused) until the two agree to ``rtol`` relative — with the default 0.05 the sign is
-    decided with a margin of 20 — or N reaches ``n_max``. Measured N at the paper's points:
-    48–75 (``benchmarks/bench_longwave.py``). Where the perturbative solve misses the branch
-    (k = 1e-5 beyond the k² regime, e.g. ν0(0) ≲ 0.02), the shift is the branch on another
-    rung, or the eigenvalue comes from :class:`~chuteflow.stability.BranchTracker`.
+    is reused; the first N' is solved from the eigenpair at N, without the Taylor
+    coefficients that only N reports) until the two agree to ``rtol`` relative — with the
+    default 0.05 the sign is decided with a margin of 20 — or N reaches ``n_max``. Measured
+    N at the paper's points: 48–75 (``benchmarks/bench_longwave.py``). Where the
+    perturbative solve misses the branch (k = 1e-5 beyond the k² regime, e.g. ν0(0) ≲
+    0.02), the shift is the branch on another rung, or the eigenvalue comes from
+    :class:`~chuteflow.stability.BranchTracker`.
     """
     tangent = steady_tangent(flow)
     ladder = RejectionPolicy(n_start=int(n), n_max=int(n_max))
     memo: dict[int, BranchPoint] = {}
 
-    def at(nn: int) -> BranchPoint:
+    def at(nn: int, ref: BranchPoint | None = None) -> BranchPoint:
+        if nn not in memo and ref is not None and ref.vector is not None:
+            # the check rung N' of the finer ref: started from ref's eigenpair, without the
+            # Taylor coefficients (only the finer rung's are reported)
+            op = stability_operator(flow, nn, cache=cache)
+            v0 = interp_vector(ref.vector, len(op.fields), ref.n, nn)
+            bp = branch_point(op, tangent, k, guess=ref.alpha, v0=v0, taylor=False)
+            if math.isfinite(bp.coefficient):
+                memo[nn] = bp
         if nn not in memo:
             op = stability_operator(flow, nn, cache=cache)
             bp = branch_point(op, tangent, k)
@@ -219,7 +229,8 @@ def eigen_sign(
 
     nn = ladder.n_start
     while True:
-        cur, prev = at(nn), at(check_n(nn))
+        cur = at(nn)
+        prev = at(check_n(nn), cur)
         conv = abs(cur.coefficient - prev.coefficient) / max(abs(cur.coefficient), 1e-300)
         if not math.isfinite(conv):
             conv = math.inf
@@ -471,7 +482,13 @@ class BranchPoint:
 
 
 def branch_point(
-    op: StabilityOperator, tangent: dict, k: float = 1e-5, *, guess: complex | None = None, v0=None
+    op: StabilityOperator,
+    tangent: dict,
+    k: float = 1e-5,
+    *,
+    guess: complex | None = None,
+    v0=None,
+    taylor: bool = True,
 ) -> BranchPoint:
     """α1, α2 and the branch's eigenvalue α(k) at a small k on the grid of ``op``.
 
@@ -485,9 +502,13 @@ def branch_point(
     eigenvector is resolved (tail below :attr:`RejectionPolicy.track_tail_tol`, which the
     continuum of the dilute top fails); otherwise ``alpha`` is NaN. With ``guess`` and
     ``v0`` (the branch at k on another grid, ``v0`` on this one), the shift is ``guess``
-    and the answer must lie within 5 % of it.
+    and the answer must lie within 5 % of it; with them, ``taylor=False`` skips the Taylor
+    coefficients (``alpha1``, ``alpha2`` NaN: one real LU of the bordered matrix less).
     """
-    a1, a2, V0, V1 = _bordered(op, tangent, *op.series_products())
+    if taylor or guess is None:
+        a1, a2, V0, V1 = _bordered(op, tangent, *op.series_products())
+    else:
+        a1 = a2 = complex("nan")
     pencil = op.pencil(k)
     if guess is None:
         pred, start = a1 * k, (V0 + k * V1) / op.col_eq
