@@ -22,9 +22,9 @@ import numpy as np
 from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
-from ..stability import BranchTracker, OperatorCache, RejectionPolicy, mode_near
+from ..stability import BranchTracker, OperatorCache, RejectionPolicy
 from ..stability.dispersion import after_lost_branch, relaxed_branch_modes
-from ..stability.modes import check_n
+from ..stability.modes import check_n, nearest_eigenpair, stability_operator
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
 
@@ -331,8 +331,9 @@ class GrowthMetric(PointFunction):
 
     @staticmethod
     def _refine(flow, ma, mb, cache=None):
-        """Brent on Re α(k) of the mode nearest the linear prediction between two tracked
-        modes (at the finer of their resolutions)."""
+        """Brent on Re α(k) of the eigenvalue nearest the linear prediction between two
+        tracked modes (at the finer of their resolutions; no drift check: only Re α is
+        used)."""
         from scipy.optimize import brentq
 
         ka, kb, aa, ab = ma.k, mb.k, ma.alpha, mb.alpha
@@ -340,7 +341,8 @@ class GrowthMetric(PointFunction):
 
         def f(k):
             pred = aa + (ab - aa) * (k - ka) / (kb - ka)
-            return float(mode_near(flow, k, pred, n=n, cache=cache).alpha.real)
+            pencil = stability_operator(flow, n, cache=cache).pencil(k)
+            return float(nearest_eigenpair(pencil, pred)[0].real)
 
         return float(brentq(f, ka, kb, xtol=1e-6 * kb, rtol=1e-6))
 
