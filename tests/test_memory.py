@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import gc
 import platform
 import sys
+import weakref
 
 import numpy as np
+import pytest
 
-from chuteflow._memory import release_free_memory
+from chuteflow._memory import brentq, release_free_memory
 
 
 def _rss_kib() -> int:
@@ -83,3 +86,40 @@ def test_keep_freed_memory_reuses_freed_pages_in_its_own_process():
     # one (measured 152 660), kept pages on none (measured 0)
     assert faults["default"] > 100_000, faults
     assert faults["keep"] < 2_000, faults
+
+
+def _captured():
+    class Big:
+        pass
+
+    obj = Big()
+
+    def f(x):
+        return x - 0.25 if obj is not None else x
+
+    return f, weakref.ref(obj)
+
+
+def test_brentq_does_not_keep_the_function_alive():
+    """scipy's brentq wraps f in a closure that refers to itself (a reference cycle), so
+    what f captures outlives the call until the cyclic garbage collector runs;
+    chuteflow._memory.brentq gives the same root and frees it at once (with the
+    collector off, as between its runs)."""
+    import scipy.optimize
+
+    gc.collect()
+    gc.disable()
+    try:
+        f, ref = _captured()
+        root = brentq(f, 0.0, 1.0, xtol=1e-14)
+        del f
+        assert ref() is None
+        assert root == pytest.approx(0.25, abs=1e-13)
+        # the reason: scipy's own keeps it
+        f, ref = _captured()
+        assert scipy.optimize.brentq(f, 0.0, 1.0, xtol=1e-14) == root
+        del f
+        assert ref() is not None
+    finally:
+        gc.enable()
+        gc.collect()

@@ -94,3 +94,42 @@ def test_u_basis_identity(n, grid_map):
     u = np.cos(y / L) + (y / L) ** 3
     back = Minv @ np.concatenate([[u[0]], (D1 @ u)[1:]])
     np.testing.assert_allclose(back, u, rtol=0, atol=1e-10)
+
+
+def _reachable_arrays(fn):
+    """The numpy arrays a function reaches through its closure (and the closures of the
+    functions and partials found there)."""
+    out, todo, seen = [], [fn], set()
+    while todo:
+        f = todo.pop()
+        if id(f) in seen:
+            continue
+        seen.add(id(f))
+        cells = getattr(f, "__closure__", None) or ()
+        for c in cells:
+            v = c.cell_contents
+            items = v if isinstance(v, (list, tuple)) else [v]
+            for x in items:
+                if isinstance(x, np.ndarray):
+                    out.append(x)
+                elif callable(x):
+                    todo.append(x)
+                elif isinstance(x, tuple):
+                    todo.extend(y for y in x if callable(y))
+    return out
+
+
+def test_kept_lu_does_not_keep_the_jacobian(flows):
+    """A kept factorisation (``factored_step``'s solve: a row's LU slot, a neighbour's
+    chord steps) holds the LU of the eliminated system and what its back-substitution
+    needs, not the full Jacobian (3(n+1)+1 squared: 4.7 MB at n = 256; the 60 × 60
+    diagram's rows kept eight of them at once). Its solve still equals the step's."""
+    flow, n = flows[(16.0, 0.08)], 96
+    st = _off_solution(flow, n)
+    newton = SteadyNewton(n, 16.0, 0.08, flow.model, 1e-9, grid_map=st.grid_map)
+    R, J = newton.evaluate(st)
+    B = R[:, None].copy()
+    sol, again = newton.factored_step(st, B)
+    big = [a for a in _reachable_arrays(again) if a.size >= J.size]
+    assert big == []
+    assert np.allclose(again(B), sol, rtol=0, atol=1e-12 * np.abs(sol).max())

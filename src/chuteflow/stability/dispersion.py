@@ -1084,7 +1084,7 @@ def crossings(
     reached; ``.converged`` is then False and ``.message`` says why. ``strict=True`` raises
     :class:`ConvergenceError` instead.
     """
-    from scipy.optimize import brentq
+    from .._memory import brentq  # scipy's, without a reference cycle that keeps the operators
 
     k_max = validate_k(k_max, "k_max")
     if k_max == 0 or num < 3:

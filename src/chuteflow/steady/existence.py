@@ -746,8 +746,9 @@ def steady_existence(
             return shot.miss
 
         # the miss jumps at separatrices: scipy's brentq (imported with scipy.integrate, which
-        # only a failed cold start needs) bisects those robustly
-        from scipy.optimize import brentq
+        # only a failed cold start needs) bisects those robustly; through the forwarder of
+        # chuteflow._memory, so that the shots of this scan are freed with it
+        from .._memory import brentq
 
         try:
             x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)

@@ -537,8 +537,10 @@ class SteadyNewton:
                 rhs[ri] -= row @ bw
             return bw, rhs
 
+        size = len(JT)  # (not JT itself in the closures: a kept LU must not keep J alive)
+
         def expand(y, bw):
-            Y = np.empty((len(JT), y.shape[1]))
+            Y = np.empty((size, y.shape[1]))
             Y[: m + 1], Y[2 * m :] = y[: m + 1], y[m + 1 :]
             Y[w] = bw - Z @ y
             return to_u(Y)

@@ -334,7 +334,7 @@ class GrowthMetric(PointFunction):
         """Brent on Re α(k) of the eigenvalue nearest the linear prediction between two
         tracked modes (at the finer of their resolutions; no drift check: only Re α is
         used)."""
-        from scipy.optimize import brentq
+        from .._memory import brentq  # scipy's, without a reference cycle that keeps the cache
 
         ka, kb, aa, ab = ma.k, mb.k, ma.alpha, mb.alpha
         n = max(ma.n, mb.n)
