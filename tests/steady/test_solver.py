@@ -441,3 +441,26 @@ def test_resolution_ladder_ends_at_n_max(n_max):
     f = solve_steady(16.0, 0.05, n_max=n_max, rtol=1e-14, strict=False)
     assert f.n == n_max
     assert not f.converged and 0 < f.convergence < 1e-9
+
+
+def test_failed_cold_start_leaves_no_reference_cycle():
+    """A failed cold start raises its diagnosis without leaving a reference cycle: the
+    first Newton failure is kept without its traceback, whose frames (with their callers',
+    through f_back: in a map, the row's flows) would otherwise stay in memory until the
+    cyclic garbage collector's next run (stop 36: 8.7 MiB of a diagram row's flows)."""
+    import gc
+
+    from chuteflow.steady.solver import solve_state
+
+    gc.collect()
+    gc.disable()
+    gc.set_debug(gc.DEBUG_SAVEALL)
+    try:
+        with pytest.raises(NoSteadyFlowError, match="layer collapses"):
+            solve_state(10.0, 0.05, ChuteModel(), 1e-9, 64)
+        gc.collect()
+        assert [o for o in gc.garbage if type(o).__name__ == "frame"] == []
+    finally:
+        gc.set_debug(0)
+        gc.garbage.clear()
+        gc.enable()

@@ -996,7 +996,9 @@ def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
             )
             return st, it
         except _NewtonFailure as fail:
-            first = first or fail
+            # (without its traceback: kept in this frame, it would be a reference cycle
+            # holding the callers' frames, a whole map row's flows, until the cyclic GC)
+            first = first or fail.with_traceback(None)
             if not (min(fail.history) < 1e-3):
                 break
     raise _diagnose(theta, nu0, model, first)
