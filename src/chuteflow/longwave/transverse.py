@@ -35,8 +35,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
+from scipy.optimize import minimize_scalar
 
+from .._memory import brentq  # scipy's, without keeping the trackers alive (a cycle)
 from ..closures import ChuteModel
 from ..errors import ConvergenceError, ParameterError
 from ..stability.dispersion import BranchTracker
@@ -613,7 +614,7 @@ def longitudinal_peak(
                     k = kk
                     break
                 except ConvergenceError as exc:
-                    last_exc = exc
+                    last_exc = exc.with_traceback(None)  # (for its message; no frame cycle)
             if got is None:
                 lost = True
                 break

@@ -28,8 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline
-from scipy.optimize import brentq
 
+from .._memory import brentq
 from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError

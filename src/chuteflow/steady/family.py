@@ -927,7 +927,7 @@ def flux_minimum(
         ``nu0``, ``rho_bar``, ``Q``, ``h``, ``nu_mean`` at the minimum, ``bracket`` (the two
         family points around it) and ``family`` (the dataset).
     """
-    from scipy.optimize import brentq
+    from .._memory import brentq  # scipy's, without keeping the family's flows alive
 
     model = model or ChuteModel()
     if nu0_values is None:
