@@ -160,3 +160,37 @@ def test_eigen_sign_alpha1_is_the_exact_kinematic_slope(p1):
     dq = steady_tangent(p1)["dQ_drho"]
     assert es.alpha1 == complex(0.0, -dq)
     assert es.n == 48 and abs(es.alpha1_taylor - es.alpha1) == pytest.approx(6.8e-4 * dq, rel=0.05)
+
+
+def test_branch_point_without_taylor_finds_the_same_eigenvalue(p1):
+    """``taylor=False`` skips bordered perturbation theory: the solve starts from the exact
+    slope (shift −i dQ0/dρ̄0 k, eq. (B 2)) and the null vector V0 instead of the grid's α1 k
+    and V0 + k V1, and lands on the same eigenvalue to the solve's round-off (measured at
+    P1, N = 48: |Δα| = 5e-10 |α|, Re α/k² 1.8e-8 relative; P2 and P4 3e-10 and 6e-9 |α|)."""
+    from chuteflow.longwave.theory import branch_point
+
+    op = StabilityOperator(p1, 48, mapped=True)
+    tangent = steady_tangent(p1)
+    on = branch_point(op, tangent, 1e-5)
+    off = branch_point(op, tangent, 1e-5, taylor=False)
+    assert np.isnan(off.alpha1) and np.isnan(off.alpha2) and np.isfinite(on.alpha2)
+    assert abs(off.alpha - on.alpha) <= 1e-8 * abs(on.alpha)
+    assert off.coefficient == pytest.approx(on.coefficient, rel=1e-6)
+    assert off.tail == pytest.approx(on.tail, rel=1e-3)
+
+
+def test_sweep_metric_computes_the_taylor_alpha2_only_when_asked(p1):
+    """The sweep's long-wave metric (version 8) leaves the strict Taylor α2 out by default
+    (never used, a sixth of the work) and reports it with ``taylor=True``; Re α/k² and N are
+    the same either way to the solve's round-off (measured 1.4e-8 relative at P1)."""
+    from chuteflow.errors import ParameterError
+    from chuteflow.sweep.metrics import LongWaveMetric
+    from chuteflow.sweep.points import Point
+
+    plain = LongWaveMetric().compute(p1, Point(0, 0, 16.0, 0.05))
+    full = LongWaveMetric(taylor=True).compute(p1, Point(0, 0, 16.0, 0.05))
+    assert plain["alpha2_taylor_re"] is None and np.isfinite(full["alpha2_taylor_re"])
+    assert plain["longwave_n"] == full["longwave_n"]
+    assert plain["alpha2_re"] == pytest.approx(full["alpha2_re"], rel=1e-6)
+    with pytest.raises(ParameterError, match="taylor"):
+        LongWaveMetric(taylor="yes").validate()

@@ -175,6 +175,7 @@ def eigen_sign(
     rtol: float = 0.05,
     k: float = K_EIG,
     cache: OperatorCache | None = None,
+    taylor: bool = True,
 ) -> EigenSign:
     """Re α(k)/k² at k = :data:`K_EIG` with its convergence, cheaply (one flow of a sweep).
 
@@ -187,6 +188,11 @@ def eigen_sign(
     perturbative solve misses the branch (k = 1e-5 beyond the k² regime, e.g. ν0(0) ≲
     0.02), the shift is the branch on another rung, or the eigenvalue comes from
     :class:`~chuteflow.stability.BranchTracker`.
+
+    ``taylor`` (default True): the finer rung also computes the strict Taylor α1, α2 by
+    bordered perturbation theory (:attr:`EigenSign.alpha2_taylor`, ``alpha1_taylor``; a
+    sixth of the work) and starts its eigenvalue solve from them; with False they are NaN
+    and the solve starts from the exact α1 k and the null vector V0 (:func:`branch_point`).
     """
     tangent = steady_tangent(flow)
     ladder = RejectionPolicy(n_start=int(n), n_max=int(n_max))
@@ -203,7 +209,7 @@ def eigen_sign(
                 memo[nn] = bp
         if nn not in memo:
             op = stability_operator(flow, nn, cache=cache)
-            bp = branch_point(op, tangent, k)
+            bp = branch_point(op, tangent, k, taylor=taylor)
             unresolved = bp.tail > DEFAULT_POLICY.track_tail_tol and nn < ladder.n_max
             if not math.isfinite(bp.coefficient) and not unresolved:
                 # beyond the k² regime at k (dilute flows): from the branch on another rung,
@@ -213,7 +219,7 @@ def eigen_sign(
                     q, vec = done[-1]
                     assert vec is not None
                     v0 = interp_vector(vec, len(op.fields), q.n, nn)
-                    bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0)
+                    bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0, taylor=taylor)
                 if not math.isfinite(bp.coefficient):
                     try:
                         a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
@@ -502,18 +508,23 @@ def branch_point(
     eigenvector is resolved (tail below :attr:`RejectionPolicy.track_tail_tol`, which the
     continuum of the dilute top fails); otherwise ``alpha`` is NaN. With ``guess`` and
     ``v0`` (the branch at k on another grid, ``v0`` on this one), the shift is ``guess``
-    and the answer must lie within 5 % of it; with them, ``taylor=False`` skips the Taylor
-    coefficients (``alpha1``, ``alpha2`` NaN: one real LU of the bordered matrix less).
+    and the answer must lie within 5 % of it. ``taylor=False`` skips the Taylor coefficients
+    (``alpha1``, ``alpha2`` NaN: the bordered matrix's LU and solves less); without
+    ``guess`` the shift is then the exact α1 k, α1 = −i dQ0/dρ̄0 of the steady tangent
+    (eq. (B 2)), and the start the null vector V0 (:func:`null_vector`), which differs from
+    the eigenvector at k by O(k): the same eigenpair, to the solve's round-off.
     """
-    if taylor or guess is None:
+    a1 = a2 = complex("nan")
+    if taylor:
         a1, a2, V0, V1 = _bordered(op, tangent, *op.series_products())
-    else:
-        a1 = a2 = complex("nan")
-    pencil = op.pencil(k)
-    if guess is None:
         pred, start = a1 * k, (V0 + k * V1) / op.col_eq
-    else:
+    elif guess is None:
+        # without perturbation theory: the exact slope α1 = −i dQ0/dρ̄0 (eq. (B 2)) and the
+        # k = 0 null vector V0 (the eigenvector at k differs from it by O(k))
+        pred, start = complex(0.0, -float(tangent["dQ_drho"])) * k, null_vector(op, tangent) / op.col_eq
+    if guess is not None:
         pred, start = complex(guess), v0
+    pencil = op.pencil(k)
     alpha, t, vec = complex("nan"), math.inf, None
     try:
         a, w = nearest_eigenpair(pencil, pred, v0=start)

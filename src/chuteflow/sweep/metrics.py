@@ -52,17 +52,25 @@ class LongWaveMetric(PointFunction):
     N (shift α(N), start vector interpolated) without the Taylor coefficients, which only
     the finer rung reports (one real LU less a flow, −12 % CPU of the metric on 661 flows
     of the 60 × 60 φ = 0.05 grid; α2 the same bit for bit, the estimate moved within the
-    round-off of Re α(N'), ~1e-9 |α|). The strict Taylor α2
-    (which feels the dilute top's continuum and converges only algebraically, docs/errata.md)
-    is reported as ``alpha2_taylor_re`` at the same N, not used. α1 = −i dQ0/dρ̄0 (eq. (B 2))
+    round-off of Re α(N'), ~1e-9 |α|). Version 8: the strict Taylor α2 (which feels the
+    dilute top's continuum and converges only algebraically, docs/errata.md, and was never
+    used) is computed only with the option ``taylor=True`` (``alpha2_taylor_re``, at the same
+    N; missing otherwise): its bordered perturbation theory was a sixth of the metric's
+    work. The eigenvalue at N is then found from the exact slope, shift α1 k, and the k = 0
+    null vector V0 (eq. (B 2) and the steady tangent) instead of the grid's α1 k and
+    V0 + k V1: on 661 flows of the 60 × 60 φ = 0.05 grid the same N everywhere but one
+    flow, no sign changed, Re α/k² median 2e-7 relative from version 7; the largest changes
+    (≤ 1.4 %) at flows with Re α/k² ≈ 1, where Re α ~ 1e-10 is within a few 1e-12 of
+    round-off for either shift (``benchmarks/probes/longwave_start.py``); the metric's CPU
+    −15 to −30 %. α1 = −i dQ0/dρ̄0 (eq. (B 2))
     comes from the exact steady tangent (as accurate as the steady flow, ~1e-9), not from
     perturbation theory on the stability grid, which converges to it only as N⁻⁴.
     """
 
     name = "longwave"
-    version = "7"
+    version = "8"
     requires = ("steady",)
-    defaults = {"n": 60, "rtol": 0.05, "n_max": 160}
+    defaults = {"n": 60, "rtol": 0.05, "n_max": 160, "taylor": False}
     variables = (
         Variable(
             "alpha1_im",
@@ -91,7 +99,8 @@ class LongWaveMetric(PointFunction):
         Variable(
             "alpha2_taylor_re",
             "sigma^(3/2) g^(1/2)",
-            "strict Taylor Re α2 at the same N (perturbation theory; converges only algebraically)",
+            "strict Taylor Re α2 at the same N (perturbation theory; converges only "
+            "algebraically; computed with the option taylor=True, else missing)",
         ),
         Variable(
             "longwave_consistent",
@@ -111,12 +120,22 @@ class LongWaveMetric(PointFunction):
                 "longwave: need 0 < rtol < 1: below 1 the resolutions N and 0.8 N agree on the "
                 "sign of Re α/k²"
             )
+        if not isinstance(o["taylor"], bool):
+            raise ParameterError(
+                f"longwave: taylor = {o['taylor']!r}: need True or False (whether to compute "
+                "the strict Taylor α2 by perturbation theory as well)"
+            )
 
     def compute(self, flow, point):
         o = self.options
         # an own operator cache: the flow's operators are dropped when the point is done
         es = eigen_sign(
-            flow, n=int(o["n"]), n_max=int(o["n_max"]), rtol=float(o["rtol"]), cache=OperatorCache(2)
+            flow,
+            n=int(o["n"]),
+            n_max=int(o["n_max"]),
+            rtol=float(o["rtol"]),
+            cache=OperatorCache(2),
+            taylor=bool(o["taylor"]),
         )
         if not es.converged:
             point.note(
@@ -129,7 +148,7 @@ class LongWaveMetric(PointFunction):
             "alpha2_re": e,
             "alpha2_convergence": es.convergence if math.isfinite(es.convergence) else None,
             "alpha2_eig_re": e,
-            "alpha2_taylor_re": es.alpha2_taylor.real,
+            "alpha2_taylor_re": es.alpha2_taylor.real if math.isfinite(es.alpha2_taylor.real) else None,
             "longwave_consistent": bool(es.convergence < 1.0),
             "longwave_n": es.n,
         }
