@@ -89,6 +89,22 @@ def test_checks_on_a_synthetic_diagram():
     assert not check_low_density_unstable(ds4)["passed"]
 
 
+def test_unresolved_sign_labels_nothing():
+    """A point whose long-wave sign the resolutions N and 0.8 N disagree on
+    (``longwave_consistent`` = 0: e.g. θ = 12.305°, ν0(0) = 0.2093 of the 60 × 60 φ = 0.05
+    diagram, Re α/k² = ±0.0025 at N = 160, at the eigenvalue's round-off) is neither
+    unstable nor stable: ``unstable`` and ``regime`` are −1 (unknown) there, the other points
+    keep their labels."""
+    ds = _synthetic_ds()
+    cons = np.ones(ds["alpha2_re"].shape, dtype=np.int8)
+    cons[2, 3] = 0
+    ds2 = classify(ds.drop_vars(["unstable", "regime"]).assign(longwave_consistent=(("theta", "nu0"), cons)))
+    assert ds2["unstable"].values[2, 3] == -1 and ds2["regime"].values[2, 3] == -1
+    keep = cons == 1
+    np.testing.assert_array_equal(ds2["unstable"].values[keep], ds["unstable"].values[keep])
+    np.testing.assert_array_equal(ds2["regime"].values[keep], ds["regime"].values[keep])
+
+
 def test_P1_unstable_P3_stable():
     """§4.2, fig disp: along θ = 16°, P1 (ν0 = 0.05) is unstable with the lighter flow faster
     (regime B) and P3 (ν0 = 0.10) is stable (sign of Re α2)."""

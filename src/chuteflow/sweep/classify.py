@@ -1,7 +1,9 @@
 """Stability classification of a swept Dataset: unstable points, regimes A, B, C (§4.2).
 
 - ``unstable``: Re α2 > 0, the long-wave criterion (§4.2: every unstable mode found by the paper
-  has α(0) = 0 and Re α ∝ k² at small k).
+  has α(0) = 0 and Re α ∝ k² at small k); −1 (unknown) where Re α2 is missing or its sign is
+  not resolved (``longwave_consistent`` = 0: the resolutions N and 0.8 N disagree on it, e.g.
+  on the neutral curve, where Re α2 is at the round-off of the eigenvalue).
 - ``finite_k_unstable`` and ``finite_k_disagrees``: where the dispersion relation was sampled
   (metric ``growth``), whether some k on its grid grows, and whether that contradicts the
   long-wave criterion (a finite-k instability it misses, or a long-wave instability the k grid
@@ -55,10 +57,15 @@ def classify(ds):
             continue
         a2 = ds[prefix + "alpha2_re"].values
         valid = np.isfinite(a2)
+        if prefix + "longwave_consistent" in ds:
+            # a sign that the two resolutions do not agree on labels nothing
+            valid &= ds[prefix + "longwave_consistent"].values != 0
         ds[prefix + "unstable"] = (
             ds[prefix + "alpha2_re"].dims,
             _flag(a2 > 0, valid),
-            _flag_attrs("long-wave unstable, Re α2 > 0", "§4.2"),
+            _flag_attrs(
+                "long-wave unstable, Re α2 > 0 (missing: not computed, or its sign not resolved)", "§4.2"
+            ),
         )
         if "growth_max" in ds:
             g = ds[prefix + "growth_max"].values
