@@ -62,7 +62,8 @@ class LongWaveMetric(PointFunction):
     flow, no sign changed, Re α/k² median 2e-7 relative from version 7; the largest changes
     (≤ 1.4 %) at flows with Re α/k² ≈ 1, where Re α ~ 1e-10 is within a few 1e-12 of
     round-off for either shift (``benchmarks/probes/longwave_start.py``); the metric's CPU
-    −15 to −30 %. α1 = −i dQ0/dρ̄0 (eq. (B 2))
+    −15 % (the 60 × 60 diagram's long-wave stage 49.6, 51.1 → 42.7, 41.2 s, alternated
+    runs). α1 = −i dQ0/dρ̄0 (eq. (B 2))
     comes from the exact steady tangent (as accurate as the steady flow, ~1e-9), not from
     perturbation theory on the stability grid, which converges to it only as N⁻⁴.
     """
