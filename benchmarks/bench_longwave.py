@@ -10,8 +10,9 @@ the best of a few repetitions after a warm-up (sympy compilation excluded).
   < 0.2 s.
 - ``longwave_1pct_<P>`` (full mode): the same to ``rtol=0.01`` (N raised until α2 changes by
   < 1 %).
-- ``eigen_sign_<P>`` (issue 9): ``eigen_sign`` — the sweep's long-wave metric, Re α/k² at
-  k = 1e-5 from one shift-invert solve at N and 0.8 N on the sinh-mapped grid — against the
+- ``eigen_sign_<P>`` (issue 9): ``eigen_sign`` with the options of the sweep's long-wave
+  metric (``LongWaveMetric``), Re α/k² at k = 1e-5 from one shift-invert solve at N and
+  0.8 N on the sinh-mapped grid — against the
   sweep's previous metric in the same run: ``longwave(n=64, rtol=0.5, n_max=256,
   eig_ks=None)`` (Taylor α2 on the plain grid, its first pass). Note: both values and N.
 - Baseline of both: what one does without perturbation theory — dense QZ
@@ -109,8 +110,11 @@ def run(quick: bool = False) -> list[dict]:
             }
         )
         from chuteflow.longwave.theory import eigen_sign
+        from chuteflow.sweep.metrics import LongWaveMetric
 
-        t_es, es = _best(lambda flow=flow: eigen_sign(flow), rep)
+        o = LongWaveMetric().options  # as the sweep calls it
+        kw = dict(n=int(o["n"]), n_max=int(o["n_max"]), rtol=float(o["rtol"]), taylor=bool(o["taylor"]))
+        t_es, es = _best(lambda flow=flow, kw=kw: eigen_sign(flow, **kw), rep)
 
         def old_metric(flow=flow):
             try:
