@@ -14,7 +14,8 @@ solves, and the flows that cost most. The counts do not depend on the machine's 
 times of two processes side by side differ by up to ±15 % on the 2-core development
 machine), so two versions are compared by their counts and by the values, which ``--out``
 writes (JSON, one record per flow) for a point-by-point comparison (``--lw-OPTION=VALUE``: an
-option of the long-wave metric, e.g. ``--lw-n=60``):
+option of the long-wave metric, e.g. ``--lw-n=60`` or ``--lw-taylor=true``; two settings of
+one version side by side in one process: ``longwave_start.py``):
 ``PYTHONPATH=/other/checkout/src python benchmarks/probes/metric_work.py growth --out=b.json``.
 """
 
@@ -55,7 +56,11 @@ def main(argv: list[str]) -> None:
     from chuteflow.sweep.points import Point
 
     cfg = SweepConfig.grid(roughness, shape=(size, size), markers=())
-    lw_opts = {k[3:]: float(v) if "." in v else int(v) for k, v in opts.items() if k.startswith("lw-")}
+
+    def _value(v: str):
+        return v == "true" if v in ("true", "false") else float(v) if "." in v else int(v)
+
+    lw_opts = {k[3:]: _value(v) for k, v in opts.items() if k.startswith("lw-")}
     lw, gm = LongWaveMetric(**lw_opts), GrowthMetric(stride=stride)
     lus: collections.Counter = collections.Counter()
     qz: collections.Counter = collections.Counter()

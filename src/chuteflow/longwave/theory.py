@@ -219,7 +219,9 @@ def eigen_sign(
                     q, vec = done[-1]
                     assert vec is not None
                     v0 = interp_vector(vec, len(op.fields), q.n, nn)
-                    bp = branch_point(op, tangent, k, guess=q.alpha, v0=v0, taylor=taylor)
+                    # (the Taylor coefficients, if asked for, are those of the first solve)
+                    again = branch_point(op, tangent, k, guess=q.alpha, v0=v0, taylor=False)
+                    bp = dataclasses.replace(again, alpha1=bp.alpha1, alpha2=bp.alpha2)
                 if not math.isfinite(bp.coefficient):
                     try:
                         a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
