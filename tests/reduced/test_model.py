@@ -225,3 +225,37 @@ def test_rho_at_nu0_is_exact_at_every_knot(rm16):
         for x in (np.nextafter(nu, 0.0), np.nextafter(nu, 1.0)):
             if rm16.nu0[0] <= x <= rm16.nu0[-1]:
                 assert rm16.rho_at_nu0(float(x)) == pytest.approx(r, rel=1e-12)
+
+
+# Off the paper: at θ = 16.237°, φ = 0.0469, Φ = 0.322, e_p = 0.86 the steady flows exist only
+# for ν0(0) ≲ 0.025 (`chuteflow steady` solves 0.005 … 0.0245 and finds no flow at 0.026 and
+# above; ν0(0) = 0.0251 is the family's unresolved end). Seen with try-random-points style
+# checks: `chuteflow reduced --nu0 0.0219` answered "no steady flow to build the 1D model on".
+_LOW = ChuteModel(roughness=0.0469, wall_loss=0.322, restitution=0.86)
+
+
+def test_family_is_found_where_no_default_seed_has_a_flow():
+    # every default seed (0.03 … 0.3) lies beyond the family; the ln ν0 scan finds it
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        rm = reduced_model(16.237, _LOW, tol=1e-3)
+    assert rm.nu0[0] == 0.005  # down to the requested bound
+    assert 0.024 < rm.nu0[-1] < 0.026  # up to the family's end
+    assert "solved alone" in rm.ends[1]  # the end is the steady solver's own verdict
+
+
+def test_walk_goes_on_where_continuation_stalls_inside_the_family():
+    # from ν0(0) = 0.0219 (the user's point first, as the CLI does) Newton from the
+    # neighbour stalls both ways although each flow solves alone: the walk asks the steady
+    # solver there instead of ending the family (it was "too short": 1 flow)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        rm = reduced_model(16.237, _LOW, tol=1e-3, seeds=(0.0219,))
+    assert rm.nu0[0] == 0.005 and 0.024 < rm.nu0[-1] < 0.026
+    c = rm.coefficients(rm.rho_at_nu0(0.0219))
+    assert np.isfinite(c.alpha2) and c.rho0 > 0
+
+
+def test_no_family_at_all_is_one_clear_error():
+    with pytest.raises(NoSteadyFlowError, match=r"none at \d+ floor densities nu0 in \[0.005, 0.45\]"):
+        reduced_model(30.0, ChuteModel())

@@ -70,10 +70,13 @@ def reduced(
     import warnings
 
     from chuteflow.reduced import reduced_model
+    from chuteflow.reduced.model import SEEDS
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
-        rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max)
+        # the family is started at the user's density first: it has a flow wherever one exists
+        seeds = SEEDS if nu0 is None else (nu0, *SEEDS)
+        rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max, seeds=seeds)
         state = None
         if nu0 is not None:
             state = rm.coefficients(rm.rho_at_nu0(nu0))
@@ -179,6 +182,7 @@ def simulate(
     from chuteflow.errors import ParameterError
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
+    from chuteflow.reduced.model import SEEDS
 
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")
@@ -186,7 +190,7 @@ def simulate(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         with con.status("building the 1D model from the steady family…"):
-            rm = reduced_model(theta, model, tol=1e-4, nu0_min=nu0_min, nu0_max=nu0_max)
+            rm = reduced_model(theta, model, tol=1e-4, nu0_min=nu0_min, nu0_max=nu0_max, seeds=(nu0, *SEEDS))
         coef = rm.coefficients(rm.rho_at_nu0(nu0))
         if coef.short_wave_unstable:
             con.print(

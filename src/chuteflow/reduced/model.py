@@ -562,7 +562,14 @@ def _knot(theta, nu0, model, guess, nu_top, cold_retry=True) -> _Knot:
 
 
 def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
-    """Continuation in ln ν0 from ``start`` towards ``bound``; halve the step on failure."""
+    """Continuation in ln ν0 from ``start`` towards ``bound``; halve the step on failure.
+
+    Where the shortest step fails too, the steady solver decides the flow there on its own
+    (shooting scan and Newton, no guess) before the walk ends: a continuation guess can
+    stall Newton inside the family (θ = 16.237°, φ = 0.0469, Φ = 0.322, e_p = 0.86: from
+    ν0(0) = 0.0219 both neighbours failed, while each solves alone), and the family ends
+    only where there is no flow.
+    """
     knots: list[_Knot] = []
     cur = start
     reason = f"requested bound nu0 = {bound:g}"
@@ -580,16 +587,39 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
             nu_next = bound if last else math.exp(ln_next)
             k = _knot(theta, nu_next, model, cur.flow, nu_top, cold_retry=False)
         except (NoSteadyFlowError, ConvergenceError) as exc:
-            if step / 2 < min_step:
-                reason = f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} ({exc})"
+            if step / 2 >= min_step:
+                step /= 2
+                continue
+            try:
+                k = _knot(theta, nu_next, model, None, nu_top)
+            except (NoSteadyFlowError, ConvergenceError) as alone:
+                reason = (
+                    f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} (continued: {exc}; "
+                    f"solved alone: {alone})"
+                )
                 break
-            step /= 2
-            continue
         knots.append(k)
         cur = k
         if last:
             break
     return knots, reason
+
+
+#: Floor densities ν0(0) from which :func:`reduced_model` starts the steady family, in order.
+SEEDS = (0.05, 0.1, 0.15, 0.03, 0.2, 0.3)
+#: Densities spaced evenly in ln ν0 over [nu0_min, nu0_max] tried after the seeds (ratio ~1.2
+#: between neighbours over the default bounds).
+SCAN_SEEDS = 24
+
+
+def _seed_order(seeds, nu0_min: float, nu0_max: float):
+    """The seeds within [nu0_min, nu0_max], then the scan's densities not within 5 % of
+    one of them."""
+    first = [float(s) for s in seeds if nu0_min <= float(s) <= nu0_max]
+    yield from first
+    for s in np.geomspace(nu0_min, nu0_max, SCAN_SEEDS):
+        if all(abs(math.log(s / f)) > 0.05 for f in first):
+            yield float(s)
 
 
 @functools.lru_cache(maxsize=32)
@@ -603,7 +633,7 @@ def reduced_model(
     tol: float = 1e-4,
     max_knots: int = 200,
     nu_top: float = 1e-9,
-    seeds: tuple = (0.05, 0.1, 0.15, 0.03, 0.2, 0.3),
+    seeds: tuple = SEEDS,
 ) -> ReducedModel:
     """Build the 1D model's F, T̄, a over the steady family at fixed ``theta``.
 
@@ -627,7 +657,11 @@ def reduced_model(
     nu_top : float
         ν0(y_max) of the steady solutions (paper: 1e-9).
     seeds : tuple of float
-        Floor densities tried, in order, to start the continuation.
+        Floor densities tried, in order, to start the continuation (those outside
+        [``nu0_min``, ``nu0_max``] are skipped). Where none has a flow, :data:`SCAN_SEEDS`
+        densities spaced evenly in ln ν0 over the bounds are tried as well, so that a family
+        that exists anywhere on a ratio grid of ~1.2 is found (e.g. θ = 16.237°, φ = 0.0469,
+        Φ = 0.322, e_p = 0.86: flows only for ν0(0) ≲ 0.03).
 
     Raises
     ------
@@ -650,19 +684,19 @@ def reduced_model(
         )
     if not 0.0 < tol < 1e-1:
         raise ParameterError(f"tol = {tol!r} is outside (0, 0.1): relative interpolation error")
-    start, errors = None, []
-    for s in seeds:
-        if not nu0_min <= s <= nu0_max:
-            continue
+    start, tried, first = None, [], ""
+    for s in _seed_order(seeds, nu0_min, nu0_max):
         try:
             start = _knot(theta, s, model, None, nu_top)
             break
         except (NoSteadyFlowError, ConvergenceError) as exc:
-            errors.append(f"nu0 = {s:g}: {exc}")
+            tried.append(s)
+            first = first or f"at nu0 = {s:.4g}: {exc}"
     if start is None:
         raise NoSteadyFlowError(
-            f"no steady flow to build the 1D model on at theta = {theta:g} deg, roughness = "
-            f"{model.roughness:g}: " + "; ".join(errors)
+            f"no steady flow to build the 1D model on at theta = {theta:g} deg ({model.describe()}): "
+            f"none at {len(tried)} floor densities nu0 in [{min(tried):.3g}, {max(tried):.3g}]; "
+            f"{first}"
         )
     down, why_lo = _walk(theta, model, start, -1, nu0_min, step, step / 4, nu_top)
     up, why_hi = _walk(theta, model, start, +1, nu0_max, step, step / 4, nu_top)
