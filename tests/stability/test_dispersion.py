@@ -230,3 +230,32 @@ def test_dispersion_past_a_dissolved_branch_is_resolved_cheaply():
     assert complex(ds.alpha_re.values[2], ds.alpha_im.values[2]) == pytest.approx(
         complex(-0.0214659, -0.2570957), abs=1e-6
     )
+
+
+def test_direct_ladder_follows_the_first_rungs_candidate_to_the_qz_ladders_answer():
+    """Where the branch is lost and the relaxed continuation does not reach k,
+    ``dispersion`` solves each k directly: dense QZ at the first rung, then the candidate
+    followed up the ladder by shift-invert (``_direct_ladder``). Independent method: the
+    QZ ladder of ``least_stable(method="qz")`` (a dense QZ at every rung). Off the paper:
+    θ = 21.293°, ν0(0) = 0.0506, φ = 0.0878, Φ = 0.337, e_p = 0.685 (branch lost near
+    k = 4.5e-4); at k = 0.0155 both pass at N = 125 with the same eigenvalue (measured
+    |Δα| = 2.3e-13, drift 2.9e-8; 0.7 s against 4.6 s). Over the 50 k of ``chuteflow
+    dispersion`` there: the same α to ≤ 7e-12 and the same N at 46 k, at two k a better
+    resolved answer (N 195 → 244, 80 → 100, drifts 1.5e-7 → 2.5e-8, 1.3e-7 → 4.3e-9, α within
+    2.5e-8); 274 s → 33 s."""
+    import importlib
+
+    from chuteflow.closures import ChuteModel
+    from chuteflow.stability import RejectionPolicy
+
+    disp = importlib.import_module("chuteflow.stability.dispersion")
+    flow = solve_steady(21.293, 0.0506, ChuteModel(roughness=0.0878, wall_loss=0.337, restitution=0.685))
+    policy = RejectionPolicy()
+    got = disp._direct_ladder(flow, 0.0155, policy, OperatorCache(2))
+    ref = least_stable(flow, 0.0155, method="qz", policy=policy, cache=OperatorCache(2))
+    assert ref.physical and ref.n == 125  # the case: the first rung does not resolve it
+    assert got.physical and got.n == ref.n
+    # both converge the same eigenvalue at N = 125 (a dense QZ and shift-invert: round-off
+    # apart, ~1e-13); 1e-10 is far below the drift 2.9e-8 that both report
+    assert abs(got.alpha - ref.alpha) < 1e-10
+    assert got.drift == pytest.approx(ref.drift, rel=1e-3)
