@@ -197,3 +197,24 @@ def test_shot_agrees_with_newton():
     f = solve_steady(16.0, 0.05)
     assert v.physical and v.u_floor == pytest.approx(f.u_floor, rel=1e-6)
     assert v.h == pytest.approx(f.h, rel=1e-4) and v.y_max == pytest.approx(f.y_max, rel=1e-4)
+
+
+def test_scan_trial_that_changes_sign_with_the_tolerance():
+    """Off the paper: θ = 17.161°, ν0(0) = 0.16556300557587944, φ = 0.0455, Φ = 0.469,
+    e_p = 0.688 (a knot of ``chuteflow reduced``'s family walk). The scan's trial u0(0) =
+    17.1907 lies 1.2e-4 above the root: cold at the scan's 1e-4, hot at fine_rtol, so the
+    bracket had the same sign at both ends at fine_rtol. That ended in scipy's "max() arg is
+    an empty sequence" (a raw ValueError out of ``chuteflow steady``), and once caught, in a
+    wrong "separatrix, no flow" verdict. Now the scan goes on from that trial as a hot one.
+    Independent method: tests/steady/shooting.py at rtol 1e-11 finds u0(0) = 17.18868648,
+    as do ν0(0) = 0.1655 and 0.1656 on either side (17.1733, 17.1978)."""
+    model = ChuteModel(roughness=0.0455, wall_loss=0.469, restitution=0.688)
+    nu0 = 0.16556300557587944
+    v = steady_existence(17.161, nu0, model)
+    assert v.exists and v.kind == "flow"
+    assert v.u_floor == pytest.approx(17.18868648, rel=1e-5)  # the scan's root at fine_rtol
+    f = solve_steady(17.161, nu0, model)
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        s = ref.solve_by_shooting(17.161, nu0, ref.Material(e=0.688, phi=0.0455, Phi=0.469))
+    assert f.u_floor == pytest.approx(s.u_floor, rel=1e-9)  # measured 5e-11

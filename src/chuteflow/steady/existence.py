@@ -754,6 +754,17 @@ def steady_existence(
             x = brentq(miss, lo, hi, xtol=1e-10, rtol=1e-12, maxiter=60)
         except (ValueError, RuntimeError, _Separatrix):
             x = 0.5 * (lo + hi)
+        # brentq starts with both ends: the scan's trials again, at tol
+        fine = (ends[lo], ends[hi])
+        # a scan trial within ~1e-4 of the root can change sign with the tolerance (θ =
+        # 17.161°, ν0(0) = 0.16556, φ = 0.0455, Φ = 0.469, e_p = 0.688: the trial u0(0) =
+        # 17.1907 is cold at 1e-4 and hot at 1e-6, the root 17.1887 lies below it): then
+        # both ends have one sign at tol, and the scan's trial keeps its end of the bracket
+        # here (the caller goes on from the trial at tol)
+        if not any(sh.sign < 0 for sh in ends.values()):
+            ends[lo] = cold
+        if not any(sh.sign > 0 for sh in ends.values()):
+            ends[hi] = hot
         cold_u = max(math.exp(v) for v, sh in ends.items() if sh.sign < 0)
         hot_u = min(math.exp(v) for v, sh in ends.items() if sh.sign > 0)
         # a trial that solves the top condition eq. (3.13): T0' small on the scale of the
@@ -781,30 +792,40 @@ def steady_existence(
             # (a packed, very cold band under the top) for |T0'| to become small
             best = a if abs(a.dT_top) <= abs(b.dT_top) else b
         nu_peak = max(math.exp(float(sh.solution.y[0].max())) for sh in ends.values())
-        return best, (cold_u, hot_u), nu_peak
+        return best, (cold_u, hot_u), nu_peak, fine
 
     # the first hot → cold change coming down from u_max that brackets a solution; a change
     # without a trial reaching nu_top is a separatrix (a discontinuity of the miss, e.g. a
     # band packing to nu_max that either collapses or heats up above it), and the scan goes on
-    prev = None
+    prev = pprev = None
     signs = []
     final = separatrix = None
     for u in trials:
         shot = trial(u)
         signs.append(shot.sign)
         if prev is not None and prev.sign > 0 > shot.sign:
-            best, bracket, nu_peak = refine(shot, prev)
+            best, bracket, nu_peak, (lo_fine, hi_fine) = refine(shot, prev)
+            if best is None and lo_fine.sign > 0 and hi_fine.sign > 0:
+                # this trial heats up at fine_rtol: the change lies below it, the scan goes
+                # on from it as a hot trial
+                signs[-1] = 1
+                pprev, prev = prev, lo_fine
+                continue
+            cools = lo_fine.sign < 0 and hi_fine.sign < 0
+            if best is None and cools and pprev is not None and pprev.sign > 0:
+                # the trial above cools at fine_rtol: the change lies above it
+                best, bracket, nu_peak, _ = refine(hi_fine, pprev)
             if best is None:
                 # near the upper existence boundary the flow packs to within a hair of
                 # nu_max below a dilute top, and a trial at fine_rtol can pack spuriously:
                 # a separatrix is only believed when it persists at 1e-9 (as the
                 # independent reference of tests/steady checks at 1e-11)
-                best, bracket, nu_peak = refine(shot, prev, 1e-9)
+                best, bracket, nu_peak, _ = refine(shot, prev, 1e-9)
             if best is not None:
                 final = best
                 break
             separatrix = separatrix or (bracket, nu_peak)
-        prev = shot
+        pprev, prev = prev, shot
     if final is None and separatrix is not None:
         bracket, nu_peak = separatrix
         packs = nu_peak > 0.95 * model.nu_max
