@@ -586,17 +586,17 @@ def _walk(theta, model, start: _Knot, direction, bound, step, min_step, nu_top):
             # the bound itself exactly (not exp(log(bound))), so that it is a knot
             nu_next = bound if last else math.exp(ln_next)
             k = _knot(theta, nu_next, model, cur.flow, nu_top, cold_retry=False)
-        except (NoSteadyFlowError, ConvergenceError) as exc:
+        except (NoSteadyFlowError, ConvergenceError):
             if step / 2 >= min_step:
                 step /= 2
                 continue
             try:
                 k = _knot(theta, nu_next, model, None, nu_top)
             except (NoSteadyFlowError, ConvergenceError) as alone:
-                reason = (
-                    f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} (continued: {exc}; "
-                    f"solved alone: {alone})"
-                )
+                # the solver's own verdict there, its first clause (the rest lists what it tried)
+                why = str(alone).split(" — ")[0]
+                reason = f"no steady flow found beyond nu0 = {cur.flow.nu0:.4g} (at nu0 = {nu_next:.4g}: "
+                reason += f"{why})"
                 break
         knots.append(k)
         cur = k
