@@ -153,3 +153,30 @@ def test_row_ends_take_the_sweeps_flows():
     assert len(calls) == 2 and all(g is flow for g in calls)  # bisection only, from the flow
     assert end["nu0"] == flow.nu0 and end["how"] == "grid" and end["h"] == flow.h
     assert end["kind"] == "stable" and end["alpha2_re"] < 0
+
+
+def test_row_ends_below_the_grid_leave_the_sweeps_flows_alone():
+    """A row whose least dense flow is the grid's first column is followed below the grid
+    by a steady family; its list of flows overwrote ``flows`` (the sweep's dict), and the
+    next row failed with "AttributeError: 'list' object has no attribute 'get'" — the full
+    (100 × 100) diagrams stage of ``chuteflow reproduce --full`` at φ = 0.1. Two such rows
+    (P2's θ = 16° and 16.1°, ν0(0) = 0.08 first): both answered, the second from the
+    sweep's flow."""
+    import json
+
+    from chuteflow.papers.mitarai2004 import edges
+    from chuteflow.steady import solve_steady
+
+    cfg = SweepConfig.grid(
+        0.05,
+        shape=(2, 1),
+        theta_range=(16.0, 16.1),
+        nu0_range=(0.08, 0.08),
+        metrics=("steady", "kinematic", StridedLongWave(stride=1)),
+    )
+    ds = _dataset(cfg, {})
+    ds.attrs["config_json"] = json.dumps(cfg.to_dict(), sort_keys=True)
+    flows = {(i, 0): solve_steady(float(th), 0.08) for i, th in enumerate(cfg.theta)}
+    ends = edges.row_ends(ds, flows=flows, halvings=1)
+    assert len(ends) == 2 and all(e["kind"] != "error" for e in ends)
+    assert all(e["nu0"] <= 0.08 and e["how"] in ("below grid", "grid, no flow found below") for e in ends)

@@ -129,10 +129,10 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5, flows=Non
                 # below the grid: the family at ν0 = ν0_min / 2^q, q = halvings … 1, by
                 # continuation down from the grid's least dense flow
                 below = [float(nus[0]) * 0.5**q for q in range(halvings, 0, -1)]
-                _, flows = steady_family(
+                _, family = steady_family(
                     theta, below + [float(nus[0])], model, tangent=False, return_flows=True, **kw
                 )
-                lowest = next((f for f in flows if f is not None), None)
+                lowest = next((f for f in family if f is not None), None)
                 if lowest is not None and lowest.nu0 < flow.nu0:
                     flow, how = lowest, "below grid"
                 else:
