@@ -180,3 +180,41 @@ def test_row_ends_below_the_grid_leave_the_sweeps_flows_alone():
     ends = edges.row_ends(ds, flows=flows, halvings=1)
     assert len(ends) == 2 and all(e["kind"] != "error" for e in ends)
     assert all(e["nu0"] <= 0.08 and e["how"] in ("below grid", "grid, no flow found below") for e in ends)
+
+
+def test_row_end_without_a_long_wave_value_is_a_failed_row():
+    """The long-wave metric leaves Re α/k² missing (None) where it has no finite value; the
+    full φ = 0.1 diagram's row θ = 20.14° ended (continued below the grid) at ν0(0) = 3.1e-4,
+    h = 84, where it is NaN at N = 160, and ``row_ends`` failed with "TypeError: '>' not
+    supported between instances of 'NoneType' and 'int'". Now that row is an error with the
+    metric's reason, which the §4.2 check lists as a failed row, not as a judged one."""
+    from types import SimpleNamespace
+
+    from chuteflow.papers.mitarai2004 import checks, edges
+
+    class Fixed:
+        def __init__(self, values, note=""):
+            self.values, self.note_text = values, note
+
+        def compute(self, flow, point):
+            if self.note_text:
+                point.note(self.note_text)
+            return dict(self.values)
+
+    flow = SimpleNamespace(theta=20.14, nu0=3.1e-4)
+    fns = [Fixed({"dU_drho": -9226.9}), Fixed({"alpha2_re": None}, "longwave: Re α/k² = nan")]
+    rec = edges._classify_flow(flow, fns)
+    assert rec["kind"] == "error" and "Re α/k² = nan" in rec["error"] and not rec["consistent"]
+    end = {"theta": 20.14, "nu0": 3.1e-4, "h": 84.0, **rec}
+    ok = {
+        "theta": 16.0,
+        "nu0": 0.01,
+        "h": 5.0,
+        "alpha2_re": 1.0,
+        "dU_drho": 1.0,
+        "kind": "A",
+        "consistent": True,
+    }
+    c = checks.check_low_density_unstable(xr.Dataset(attrs={"roughness": 0.1}), [ok, end])
+    assert "1 of 1 θ rows" in c["computed"] and "1 rows failed" in c["computed"]
+    assert "undetermined" not in c["computed"]

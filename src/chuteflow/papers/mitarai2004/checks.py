@@ -98,7 +98,9 @@ def check_low_density_unstable(ds, ends=None) -> dict:
         if e.get("h", 0) >= 1 and e.get("consistent", True) and e["kind"] != "error" and e not in stuck
     ]
     thin = [e for e in ends if e.get("h", 0) < 1 and e["kind"] != "error"]
-    unsure = [e for e in ends if e.get("h", 0) >= 1 and not e.get("consistent", True)]
+    unsure = [
+        e for e in ends if e.get("h", 0) >= 1 and not e.get("consistent", True) and e["kind"] != "error"
+    ]
     bad = [e for e in judged if e["kind"] not in ("A", "B")]
     errors = [e for e in ends if e["kind"] == "error"]
 

@@ -31,6 +31,17 @@ def _classify_flow(flow, fns):
         point.values.update(f.compute(flow, point))
     v = point.values
     a2, dU = v["alpha2_re"], v["dU_drho"]
+    if a2 is None or dU is None:
+        # the long-wave metric left its value missing (no finite Re α/k²): the row's end is
+        # not classified, and the check counts it as a failed row with the metric's reason
+        why = "; ".join(point.notes) or "no finite value"
+        return {
+            "alpha2_re": math.nan if a2 is None else float(a2),
+            "dU_drho": math.nan if dU is None else float(dU),
+            "kind": "error",
+            "error": f"the long-wave coefficient at the row's end (ν0 = {flow.nu0:.4g}) is missing: {why}",
+            "consistent": False,
+        }
     if a2 > 0:
         kind = "B" if dU < 0 else "A"
     else:
