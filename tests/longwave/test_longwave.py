@@ -194,3 +194,20 @@ def test_sweep_metric_computes_the_taylor_alpha2_only_when_asked(p1):
     assert plain["alpha2_re"] == pytest.approx(full["alpha2_re"], rel=1e-6)
     with pytest.raises(ParameterError, match="taylor"):
         LongWaveMetric(taylor="yes").validate()
+
+
+def test_eigen_sign_reaches_k_through_a_tenth_of_it_where_the_k2_regime_is_shorter():
+    """θ = 20.14°, φ = 0.1, ν0(0) = 3.1e-4 (h = 84; the full φ = 0.1 diagram's row end at
+    θ = 20.14°): Re α/k² is 2.3e6 at k = 1e-6 and −6508 at 1e-5, so the tracker's first step
+    from k = 0 straight to 1e-5 misses by 1.2 of any step, and the sweep's long-wave metric
+    gave NaN at every rung up to N = 160. Through k/10 first the branch is reached.
+    Independent value: ``eigen_coefficient`` (the tracker through k = 1e-6, 1e-5, 1e-4, as
+    ``chuteflow longwave`` reports it) −6508.2425 at N = 156; measured −6508.2256 at N = 60
+    with the estimate 8.8e-6 against N' = 48 (2.6e-6 apart)."""
+    from chuteflow.longwave.theory import eigen_sign
+    from chuteflow.stability import OperatorCache
+
+    flow = solve_steady(20.136363636364, 0.0003125, ChuteModel(roughness=0.1))
+    es = eigen_sign(flow, n=60, n_max=160, rtol=0.05, cache=OperatorCache(2), taylor=False)
+    assert es.converged and es.convergence < 1e-4
+    assert es.coefficient == pytest.approx(-6508.2425, rel=1e-4)

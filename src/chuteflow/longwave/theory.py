@@ -224,7 +224,16 @@ def eigen_sign(
                     bp = dataclasses.replace(again, alpha1=bp.alpha1, alpha2=bp.alpha2)
                 if not math.isfinite(bp.coefficient):
                     try:
-                        a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
+                        try:
+                            a, w = BranchTracker(flow, nn, n_max=nn, cache=cache).advance(k)
+                        except ConvergenceError:
+                            # through k/10 first: where the k² regime ends below k the first
+                            # step from k = 0 must stay inside it (θ = 20.14°, φ = 0.1, ν0(0) =
+                            # 3.1e-4, h = 84: Re α/k² = 2.3e6 at k = 1e-6, −6508 at 1e-5; to k
+                            # directly the predictor misses by 1.2 of any step)
+                            tr = BranchTracker(flow, nn, n_max=nn, cache=cache)
+                            tr.advance(k / 10)
+                            a, w = tr.advance(k)
                         bp = dataclasses.replace(bp, alpha=complex(a), vector=w)
                     except ConvergenceError:
                         # lost near the continuum: as least_stable answers there
