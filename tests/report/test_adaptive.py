@@ -118,29 +118,31 @@ def test_refine_reuses_the_sweeps_flows():
     assert (np.abs(ra - rb) <= conv * np.abs(rb)).all(), (np.abs(ra / rb - 1).max(), conv.min())
 
 
+def _row_ends_dataset(**grid):
+    """A small diagram (``SweepConfig.grid(0.05, **grid)`` with the point functions that
+    ``row_ends`` classifies with) and its dataset, every point a flow, no values yet."""
+    import json
+
+    cfg = SweepConfig.grid(0.05, metrics=("steady", "kinematic", StridedLongWave(stride=1)), **grid)
+    ds = _dataset(cfg, {})
+    ds.attrs["config_json"] = json.dumps(cfg.to_dict(), sort_keys=True)
+    return cfg, ds
+
+
 def test_row_ends_take_the_sweeps_flows():
     """:func:`~chuteflow.papers.mitarai2004.edges.row_ends` with ``flows=`` (the sweep's
     steady flows) starts a row's bisection below its least dense grid flow from that flow
     instead of solving it again from the cold start; the row end it reports is that flow
     here (every bisection step below it is refused) and it is classified with the sweep's
     point functions (P2, θ = 16°, ν0(0) = 0.08: long-wave stable, §4.2)."""
-    import json
     from unittest import mock
 
     from chuteflow.errors import NoSteadyFlowError
     from chuteflow.papers.mitarai2004 import edges
     from chuteflow.steady import solve_steady
 
-    cfg = SweepConfig.grid(
-        0.05,
-        shape=(1, 2),
-        theta_range=(16.0, 16.0),
-        nu0_range=(0.07, 0.08),
-        metrics=("steady", "kinematic", StridedLongWave(stride=1)),
-    )
-    ds = _dataset(cfg, {})
+    cfg, ds = _row_ends_dataset(shape=(1, 2), theta_range=(16.0, 16.0), nu0_range=(0.07, 0.08))
     ds["status"].values[0, 0] = 2  # the least dense point has no flow: bisect towards it
-    ds.attrs["config_json"] = json.dumps(cfg.to_dict(), sort_keys=True)
     flow = solve_steady(16.0, 0.08)
     calls = []
 
@@ -162,20 +164,11 @@ def test_row_ends_below_the_grid_leave_the_sweeps_flows_alone():
     (100 × 100) diagrams stage of ``chuteflow reproduce --full`` at φ = 0.1. Two such rows
     (P2's θ = 16° and 16.1°, ν0(0) = 0.08 first): both answered, the second from the
     sweep's flow."""
-    import json
 
     from chuteflow.papers.mitarai2004 import edges
     from chuteflow.steady import solve_steady
 
-    cfg = SweepConfig.grid(
-        0.05,
-        shape=(2, 1),
-        theta_range=(16.0, 16.1),
-        nu0_range=(0.08, 0.08),
-        metrics=("steady", "kinematic", StridedLongWave(stride=1)),
-    )
-    ds = _dataset(cfg, {})
-    ds.attrs["config_json"] = json.dumps(cfg.to_dict(), sort_keys=True)
+    cfg, ds = _row_ends_dataset(shape=(2, 1), theta_range=(16.0, 16.1), nu0_range=(0.08, 0.08))
     flows = {(i, 0): solve_steady(float(th), 0.08) for i, th in enumerate(cfg.theta)}
     ends = edges.row_ends(ds, flows=flows, halvings=1)
     assert len(ends) == 2 and all(e["kind"] != "error" for e in ends)
