@@ -29,7 +29,7 @@ best of a few repetitions after a warm-up (sympy compilation is excluded).
 - ``large_k_direct_P1_3`` (full run only, one repetition): ``least_stable(P1, k = 3)``, the
   direct solve past the continuum (dense QZ up the ladder 80 … 244), against the same with
   a second QZ for every rung's check at N' (no eigenvalues kept by the operators) and the
-  check past the continuum at the top rung N = 256 (``TOP_CHECK_BELOW`` = 1): the code
+  check past the continuum at the top rung N = 256 (``TrackingPolicy.top_check_below`` = 1): the code
   before issue 9's ladder reuse, in the same run; the answers must agree.
 """
 
@@ -221,25 +221,20 @@ def _assembly(flow, sizes, repeat: int = 100) -> list[dict]:
 
 def _large_k() -> dict:
     """Row ``large_k_direct_P1_3`` (module docstring)."""
-    import importlib
     from unittest import mock
 
-    from chuteflow.stability import OperatorCache, least_stable
+    from chuteflow.stability import DEFAULT_POLICY, OperatorCache, TrackingPolicy, least_stable
     from chuteflow.stability.operator import StabilityOperator
     from chuteflow.steady import solve_steady
 
-    # the module (chuteflow.stability.dispersion is also the name of a function there)
-    disp = importlib.import_module("chuteflow.stability.dispersion")
     f = solve_steady(THETA, NU0)
     t0 = time.perf_counter()
     new = least_stable(f, 3.0, cache=OperatorCache(4))
     t_new = time.perf_counter() - t0
-    with (
-        mock.patch.object(StabilityOperator, "remember_eigenvalues", lambda self, k, kz, w: None),
-        mock.patch.object(disp, "TOP_CHECK_BELOW", 1.0),
-    ):
+    at_top = DEFAULT_POLICY.replace(tracking=TrackingPolicy(top_check_below=1.0))
+    with mock.patch.object(StabilityOperator, "remember_eigenvalues", lambda self, k, kz, w: None):
         t0 = time.perf_counter()
-        old = least_stable(f, 3.0, cache=OperatorCache(4))
+        old = least_stable(f, 3.0, cache=OperatorCache(4), policy=at_top)
         t_old = time.perf_counter() - t0
     return {
         "name": "large_k_direct_P1_3",

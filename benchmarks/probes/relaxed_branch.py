@@ -30,7 +30,7 @@ import time
 from chuteflow.closures import ChuteModel
 from chuteflow.papers.mitarai2004.points import POINTS
 from chuteflow.stability import OperatorCache, least_stable
-from chuteflow.stability.dispersion import near_continuum_branch
+from chuteflow.stability.lost import near_continuum_branch
 from chuteflow.stability.modes import direct_mode, spectrum
 from chuteflow.steady import solve_steady
 

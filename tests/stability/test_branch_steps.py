@@ -14,10 +14,10 @@ import pytest
 
 from chuteflow.closures import ChuteModel
 from chuteflow.errors import ConvergenceError
-from chuteflow.stability import BranchTracker, OperatorCache
+from chuteflow.stability import BranchTracker, OperatorCache, RejectionPolicy, TrackingPolicy
 from chuteflow.steady import solve_steady
 
-dispersion = importlib.import_module("chuteflow.stability.dispersion")
+tracking = importlib.import_module("chuteflow.stability.tracking")
 
 
 @pytest.fixture(scope="module")
@@ -32,13 +32,13 @@ def crossing_flow():
 def solves(monkeypatch):
     """Count the tracker's eigen-solves."""
     count = [0]
-    solve = dispersion.nearest_eigenpair
+    solve = tracking.nearest_eigenpair
 
     def counted(*args, **kw):
         count[0] += 1
         return solve(*args, **kw)
 
-    monkeypatch.setattr(dispersion, "nearest_eigenpair", counted)
+    monkeypatch.setattr(tracking, "nearest_eigenpair", counted)
     return count
 
 
@@ -70,7 +70,7 @@ def test_relaxed_tracker_reuses_the_strict_trackers_solves(crossing_flow, solves
     with pytest.raises(ConvergenceError, match="rises through the tracking threshold"):
         BranchTracker(crossing_flow, 48, n_max=48, cache=cache).advance(1e-4)
     strict = solves[0]
-    relaxed = dispersion.DEFAULT_POLICY.replace(track_tail_tol=1e-3, n_start=48, n_max=48)
+    relaxed = RejectionPolicy().replace(track_tail_tol=1e-3, n_start=48, n_max=48)
     a, _ = BranchTracker(crossing_flow, 48, policy=relaxed, cache=cache).advance(1e-4)
     assert solves[0] == strict  # reached 1e-4 on the strict tracker's solves
     solves[0] = 0
@@ -78,17 +78,17 @@ def test_relaxed_tracker_reuses_the_strict_trackers_solves(crossing_flow, solves
     assert a == b and solves[0] == strict
 
 
-def test_tail_crossing_stops_where_creeping_stopped(crossing_flow, solves, monkeypatch):
-    """The crossing rule (dispersion.CROSSING_NEAR): the continuation stops at the first step
+def test_tail_crossing_stops_where_creeping_stopped(crossing_flow, solves):
+    """The crossing rule (TrackingPolicy.crossing_near): the continuation stops at the first step
     rejected by the branch's own tail, at the log-linear estimate of the crossing, where
     the old rule crept up to the same crossing in ever shorter steps."""
     with pytest.raises(ConvergenceError, match="rises through") as new:
         BranchTracker(crossing_flow, 48, n_max=48, cache=OperatorCache(2)).advance(1e-4)
     n_new = solves[0]
     k_new = float(str(new.value).split("near k = ")[1].split()[0])
-    _rules_off(monkeypatch)  # the old rules: creep
+    off = _rules_off()  # the old rules: creep
     solves[0] = 0
-    tr = BranchTracker(crossing_flow, 48, n_max=48, cache=OperatorCache(2))
+    tr = BranchTracker(crossing_flow, 48, n_max=48, policy=off, cache=OperatorCache(2))
     with pytest.raises(ConvergenceError, match="step shrank"):
         tr.advance(1e-4)
     k_creep = tr.history[-1][0]  # the crept limit: 9.97235e-5
@@ -103,40 +103,41 @@ def spurious_flow():
     return solve_steady(17.186440677966, 0.144237288136, ChuteModel(roughness=0.05), min_thickness=0.0)
 
 
-def _rules_off(monkeypatch, tail=True, stall=True):
+def _rules_off(tail=True, stall=True) -> RejectionPolicy:
+    """The policy without the tail crossing rule and/or the predictor's stall rule."""
+    changes = {}
     if tail:
-        monkeypatch.setattr(dispersion, "CROSSING_JUMP", 0.0)
+        changes["crossing_jump"] = 0.0
     if stall:
-        monkeypatch.setattr(dispersion, "STALL_REJECTIONS", 10**6)
+        changes["stall_rejections"] = 10**6
+    return RejectionPolicy(tracking=TrackingPolicy(**changes))
 
 
-def test_unresolved_null_vector_stops_at_once(spurious_flow, solves, monkeypatch):
+def test_unresolved_null_vector_stops_at_once(spurious_flow, solves):
     """N = 48: every step from k = 0 has the null vector's tail 1.3e-4; the tracker gives up
     at the first (1 solve), where it halved 16 times before (17 solves), same history."""
     with pytest.raises(ConvergenceError, match="not resolved at k = 0"):
         BranchTracker(spurious_flow, 48, n_max=48, cache=OperatorCache(2)).advance(1e-5)
     assert solves[0] == 1
-    _rules_off(monkeypatch)
+    off = _rules_off()
     solves[0] = 0
-    tr = BranchTracker(spurious_flow, 48, n_max=48, cache=OperatorCache(2))
+    tr = BranchTracker(spurious_flow, 48, n_max=48, policy=off, cache=OperatorCache(2))
     with pytest.raises(ConvergenceError, match="step shrank"):
         tr.advance(1e-5)
     assert solves[0] == 17 and len(tr.history) == 1
 
 
-def test_stalled_predictor_stops_at_once(spurious_flow, solves, monkeypatch):
+def test_stalled_predictor_stops_at_once(spurious_flow, solves):
     """N = 60 without the tail rules: after a point accepted at k = 1.22e-9 (off the branch:
     N = 75 reaches k = 1e-5 in one step from k = 0) every shorter step misses the prediction
     by 0.36 of the step; the stall rule stops after 3 such misses instead of halving 14
     times, with the same history."""
-    _rules_off(monkeypatch, stall=False)
-    tr = BranchTracker(spurious_flow, 60, n_max=60, cache=OperatorCache(2))
+    tr = BranchTracker(spurious_flow, 60, n_max=60, policy=_rules_off(stall=False), cache=OperatorCache(2))
     with pytest.raises(ConvergenceError, match="misses the prediction"):
         tr.advance(1e-5)
     n_stall, hist = solves[0], [(s, a) for s, a, _ in tr.history]
-    _rules_off(monkeypatch)
     solves[0] = 0
-    tr = BranchTracker(spurious_flow, 60, n_max=60, cache=OperatorCache(2))
+    tr = BranchTracker(spurious_flow, 60, n_max=60, policy=_rules_off(), cache=OperatorCache(2))
     with pytest.raises(ConvergenceError, match="step shrank"):
         tr.advance(1e-5)
     assert [(s, a) for s, a, _ in tr.history] == hist and len(hist) == 2

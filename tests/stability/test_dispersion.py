@@ -248,7 +248,7 @@ def test_direct_ladder_follows_the_first_rungs_candidate_to_the_qz_ladders_answe
     from chuteflow.closures import ChuteModel
     from chuteflow.stability import RejectionPolicy
 
-    disp = importlib.import_module("chuteflow.stability.dispersion")
+    disp = importlib.import_module("chuteflow.stability.lost")
     flow = solve_steady(21.293, 0.0506, ChuteModel(roughness=0.0878, wall_loss=0.337, restitution=0.685))
     policy = RejectionPolicy()
     got = disp._direct_ladder(flow, 0.0155, policy, OperatorCache(2))

@@ -118,7 +118,7 @@ def test_default_ladder_does_not_stop_at_a_damped_mode_below_the_continuum():
     """P4, k = 0.5 with the default ladder (what ``chuteflow eig --k 0.5`` uses): at N = 80
     the relaxed continuation does not reach k and the direct solve's −2.5106 − 0.8721i passes
     both tests, with unresolved eigenvalues above it. Checked once more near the top of the
-    ladder (N = 244, stability.dispersion.TOP_CHECK_BELOW; at the top rung N = 256 before:
+    ladder (N = 244, TrackingPolicy.top_check_below; at the top rung N = 256 before:
     −0.030044 − 0.817171i, drift 1.2e-4, tail 3.7e-6) the branch is picked out:
     −0.0300167 − 0.8171262i (drift 2.0e-4), within its drift of the N = 360 reference
     −0.0300217 − 0.8171577i above; flagged. At P5

@@ -19,14 +19,13 @@ import numpy as np
 import pytest
 
 from chuteflow.stability import stability_operator
-from chuteflow.stability.modes import nearest_eigenpair
+from chuteflow.stability.modes import nearest_eigenpair, tails
 from chuteflow.stability.transverse import (
     SEED_N,
     _finite_spectrum,
     _nearest_kx0,
     _real_pencil,
     _seed_spectrum,
-    _tails,
     real_form,
 )
 
@@ -71,7 +70,7 @@ def test_seed_spectrum_keeps_the_qz_seeds(p1_flow, kz):
     p = op.pencil(0.0, kz)
     w, V = _finite_spectrum(p, True)
     w2, V2 = _seed_spectrum(op, kz)
-    t, t2 = _tails(p, V, 10), _tails(p, V2, 10)
+    t, t2 = tails(p, V, 10), tails(p, V2, 10)
     a = np.nonzero((t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5))[0][:4]
     b = np.nonzero((t2 < 1e-4) & (w2.imag >= 0) & (np.abs(w2) > 1e-5))[0][:4]
     assert len(a) == len(b) > 0

@@ -5,7 +5,8 @@ Each solves the steady flow at (θ, ν0(0)) first, then:
 - ``chuteflow eig``: the least-stable mode at one k (the α(0) = 0 branch, or the whole spectrum
   by dense QZ with ``--method qz``), with its convergence estimates;
 - ``chuteflow dispersion``: α(k) of that branch on [0, k_max] and the critical k_c;
-- ``chuteflow longwave``: α1, α2 of α = α1 k + α2 k² + … and k_c where long-wave unstable;
+- ``chuteflow longwave``: α1, α2 of α = α1 k + α2 k² + … (α2 from the eigenvalue at k = 1e-5,
+  the Taylor α2 beside it) and k_c where long-wave unstable;
 - ``chuteflow mode``: the eigenfunction figure at one k (figures 10, 11, 14).
 
 ``--json`` prints one JSON object (non-finite numbers as null) and nothing else on standard
@@ -52,7 +53,10 @@ EIG_KEYS = (
     "converged",
     "note",
 )
-#: Keys of ``longwave --json``.
+#: Keys of ``longwave --json`` taken from :meth:`LongWave.summary` (with the model's keys,
+#: ``k_c``, ``k_max``, ``lambda_c``, ``k_c_converged`` and the nested ``steady``; every key is
+#: documented in docs/cli.md). ``alpha2_*`` is the dispersion relation's k² coefficient (from
+#: the eigenvalue at k = 1e-5); the Taylor coefficient is the diagnostic ``alpha2_taylor_*``.
 LONGWAVE_KEYS = (
     "theta",
     "nu0",
@@ -68,21 +72,24 @@ LONGWAVE_KEYS = (
     "alpha1_im",
     "alpha2_re",
     "alpha2_im",
+    "alpha2_convergence",
+    "alpha2_im_convergence",
+    "alpha2_k",
     "dQ_drho",
     "convergence_alpha1",
-    "convergence_alpha2",
     "n",
+    "alpha2_taylor_re",
+    "alpha2_taylor_im",
+    "alpha2_taylor_convergence",
+    "taylor_converged",
     "k_check",
-    "alpha2_from_eigenvalue_re",
-    "alpha2_from_eigenvalue_im",
+    "alpha2_check_re",
+    "alpha2_check_im",
     "long_wave_unstable",
     "k_c",
     "k_max",
-    "converged",
-    "alpha2_eig_re",
     "eig_k",
     "eig_alpha2_re",
-    "eig_convergence",
     "eig_n",
     "sign_consistent",
     "k_c_converged",
@@ -178,10 +185,8 @@ def _warn_mode(mode) -> None:
             "the best estimate is shown"
         )
     elif not mode.method.startswith("branch") and mode.method != "shift":
-        _warn(
-            f"k = {mode.k:g}: answered by {mode.method} (direct solve at k)"
-            + (f"; {mode.note}" if mode.note else "")
-        )
+        how = "a mode above the tracked branch" if mode.method == "global" else "direct solve at k"
+        _warn(f"k = {mode.k:g}: answered by {mode.method} ({how})" + (f"; {mode.note}" if mode.note else ""))
 
 
 def _mode_summary(mode, flow, method) -> dict:
@@ -346,8 +351,9 @@ def dispersion_cmd(
     """Dispersion relation α(k) of the least-stable (α(0) = 0) branch, and k_c."""
     import numpy as np
 
-    from chuteflow.errors import ConvergenceError, ParameterError
-    from chuteflow.stability import Crossings, RejectionPolicy, check_hydrodynamic_k, crossings, dispersion
+    from chuteflow.errors import ParameterError
+    from chuteflow.stability import RejectionPolicy, check_hydrodynamic_k, dispersion
+    from chuteflow.stability.scan import peak_index
 
     _check_positive("k_max", k_max)
     check_hydrodynamic_k(k_max)
@@ -359,18 +365,11 @@ def dispersion_cmd(
     policy = RejectionPolicy(n_max=n_max)
     with console.status(f"dispersion relation at {num} wavenumbers on [0, {k_max:g}]"):
         ds = dispersion(flow, ks, policy=policy, strict=strict)
-    kc_error = None
     with console.status("critical wavenumbers (sign changes of Re α, Brent)"):
-        try:
-            found = crossings(flow, k_max=k_max, num=max(num, 12), policy=policy, strict=strict)
-            k_c = _k_c(flow, found, policy)
-            if not found.converged:
-                _warn(f"k_c: {found.message}")
-        except ConvergenceError as exc:
-            if strict:
-                raise
-            found, k_c, kc_error = Crossings(), None, str(exc)
-            found.converged = False
+        scan, kc_error = _k_c(flow, k_max, max(num, 12), policy, strict)
+    found, k_c = scan.to_crossings(), scan.k_c
+    if kc_error is None and not found.converged:
+        _warn(f"k_c: {found.message}")
     if found:
         ds.attrs["crossings"] = np.asarray(found, dtype=float)
     if k_c is not None:
@@ -401,8 +400,8 @@ def dispersion_cmd(
         )
     # --no-strict: NaN where the branch was lost; k = 0 is outside (0, k_max] (α(0) = 0 by
     # mass conservation, Appendix B: the computed value is its discretisation error)
-    finite = np.isfinite(v["alpha_re"]) & (v["k"] > 0)
-    i_max = int(np.argmax(np.where(finite, v["alpha_re"], -np.inf))) if finite.any() else 0
+    # the largest sampled Re α by the branch scan's rule (chuteflow.stability.scan.peak_index)
+    i_max = peak_index(v["alpha_re"], v["k"]) or 0
     summary = {
         **_params(flow),
         "k_max": k_max,
@@ -411,7 +410,10 @@ def dispersion_cmd(
         "lambda_c": 2 * math.pi / k_c if k_c else None,
         "crossings": list(found),
         "k_c_error": kc_error,
-        "k_c_converged": bool(getattr(found, "converged", True)),
+        "k_c_converged": bool(found.converged),
+        "k_cutoff": scan.cutoff(),
+        "peak_growth": scan.peak().growth,
+        "k_peak": scan.peak().k,
         "all_converged": bool(v["physical"].all()),
         "max_growth": float(v["alpha_re"][i_max]),
         "k_max_growth": float(v["k"][i_max]),
@@ -451,15 +453,23 @@ def dispersion_cmd(
             c.print(f"wrote {p}", highlight=False)
 
 
-def _k_c(flow, found, policy):
-    """Upper edge of the long-wave unstable band 0 < k < k_c: the first crossing if Re α > 0
-    below it (Re α keeps its sign on (0, k_1), k_1 the first crossing), else None."""
-    from chuteflow.stability import least_stable
+def _k_c(flow, k_max, num, policy, strict):
+    """The branch scan that decides k_c (:func:`chuteflow.stability.branch_scan`: the first
+    sign change of Re α when it goes from + to −, the upper edge of the long-wave unstable
+    band 0 < k < k_c; None where the flow is long-wave stable on the scan), and the error
+    that ended it (``--no-strict``: an empty scan and the message instead of the error)."""
+    import numpy as np
 
-    if not found:
-        return None
-    below = least_stable(flow, 0.5 * found[0], policy=policy, strict=False)
-    return float(found[0]) if below.alpha.real > 0 else None
+    from chuteflow.errors import ConvergenceError
+    from chuteflow.stability import BranchScan, branch_scan
+
+    try:
+        return branch_scan(flow, k_max=k_max, num=num, policy=policy, strict=strict), None
+    except ConvergenceError as exc:
+        if strict:
+            raise
+        empty = BranchScan.from_samples([0.5 * k_max, k_max], np.full(2, np.nan), message=str(exc))
+        return empty, str(exc)
 
 
 def _kc_line(k_c, found, s, k_max):
@@ -470,9 +480,14 @@ def _kc_line(k_c, found, s, k_max):
         )
     where = ", ".join(f"{v:.6g}" for v in found) or "none"
     state = "Re α > 0 somewhere" if s["max_growth"] > 0 else "stable"
+    band = (
+        f"; no long-wave band 0 < k < k_c, Re α > 0 up to k = {s['k_cutoff']:.6g}"
+        if s.get("k_cutoff") is not None
+        else ""
+    )
     return (
         f"{state} on (0, {k_max:g}]: largest sampled Re α = {s['max_growth']:.4e} at k = "
-        f"{s['k_max_growth']:.4g}; sign changes of Re α at: {where}"
+        f"{s['k_max_growth']:.4g}; sign changes of Re α at: {where}{band}"
     )
 
 
@@ -487,7 +502,7 @@ def longwave_cmd(
     rtol: float = typer.Option(
         0.01,
         "--rtol",
-        help="Accepted relative change of α2 between resolutions (0.2 is enough for its sign).",
+        help="Accepted relative change of the Taylor α2 (a diagnostic) between resolutions.",
     ),
     n_max: int = typer.Option(480, "--n-max", help="Largest resolution."),
     k_max: float = typer.Option(0.05, "--k-max", help="Search k_c on (0, k_max]."),
@@ -496,7 +511,7 @@ def longwave_cmd(
     """Long-wave coefficients α1, α2 (α = α1 k + α2 k² + …) and k_c where unstable."""
     from chuteflow.errors import ParameterError
     from chuteflow.longwave import longwave
-    from chuteflow.stability import crossings
+    from chuteflow.stability import branch_scan
 
     _check_positive("k_max", k_max)
     if not 0 < rtol < 1:
@@ -505,25 +520,30 @@ def longwave_cmd(
     flow = _steady(console, theta, nu0, model, nu_top)
     with console.status("long-wave perturbation theory at k = 0"):
         lw = longwave(flow, n=n, rtol=rtol, n_max=n_max, strict=False)
-    if not lw.converged:
+    if not math.isfinite(lw.alpha2.real):
         _warn(
-            f"Taylor α2 did not reach rtol = {rtol:g} by N = {lw.n} (relative change "
-            f"{lw.convergence_alpha2:.1e}; it converges only algebraically, see docs/errata.md); the "
-            f"eigenvalue-based Re α/k² at k = 1e-5 ({lw.alpha2_eig:.6g}, relative change "
-            f"{lw.eig_convergence:.1e} at N = {lw.eig_n}) decides the sign"
+            f"the branch's eigenvalue at k = {lw.alpha2_k:g} was not reached: α2 is unknown and "
+            "the sign is that of the Taylor α2 (a diagnostic, docs/errata.md)"
+        )
+    elif not lw.alpha2_convergence <= 0.2:
+        _warn(
+            f"Re α2 changed by {lw.alpha2_convergence:.1e} (relative) between N = {lw.eig_n} and "
+            "the rung below: its value is uncertain to about that"
         )
     if not lw.sign_consistent:
         _warn(
-            f"the signs of the Taylor Re α2 ({lw.alpha2.real:.4g}) and of Re α/k² at k = "
-            f"1e-5 ({lw.alpha2_eig:.4g}) differ; the latter decides"
+            f"the signs of the Taylor Re α2 ({lw.alpha2_taylor.real:.4g}, a diagnostic) and of "
+            f"Re α2 = Re α/k² at k = {lw.alpha2_k:g} ({lw.alpha2.real:.4g}) differ; the latter "
+            "decides"
         )
     k_c, kc_ok = None, True
     if lw.unstable:
         with console.status("critical wavenumber k_c (dispersion relation, Brent)"):
-            found = crossings(flow, k_max=k_max, strict=False)
-            k_c, kc_ok = (found[0] if found else None), found.converged
+            # the one rule of chuteflow.stability.scan (the same k_c as `chuteflow dispersion`)
+            scan = branch_scan(flow, k_max=k_max, refine_peak=False)
+            k_c, kc_ok = scan.k_c, scan.converged
             if not kc_ok:
-                _warn(f"k_c: {found.message}")
+                _warn(f"k_c: {scan.to_crossings().message}")
     s = lw.summary()
     out = _params(flow)
     out.update({k: s[k] for k in LONGWAVE_KEYS if k in s})
@@ -545,16 +565,26 @@ def longwave_cmd(
     t.add_column("value", justify="right")
     t.add_row("α1 (= −i dQ0/dρ̄0)", f"{lw.alpha1.real:.3e} {lw.alpha1.imag:+.10g}i")
     t.add_row("dQ0/dρ̄0 (steady family)", f"{lw.dQ_drho:.10g}")
-    t.add_row("α2", f"{lw.alpha2.real:.6g} {lw.alpha2.imag:+.6g}i")
     t.add_row(
-        "relative change of α1, α2 (N → 4N/5)", f"{lw.convergence_alpha1:.1e}, {lw.convergence_alpha2:.1e}"
+        f"α2 (dispersion relation: (α − α1 k)/k² at k = {lw.alpha2_k:g}, N = {lw.eig_n})",
+        f"{lw.alpha2.real:.6g} {lw.alpha2.imag:+.6g}i",
     )
-    eig = lw.alpha2_from_eigenvalue
-    t.add_row(f"(α(k) − α1 k)/k² at k = {lw.k_check:g}", f"{eig.real:.6g} {eig.imag:+.6g}i")
-    t.add_row("resolution N", str(lw.n))
+    t.add_row(
+        "relative change of Re α2, Im α2 (N → 4N/5)",
+        f"{lw.alpha2_convergence:.1e}, {lw.alpha2_im_convergence:.1e}",
+    )
     for kk, val in zip(lw.eig_k, lw.eig_alpha2):
         t.add_row(f"Re α/k² at k = {kk:g} (eigenvalue, N = {lw.eig_n})", f"{val:.8g}")
-    t.add_row("relative change of Re α/k² at k = 1e-5 (N → 4N/5)", f"{lw.eig_convergence:.1e}")
+    t.add_row(
+        f"diagnostic: Taylor α2 (perturbation theory at k = 0, N = {lw.n})",
+        f"{lw.alpha2_taylor.real:.6g} {lw.alpha2_taylor.imag:+.6g}i",
+    )
+    t.add_row(
+        "relative change of α1, Taylor α2 (N → 4N/5)",
+        f"{lw.convergence_alpha1:.1e}, {lw.alpha2_taylor_convergence:.1e}",
+    )
+    chk = lw.alpha2_check
+    t.add_row(f"diagnostic: (α(k) − α1 k)/k² at k = {lw.k_check:g}", f"{chk.real:.6g} {chk.imag:+.6g}i")
     t.add_row("long-wave stability", "unstable (Re α/k² > 0)" if lw.unstable else "stable (Re α/k² < 0)")
     t.add_row("k_c", "—" if k_c is None else f"{k_c:.6g} (λ_c = {2 * math.pi / k_c:.5g})")
     Console().print(t)

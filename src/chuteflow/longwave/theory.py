@@ -15,10 +15,14 @@ adjoint vector, which is ill-conditioned here: a continuum of slowly settling de
 the dilute top (docs/errata.md, numerical notes) sits within ~1e-8 of α = 0. Rows and columns are
 equilibrated before the LU for the same reason.
 
-Checks: α1 = −i dQ0/dρ̄0 (Appendix B, eq. (B 2)) and α2 = lim Re α/k² + i Im … of the eigenvalues
-at k ≲ 1e-6. Re α2 converges only algebraically in N (≈ N⁻⁴), hence the default N = 200 and the
-reported convergence. Re α2 > 0 means long-wave instability; never decide stability at finite k
-from α2 alone (the k² regime ends near k ~ 1e-5 … 1e-4 for P1).
+The α2 reported to users (:attr:`LongWave.alpha2`) is not this Taylor coefficient but the
+dispersion relation's: (α(k) − α1 k)/k² from the branch's eigenvalue at k = 1e-5 with the
+exact α1 = −i dQ0/dρ̄0 (Appendix B, eq. (B 2)), so Re α2 = Re α(k)/k², which converges
+spectrally. The strict Taylor α2 (:attr:`LongWave.alpha2_taylor`) feels the dilute top's
+continuum and converges only algebraically in N (≈ N⁻⁴): at P4 its real part is about half
+of the dispersion relation's (docs/errata.md, note 4). Re α2 > 0 means long-wave
+instability; never decide stability at finite k from α2 alone (the k² regime ends near
+k ~ 1e-5 … 1e-4 for P1).
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ import scipy.linalg as sla
 from ..closures import ChuteModel
 from ..conventions import long_wave_phase_velocity
 from ..errors import ConvergenceError
-from ..stability.dispersion import BranchTracker, after_lost_branch
+from ..stability.lost import after_lost_branch
 from ..stability.modes import (
     OperatorCache,
     check_n,
@@ -44,6 +48,7 @@ from ..stability.modes import (
 )
 from ..stability.operator import StabilityOperator
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
+from ..stability.tracking import BranchTracker
 from ..steady import SteadyFlow, steady_tangent
 
 #: Wavenumbers of the eigenvalue-based k² coefficient Re α/k² (the range over which the
@@ -80,24 +85,49 @@ def eigen_coefficient(
         relative change at :data:`K_EIG` and the resolution N.
     """
     ks = tuple(sorted(float(k) for k in ks))
+    cur, _, conv, nn = branch_eigenvalues(flow, n=n, n_max=n_max, rtol=rtol, ks=ks, cache=cache)
+    return tuple(float(a.real / kk**2) for a, kk in zip(cur, ks)), conv, nn
+
+
+def branch_eigenvalues(
+    flow: SteadyFlow,
+    *,
+    n: int = 100,
+    n_max: int = 256,
+    rtol: float = 1e-4,
+    ks=EIG_KS,
+    cache: OperatorCache | None = None,
+) -> tuple[tuple[complex, ...], tuple[complex, ...], float, int]:
+    """The eigenvalues α(k) of the α(0) = 0 branch behind :func:`eigen_coefficient`.
+
+    Same ladder and stopping rule (relative change of Re α/k² at :data:`K_EIG`).
+
+    Returns
+    -------
+    (alphas, alphas_check, convergence, n)
+        The eigenvalues at the sorted ``ks`` at the final N and at the rung below it (NaN
+        where the branch was not reached), the relative change of Re α/k² at
+        :data:`K_EIG` between them, and N.
+    """
+    ks = tuple(sorted(float(k) for k in ks))
     tangent = steady_tangent(flow)
 
-    def at(nn):
+    def at(nn) -> list[complex]:
         op = stability_operator(flow, nn, cache=cache)
-        vals: list[float] = []
+        vals: list[complex] = []
         tr = None
         for kk in ks:
             bp = branch_point(op, tangent, kk) if tr is None else None
             if bp is not None and math.isfinite(bp.coefficient):
-                vals.append(bp.coefficient)
+                vals.append(complex(bp.alpha))
                 continue
             if tr is None:
                 tr = BranchTracker(flow, nn, n_max=nn, cache=cache)
             try:
                 a, _ = tr.advance(kk)
-                vals.append(float(a.real / kk**2))
+                vals.append(complex(a))
             except ConvergenceError:
-                vals.extend([math.nan] * (len(ks) - len(vals)))
+                vals.extend([complex("nan")] * (len(ks) - len(vals)))
                 break
         return vals
 
@@ -108,11 +138,11 @@ def eigen_coefficient(
     nn = int(n)
     while True:
         cur = at(nn)
-        conv = abs(cur[j] - prev[j]) / max(abs(cur[j]), 1e-300)
+        conv = abs(cur[j].real - prev[j].real) / max(abs(cur[j].real), 1e-300)
         if not math.isfinite(conv):
             conv = math.inf
         if conv <= rtol or nn >= ladder.n_max:
-            return tuple(cur), float(conv), nn
+            return tuple(cur), tuple(prev), float(conv), nn
         prev, nn = cur, ladder.next_n(nn)
 
 
@@ -272,35 +302,59 @@ def eigen_sign(
 class LongWave:
     """Long-wave coefficients of the least-stable branch of one steady flow.
 
+    α(k) = α1 k + α2 k² + O(k³) for perturbations ∝ exp(αt + ikx) (eq. 4.4). :attr:`alpha2`
+    is the k² coefficient of the dispersion relation, from the branch's eigenvalue at
+    k = :attr:`alpha2_k` (default :data:`K_EIG` = 1e-5); the strict Taylor coefficient of
+    perturbation theory at k = 0 is the diagnostic :attr:`alpha2_taylor`.
+
     Attributes
     ----------
     theta, nu0 : float
         The steady flow (degrees, floor density).
-    alpha1, alpha2 : complex
-        α(k) = α1 k + α2 k² + O(k³) for perturbations ∝ exp(αt + ikx) (eq. 4.4).
+    alpha1 : complex
+        α1 by bordered perturbation theory at k = 0 (plain grid, N = :attr:`n`); Appendix B:
+        α1 = −i dQ0/dρ̄0.
+    alpha2 : complex
+        α2 = (α(k) − α1 k)/k² at k = :attr:`alpha2_k` (1e-5), α(k) the eigenvalue of the
+        α(0) = 0 branch (:func:`branch_eigenvalues`, sinh-mapped grid, N = :attr:`eig_n`)
+        and α1 = −i dQ0/dρ̄0 exactly (steady tangent), so Re α2 = Re α(k)/k²: the
+        coefficient the dispersion relation follows, whose sign decides long-wave stability
+        (:attr:`unstable`). The exact α1 keeps the grid's O(N⁻⁴) error of α1, which 1/k
+        would amplify, out of Im α2. NaN when the eigenvalues were not computed.
+    alpha2_convergence, alpha2_im_convergence : float
+        Relative change of Re α2 and of Im α2 between N = :attr:`eig_n` and the rung below
+        it (4N/5 … N/1.25): the estimate of their relative error.
+    alpha2_k : float
+        The wavenumber of :attr:`alpha2`.
     dQ_drho : float
         dQ0/dρ̄0 along the family at fixed θ (eq. B 6); Appendix B: α1 = −i dQ0/dρ̄0.
     n : int
-        Chebyshev intervals of the finer resolution.
-    convergence_alpha1, convergence_alpha2 : float
-        Relative change of α1 and α2 between n and 4n/5.
+        Chebyshev intervals of the finer resolution of α1 and the Taylor α2.
+    convergence_alpha1 : float
+        Relative change of α1 between n and 4n/5.
+    alpha2_taylor : complex
+        The strict Taylor coefficient α2 by bordered perturbation theory at k = 0 (plain
+        grid, N = :attr:`n`; the paper's Appendix B). A diagnostic: it feels the near-neutral
+        continuum of the dilute top within ~1e-8 of α = 0, which the eigenvalues at
+        k ≳ 1e-6 do not, and converges only algebraically in N (docs/errata.md, note 4;
+        at P4 Re α2 is 44.2 while the Taylor value at N = 390 is 22.9).
+    alpha2_taylor_convergence : float
+        Relative change of the Taylor α2 between n and 4n/5.
+    taylor_converged : bool
+        The Taylor coefficients met ``rtol`` by ``n_max`` (else they are the estimate at
+        ``n``, with :attr:`alpha2_taylor_convergence` saying how far they are from it).
     k_check, alpha_check : float, complex
-        A small wavenumber and the eigenvalue there (see :attr:`alpha2_from_eigenvalue`).
+        A second small wavenumber (default 1e-6) and the eigenvalue there on the Taylor
+        coefficients' grid (see :attr:`alpha2_check`).
     model : ChuteModel or None
         Parameters and closures of the steady flow the coefficients were computed for.
-    converged : bool
-        The Taylor coefficients met ``rtol`` by ``n_max`` (else they are the estimate at
-        ``n``, with :attr:`convergence_alpha2` saying how far they are from it).
     eig_k : tuple of float
-        Wavenumbers of the eigenvalue-based coefficient (default 1e-6, 1e-5, 1e-4).
+        Wavenumbers of the eigenvalues (default 1e-6, 1e-5, 1e-4).
     eig_alpha2 : tuple of float
-        Re α(k)/k² of the tracked branch at ``eig_k``: the k² coefficient the dispersion
-        relation follows there (docs/errata.md: the strict Taylor α2 feels the dilute-top continuum
-        within ~1e-8 of α = 0, which eigenvalues at k ≳ 1e-6 do not).
-    eig_convergence : float
-        Relative change of Re α(k)/k² at k = :data:`K_EIG` between N_eig and 4N_eig/5.
+        Re α(k)/k² of the tracked branch at ``eig_k``: how far the k² regime extends
+        (docs/errata.md, note 4); the entry at :attr:`alpha2_k` is Re :attr:`alpha2`.
     eig_n : int
-        Resolution of the eigenvalue-based coefficient.
+        Resolution of the eigenvalues.
     """
 
     theta: float
@@ -310,36 +364,32 @@ class LongWave:
     dQ_drho: float
     n: int
     convergence_alpha1: float
-    convergence_alpha2: float
+    alpha2_taylor: complex = complex("nan")
+    alpha2_taylor_convergence: float = float("nan")
+    alpha2_convergence: float = float("nan")
+    alpha2_im_convergence: float = float("nan")
+    alpha2_k: float = float("nan")
     k_check: float = float("nan")
     alpha_check: complex = complex("nan")
     model: ChuteModel | None = None
-    converged: bool = True
+    taylor_converged: bool = True
     eig_k: tuple = ()
     eig_alpha2: tuple = ()
-    eig_convergence: float = float("nan")
     eig_n: int = 0
 
     @property
-    def alpha2_eig(self) -> float:
-        """Re α/k² of the eigenvalue at k = :data:`K_EIG` (1e-5): the robust long-wave
-        coefficient (NaN when not computed)."""
-        for kk, v in zip(self.eig_k, self.eig_alpha2):
-            if kk == K_EIG:
-                return float(v)
-        return float("nan")
-
-    @property
     def sign_consistent(self) -> bool:
-        """The Taylor Re α2 and the eigenvalue-based Re α/k² agree in sign (True when the
-        latter was not computed)."""
-        e = self.alpha2_eig
-        return not math.isfinite(e) or (e > 0) == (self.alpha2.real > 0)
+        """The Taylor Re α2 and Re :attr:`alpha2` agree in sign (True when the latter was not
+        computed)."""
+        e = self.alpha2.real
+        return not math.isfinite(e) or (e > 0) == (self.alpha2_taylor.real > 0)
 
     @property
-    def alpha2_from_eigenvalue(self) -> complex:
-        """(α(k) − α1 k)/k² from the eigenvalue at ``k_check``: the k² coefficient as the
-        eigenvalues see it, for comparison with the perturbative α2."""
+    def alpha2_check(self) -> complex:
+        """(α(k) − α1 k)/k² from the eigenvalue at ``k_check`` (1e-6) on the Taylor
+        coefficients' grid, α1 the Taylor one: a check of :attr:`alpha2` and
+        :attr:`alpha2_taylor`. At 1e-6 the eigenvalue's round-off (~1e-12 near the
+        continuum) is ~1 in α2 (P4: 12 … 55 with round-off-level changes of the flow)."""
         return (self.alpha_check - self.alpha1 * self.k_check) / self.k_check**2
 
     @property
@@ -350,12 +400,14 @@ class LongWave:
 
     @property
     def unstable(self) -> bool:
-        """Long-wave unstable: Re α/k² > 0 from the eigenvalue at k = 1e-5
-        (:attr:`alpha2_eig`, converged to ~1e-6 at N ≈ 100), else Re α2 > 0 (Taylor)."""
-        e = self.alpha2_eig
-        return bool(e > 0) if math.isfinite(e) else bool(self.alpha2.real > 0)
+        """Long-wave unstable: Re :attr:`alpha2` > 0 (Re α/k² from the eigenvalue at
+        k = 1e-5), else, where that was not computed, the Taylor Re α2 > 0."""
+        e = self.alpha2.real
+        return bool(e > 0) if math.isfinite(e) else bool(self.alpha2_taylor.real > 0)
 
     def summary(self) -> dict:
+        """JSON-ready dict (the keys of ``chuteflow longwave --json``, docs/cli.md)."""
+        check = self.alpha2_check
         return {
             "theta": self.theta,
             "nu0": self.nu0,
@@ -363,19 +415,22 @@ class LongWave:
             "alpha1_im": self.alpha1.imag,
             "alpha2_re": self.alpha2.real,
             "alpha2_im": self.alpha2.imag,
+            "alpha2_convergence": self.alpha2_convergence,
+            "alpha2_im_convergence": self.alpha2_im_convergence,
+            "alpha2_k": self.alpha2_k,
             "dQ_drho": self.dQ_drho,
             "n": self.n,
             "convergence_alpha1": self.convergence_alpha1,
-            "convergence_alpha2": self.convergence_alpha2,
+            "alpha2_taylor_re": self.alpha2_taylor.real,
+            "alpha2_taylor_im": self.alpha2_taylor.imag,
+            "alpha2_taylor_convergence": self.alpha2_taylor_convergence,
+            "taylor_converged": bool(self.taylor_converged),
             "k_check": self.k_check,
-            "alpha2_from_eigenvalue_re": self.alpha2_from_eigenvalue.real,
-            "alpha2_from_eigenvalue_im": self.alpha2_from_eigenvalue.imag,
+            "alpha2_check_re": check.real,
+            "alpha2_check_im": check.imag,
             "long_wave_unstable": bool(self.unstable),
-            "converged": bool(self.converged),
-            "alpha2_eig_re": self.alpha2_eig,
             "eig_k": list(self.eig_k),
             "eig_alpha2_re": list(self.eig_alpha2),
-            "eig_convergence": self.eig_convergence,
             "eig_n": self.eig_n,
             "sign_consistent": bool(self.sign_consistent),
             **(self.model.to_dict() if self.model is not None else {}),
@@ -562,48 +617,60 @@ def longwave(
     strict: bool = True,
     eig_ks=EIG_KS,
 ) -> LongWave:
-    """Long-wave coefficients α1, α2 of the least-stable branch (perturbation theory at k = 0).
+    """Long-wave coefficients α1, α2 of the least-stable branch, α = α1 k + α2 k² + O(k³).
+
+    α2 (:attr:`LongWave.alpha2`) is the dispersion relation's k² coefficient, from the
+    branch's eigenvalue at k = 1e-5; α1 and the strict Taylor α2
+    (:attr:`LongWave.alpha2_taylor`, a diagnostic) come from bordered perturbation theory at
+    k = 0.
 
     Parameters
     ----------
     flow : SteadyFlow
         The base state.
     n : int
-        Starting number of Chebyshev intervals per field. α1, α2 are computed at 4n/5 and n,
-        and n is raised by 25 % until α2 changes by less than ``rtol`` (α1 by less than
-        ``rtol``/100).
+        Starting number of Chebyshev intervals per field of the perturbation theory. α1 and
+        the Taylor α2 are computed at 4n/5 and n, and n is raised by 25 % until the Taylor
+        α2 changes by less than ``rtol`` (α1 by less than ``rtol``/100).
     rtol : float
-        Accepted relative change of α2 between resolutions. Re α2 converges only
+        Accepted relative change of the Taylor α2 between resolutions. It converges only
         algebraically (≈ N⁻⁴) when the domain reaches far into the dilute layer
-        (``flow.nu_top`` = 1e-9 needs N ≈ 300–400 for 1 %); for a sign only, 0.2 suffices.
+        (``flow.nu_top`` = 1e-9 needs N ≈ 300–400 for 1 %); 0.2 is enough where only α1 and
+        :attr:`LongWave.alpha2` are wanted.
     n_max : int
-        Largest resolution tried.
+        Largest resolution tried for the perturbation theory.
     k_check : float or None
-        Wavenumber of the eigenvalue cross-check; None skips it (sign-only sweeps).
+        Wavenumber of the eigenvalue cross-check (:attr:`LongWave.alpha2_check`); None
+        skips it.
     strict : bool
         True (default): raise when ``rtol`` is not met by ``n_max``. False: return the
-        estimate at ``n_max`` flagged ``converged = False`` (its relative change in
-        :attr:`LongWave.convergence_alpha2`).
+        estimate at ``n_max`` flagged ``taylor_converged = False`` (its relative change in
+        :attr:`LongWave.alpha2_taylor_convergence`).
     eig_ks : tuple of float or None
-        Wavenumbers of the eigenvalue-based coefficient Re α/k² (:func:`eigen_coefficient`,
-        default 1e-6, 1e-5, 1e-4); it decides :attr:`LongWave.unstable`. Empty or None
-        skips it.
+        Wavenumbers of the branch's eigenvalues (:func:`branch_eigenvalues`, default 1e-6,
+        1e-5, 1e-4); :attr:`LongWave.alpha2` is taken at :data:`K_EIG` (1e-5; the middle
+        one if absent) and decides :attr:`LongWave.unstable`. Empty or None skips them
+        (``alpha2`` is then NaN and the Taylor sign decides).
 
     Raises
     ------
     ConvergenceError
-        With ``strict=True``, if the target is not reached by ``n_max``.
+        With ``strict=True``, if the Taylor coefficients do not reach ``rtol`` by ``n_max``.
 
     Notes
     -----
-    The eigenvalue at ``k_check`` (default 1e-6) is computed too, by shift-invert from
-    α1 k + α2 k² on the equilibrated pencil, and kept in the result
-    (``alpha2_from_eigenvalue``). The two differ by a few per cent for ν_top = 1e-9: at
-    k → 0 the branch interacts with the near-neutral continuum of the dilute top (gap
-    ~1e-8), which the strict k² coefficient includes and eigenvalues at k ≳ 1e-7 do not
-    (at P2 the Taylor Re α2 is −91 at N = 480, +841 at N = 100, while Re α/k² at
-    k = 1e-5 is −39.996 from N = 100 on). :attr:`LongWave.unstable` is therefore decided
-    by the eigenvalue-based coefficient (:func:`eigen_coefficient`).
+    α2 = (α(k) − α1 k)/k² at k = 1e-5 with the exact α1 = −i dQ0/dρ̄0: Re α2 = Re α(k)/k²
+    converges to ~1e-6 by N ≈ 100 at P1, P2 (at P4, where Re α(1e-5) ≈ 4e-9 lies next to the
+    continuum, to ~1e-2: round-off), Im α2 to ~1e-5 … 1e-3. The strict Taylor α2 differs:
+    at k → 0 the branch interacts with the near-neutral continuum of the dilute top (gap
+    ~1e-8), which the strict k² coefficient includes and eigenvalues at k ≳ 1e-7 do not (at
+    P2 the Taylor Re α2 is −91 at N = 480, +841 at N = 100, while Re α/k² at k = 1e-5 is
+    −39.996 from N = 100 on). Never decide stability at finite k from α2 alone: the k²
+    regime ends near k ~ 1e-5 … 1e-4 (:attr:`LongWave.eig_alpha2`).
+
+    The eigenvalue at ``k_check`` (default 1e-6) on the Taylor coefficients' grid is
+    computed by shift-invert from α1 k + α2 k² (Taylor) and kept in the result
+    (:attr:`LongWave.alpha2_check`).
     """
     tangent = steady_tangent(flow)
     n = int(n)
@@ -626,9 +693,9 @@ def longwave(
         b1, b2, n2, n = a1, a2, n, ladder.next_n(n)
     if not ok and strict:
         raise ConvergenceError(
-            f"long-wave coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did not "
-            f"converge: relative change of alpha1 {c1:.1e}, alpha2 {c2:.1e} between n = {n2} "
-            f"and n = {n} (rtol = {rtol:g}); raise n_max or rtol"
+            f"long-wave Taylor coefficients at theta = {flow.theta:g}, nu0 = {flow.nu0:g} did "
+            f"not converge: relative change of alpha1 {c1:.1e}, alpha2 (Taylor) {c2:.1e} "
+            f"between n = {n2} and n = {n} (rtol = {rtol:g}); raise n_max or rtol"
         )
     check = complex("nan")
     if k_check:
@@ -639,25 +706,40 @@ def longwave(
                 raise
     eig_k: tuple[float, ...] = ()
     eig_vals: tuple = ()
-    eig_conv, eig_n = float("nan"), 0
+    eig_n = 0
+    alpha2, conv_re, conv_im, k2 = complex("nan"), float("nan"), float("nan"), float("nan")
     if eig_ks:
         eig_k = tuple(sorted(float(k) for k in eig_ks))
-        eig_vals, eig_conv, eig_n = eigen_coefficient(flow, ks=eig_k)
+        alphas, coarse, conv_re, eig_n = branch_eigenvalues(flow, ks=eig_k)
+        eig_vals = tuple(float(a.real / kk**2) for a, kk in zip(alphas, eig_k))
+        j = eig_k.index(K_EIG) if K_EIG in eig_k else len(eig_k) // 2
+        k2 = eig_k[j]
+        # the exact α1 (eq. (B 2)): Re α1 = 0, so Re α2 = Re α(k)/k²; the grid's α1 would
+        # carry its O(N⁻⁴) error, amplified by 1/k, into Im α2
+        exact1 = complex(0.0, -float(tangent["dQ_drho"]))
+        alpha2 = (alphas[j] - exact1 * k2) / k2**2
+        im_coarse = ((coarse[j] - exact1 * k2) / k2**2).imag
+        conv_im = abs(alpha2.imag - im_coarse) / max(abs(alpha2.imag), 1e-300)
+        if not math.isfinite(conv_im):
+            conv_im = math.inf
     return LongWave(
         flow.theta,
         flow.nu0,
         a1,
-        a2,
+        alpha2,
         float(tangent["dQ_drho"]),
         n,
         float(c1),
-        float(c2),
-        float(k_check or float("nan")),
-        check,
+        alpha2_taylor=a2,
+        alpha2_taylor_convergence=float(c2),
+        alpha2_convergence=float(conv_re),
+        alpha2_im_convergence=float(conv_im),
+        alpha2_k=float(k2),
+        k_check=float(k_check or float("nan")),
+        alpha_check=check,
         model=flow.model,
-        converged=bool(ok),
+        taylor_converged=bool(ok),
         eig_k=eig_k,
         eig_alpha2=eig_vals,
-        eig_convergence=eig_conv,
         eig_n=eig_n,
     )

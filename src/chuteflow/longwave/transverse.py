@@ -40,7 +40,6 @@ from scipy.optimize import minimize_scalar
 from .._memory import brentq  # scipy's, without keeping the trackers alive (a cycle)
 from ..closures import ChuteModel
 from ..errors import ConvergenceError, ParameterError
-from ..stability.dispersion import BranchTracker
 from ..stability.modes import (
     Mode,
     OperatorCache,
@@ -49,6 +48,8 @@ from ..stability.modes import (
 )
 from ..stability.operator import StabilityOperator, base_on_grid, stability_grid
 from ..stability.policy import DEFAULT_POLICY, RejectionPolicy
+from ..stability.scan import critical_index, peak_index, sign_changes
+from ..stability.tracking import BranchTracker
 from ..stability.transverse import (
     TransverseDispersion,
     TransverseTracker,
@@ -269,8 +270,9 @@ class TransverseResult:
     stationary : bool
         Im α = 0 at the maximum (to 1e-9 relative).
     kz_cutoff : float or None
-        The first k_z > 0 where the growth rate changes sign from + to − (upper edge of the
-        unstable band), None if none on the grid.
+        The first k_z > 0 where the growth rate changes sign, when from + to − (upper edge of
+        the long-wave unstable band, the k_c rule of :mod:`chuteflow.stability.scan`), None
+        if none on the grid or the first change goes from − to +.
     dispersion : TransverseDispersion
         The computed α(k_z) with convergence estimates.
     model : ChuteModel
@@ -388,7 +390,7 @@ def transverse(
     lp = lateral_pressure(flow)
     lub = lubrication_alpha2z(flow)
     g = np.where(np.isfinite(disp.alpha_re), disp.alpha_re, -np.inf)
-    j = int(np.argmax(g))
+    j = peak_index(g) or 0  # the branch scan's rule (chuteflow.stability.scan)
     kz_best, growth, aim = float(ks[j]), float(g[j]), float(disp.alpha_im[j])
     if 0 < j < len(ks) - 1 and np.isfinite(g[j - 1]):
         # where the tracker lost the branch after k_z[j], up to as far beyond its last point
@@ -444,16 +446,20 @@ def transverse(
 
 
 def _cutoff(ks, g, tr, growth_at) -> float | None:
-    """Upper edge of the unstable band: the first + → − sign change of Re α, on the grid or
-    (tracked branch) on the tracker's own steps, refined by Brent's method."""
+    """Upper edge of the long-wave unstable band, decided as k_c of a branch scan
+    (:func:`chuteflow.stability.scan.critical_index`: the first sign change of Re α, when it
+    goes from + to −), on the grid or (tracked branch) on the tracker's own steps, refined by
+    Brent's method; None where the first sign change goes from − to +."""
     pts = list(zip(ks, g))
     if tr is not None:
         pts = sorted({(p.kz, p.alpha.real) for p in tr.history if p.kz > 0} | set(pts))
-    for (a, ga), (b, gb) in zip(pts[:-1], pts[1:]):
-        if ga > 0 and np.isfinite(gb) and gb <= 0:
-            return float(
-                brentq(lambda k: growth_at(k)[0], float(a), float(b), rtol=1e-3, xtol=1e-12, maxiter=20)
-            )
+    gs = [q[1] for q in pts]
+    i = critical_index(gs)
+    if i is not None:
+        (a, _), (b, _) = pts[i], pts[i + 1]
+        return float(brentq(lambda k: growth_at(k)[0], float(a), float(b), rtol=1e-3, xtol=1e-12, maxiter=20))
+    if sign_changes(gs):
+        return None  # long-wave stable on the scan: no band 0 < k < k_c
     if tr is not None and tr.lost_at is not None and len(tr.history) >= 4 and tr.history[-1].alpha.real > 0:
         # the branch enters the continuum (Re α ≈ −1e-8 at P1) as it crosses zero: the root
         # of the quadratic through its last three points, if it lies before the loss
@@ -482,8 +488,9 @@ class GrowthPeak:
     alpha_im : float
         Im α there.
     cutoff : float or None
-        First sign change of Re α from + to − (the upper edge of the unstable band), None if
-        the branch was not followed that far.
+        First sign change of Re α, when from + to − (the upper edge of the long-wave unstable
+        band, the k_c rule of :mod:`chuteflow.stability.scan`), None if the branch was not
+        followed that far or the first change goes from − to +.
     mode : Mode or None
         The mode at the maximum, judged by the policy (drift |α(N) − α(N')|, tail; N raised
         along the ladder while it is not physical).
@@ -557,7 +564,7 @@ SCAN_HALVINGS = 8
 #: the branch is lost before its maximum at N = 48, 60 and 75 it is lost at every N of the
 #: old 20-point scan up to 160 too. (Thick dilute flows, e.g. θ = 17.5°, ν0(0) = 0.02 at
 #: φ = 0.05, where the branch was lost near k = 1e-5 at every N, were the tracker's first
-#: step from k = 0 accepted off α1 k, FIRST_STEP_MIN; a rule that gave up after two rungs
+#: step from k = 0 accepted off α1 k, TrackingPolicy.first_step_min; a rule that gave up after two rungs
 #: lost before the first scan point was dropped with it: dense thin flows, θ = 16°,
 #: ν0(0) = 0.25, need N = 75, eigenvector tails 1.8e-4 and 1.8e-5 at N = 48 and 60.)
 LONGITUDINAL_RUNGS = 3
@@ -639,7 +646,7 @@ def longitudinal_peak(
 def _peak_2d(flow, tr, ks, alphas, vecs, policy, cache) -> GrowthPeak:
     """Refine and judge the maximum of a longitudinal scan (:func:`longitudinal_peak`)."""
     g = np.array([a.real for a in alphas])
-    j = int(np.argmax(g))
+    j = peak_index(g) or 0  # the branch scan's rule (chuteflow.stability.scan)
     n = tr.n
     solves = len(ks)
     k_best, a_best, v_best = ks[j], alphas[j], vecs[j]
@@ -666,11 +673,11 @@ def _peak_2d(flow, tr, ks, alphas, vecs, policy, cache) -> GrowthPeak:
             k_best, a_best, v_best = pay
     mode = judge_resolved(flow, k_best, 0.0, a_best, v_best, n, three_d=False, policy=policy, cache=cache)
     cut = None
-    for (k0, a0), (k1, a1) in zip(zip(ks[:-1], alphas[:-1]), zip(ks[1:], alphas[1:])):
-        if a0.real > 0 >= a1.real:  # linear in ln k between the bracketing points
-            t = a0.real / (a0.real - a1.real)
-            cut = float(math.exp(math.log(k0) + t * math.log(k1 / k0)))
-            break
+    i = critical_index(g)  # k_c of the branch scan's rule (chuteflow.stability.scan)
+    if i is not None:  # linear in ln k between the bracketing points
+        (k0, a0), (k1, a1) = (ks[i], alphas[i]), (ks[i + 1], alphas[i + 1])
+        t = a0.real / (a0.real - a1.real)
+        cut = float(math.exp(math.log(k0) + t * math.log(k1 / k0)))
     m_alpha = mode.alpha if mode is not None else a_best
     return GrowthPeak(
         "longitudinal", float(m_alpha.real), float(k_best), float(m_alpha.imag), cut, mode, solves
@@ -723,7 +730,7 @@ def transverse_peak(
     if not pts:
         return GrowthPeak("transverse", math.nan, math.nan, 0.0, None, None, solves)
     g = np.array([p.alpha.real for p in pts])
-    j = int(np.argmax(g))
+    j = peak_index(g) or 0  # the branch scan's rule (chuteflow.stability.scan)
     best = pts[j]
     xs = [math.log(p.kz) for p in pts[max(j - 1, 0) : j + 2]]
     ys = list(g[max(j - 1, 0) : j + 2])

@@ -1,4 +1,8 @@
-"""Render a :class:`~chuteflow.report.report.Report` as Markdown or self-contained HTML."""
+"""Render a :class:`~chuteflow.report.report.Report` as Markdown or self-contained HTML.
+
+It reads the records of :mod:`chuteflow.report.content` and, of the report, what
+:class:`Renderable` names: it does not import :mod:`chuteflow.report.report`, which imports it.
+"""
 
 from __future__ import annotations
 
@@ -6,13 +10,30 @@ import base64
 import html
 import os
 from dataclasses import replace
+from datetime import datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
-if TYPE_CHECKING:
-    from .report import Report, Section
+from .content import STATUS_FAIL, STATUS_NOT_CHECKED, STATUS_PASS, Section
 
-__all__ = ["render_markdown", "render_html"]
+__all__ = ["render_markdown", "render_html", "Renderable"]
+
+
+class Renderable(Protocol):
+    """What the renderers read of a report (:class:`chuteflow.report.report.Report`)."""
+
+    title: str
+    version: str
+    created: datetime
+    wall_time: float | None
+    parameters: dict[str, Any]
+    sections: dict[str, Section]
+
+    @property
+    def environment(self) -> dict[str, str]: ...
+
+    def counts(self) -> dict[str, int]: ...
+
 
 _MIME = {
     ".png": "image/png",
@@ -22,7 +43,7 @@ _MIME = {
     ".gif": "image/gif",
     ".webp": "image/webp",
 }
-_SYMBOL = {"pass": "✅ pass", "fail": "❌ FAIL", "not checked": "– not checked"}
+_SYMBOL = {STATUS_PASS: "✅ pass", STATUS_FAIL: "❌ FAIL", STATUS_NOT_CHECKED: "– not checked"}
 
 
 def _fmt_time(seconds: float | None) -> str:
@@ -41,7 +62,7 @@ def _fmt_value(value: Any) -> str:
     return str(value)
 
 
-def _header_rows(report: Report) -> list[tuple[str, str]]:
+def _header_rows(report: Renderable) -> list[tuple[str, str]]:
     counts = report.counts()
     rows = [
         ("chuteflow version", report.version),
@@ -101,7 +122,7 @@ def _md_section(sec: Section, base: Path) -> list[str]:
     return lines
 
 
-def render_markdown(report: Report, base: Path) -> str:
+def render_markdown(report: Renderable, base: Path) -> str:
     """Markdown text of ``report``; figure links relative to ``base``."""
     base = Path(base).resolve()
     lines = [f"# {report.title}", ""]
@@ -193,7 +214,7 @@ def _html_section(sec: Section) -> str:
     return "\n".join(parts)
 
 
-def render_html(report: Report) -> str:
+def render_html(report: Renderable) -> str:
     """Self-contained HTML page of ``report`` (inline CSS, figures as data URIs)."""
     counts = report.counts()
     summary_cls = "summary-fail" if counts["fail"] else "summary-ok"

@@ -29,15 +29,23 @@ Rejection policy
     ``track_tail_tol``, and the resolution ladder ``n_start``, ``n_max``, ``n_growth``
     (``.ladder()``, ``.next_n(n)``, ``.accepts(drift, tail)``); every solver below takes it
     as ``policy=`` (default :data:`DEFAULT_POLICY`, the paper's values). The keywords
-    ``drift_tol``, ``tail_tol``, ``n_max`` remain as overrides of its fields.
+    ``drift_tol``, ``tail_tol``, ``n_max`` remain as overrides of its fields. Its fields
+    ``tracking`` (:class:`TrackingPolicy`: the continuation of the branch and its
+    fallbacks) and ``search`` (:class:`SearchPolicy`: the resolver's search above an
+    answer) hold every tuning knob.
 
 Modes (every one carries its convergence estimate)
     :class:`Mode` — ``alpha``, ``k``, ``kz``, ``theta``, ``nu0``, ``n``, ``y``, ``fields``
     (dict of nodal values, largest component 1), ``drift`` (|α(N) − α(N')|,
     N' = round(0.8N)), ``tail`` (paper's Chebyshev-tail statistic), ``physical`` (both
     < 1e-7), ``summary()``, ``to_xarray()``.
-    ``least_stable(flow, k, n=None, sigma=None, method="branch"|"qz")`` → Mode; N adaptive
-    (80, 100, 125, …, 256) unless given. ``spectrum(flow, k, n=80)`` → all physical modes
+    ``least_stable(flow, k, kz=0, n=None, sigma=None, method="branch"|"qz")`` → Mode
+    (:mod:`.resolver`): the mode of largest Re α among the modes that pass both tests under
+    refinement, at any wavevector — the tracked (or direct) answer, then one dense solve at
+    N = 48 whose candidates above it are followed up the ladder until decided; an undecided
+    one is returned flagged. N adaptive (80, 100, 125, …, 256) unless given; finite
+    wavevectors on the sinh-mapped grid (:func:`~.modes.cache_for`).
+    ``spectrum(flow, k, n=80)`` → all physical modes
     by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift;
     ``nearest_eigenpair(pencil, σ, v0=None)`` → (α, w) on the equilibrated pencil.
 
@@ -45,10 +53,18 @@ Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     ``null_vectors(op)`` → :class:`NullVectors` (``alpha0``, ``right`` ∝ ∂X0/∂β,
     ``left``; lᴴ B r = 1). ``first_order(op, nv)`` → α1 estimate (a predictor; the
     long-wave stage computes α1, α2 accurately). ``BranchTracker(flow, n)`` — continuation
-    in k with ``.advance(k)`` and ``.mode(k)``. ``dispersion(flow, ks)`` →
+    in k with ``.advance(k)`` and ``.mode(k)`` (:mod:`.tracking`; where it loses the branch,
+    the fallbacks of :mod:`.lost`). ``dispersion(flow, ks)`` →
     :class:`xarray.Dataset` (alpha_re, alpha_im, drift, tail, n, physical over k; the
-    flow's parameters as attributes). ``critical_k(flow, k_max=0.05)`` → k_c (brentq on the
-    tracked branch) or None; ``crossings(...)`` → all sign changes of Re α.
+    flow's parameters as attributes).
+
+Branch scan, k_c and the peak (:mod:`.scan`, paper §4.2, figures 7–9)
+    ``branch_scan(flow, k_max=0.05)`` → :class:`BranchScan` (k, alpha, drift, tail, n,
+    physical per point; ``.k_c``, ``.peak()``, ``.cutoff()``, ``.converged``,
+    ``.to_xarray()``): k_c is the first sign change of Re α when it goes from + to − (the
+    upper edge of the long-wave unstable band), None for a flow long-wave stable on the
+    scan. ``critical_k(flow, k_max=0.05)`` → that k_c; ``crossings(...)`` → all sign
+    changes of Re α (:class:`Crossings`, with the scan's convergence).
 
 Three dimensions (:mod:`.transverse`)
     ``least_stable_3d(flow, kx, kz)`` → the physical mode of largest Re α at any wavevector
@@ -64,20 +80,7 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 ~1e-12 absolute.
 """
 
-from .dispersion import (
-    BranchTracker,
-    Crossings,
-    NullVectors,
-    branch_mode,
-    choose_n,
-    critical_k,
-    crossings,
-    dispersion,
-    first_order,
-    least_stable,
-    null_vectors,
-    operator,
-)
+from .dispersion_relation import dispersion
 from .eigen import ShiftInvert, qz
 from .modes import (
     K_DIRECT,
@@ -95,7 +98,10 @@ from .modes import (
     tail,
 )
 from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
-from .policy import DEFAULT_POLICY, RejectionPolicy
+from .policy import DEFAULT_POLICY, RejectionPolicy, SearchPolicy, TrackingPolicy
+from .resolver import choose_n, least_stable, operator
+from .scan import BranchScan, Crossings, Peak, branch_scan, critical_k, crossings
+from .tracking import BranchTracker, NullVectors, branch_mode, first_order, null_vectors
 from .transverse import (
     TransverseDispersion,
     growth_plane,
@@ -126,11 +132,16 @@ __all__ = [
     "branch_mode",
     "critical_k",
     "crossings",
+    "BranchScan",
+    "Peak",
+    "branch_scan",
     "dispersion",
     "first_order",
     "null_vectors",
     "RejectionPolicy",
     "DEFAULT_POLICY",
+    "SearchPolicy",
+    "TrackingPolicy",
     "OperatorCache",
     "OPERATORS",
     "TransverseDispersion",

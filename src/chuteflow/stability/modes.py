@@ -127,12 +127,21 @@ class OperatorCache:
     grid, as an independent check.
     """
 
-    def __init__(self, maxsize: int = 6, *, mapped: bool = True):
+    def __init__(self, maxsize: int = 6, *, mapped: bool = True, mapped_3d: bool = False):
         if int(maxsize) < 1:
             raise ParameterError(f"maxsize = {maxsize!r}: an operator cache holds at least one")
         self.maxsize = int(maxsize)
         self.mapped = bool(mapped)
+        self.mapped_3d = bool(mapped_3d) and self.mapped
         self._entries: OrderedDict = OrderedDict()
+
+    def for_finite_k(self) -> OperatorCache:
+        """The cache of the same grid choice for modes at finite wavevectors in 3D: itself
+        when it already maps 3D operators or builds plain ones only (``mapped=False``, a
+        check on the paper's grid), else :data:`OPERATORS_3D` (see :func:`cache_for`)."""
+        if self.mapped_3d or not self.mapped:
+            return self
+        return OPERATORS_3D
 
     def get(self, flow: SteadyFlow, n: int, three_d: bool = False) -> StabilityOperator:
         """The operator of ``flow`` at N = ``n``, built on the first request."""
@@ -142,7 +151,7 @@ class OperatorCache:
         if entry is not None and entry[0].flow is flow and entry[1] == fp:
             self._entries.move_to_end(key)
             return entry[0]
-        op = StabilityOperator(flow, n, three_d=three_d, mapped=self.mapped and not three_d)
+        op = StabilityOperator(flow, n, three_d=three_d, mapped=self.mapped_3d if three_d else self.mapped)
         self._entries[key] = (op, fp)
         self._entries.move_to_end(key)
         while len(self._entries) > self.maxsize:
@@ -157,8 +166,27 @@ class OperatorCache:
         return len(self._entries)
 
 
-#: The cache the module's functions use unless given another.
+#: The cache the module's functions use unless given another: 2D operators on the mapped
+#: grid, 3D ones on the plain grid (the k → 0 quantities, :func:`cache_for`).
 OPERATORS = OperatorCache(6)
+#: 3D operators on the mapped grid: finite-wavevector modes (:func:`cache_for`).
+OPERATORS_3D = OperatorCache(4, mapped_3d=True)
+
+
+def cache_for(kz: float, cache: OperatorCache | None = None) -> OperatorCache:
+    """The one place where the grid of a question is chosen.
+
+    Finite-wavevector modes, 2D and 3D, are solved on the sinh-mapped grid clustered at the
+    layer's edge (:func:`~chuteflow.stability.operator.layer_map`): at P5, (k_x, k_z) =
+    (0.002, 0.02) the least-stable mode passes the paper's tests at N = 94 on it and needs
+    N ≈ 200–250 on the plain grid. The plain grid stays only where a k → 0 quantity needs it:
+    α2z and the tracked transverse branch (:mod:`chuteflow.longwave.transverse`,
+    :mod:`.transverse`, which build their operators from :data:`OPERATORS`), whose
+    relative change N = 80 → 100 is 4e-5 on the mapped grid against 8e-6 on the plain one.
+    ``cache`` (default :data:`OPERATORS`) keeps its own choice when it maps 3D operators or
+    builds plain ones only (``OperatorCache(mapped=False)``, the independent check)."""
+    cache = OPERATORS if cache is None else cache
+    return cache.for_finite_k() if kz else cache
 
 
 def stability_operator(
@@ -205,7 +233,7 @@ class Mode:
         ``"qz"`` (dense QZ at k), ``"shift"`` (shift-invert near a given σ),
         ``"branch (relaxed)"`` (the branch followed with the continuation's tail threshold
         relaxed after it was lost near the continuum,
-        :func:`~chuteflow.stability.dispersion.near_continuum_branch`), or
+        :func:`~chuteflow.stability.lost.near_continuum_branch`), or
         ``"qz (branch lost)"`` (direct solve where even that did not reach k, or where the
         policy ranks it above the relaxed branch,
         :meth:`~chuteflow.stability.RejectionPolicy.direct_outranks_relaxed`).
@@ -306,6 +334,17 @@ def tail(V: np.ndarray, nfields: int, m: int = TAIL_TERMS) -> float:
     """The paper's tail test statistic of an eigenvector (see module docstring)."""
     c = np.abs(coefficients(normalise(V).reshape(nfields, -1)))
     return float(c[:, -m:].max())
+
+
+def tails(pencil: Pencil, W: np.ndarray, m: int = TAIL_TERMS) -> np.ndarray:
+    """:func:`tail` of every column of W (eigenvectors of the equilibrated ``pencil``),
+    vectorised."""
+    nf, n1 = len(pencil.fields), pencil.n + 1
+    V = pencil.unscale(W)
+    big = V[np.argmax(np.abs(V), axis=0), np.arange(V.shape[1])]
+    V = V / np.where(big == 0, 1.0, big)[None, :]
+    c = np.abs(coefficients(V.T.reshape(-1, nf, n1)))
+    return c[:, :, -m:].max(axis=(1, 2))
 
 
 def make_mode(pencil: Pencil, alpha, v, drift, n_check, policy: RejectionPolicy = DEFAULT_POLICY) -> Mode:

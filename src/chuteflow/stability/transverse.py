@@ -42,9 +42,7 @@ import scipy.linalg as sla
 
 from ..conventions import RATE_UNITS, WAVENUMBER_UNITS
 from ..errors import ConvergenceError, ParameterError
-from ..spectral import coefficients
 from ..steady import SteadyFlow
-from .dispersion import branch_mode
 from .eigen import ShiftInvert, factor_shifted
 from .modes import (
     Mode,
@@ -56,9 +54,11 @@ from .modes import (
     nearest_eigenpair,
     stability_operator,
     tail,
+    tails,
 )
 from .operator import Pencil, validate_k
 from .policy import DEFAULT_POLICY, RejectionPolicy
+from .tracking import branch_mode
 
 __all__ = [
     "TransverseDispersion",
@@ -111,17 +111,6 @@ def _finite_spectrum(pencil: Pencil, vectors: bool):
     return w, V
 
 
-def _tails(pencil: Pencil, W: np.ndarray, m: int) -> np.ndarray:
-    """The paper's tail statistic (:func:`chuteflow.stability.tail`) of every column of W
-    (eigenvectors of the equilibrated pencil), vectorised."""
-    nf, n1 = len(pencil.fields), pencil.n + 1
-    V = pencil.unscale(W)
-    big = V[np.argmax(np.abs(V), axis=0), np.arange(V.shape[1])]
-    V = V / np.where(big == 0, 1.0, big)[None, :]
-    c = np.abs(coefficients(V.T.reshape(-1, nf, n1)))
-    return c[:, :, -m:].max(axis=(1, 2))
-
-
 def least_stable_3d(
     flow: SteadyFlow,
     kx: float,
@@ -155,16 +144,16 @@ def least_stable_3d(
         p2 = stability_operator(flow, n2, True).pencil(kx, kz)
         w1, V1 = _finite_spectrum(p1, True)
         w2, _ = _finite_spectrum(p2, False)
-        tails = _tails(p1, V1, policy.tail_terms)
+        tl = tails(p1, V1, policy.tail_terms)
         pending = False  # a resolved eigenvector above the accepted one whose α drifts
         for j in range(len(w1)):
-            if tails[j] >= policy.track_tail_tol:
+            if tl[j] >= policy.track_tail_tol:
                 continue
             drift = float(np.abs(w2 - w1[j]).min()) if len(w2) else math.inf
-            if policy.accepts(drift, tails[j]):
+            if policy.accepts(drift, tl[j]):
                 accepted = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
                 break
-            if tails[j] < policy.tail_tol:
+            if tl[j] < policy.tail_tol:
                 pending = True
             if best is None:
                 best = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
@@ -375,7 +364,7 @@ def growth_plane(
 
     ``method="dense"``: the dense scan at every wavevector (:func:`least_stable_3d`, ~1 s a
     point); ``"branch"``: the α(0) = 0 branch continued along the ray through each
-    wavevector (:func:`chuteflow.stability.dispersion.branch_mode`, coarse continuation and
+    wavevector (:func:`chuteflow.stability.tracking.branch_mode`, coarse continuation and
     one solve at N), ~10× faster in the long-wave region; where the branch is lost (at
     k_x = 0 past the transverse band, in the continuum) the point is left NaN.
 
@@ -574,7 +563,7 @@ def _real_pencil(op, kz: float):
 
 def _null_vector(op) -> np.ndarray:
     """The right eigenvector of the equilibrated k = 0 pencil for its eigenvalue nearest 0:
-    the shift-invert Arnoldi at σ = 0 of :func:`~chuteflow.stability.dispersion.null_vectors`
+    the shift-invert Arnoldi at σ = 0 of :func:`~chuteflow.stability.tracking.null_vectors`
     on the real form (a real LU; the left vector is not needed here)."""
     _, Ar, bd, s = _real_pencil(op, 0.0)
     _, W = _RealFormShiftInvert.nudged(Ar, bd, 0.0).nearest(1)
@@ -795,17 +784,17 @@ def dense_modes(
         p2 = stability_operator(flow, n2, True).pencil(kx, kz)
         w1, V1 = _finite_spectrum(p1, True)
         w2, _ = _finite_spectrum(p2, False)
-        tails = _tails(p1, V1, policy.tail_terms)
+        tl = tails(p1, V1, policy.tail_terms)
         modes, vecs, pending = [], [], False
         for j in range(len(w1)):
-            if tails[j] >= policy.track_tail_tol:
+            if tl[j] >= policy.track_tail_tol:
                 continue
             drift = float(np.abs(w2 - w1[j]).min()) if len(w2) else math.inf
-            if policy.accepts(drift, tails[j]):
+            if policy.accepts(drift, tl[j]):
                 m = make_mode(p1, w1[j], V1[:, j], drift, n2, policy)
                 modes.append(dataclasses.replace(m, method="qz"))
                 vecs.append(V1[:, j])
-            elif tails[j] < policy.tail_tol and not modes:
+            elif tl[j] < policy.tail_tol and not modes:
                 pending = True
         if modes and not pending:
             return modes, vecs
@@ -869,7 +858,7 @@ def _seed_candidates(flow, kz, policy, cache):
     Arnoldi)."""
     op = stability_operator(flow, SEED_N, True, cache=cache)
     w, V = _seed_spectrum(op, kz)
-    t = _tails(op.pencil(0.0, kz), V, policy.tail_terms)
+    t = tails(op.pencil(0.0, kz), V, policy.tail_terms)
     keep = np.nonzero((t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5))[0][: 2 * N_CANDIDATES]
     return [(complex(w[i]), V[:, i]) for i in keep]
 

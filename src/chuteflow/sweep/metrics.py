@@ -4,7 +4,8 @@
   Appendix B) from :func:`chuteflow.longwave.theory.eigen_sign`; > 0 is long-wave
   instability (§4.2), the rule of :attr:`chuteflow.longwave.LongWave.unstable`.
 - ``growth``: the dispersion relation of the α(0) = 0 branch tracked over a k grid: maximum
-  growth rate, its k, and the critical k_c (first sign change of Re α, refined). Computed on a
+  growth rate, its k, and the critical k_c (the rule of :mod:`chuteflow.stability.scan`:
+  the first sign change of Re α when it goes from + to −, refined). Computed on a
   sample of the points (every ``stride``-th point in θ and ν0, and every marked point), which
   is the check that no finite-k instability is missed by the long-wave criterion, and, with
   ``unstable_points=True``, at every long-wave unstable point.
@@ -23,8 +24,9 @@ from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
 from ..longwave.theory import eigen_sign
 from ..stability import BranchTracker, OperatorCache, RejectionPolicy
-from ..stability.dispersion import after_lost_branch, relaxed_branch_modes
+from ..stability.lost import after_lost_branch, relaxed_branch_modes
 from ..stability.modes import check_n, nearest_eigenpair, stability_operator
+from ..stability.scan import critical_index, linear_crossing, peak_index
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
 
@@ -161,30 +163,38 @@ class GrowthMetric(PointFunction):
 
     The α(0) = 0 branch is tracked from k = 0 (:class:`chuteflow.stability.BranchTracker`,
     drift and tail checked at every k, N raised where needed) over ``num`` wavenumbers
-    geometrically spaced in [k_min, k_max]. k_c, the first sign change of Re α from + to −,
-    is refined by Brent's method on the mode nearest the linear prediction inside the bracket
-    (relative tolerance 1e-6). Points that miss the paper's drift and tail tests at
-    N = ``n_max`` are kept with their estimate (``growth_converged`` = 0, the largest drift
-    in ``growth_drift``, a note in the point's message); where the tracker loses the branch
+    geometrically spaced in [k_min, k_max]. k_c is decided on these samples by the rule of
+    :attr:`chuteflow.stability.BranchScan.k_c` (:func:`~chuteflow.stability.scan.critical_index`:
+    the first sign change of Re α between reached neighbours, when it goes from + to −, i.e.
+    the upper edge of the long-wave unstable band; missing where the first change goes from
+    − to +), and refined by Brent's method on the mode nearest the linear prediction inside
+    the bracket (relative tolerance 1e-6); the maximum is the largest sample
+    (:func:`~chuteflow.stability.scan.peak_index`), not refined. Points that miss the
+    paper's drift and tail tests at N = ``n_max`` are kept with their estimate
+    (``growth_converged`` = 0, the largest drift in ``growth_drift``, a note in the point's
+    message); where the tracker loses the branch
     near the continuum of the dilute top, the rest of the k grid is followed once more from
     k = 0 with the tail threshold relaxed, up to the first k it does not reach, and the
     values there that fail the paper's tests are recomputed each by its own continuation
-    from k = 0 (:func:`chuteflow.stability.dispersion.relaxed_branch_modes`), as version 5
+    from k = 0 (:func:`chuteflow.stability.lost.relaxed_branch_modes`), as version 5
     did for every k (past ``RejectionPolicy.relaxed_k_max`` each k as
     :func:`~chuteflow.stability.least_stable` answers there,
-    :func:`~chuteflow.stability.dispersion.after_lost_branch`). The k beyond are missing:
+    :func:`~chuteflow.stability.lost.after_lost_branch`). The k beyond are missing:
     there the branch has dissolved into the continuum (strongly damped, e.g. Re α = −0.2 at
     k = 0.017 for θ = 15.36°, ν0(0) = 0.12), ``growth_k_reached`` says how far it was
     followed, the maximum and k_c are those of the part reached, flagged
     ``growth_converged`` = 0 (version 6; version 5 dropped every value where the largest k
     was not reached, and version 6 also fixes the first step from k = 0, see
-    :data:`~chuteflow.stability.dispersion.FIRST_STEP_MIN`; version 7: the tracker gives up
+    ``TrackingPolicy.first_step_min``; version 7: the tracker gives up
     at once where no shorter step can pass — an eigenvector unresolved at k = 0, the
     branch's own tail rising through the threshold, a predictor that misses by a fixed
-    fraction of any step, see :data:`~chuteflow.stability.dispersion.CROSSING_NEAR` and
-    :data:`~chuteflow.stability.dispersion.STALL_REJECTIONS` — so it no longer carries a
+    fraction of any step, see ``TrackingPolicy.crossing_near`` and
+    ``TrackingPolicy.stall_rejections`` — so it no longer carries a
     point accepted off the branch at N = 60 up the ladder: θ = 17.19°, ν0(0) = 0.144 was
-    lost at N = 160 and is now tracked, converged, at N = 118). Only where not even the first
+    lost at N = 160 and is now tracked, converged, at N = 118; version 8: k_c by the one
+    rule of :mod:`chuteflow.stability.scan`, missing where the first sign change goes from −
+    to + (a long-wave stable flow with a finite-k band), where version 7 stored that band's
+    upper edge). Only where not even the first
     k is reached are the values missing (``dispersion_sampled`` = 1, the reason in the
     message).
     Evaluated at the sampled points (every ``stride``-th point in θ
@@ -193,7 +203,7 @@ class GrowthMetric(PointFunction):
     """
 
     name = "growth"
-    version = "7"
+    version = "8"
     requires = ("steady", "longwave")
     critical = False  # a cross-check: its failure leaves the point's classification alone
     defaults = {
@@ -216,7 +226,8 @@ class GrowthMetric(PointFunction):
         Variable(
             "k_c",
             "1/sigma",
-            "critical wavenumber: first sign change of Re α (upper edge of the unstable band 0 < k < k_c)",
+            "critical wavenumber: first sign change of Re α, from + to − (upper edge of the "
+            "long-wave unstable band 0 < k < k_c; missing where the flow is long-wave stable)",
             source="§4.2",
         ),
         Variable("growth_n", "1", "largest Chebyshev N used along the branch", kind="int"),
@@ -325,7 +336,8 @@ class GrowthMetric(PointFunction):
                 f"first at k = {m.k:.3g}, N = {m.n} (drift {m.drift:.1e}, tail {m.tail:.1e})"
             )
         re = np.array([np.nan if m is None else m.alpha.real for m in modes])
-        imax = int(np.nanargmax(re))
+        imax = peak_index(re)  # the branch scan's rule for the largest sampled Re α
+        assert imax is not None  # some mode was reached
         out = {
             "dispersion_sampled": True,
             "growth_max": float(re[imax]),
@@ -335,18 +347,17 @@ class GrowthMetric(PointFunction):
             "growth_converged": not bad and len(got) == len(ks),
             "growth_k_reached": max(m.k for m in got),
         }
-        for i in range(len(ks) - 1):
-            if modes[i] is None or modes[i + 1] is None:
-                continue
-            if re[i] > 0 >= re[i + 1]:
-                try:
-                    out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
-                except (ConvergenceError, ValueError) as exc:
-                    # the refinement left the branch: the bracket's linear estimate, noted
-                    ka, kb = float(ks[i]), float(ks[i + 1])
-                    out["k_c"] = ka - re[i] * (kb - ka) / (re[i + 1] - re[i])
-                    point.note(f"growth: k_c in [{ka:.3g}, {kb:.3g}] by linear interpolation ({exc})")
-                break
+        # k_c by the branch scan's rule (chuteflow.stability.scan.critical_index): the first
+        # sign change of Re α between reached neighbours, when it goes from + to −
+        i = critical_index(re)
+        if i is not None:
+            try:
+                out["k_c"] = self._refine(flow, modes[i], modes[i + 1], cache)
+            except (ConvergenceError, ValueError) as exc:
+                # the refinement left the branch: the bracket's linear estimate, noted
+                ka, kb = float(ks[i]), float(ks[i + 1])
+                out["k_c"] = linear_crossing(ks, re, i)
+                point.note(f"growth: k_c in [{ka:.3g}, {kb:.3g}] by linear interpolation ({exc})")
         return out
 
     @staticmethod

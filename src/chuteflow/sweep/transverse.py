@@ -62,7 +62,7 @@ class TransverseMetric(PointFunction):
 
     name = "transverse"
     # 4: the longitudinal branch's first step from k = 0 must hit α1 k
-    # (chuteflow.stability.dispersion.FIRST_STEP_MIN): in dilute flows it was "lost" at k = 1e-5;
+    # (TrackingPolicy.first_step_min): in dilute flows it was "lost" at k = 1e-5;
     # and longitudinal_peak tries N = 75 also where the branch is lost before k_min at 48, 60.
     # 5: the transverse branch is followed over its flat maximum whatever the round-off (10
     # step halvings of TransverseTracker.advance instead of 6: P1 was "lost" at k_z = 1.93e-3

@@ -85,7 +85,7 @@ def _run(ctx: StageContext) -> None:
     from ...._threads import limit_blas_threads
     from ....closures import ChuteModel
     from ....longwave import longwave
-    from ....stability import crossings, dispersion
+    from ....stability import branch_scan, dispersion
     from ....steady import solve_steady
 
     limit_blas_threads(1)
@@ -96,23 +96,24 @@ def _run(ctx: StageContext) -> None:
         R.flows[name] = solve_steady(th, nu0, ChuteModel(roughness=phi))
         ctx.progress(advance=1)
 
-    # dispersion relations, their k_c, and the k → 0 end of each branch
+    # dispersion relations, their k_c (the branch scan's rule, chuteflow.stability.scan: the
+    # first sign change of Re α when it goes from + to −), and the k → 0 end of each branch
     small_k = np.geomspace(1e-6, 1e-5, 5)
     for name, (th, nu0, phi, k_max) in POINTS.items():
         ctx.progress(f"dispersion relation {name} (θ = {th:g}°, ν0(0) = {nu0:g}, φ = {phi:g})")
         flow = R.flows[name]
         try:
             ds = dispersion(flow, _k_grid(k_max, q), strict=False)
-            found = crossings(flow, k_max=k_max, num=15 if q else 40)
+            scan = branch_scan(flow, k_max=k_max, num=15 if q else 40, refine_peak=False)
             R.small[name] = dispersion(flow, small_k, strict=False)
         except Exception as exc:  # recorded as a failed checkpoint below
             R.errors[name] = f"{type(exc).__name__}: {exc}"
             continue
-        R.kc[name] = found
+        R.kc[name] = found = scan.to_crossings()
         if found:
             ds.attrs["crossings"] = np.asarray(found, dtype=float)
-        if found and R.small[name].alpha_re.values[0] > 0:
-            ds.attrs["k_c"] = found[0]
+        if scan.k_c is not None:
+            ds.attrs["k_c"] = scan.k_c
         R.disp[name] = ds
         ds.to_netcdf(ctx.path(f"dispersion_{name}.nc"), engine="h5netcdf")
     for name, msg in R.errors.items():
@@ -211,16 +212,16 @@ def _magnification(ctx, R):
     png = magnification_figure(
         ds,
         ctx.path("dispmag.png"),
-        alpha2=lw.alpha2,
+        alpha2=lw.alpha2_taylor,
         dQ_drho=lw.dQ_drho,
-        alpha2_uncertainty=lw.convergence_alpha2,
+        alpha2_uncertainty=lw.alpha2_taylor_convergence,
         k_mag=1e-4,
         label="P1",
     )
     ctx.report.add_figure(
         png,
         "P1 (φ = 0.05, θ = 16°, ν0(0) = 0.05) near k = 0: (a) Re α with "
-        f"the long-wave Re α2 k² (α2 = {_fmt_alpha(lw.alpha2)}, "
+        f"the long-wave Re α2 k² (Taylor α2 = {_fmt_alpha(lw.alpha2_taylor)}, "
         f"N = {lw.n}) dashed; (b) Im α with the slope −dQ0/dρ̄0 = "
         f"{-lw.dQ_drho:.6g} dashed; (c) Re α/k² against k: the k² "
         "regime ends near k ~ 1e-5 (docs/errata.md, numerical notes).",
@@ -297,7 +298,7 @@ def _stability_verdicts(ctx, R):
         lw = R.lw.get(name)
         small = R.small.get(name)
         re_small = float(small.alpha_re.values[0]) if small is not None else math.nan
-        ok = mx < 0 and re_small < 0 and (lw is None or lw.alpha2.real < 0)
+        ok = mx < 0 and re_small < 0 and (lw is None or lw.alpha2_taylor.real < 0)
         th, nu0, phi, k_max = POINTS[name]
         rep.check(
             f"stability.{name}_stable",
@@ -306,8 +307,8 @@ def _stability_verdicts(ctx, R):
             computed=(
                 f"largest sampled Re α = {mx:.4e} (k = {kmx:.3g}) over "
                 f"{int((R.disp[name].k > 0).sum())} k in (0, {k_max:g}]; Re α = "
-                f"{re_small:.3e} at k = 1e-6; long-wave Re α2 = "
-                + (f"{lw.alpha2.real:.4g}" if lw else "not computed")
+                f"{re_small:.3e} at k = 1e-6; long-wave (Taylor) Re α2 = "
+                + (f"{lw.alpha2_taylor.real:.4g}" if lw else "not computed")
             ),
             passed=ok,
             detail="The sampled band extends to where Re α decreases monotonically; the "
@@ -410,7 +411,12 @@ def _small_k(ctx, R):
         lines.append(
             f"{name}: d ln Re α/d ln k = {p:.4f} on k = {k[0]:.2g}–{10 * k[0]:.2g}, "
             f"Re α/k² = {re[0] / k[0] ** 2:.5g}"
-            + (f" (long-wave Re α2 = {lw.alpha2.real:.5g} ± {lw.convergence_alpha2:.0%})" if lw else "")
+            + (
+                f" (long-wave Taylor Re α2 = {lw.alpha2_taylor.real:.5g} "
+                f"± {lw.alpha2_taylor_convergence:.0%})"
+                if lw
+                else ""
+            )
         )
         if lw is not None:
             c = np.polyfit(k[:3], im[:3] / k[:3], 2)[-1]
@@ -458,17 +464,19 @@ def _longwave_signs(ctx, R):
         small = R.small.get(name)
         eig = float(small.alpha_re.values[0] / small.k.values[0] ** 2) if small is not None else math.nan
         table.append(
-            f"{name}: α1 = {_fmt_alpha(lw.alpha1)}, α2 = {_fmt_alpha(lw.alpha2)} "
-            f"(N = {lw.n}, change {lw.convergence_alpha2:.1e}); Re α/k² at k = 1e-6: "
+            f"{name}: α1 = {_fmt_alpha(lw.alpha1)}, Taylor α2 = {_fmt_alpha(lw.alpha2_taylor)} "
+            f"(N = {lw.n}, change {lw.alpha2_taylor_convergence:.1e}); Re α/k² at k = 1e-6: "
             f"{eig:.5g}"
         )
         if name not in PAPER_UNSTABLE:
             continue
-        agree = (lw.alpha2.real > 0) == PAPER_UNSTABLE[name] and (eig > 0) == (lw.alpha2.real > 0)
+        agree = (lw.alpha2_taylor.real > 0) == PAPER_UNSTABLE[name] and (eig > 0) == (
+            lw.alpha2_taylor.real > 0
+        )
         ok &= agree
         lines.append(
-            f"{name}: Re α2 = {lw.alpha2.real:.4g} "
-            f"({'unstable' if lw.alpha2.real > 0 else 'stable'}; paper "
+            f"{name}: Taylor Re α2 = {lw.alpha2_taylor.real:.4g} "
+            f"({'unstable' if lw.alpha2_taylor.real > 0 else 'stable'}; paper "
             f"{'unstable' if PAPER_UNSTABLE[name] else 'stable'}; eigenvalues "
             f"{eig:+.4g})"
         )

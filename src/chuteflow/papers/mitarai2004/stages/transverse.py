@@ -33,7 +33,7 @@ WINNER_GRID = {
 #: (real) transverse branch at its flat maximum in 3 flows at φ = 0.05 (growth ~1e-8 instead
 #: of 4e-4 … 3e-3; TransverseTracker.advance's step halvings, 6 then, 10 now). Version 3 lost
 #: the longitudinal branch at k ~ 1e-5 in thick dilute flows (the tracker's first step from
-#: k = 0 off α1 k, chuteflow.stability.dispersion.FIRST_STEP_MIN) and named no winner at 55
+#: k = 0 off α1 k, TrackingPolicy.first_step_min) and named no winner at 55
 #: (φ = 0.05) and 15 (φ = 0.10) of the points unstable both ways; every one has a verdict
 #: now. Counts are of the grid points with a steady flow.
 SWEEP_ANSWER_40x40 = {

@@ -1,0 +1,577 @@
+"""The least-stable mode at any wavevector: one contract, one resolver (paper §4.1–4.2).
+
+Contract
+    The least-stable mode at (k_x, k_z) is the mode of largest Re α among the modes that
+    pass the paper's two tests under refinement (§4.1: drift |α(N) − α(N')| and Chebyshev
+    tail below 1e-7, :class:`~.policy.RejectionPolicy`). An eigenvalue above the answer
+    that fails a test is not discarded while its drift and tail keep falling: it is followed
+    up the ladder of resolutions until it is decided — a mode (it passes both tests, and
+    then it is the answer), or not one (the near-neutral continuum of the dilute top, or a
+    spurious eigenvalue: its drift or tail stops falling, or no eigenvalue at the next N
+    continues it), or below the answer. Where the ladder ends with such a candidate
+    undecided, the answer is that candidate, flagged ``converged = False`` with its drift
+    and tail, and the note names the least-stable resolved mode below it. A damped mode is
+    never reported as converged while a less damped one that passes the tests exists at
+    the resolutions tried.
+
+Resolver (:func:`least_stable`)
+    1. *Tracked or direct answer*: the α(0) = 0 branch (the kinematic-wave mode of
+       Appendix B) followed from k = 0 by continuation, with the relaxed-tail and direct
+       fallbacks where the continuation loses it near the continuum
+       (:mod:`.dispersion`); or the dense spectrum at each rung (``method="qz"``, and
+       |k| > 1).
+    2. *Search above it* (:func:`search_above`): one dense QZ of the whole spectrum at the
+       coarse resolution ``policy.search.n`` (48) on the grid of the question; every
+       eigenvalue above the answer whose eigenvector is nearly resolved there is a
+       candidate, followed by shift-invert on the rungs 48, 60, 75, 94, … (each rung's
+       α(N') is the rung below) until decided (:func:`follow_candidate`).
+
+    Finite wavevectors, 2D and 3D, are solved on the sinh-mapped grid
+    (:func:`~.modes.cache_for`, the one place where the grid is chosen).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..errors import ConvergenceError, ParameterError
+from ..steady import SteadyFlow
+from .eigen import qz
+from .lost import _better, _direct_candidate, _outranked, after_lost_branch
+from .modes import (
+    K_DIRECT,
+    Mode,
+    OperatorCache,
+    cache_for,
+    check_hydrodynamic_k,
+    check_n,
+    direct_mode,
+    drift_of,
+    interp_vector,
+    join_notes,
+    make_mode,
+    mode_near,
+    nearest_eigenpair,
+    resolve_policy,
+    stability_operator,
+    tails,
+)
+from .operator import Pencil, StabilityOperator, validate_k, validate_n
+from .policy import RejectionPolicy
+from .tracking import branch_mode
+
+__all__ = ["choose_n", "follow_candidate", "least_stable", "operator", "search_above"]
+
+
+def _top_check_n(ladder: list[int], policy: RejectionPolicy) -> int:
+    """The first rung of at least ``policy.tracking.top_check_below`` of the top: a direct
+    solve's physical mode past the continuum is checked once more there (P1, k = 3: the check
+    at N = 256 after the mode passed at 244 cost 41 of 107 s)."""
+    return next(r for r in ladder if r >= policy.tracking.top_check_below * ladder[-1])
+
+
+def _check_above_continuum(flow, k, kz, n_top, mode: Mode, policy, cache, lost: str) -> Mode:
+    """A direct solve's physical mode past the continuum (k > ``policy.relaxed_k_max``) with
+    unresolved eigenvalues above it, checked once more near the top of the ladder (at
+    ``n_top``, ``policy.tracking.top_check_below``): there a branch in the band of critical-layer
+    eigenvalues may be nearly resolved and less damped (P4, k = 0.5: −2.51 − 0.87i passes
+    both tests at N = 80, but the branch at −0.0300 − 0.8172i is picked out at N = 244 and
+    256, drift ~1e-4, tail ~4e-6). The less damped answer wins, flagged if it does not pass
+    the tests."""
+    top = direct_mode(flow, k, kz=kz, n=n_top, policy=policy, cache=cache)
+    if top is None or top.alpha.real <= mode.alpha.real + max(mode.drift, top.drift):
+        return mode
+    note = join_notes(
+        lost,
+        top.note,
+        f"less damped than the mode {mode.alpha:.6g} that passes both tests at N = {mode.n}",
+    )
+    return dataclasses.replace(top, method=mode.method, note=note)
+
+
+def least_stable(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    n: int | None = None,
+    sigma: complex | None = None,
+    method: str = "branch",
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    n_max: int | None = None,
+    strict: bool = False,
+    cache: OperatorCache | None = None,
+) -> Mode:
+    """The least-stable mode at the wavevector (``k``, ``kz``), by the contract of this
+    module: the mode of largest Re α among the modes that pass the paper's drift and tail
+    tests under refinement (§4.1). Step 1 below gives the tracked (or direct) answer; step 2
+    (:func:`search_above`) follows every nearly resolved eigenvalue above it, from one dense
+    solve at ``policy.search.n``, until each is decided; an undecided candidate above the
+    least-stable resolved mode is returned flagged (``converged = False``), the resolved
+    mode named in its note. With ``sigma`` the question is another one (the mode nearest σ)
+    and step 2 is skipped.
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        Base state.
+    k, kz : float
+        Wavenumber(s); |k| ≤ :data:`K_HYDRO_MAX` = 2π (a wavelength of one particle
+        diameter: beyond it the hydrodynamics does not apply and ParameterError is raised).
+    n : int, optional
+        Resolution N. Default: adaptive, along ``policy.ladder()`` (80, 100, 125, …, by
+        factors 1.25) until the mode is physical, at most ``policy.n_max`` (256).
+    sigma : complex, optional
+        Shift: return the physical mode nearest σ (shift-invert Arnoldi at N, drift at N').
+    method : {"branch", "qz"}
+        Without ``sigma``: ``"branch"`` follows the branch with α(0) = 0 (the kinematic-wave
+        mode of Appendix B, which the paper finds to be the least stable) from k = 0 by
+        continuation — fast; ``"qz"`` scans the whole spectrum by dense QZ — the global
+        reference, seconds. With ``"branch"``, k > :data:`K_DIRECT` (= 1) is solved
+        directly (QZ at k). Where the continuation loses the branch (its phase velocity
+        inside the range of u0, near the continuum of the dilute top), the branch is
+        followed again with the tail threshold relaxed (:func:`near_continuum_branch`,
+        ``method = "branch (relaxed)"``, at this and every further N of the ladder); only
+        where that does not reach k either, the solver falls back to the direct solve at
+        k. A value on the branch is preferred to a direct solve's candidate as the flagged
+        answer, except beyond ``policy.relaxed_k_max`` (0.1), where the branch lies in a
+        band of critical-layer eigenvalues: there the branch is picked out of the band by
+        its tail, and a resolved direct mode that drifts less and is at least as unstable
+        replaces it (:func:`after_lost_branch`,
+        :meth:`RejectionPolicy.direct_outranks_relaxed`); the further rungs are then
+        solved directly. Below ``policy.relaxed_k_max``, while the relaxed value is rejected
+        by the paper's tests, each rung also solves directly (dense QZ, then the candidate
+        followed by shift-invert, :func:`_direct_candidate`), and a mode that passes both
+        tests and is less damped is the answer. :attr:`Mode.method` says which method
+        answered.
+    policy : RejectionPolicy, optional
+        Thresholds of the drift and tail tests and the resolution ladder (default: the
+        paper's, §4.1).
+    drift_tol, tail_tol, n_max : optional
+        Overrides of the policy's fields of the same names.
+    strict : bool
+        False (default): when no mode passes the tests by N = ``n_max``, return the best
+        candidate flagged ``physical = False`` (:attr:`Mode.converged`) with its drift and
+        tail. True: raise :class:`ConvergenceError` instead.
+    cache : OperatorCache, optional
+        Where the operators come from.
+
+    Raises
+    ------
+    ConvergenceError
+        Only with ``strict=True``: no physical mode reaches the thresholds by N = ``n_max``.
+    """
+    k, kz = validate_k(k, "k"), validate_k(kz, "kz", signed=True)
+    check_hydrodynamic_k(k, kz)
+    policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max)
+    if method not in ("branch", "qz"):
+        raise ParameterError(
+            f"method = {method!r}: choose 'branch' (continuation from k = 0) "
+            "or 'qz' (dense scan of the whole spectrum)"
+        )
+    cache = cache_for(kz, cache)
+    ns = [validate_n(n)] if n is not None else policy.ladder()
+    # the search's own ladder from its coarse N, up to the given N where one is given
+    rungs = policy.search.ladder(policy.n_max if n is None else ns[-1], policy.n_growth)
+    # in 3D the search from scratch replaces the fallbacks after a lost branch (a dense QZ
+    # of the 3D pencil at every rung: P1, (0.002, 0.1) took 31 s that way)
+    found, lost = _tracked_or_direct(flow, k, kz, ns, sigma, method, policy, cache, stop_when_lost=bool(kz))
+    if found is None and lost is not None:
+        found = search_above(flow, k, kz, None, policy, cache, rungs)
+        if found is not None:
+            found = dataclasses.replace(found, note=join_notes(lost, found.note))
+        else:
+            found, _ = _tracked_or_direct(flow, k, kz, ns, sigma, method, policy, cache)
+    elif sigma is None and found is not None:
+        found = search_above(flow, k, kz, found, policy, cache, rungs)
+    if found is not None and (found.physical or not strict):
+        return found
+    what = (
+        "no physical mode"
+        if found is None
+        else f"best candidate α = {found.alpha:.6g} with drift {found.drift:.1e}, tail {found.tail:.1e}"
+    )
+    raise ConvergenceError(
+        f"least-stable mode at theta = {flow.theta:g}, nu0 = {flow.nu0:g}, k = {k:g}: "
+        f"{what} (thresholds drift {policy.drift_tol:g}, tail {policy.tail_tol:g}) up to N = "
+        f"{ns[-1]}; raise n_max or relax the thresholds"
+    )
+
+
+def _tracked_or_direct(
+    flow, k, kz, ns, sigma, method, policy, cache, stop_when_lost: bool = False
+) -> tuple[Mode | None, str | None]:
+    """Step 1 of the resolver (module docstring): (the first mode along the resolutions
+    ``ns`` that passes both tests, else the best candidate (:func:`_better`), else None;
+    where the continuation lost the branch, why). With ``stop_when_lost`` it returns
+    (None, why) as soon as the branch is lost."""
+    how = "qz" if (method == "qz" or (sigma is None and math.hypot(k, kz) > K_DIRECT)) else method
+    best: Mode | None = None
+    lost = None
+    seed: Mode | None = None  # direct candidate below the continuum (_direct_candidate)
+    kk = math.hypot(k, kz)
+    for nn in ns:
+        mode: Mode | None
+        if sigma is not None:
+            try:
+                mode = dataclasses.replace(
+                    mode_near(flow, k, sigma, kz=kz, n=nn, policy=policy, cache=cache), method="shift"
+                )
+            except ConvergenceError:
+                mode = None
+        elif how == "qz":
+            mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+            if mode is not None and lost is not None:
+                mode = dataclasses.replace(mode, method="qz (branch lost)", note=join_notes(lost, mode.note))
+        else:
+            mode = None
+            if how == "branch":
+                try:
+                    mode = branch_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache, retrack=not kz)
+                except ConvergenceError as exc:
+                    # the continuation lost the branch: from now on followed with the tail
+                    # threshold relaxed (near_continuum_branch), at every rung
+                    lost, how = str(exc).split(" (theta")[0], "relaxed"
+                    if stop_when_lost:
+                        return None, lost
+            if mode is None:
+                # the dense spectrum (band search, direct mode) only at the last rung: below
+                # it an unresolved relaxed value only leads to the next rung
+                mode = after_lost_branch(
+                    flow,
+                    k,
+                    kz=kz,
+                    n=nn,
+                    policy=policy,
+                    cache=cache,
+                    lost=lost or "",
+                    check_direct=nn == ns[-1],
+                )
+                if mode is not None:
+                    if mode.method != "branch (relaxed)":
+                        # the branch has dissolved into the continuum: direct solves from now on
+                        how = "qz"
+                    elif not mode.physical and kk <= policy.relaxed_k_max:
+                        # below the continuum: a resolved, less damped mode outranks the
+                        # flagged relaxed value (RejectionPolicy.direct_outranks_relaxed)
+                        seed = _direct_candidate(flow, k, kz, nn, seed, policy, cache)
+                        mode = _outranked(mode, seed, kk, policy, f" at N = {nn}")
+                else:
+                    # not even the relaxed continuation reaches k: a direct solve at k
+                    how = "qz"
+                    mode = direct_mode(flow, k, kz=kz, n=nn, policy=policy, cache=cache)
+                    if mode is not None:
+                        mode = dataclasses.replace(
+                            mode, method="qz (branch lost)", note=join_notes(lost or "", mode.note)
+                        )
+        if mode is not None and mode.physical:
+            if (
+                mode.method.startswith("qz")
+                and mode.continuum_re > mode.alpha.real  # False when NaN
+                and math.hypot(k, kz) > policy.relaxed_k_max
+                and nn < (n_top := _top_check_n(ns, policy))
+            ):
+                mode = _check_above_continuum(flow, k, kz, n_top, mode, policy, cache, lost or "")
+            return mode, lost
+        if mode is not None and _better(mode, best, policy):
+            best = mode
+    return best, lost
+
+
+def choose_n(
+    flow: SteadyFlow,
+    k: float,
+    *,
+    kz: float = 0.0,
+    policy: RejectionPolicy | None = None,
+    drift_tol: float | None = None,
+    tail_tol: float | None = None,
+    n_max: int | None = None,
+) -> int:
+    """Smallest N of the policy's ladder (80, 100, 125, …) at which the least-stable
+    (α(0) = 0 branch) mode at (k, kz) passes the drift and tail tests."""
+    return least_stable(
+        flow, k, kz=kz, policy=policy, drift_tol=drift_tol, tail_tol=tail_tol, n_max=n_max, strict=True
+    ).n
+
+
+def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
+    """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
+
+    ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence
+    estimate of the least-stable mode).
+    """
+    if n is None:
+        n = choose_n(flow, k)
+    return StabilityOperator(flow, n, three_d=bool(kz)).pencil(k, kz)
+
+
+# -- the search above an answer ----------------------------------------------------------
+@dataclasses.dataclass(frozen=True)
+class Followed:
+    """One candidate of :func:`search_above` after :func:`follow_candidate`.
+
+    Attributes
+    ----------
+    start : complex
+        The eigenvalue at the coarse resolution where the candidate was found.
+    mode : Mode or None
+        The candidate at the last resolution it was followed to (None: lost at the first).
+    verdict : str
+        ``"mode"`` (passes both tests), ``"below"`` (below the answer), ``"same"`` (it
+        converges onto the answer: the same eigenvalue), ``"not a mode"``
+        (drift or tail stops falling, or no eigenvalue continues it), ``"undecided"``
+        (the ladder ended first).
+    why : str
+        The evidence for the verdict, in words.
+    """
+
+    start: complex
+    mode: Mode | None
+    verdict: str
+    why: str
+
+
+class _Candidate:
+    """One eigenpair followed up the ladder by shift-invert (:func:`follow_candidate`):
+    its last eigenpair, the mode at the last rung, the tails seen, and once decided its
+    :class:`Followed`."""
+
+    def __init__(self, flow, kx, kz, alpha: complex, v: np.ndarray, n_from: int, policy, cache):
+        self.flow, self.kx, self.kz, self.policy, self.cache = flow, kx, kz, policy, cache
+        self.start = self.alpha = complex(alpha)
+        self.v, self.n_from = v, n_from
+        self.mode: Mode | None = None
+        self.tails: list[float] = []
+        self.done: Followed | None = None
+        self.answer: Mode | None = None  # the answer the search is above (search_above)
+
+    def _decide(self, verdict: str, why: str) -> Followed:
+        self.done = Followed(self.start, self.mode, verdict, why)
+        return self.done
+
+    def step(self, nn: int, floor: float) -> Followed | None:
+        """Solve at N = ``nn``; the verdict once decided, else None."""
+        flow, kx, kz, policy, search = self.flow, self.kx, self.kz, self.policy, self.policy.search
+        three_d = bool(kz)
+        p = stability_operator(flow, nn, three_d, cache=self.cache).pencil(kx, kz)
+        nf = len(p.fields)
+        v0 = self.v if nn == self.n_from else interp_vector(self.v, nf, self.n_from, nn)
+        try:
+            a, w = nearest_eigenpair(p, self.alpha, v0=v0)
+        except ConvergenceError:
+            return self._decide("not a mode", f"no eigenvalue settles near {self.alpha:.6g} at N = {nn}")
+        if abs(a - self.alpha) > search.jump * max(abs(self.alpha), 1e-3):
+            return self._decide(
+                "not a mode", f"no eigenvalue at N = {nn} continues {self.alpha:.6g} (nearest {a:.6g})"
+            )
+        n2 = check_n(nn)
+        prev = self.mode
+        if prev is not None and prev.n == n2:
+            drift = abs(a - prev.alpha)  # the rung below is N' = round(0.8 N)
+        else:
+            try:
+                drift, _ = drift_of(flow, a, w, nn, kx, kz, three_d, cache=self.cache)
+            except ConvergenceError:
+                drift = math.inf
+        self.mode = mode = make_mode(p, a, w, drift, n2, policy)
+        self.alpha, self.v, self.n_from = complex(a), w, nn
+        ans = self.answer
+        if ans is not None and abs(a - ans.alpha) <= 2 * max(drift, ans.drift, policy.drift_tol):
+            # the candidate converges onto the answer (its coarse eigenvalue lay farther off)
+            return self._decide("same", f"it converges onto the answer {ans.alpha:.6g} (N = {nn})")
+        if mode.physical:
+            return self._decide("mode", f"passes both tests at N = {nn}")
+        if mode.alpha.real + mode.drift < floor:
+            return self._decide("below", f"Re α = {mode.alpha.real:.6g} at N = {nn}")
+        self.tails.append(mode.tail)
+        if (
+            len(self.tails) >= 4
+            and mode.tail >= policy.tail_tol
+            and mode.tail > search.stall * self.tails[-4]
+        ):
+            return self._decide(
+                "not a mode",
+                f"its eigenvector's tail does not decay ({self.tails[-4]:.1e} → {mode.tail:.1e} over three "
+                f"rungs up to N = {nn}): the continuum of the dilute top or a spurious eigenvalue",
+            )
+        return None
+
+    def result(self) -> Followed:
+        """The verdict, ``"undecided"`` while none."""
+        if self.done is not None:
+            return self.done
+        where = f"N = {self.mode.n}" if self.mode is not None else "the first rung"
+        return Followed(self.start, self.mode, "undecided", f"not decided by {where}")
+
+
+def follow_candidate(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    alpha: complex,
+    v: np.ndarray,
+    n_from: int,
+    rungs: list[int],
+    policy: RejectionPolicy,
+    cache: OperatorCache,
+    floor: float = -math.inf,
+) -> Followed:
+    """Follow the eigenpair (α, v) found at N = ``n_from`` up the resolutions ``rungs`` by
+    shift-invert until it is decided (module docstring; ``floor``: the growth rate of the
+    answer, below which a candidate is decided ``"below"``). A rung's α(N') is the α just
+    solved on the rung below when that is N' = round(0.8 N), else a solve at N'."""
+    c = _Candidate(flow, kx, kz, alpha, v, n_from, policy, cache)
+    for nn in rungs:
+        if c.step(nn, floor) is not None:
+            break
+    return c.result()
+
+
+def global_candidates(
+    flow: SteadyFlow, kx: float, kz: float, answer: Mode | None, policy: RejectionPolicy, cache: OperatorCache
+) -> list[tuple[complex, np.ndarray]]:
+    """Eigenpairs above ``answer`` from one dense QZ at ``policy.search.n``, best first:
+    eigenvectors nearly resolved there (tail < ``policy.search.candidate_tail``), Re α above
+    the answer's by more than its uncertainty (its drift, at least the drift threshold),
+    neither the answer itself nor, in a real pencil (k_x = 0), the conjugate of one kept."""
+    search = policy.search
+    n = search.n
+    p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
+    w, V = qz(*p.equilibrated())
+    if answer is None:
+        above = np.arange(len(w))
+    else:
+        margin = max(answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol)
+        above = np.nonzero(w.real > answer.alpha.real + margin)[0]
+    if len(above) == 0:
+        return []
+    t = tails(p, V[:, above], policy.tail_terms)
+    out: list[tuple[complex, np.ndarray]] = []
+    for j, tj in zip(above, t):
+        a = complex(w[j])
+        if tj >= search.candidate_tail:
+            continue
+        if answer is not None and abs(a - answer.alpha) <= 1e-3 * max(abs(answer.alpha), 1e-3):
+            continue
+        if kx == 0 and any(abs(a - b.conjugate()) <= 1e-8 * max(abs(a), 1.0) for b, _ in out):
+            continue
+        out.append((a, V[:, j]))
+    return out
+
+
+def search_above(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    answer: Mode | None,
+    policy: RejectionPolicy,
+    cache: OperatorCache,
+    rungs: list[int] | None = None,
+) -> Mode | None:
+    """The least-stable mode by the contract of this module, given a tracked or direct
+    ``answer``: candidates above it from one dense solve (:func:`global_candidates`),
+    followed on ``rungs`` (default ``policy.search.ladder``) until decided
+    (:func:`follow_candidate`). Returns the answer, a candidate that passes both tests and
+    is less damped, or, where a candidate above the best resolved mode stays undecided,
+    that candidate flagged (``physical = False``) with the resolved mode in its note.
+    With ``answer=None`` (the search from scratch, where the continuation lost the branch
+    in 3D) every candidate is above; None when the dense solve has none."""
+    search = policy.search
+    if search.max_candidates == 0:
+        return answer
+    if rungs is None:
+        rungs = search.ladder(policy.n_max, policy.n_growth)
+    cands = global_candidates(flow, kx, kz, answer, policy, cache)
+    if not cands:
+        return answer
+    # the least-stable mode that passes both tests, and the candidates not decided
+    best = answer if answer is not None and answer.physical else None
+    undecided: list[Followed] = []
+    if answer is not None and not answer.physical:
+        undecided.append(Followed(answer.alpha, answer, "undecided", ""))
+    notes: list[str] = []
+    active = [
+        _Candidate(flow, kx, kz, a, v, search.n, policy, cache) for a, v in cands[: search.max_candidates]
+    ]
+    for c in active:
+        c.answer = answer
+    undecided += [Followed(a, None, "undecided", "not followed") for a, _ in cands[search.max_candidates :]]
+    # every candidate advances rung by rung (each operator is built once), best first; a
+    # candidate below the least-stable mode that passes both tests needs no more solves
+    for nn in rungs:
+        if not active:
+            break
+        for c in sorted(active, key=lambda c: -c.alpha.real):
+            err = c.mode.drift if c.mode is not None and math.isfinite(c.mode.drift) else 0.0
+            if best is not None and c.alpha.real + err <= best.alpha.real:
+                c._decide("below", f"Re α = {c.alpha.real:.6g} at N = {c.n_from}")
+                continue
+            f = c.step(nn, best.alpha.real if best is not None else -math.inf)
+            if f is not None and f.verdict == "mode" and f.mode is not None:
+                if best is None or f.mode.alpha.real > best.alpha.real:
+                    if answer is not None:
+                        notes.append(
+                            f"the tracked/direct answer {answer.alpha:.6g} (N = {answer.n}, "
+                            f"{'passes' if answer.physical else 'fails'} the tests) is more damped than "
+                            f"this mode, found by the global solve at N = {search.n}"
+                        )
+                    best = f.mode
+        active = [c for c in active if c.done is None]
+    undecided += [c.result() for c in active]
+    if best is None:
+        # nothing passes the tests: the least damped of the undecided, flagged
+        followed = [f for f in undecided if f.mode is not None]
+        if not followed:
+            return answer
+        top = max(followed, key=lambda f: f.mode.alpha.real)  # type: ignore[union-attr]
+        assert top.mode is not None
+        if top.mode is answer:
+            return answer
+        return dataclasses.replace(
+            top.mode,
+            method="global",
+            note=join_notes(
+                top.mode.note,
+                f"no mode passes both tests; this candidate is not decided by N = {top.mode.n} "
+                f"(drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e})"
+                + (
+                    f"; the tracked/direct answer {answer.alpha:.6g} is more damped"
+                    if answer is not None
+                    else ""
+                ),
+            ),
+        )
+    above = [
+        f
+        for f in undecided
+        if f.mode is not None and f.mode.alpha.real > best.alpha.real + max(best.drift, f.mode.drift)
+    ]
+    not_followed = [f for f in undecided if f.mode is None and f.start.real > best.alpha.real]
+    if above:
+        top = max(above, key=lambda f: f.mode.alpha.real)  # type: ignore[union-attr]
+        assert top.mode is not None
+        note = join_notes(
+            top.mode.note,
+            f"a candidate above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) is not "
+            f"decided by N = {top.mode.n} (drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e})",
+        )
+        return dataclasses.replace(
+            top.mode, method=top.mode.method if top.mode is answer else "global", note=note
+        )
+    if not_followed:
+        note = join_notes(
+            best.note,
+            *notes,
+            f"{len(not_followed)} candidate(s) above it not followed (search.max_candidates = "
+            f"{search.max_candidates}), e.g. {not_followed[0].start:.6g} at N = {search.n}",
+        )
+        return dataclasses.replace(best, physical=False, note=note)
+    if best is answer:
+        return answer
+    return dataclasses.replace(best, method="global", note=join_notes(best.note, *notes))

@@ -1,0 +1,148 @@
+"""The contract of "least stable" (docs/numerics.md, :mod:`chuteflow.stability.resolver`).
+
+The least-stable mode is the mode of largest Re α among the modes that pass the paper's
+drift and tail tests (§4.1) under refinement; a candidate above the answer is followed until
+decided, and an undecided one flags the answer. The reference here is brute force: every
+eigenvalue of the 3D pencil by dense QZ at N = 125 and N' = 100 on the same (mapped) grid,
+no continuation and no candidates; the mode found passes both tests there (drift ~1e-9 and
+below), so 1e-6 covers the two resolutions' difference with a wide margin.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from chuteflow.errors import ParameterError
+from chuteflow.stability import (
+    DEFAULT_POLICY,
+    OperatorCache,
+    RejectionPolicy,
+    SearchPolicy,
+    least_stable,
+)
+from chuteflow.stability.eigen import qz
+from chuteflow.stability.modes import cache_for, check_n, make_mode, tails
+from chuteflow.stability.resolver import follow_candidate, search_above
+
+#: P5 (θ = 17°, ν0(0) = 0.10, φ = 0.05) at an oblique wavevector where the α(0) = 0 branch
+#: passes both tests but is not the least-stable mode (issue report: before the resolver,
+#: `chuteflow eig --kx 0.002 --kz 0.02` gave the branch, −0.00812 − 0.0449i, as converged).
+KX, KZ = 0.002, 0.02
+
+
+def _brute_force(flow, kx, kz, n=125):
+    """The physical mode of largest Re α by dense QZ at N and N' (no tracking)."""
+    cache = OperatorCache(2, mapped_3d=True)
+    p1 = cache.get(flow, n, True).pencil(kx, kz)
+    n2 = check_n(n)
+    w1, V1 = qz(*p1.equilibrated())
+    w2, _ = qz(*cache.get(flow, n2, True).pencil(kx, kz).equilibrated(), vectors=False)
+    for j in range(len(w1)):
+        m = make_mode(p1, w1[j], V1[:, j], float(np.abs(w2 - w1[j]).min()), n2)
+        if m.physical:
+            return m
+    raise AssertionError("no resolved mode at N = 125")
+
+
+@pytest.fixture(scope="module")
+def p5(flows):
+    return flows("P5")
+
+
+def test_p5_oblique_answer_is_the_least_stable_resolved_mode(p5):
+    ref = _brute_force(p5, KX, KZ)
+    mode = least_stable(p5, KX, kz=KZ)
+    assert mode.converged
+    assert abs(mode.alpha - ref.alpha) < 1e-6, (mode.alpha, ref.alpha)
+    assert abs(mode.alpha - (-0.0070865 - 0.0179171j)) < 1e-6
+    # the branch, resolved too, is more damped: the search found the mode above it
+    assert mode.method == "global" and "more damped" in mode.note
+
+
+def test_without_the_search_the_branch_is_returned(p5):
+    """The search is what decides: with it switched off the resolver returns the tracked
+    branch, a resolved mode 1e-3 below the least-stable one (so the test above can fail)."""
+    off = DEFAULT_POLICY.replace(search=SearchPolicy(max_candidates=0))
+    branch = least_stable(p5, KX, kz=KZ, policy=off)
+    assert branch.physical
+    assert abs(branch.alpha - (-0.0081189 - 0.0449464j)) < 1e-6
+    assert branch.alpha.real < least_stable(p5, KX, kz=KZ).alpha.real - 1e-3
+
+
+def test_an_undecided_candidate_above_flags_the_answer(p5):
+    """With the ladder cut at N = 60 the mode above the branch cannot pass the tests
+    (drift ~1e-6 between N = 48 and 60): the answer is that candidate, flagged."""
+    short = RejectionPolicy(n_start=48, n_max=60)
+    mode = least_stable(p5, KX, kz=KZ, policy=short)
+    assert not mode.converged
+    assert abs(mode.alpha - (-0.0070865 - 0.0179171j)) < 1e-4
+    assert "not decided" in mode.note or "no candidate decided" in mode.note
+
+
+def test_continuum_candidate_is_decided_not_a_mode(p5):
+    """An eigenvalue of the dilute top's continuum (phase velocity u0 at the top, tail
+    ~7e-4 at N = 48) is followed and decided: its tail does not fall with N."""
+    cache = cache_for(KZ, OperatorCache(2))
+    p = cache.get(p5, 48, True).pencil(KX, KZ)
+    w, V = qz(*p.equilibrated())
+    t = tails(p, V)
+    u_top = float(p5.u[-1]) if p5.u[-1] > p5.u[0] else float(np.max(p5.u))
+    cont = [j for j in range(len(w)) if 1e-4 < t[j] < 2e-3 and abs(-w[j].imag / KX - u_top) < 0.05 * u_top]
+    assert cont, "no continuum eigenvalue at N = 48"
+    rungs = [60, 75, 94, 118, 148, 185]
+    verdicts = [
+        follow_candidate(p5, KX, KZ, complex(w[j]), V[:, j], 48, rungs, DEFAULT_POLICY, cache)
+        for j in cont[:4]
+    ]
+    assert all(f.verdict == "not a mode" for f in verdicts), verdicts
+    # the resolved mode, followed the same way, passes both tests
+    k = int(np.argmin(np.abs(w - (-0.0070865 - 0.0179171j))))
+    g = follow_candidate(p5, KX, KZ, complex(w[k]), V[:, k], 48, rungs, DEFAULT_POLICY, cache)
+    assert g.verdict == "mode" and g.mode is not None and abs(g.mode.alpha - w[k]) < 1e-5
+
+
+def test_search_keeps_a_resolved_answer_with_nothing_above(flows):
+    """P1, k = 0.002 (2D, paper §4.2): the branch is the least-stable mode; the search
+    leaves it unchanged (same object)."""
+    p1 = flows("P1")
+    mode = least_stable(p1, 0.002, policy=DEFAULT_POLICY.replace(search=SearchPolicy(max_candidates=0)))
+    again = search_above(p1, 0.002, 0.0, mode, DEFAULT_POLICY, cache_for(0.0))
+    assert again is mode
+
+
+def test_search_policy_validation():
+    with pytest.raises(ParameterError, match="candidate_tail"):
+        SearchPolicy(candidate_tail=2.0)
+    with pytest.raises(ParameterError, match="max_candidates"):
+        SearchPolicy(max_candidates=-1)
+    with pytest.raises(ParameterError, match="search"):
+        RejectionPolicy(search=dataclasses.asdict(SearchPolicy()))  # type: ignore[arg-type]
+    assert SearchPolicy().ladder(256, 1.25) == [48, 60, 75, 94, 118, 148, 185, 231, 256]
+
+
+def test_a_slowly_converging_mode_above_flags_the_answer(flows):
+    """P3 (θ = 16°, ν0(0) = 0.10) at (k_x, k_z) = (0.005, 0.1): the dense spectrum at N = 156
+    has −0.0847714 − 0.181899i as its least-stable mode that passes both tests, but a mode
+    above it, −0.0511 − 0.0385i, converges only slowly (drift 4e-4, tail 1.2e-6 at N = 231;
+    see the slow test below): at the default ladder's top it is undecided, so the answer is
+    that candidate, flagged — not the resolved, more damped mode reported as converged."""
+    mode = least_stable(flows("P3"), 0.005, kz=0.1)
+    assert not mode.converged
+    assert abs(mode.alpha - (-0.0511 - 0.0385j)) < 2e-3, mode.alpha
+    assert "-0.0847" in mode.note and "not decided" in mode.note
+
+
+@pytest.mark.slow
+def test_the_slow_mode_above_keeps_converging_on_a_longer_ladder(flows):
+    """The candidate of the test above, followed on a ladder to N = 512, is a mode: its
+    drift keeps falling (4e-4 at N = 231, 4.6e-6 at 451, 1.2e-6 at 512) and its tail with it
+    (1.2e-6, 1.5e-9, 2.3e-10), towards −0.0511007 − 0.0384992i; the 1e-7 drift needs N
+    beyond 512, so it stays flagged there too, still above the resolved −0.0847714."""
+    longer = DEFAULT_POLICY.replace(n_max=512)
+    mode = least_stable(flows("P3"), 0.005, kz=0.1, policy=longer)
+    assert mode.n == 512 and mode.drift < 2e-6 and mode.tail < 1e-9
+    assert abs(mode.alpha - (-0.0511007 - 0.0384992j)) < 5e-6
+    assert mode.alpha.real > -0.0847714 + 0.03
