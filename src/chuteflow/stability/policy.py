@@ -25,7 +25,7 @@ class SearchPolicy:
 
     The contract of "least stable" (docs/numerics.md) is the largest Re α among the modes
     that pass the drift and tail tests under refinement. After the tracked or direct answer,
-    the resolver solves the whole spectrum once by dense QZ at the coarse resolution ``n``
+    the resolver solves the whole spectrum once (one dense eigensolve) at the coarse resolution ``n``
     on the grid of the question, and every eigenvalue above the answer whose eigenvector is
     nearly resolved there (Chebyshev tail below ``candidate_tail``) is a candidate; each is
     followed up the ladder ``n``, round(1.25 n), … by shift-invert until it is decided.

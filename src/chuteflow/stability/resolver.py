@@ -18,9 +18,10 @@ Resolver (:func:`least_stable`)
     1. *Tracked or direct answer*: the α(0) = 0 branch (the kinematic-wave mode of
        Appendix B) followed from k = 0 by continuation, with the relaxed-tail and direct
        fallbacks where the continuation loses it near the continuum
-       (:mod:`.dispersion`); or the dense spectrum at each rung (``method="qz"``, and
+       (:mod:`.tracking`, :mod:`.lost`); or the dense spectrum at each rung (``method="qz"``, and
        |k| > 1).
-    2. *Search above it* (:func:`search_above`): one dense QZ of the whole spectrum at the
+    2. *Search above it* (:func:`search_above`): one dense eigensolve of the whole spectrum
+       (:func:`~.eigen.shifted_spectrum`: one LU and a standard eigenproblem) at the
        coarse resolution ``policy.search.n`` (48) on the grid of the question; every
        eigenvalue above the answer whose eigenvector is nearly resolved there is a
        candidate, followed by shift-invert on the rungs 48, 60, 75, 94, … (each rung's
@@ -39,7 +40,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow
-from .eigen import qz
+from .eigen import shifted_spectrum
 from .lost import _better, _direct_candidate, _outranked, after_lost_branch
 from .modes import (
     K_DIRECT,
@@ -436,20 +437,25 @@ def follow_candidate(
 def global_candidates(
     flow: SteadyFlow, kx: float, kz: float, answer: Mode | None, policy: RejectionPolicy, cache: OperatorCache
 ) -> list[tuple[complex, np.ndarray]]:
-    """Eigenpairs above ``answer`` from one dense QZ at ``policy.search.n``, best first:
+    """Eigenpairs above ``answer`` from one dense eigensolve at ``policy.search.n``
+    (:func:`~.eigen.shifted_spectrum`), best first:
     eigenvectors nearly resolved there (tail < ``policy.search.candidate_tail``), Re α above
     the answer's by more than its uncertainty (its drift, at least the drift threshold),
     neither the answer itself nor, in a real pencil (k_x = 0), the conjugate of one kept."""
     search = policy.search
     n = search.n
     p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
-    w, V = qz(*p.equilibrated())
-    if answer is None:
-        above = np.arange(len(w))
-    else:
-        margin = max(answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol)
-        above = np.nonzero(w.real > answer.alpha.real + margin)[0]
-    if len(above) == 0:
+    # the dense spectrum by one LU and a standard eigensolve, shifted to the right of the
+    # answer (accurate where the candidates are): 3–4.5 × faster than QZ at N = 48
+    sigma = 0.5 if answer is None else complex(max(answer.alpha.real, 0.0) + 0.5, answer.alpha.imag)
+    floor = -math.inf
+    if answer is not None:
+        floor = answer.alpha.real + max(
+            answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol
+        )
+    w, V = shifted_spectrum(*p.equilibrated(), sigma, vectors_above=floor)
+    above = np.nonzero(w.real > floor)[0]
+    if len(above) == 0 or V is None:
         return []
     t = tails(p, V[:, above], policy.tail_terms)
     out: list[tuple[complex, np.ndarray]] = []

@@ -493,18 +493,20 @@ def branch_mode(
     check at N'. If the coarse branch is lost, or the fine solve does not land on a resolved
     eigenvector close to it, the continuation is redone at N. ``n`` defaults to
     ``policy.n_start``; the mode is judged by ``policy`` (``drift_tol``, ``tail_tol``:
-    overrides of its thresholds). With ``retrack=False`` a fine solve that lands close to
-    the coarse branch with an eigenvector below the tracking threshold is returned even
-    where it fails the paper's tests (the branch, not yet resolved at N: the next rung of
-    the ladder resolves it) instead of redoing the continuation at N — what the resolver
-    does in 3D, where its search above the answer is the global check (P1, (0.002, 0.02):
-    three continuations at N = 80, 100, 125 took 4.4 of 6.3 s).
+    overrides of its thresholds). With ``retrack=False`` the continuation is never redone at
+    N: a fine solve that lands close to the coarse branch with an eigenvector below the
+    tracking threshold is returned even where it fails the paper's tests (the branch, not
+    yet resolved at N: the next rung of the ladder resolves it), and where the coarse branch
+    is lost or the fine solve leaves it, :class:`ConvergenceError` is raised — what the
+    resolver does in 3D, where its search is the global check (P1, (0.002, 0.02): three
+    continuations at N = 80, 100, 125 took 4.4 of 6.3 s).
     """
     policy = resolve_policy(policy, drift_tol=drift_tol, tail_tol=tail_tol)
     n = validate_n(policy.n_start if n is None else n)
     kk = math.hypot(k, kz)
     direction = (k, kz) if kk else (1.0, 0.0)
     coarse_n = policy.tracking.coarse_n
+    why = f"the coarse branch (N = {coarse_n}) does not continue to N = {n}"
     if kk > 0 and n > coarse_n + 16:
         try:
             coarse = BranchTracker(
@@ -519,7 +521,12 @@ def branch_mode(
                 mode = make_mode(pencil, alpha, w, drift, n2, policy)
                 if mode.physical or (not retrack and mode.tail < policy.track_tail_tol):
                     return mode
-        except ConvergenceError:
-            pass
+        except ConvergenceError as exc:
+            why = str(exc).split(" (theta")[0]
+        if not retrack:
+            # no continuation at N: the caller's global search takes over (the resolver in
+            # 3D; a flow at θ = 19.537°, ν0(0) = 0.0153, φ = 0.085, Φ = 0.327, (k_x, k_z) =
+            # (0.00913, 0.042): 413 continuation steps at N = 80 … 256, 47 of 52 s)
+            raise ConvergenceError(f"{why} (theta = {flow.theta:g}, nu0 = {flow.nu0:g}, N = {n})")
     tr = BranchTracker(flow, n, direction=direction, policy=policy, n_max=n, cache=cache)
     return tr.mode(kk)
