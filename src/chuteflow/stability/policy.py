@@ -57,6 +57,14 @@ class SearchPolicy:
         keeps tails of 1e-4 … 2e-5 (0.5 … 1). Its drift is no criterion: the continuum's is
         ~1e-9, and the critical-layer mode's drifts are 3e-4, 2e-4, 3e-4, 3e-4 up to N = 94
         before they fall.
+    hopeless : float
+        A candidate whose drift, extrapolated to the top of the ladder at its own rate of
+        fall or at ``fastest_fall`` a rung (the faster), stays above ``hopeless`` × the drift
+        threshold is left undecided at once: the ladder cannot decide it (Q1, (0.002, 0.02):
+        a critical-layer mode with drifts 3e-4, 2e-4, 3e-4, 3e-4, 2e-4, 4e-5 at N = 48 …
+        148, 8e-6 at 256).
+    fastest_fall : float
+        See ``hopeless``.
     jump : float
         A shift-invert solve that lands farther than ``jump`` × max(|α|, 1e-3) from the
         candidate followed has lost it: no eigenvalue continues it at that N (spurious).
@@ -66,6 +74,8 @@ class SearchPolicy:
     candidate_tail: float = 5e-4
     max_candidates: int = 8
     stall: float = 0.35
+    hopeless: float = 100.0
+    fastest_fall: float = 0.25
     jump: float = 0.2
 
     def __post_init__(self):
@@ -73,7 +83,11 @@ class SearchPolicy:
             object.__setattr__(self, "n", validate_n(self.n))
         except ParameterError as exc:
             raise ParameterError(f"search n: {exc}") from None
-        for name in ("candidate_tail", "stall", "jump"):
+        if isinstance(self.hopeless, bool) or not (
+            isinstance(self.hopeless, (int, float)) and self.hopeless >= 1
+        ):
+            raise ParameterError(f"search hopeless = {self.hopeless!r}: need a number >= 1")
+        for name in ("candidate_tail", "stall", "jump", "fastest_fall"):
             v = getattr(self, name)
             if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < 1):
                 raise ParameterError(f"search {name} = {v!r} is outside (0, 1)")

@@ -356,8 +356,9 @@ class _Candidate:
         self.done = Followed(self.start, self.mode, verdict, why)
         return self.done
 
-    def step(self, nn: int, floor: float) -> Followed | None:
-        """Solve at N = ``nn``; the verdict once decided, else None."""
+    def step(self, nn: int, floor: float, rungs_left: int = 0) -> Followed | None:
+        """Solve at N = ``nn``; the verdict once decided, else None (``rungs_left``: the
+        rungs of the ladder above ``nn``)."""
         flow, kx, kz, policy, search = self.flow, self.kx, self.kz, self.policy, self.policy.search
         three_d = bool(kz)
         p = stability_operator(flow, nn, three_d, cache=self.cache).pencil(kx, kz)
@@ -401,6 +402,17 @@ class _Candidate:
                 f"its eigenvector's tail does not decay ({self.tails[-4]:.1e} → {mode.tail:.1e} over three "
                 f"rungs up to N = {nn}): the continuum of the dilute top or a spurious eigenvalue",
             )
+        if len(self.tails) >= 4 and prev is not None and 0 < prev.drift < math.inf and math.isfinite(drift):
+            # a candidate whose tail decays (the stall rule above has had three rungs) with a
+            # drift that, extrapolated to the ladder's top at its own rate or the fastest
+            # plausible one, stays far above the threshold: the ladder cannot decide it
+            rate = max(drift / prev.drift, search.fastest_fall)
+            if drift * rate**rungs_left > search.hopeless * policy.drift_tol:
+                return self._decide(
+                    "undecided",
+                    f"its drift {drift:.1e} at N = {nn}, falling ×{rate:.2g} a rung, stays above "
+                    f"{search.hopeless:g} × the threshold by the top of the ladder",
+                )
         return None
 
     def result(self) -> Followed:
@@ -428,8 +440,8 @@ def follow_candidate(
     answer, below which a candidate is decided ``"below"``). A rung's α(N') is the α just
     solved on the rung below when that is N' = round(0.8 N), else a solve at N'."""
     c = _Candidate(flow, kx, kz, alpha, v, n_from, policy, cache)
-    for nn in rungs:
-        if c.step(nn, floor) is not None:
+    for i, nn in enumerate(rungs):
+        if c.step(nn, floor, len(rungs) - 1 - i) is not None:
             break
     return c.result()
 
@@ -510,7 +522,7 @@ def search_above(
     undecided += [Followed(a, None, "undecided", "not followed") for a, _ in cands[search.max_candidates :]]
     # every candidate advances rung by rung (each operator is built once), best first; a
     # candidate below the least-stable mode that passes both tests needs no more solves
-    for nn in rungs:
+    for i, nn in enumerate(rungs):
         if not active:
             break
         for c in sorted(active, key=lambda c: -c.alpha.real):
@@ -518,7 +530,7 @@ def search_above(
             if best is not None and c.alpha.real + err <= best.alpha.real:
                 c._decide("below", f"Re α = {c.alpha.real:.6g} at N = {c.n_from}")
                 continue
-            f = c.step(nn, best.alpha.real if best is not None else -math.inf)
+            f = c.step(nn, best.alpha.real if best is not None else -math.inf, len(rungs) - 1 - i)
             if f is not None and f.verdict == "mode" and f.mode is not None:
                 if best is None or f.mode.alpha.real > best.alpha.real:
                     if answer is not None:
@@ -528,6 +540,7 @@ def search_above(
                             f"this mode, found by the global solve at N = {search.n}"
                         )
                     best = f.mode
+        undecided += [c.done for c in active if c.done is not None and c.done.verdict == "undecided"]
         active = [c for c in active if c.done is None]
     undecided += [c.result() for c in active]
     if best is None:
@@ -545,7 +558,7 @@ def search_above(
             note=join_notes(
                 top.mode.note,
                 f"no mode passes both tests; this candidate is not decided by N = {top.mode.n} "
-                f"(drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e})"
+                f"(drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e}): {top.why}"
                 + (
                     f"; the tracked/direct answer {answer.alpha:.6g} is more damped"
                     if answer is not None
@@ -565,7 +578,8 @@ def search_above(
         note = join_notes(
             top.mode.note,
             f"a candidate above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) is not "
-            f"decided by N = {top.mode.n} (drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e})",
+            f"decided by N = {top.mode.n} (drift {top.mode.drift:.1e}, tail {top.mode.tail:.1e})"
+            + (f": {top.why}" if top.why and top.mode is not answer else ""),
         )
         return dataclasses.replace(
             top.mode, method=top.mode.method if top.mode is answer else "global", note=note
