@@ -149,3 +149,31 @@ def test_the_slow_mode_above_keeps_converging_on_a_longer_ladder(flows):
     assert mode.n == 512 and mode.drift < 2e-6 and mode.tail < 1e-9
     assert abs(mode.alpha - (-0.0511007 - 0.0384992j)) < 5e-6
     assert mode.alpha.real > -0.0847714 + 0.03
+
+
+def test_dispersion_reports_where_the_branch_is_not_the_least_stable_mode(flows):
+    """P1 (2D): at k = 0.002 the α(0) = 0 branch is the least-stable mode (paper §4.2); at
+    k = 0.1264 a resolved mode, −0.12217, is less damped than the branch, −0.12788.
+    ``dispersion(..., least_stable=True)`` keeps the branch's values and names that mode,
+    which the brute-force dense QZ (N = 156, 125; no tracking) confirms and
+    :func:`least_stable` returns."""
+    from chuteflow.stability import dispersion
+
+    p1 = flows("P1")
+    ks = [0.002, 0.1264]
+    ds = dispersion(p1, ks, strict=False, least_stable=True)
+    assert list(ds.branch_is_least.values) == [True, False]
+    assert ds.least_converged.values.all()
+    least = complex(ds.least_re.values[1], ds.least_im.values[1])
+    assert abs(ds.alpha_re.values[1] - (-0.12788)) < 1e-4 and abs(least.real - (-0.12217)) < 1e-4
+    cache = OperatorCache(2)
+    p = cache.get(p1, 156, False).pencil(ks[1])
+    w1, V1 = qz(*p.equilibrated())
+    w2, _ = qz(*cache.get(p1, 125, False).pencil(ks[1]).equilibrated(), vectors=False)
+    ref = next(
+        m
+        for j in range(len(w1))
+        if (m := make_mode(p, w1[j], V1[:, j], float(np.abs(w2 - w1[j]).min()), 125)).physical
+    )
+    assert abs(least - ref.alpha) < 1e-6
+    assert abs(least_stable(p1, ks[1]).alpha - ref.alpha) < 1e-6

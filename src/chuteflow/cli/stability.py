@@ -364,7 +364,7 @@ def dispersion_cmd(
     ks = np.linspace(0.0, k_max, num)
     policy = RejectionPolicy(n_max=n_max)
     with console.status(f"dispersion relation at {num} wavenumbers on [0, {k_max:g}]"):
-        ds = dispersion(flow, ks, policy=policy, strict=strict)
+        ds = dispersion(flow, ks, policy=policy, strict=strict, least_stable=True)
     with console.status("critical wavenumbers (sign changes of Re α, Brent)"):
         scan, kc_error = _k_c(flow, k_max, max(num, 12), policy, strict)
     found, k_c = scan.to_crossings(), scan.k_c
@@ -383,8 +383,30 @@ def dispersion_cmd(
         dispersion_figure([("", ds, k_c)], plot, title=f"Least-stable branch α(k), {_caption(flow)}")
     v = {
         name: ds[name].values
-        for name in ("k", "alpha_re", "alpha_im", "drift", "tail", "n", "physical", "direct")
+        for name in (
+            "k",
+            "alpha_re",
+            "alpha_im",
+            "drift",
+            "tail",
+            "n",
+            "physical",
+            "direct",
+            "least_re",
+            "least_im",
+            "least_converged",
+            "branch_is_least",
+        )
     }
+    others = v["k"][~v["branch_is_least"]]
+    if len(others):
+        j = int(np.flatnonzero(~v["branch_is_least"])[0])
+        _warn(
+            f"at {len(others)} wavenumbers (k = {others.min():g} … {others.max():g}) another mode "
+            f"is less damped than the branch (e.g. k = {v['k'][j]:g}: {v['least_re'][j]:.6g} "
+            f"{v['least_im'][j]:+.6g}i against the branch's {v['alpha_re'][j]:.6g}; "
+            "`least_re`, `least_im` in --json and --out; `chuteflow eig --k K` answers it)"
+        )
     if not v["physical"].all():
         bad = v["k"][~v["physical"]]
         _warn(

@@ -15,6 +15,7 @@ from .lost import _direct_ladder, _outranked, after_lost_branch, relaxed_branch_
 from .modes import (
     Mode,
     OperatorCache,
+    cache_for,
     check_hydrodynamic_k,
     direct_mode,
     drift_of,
@@ -23,6 +24,7 @@ from .modes import (
 )
 from .operator import validate_k
 from .policy import RejectionPolicy
+from .resolver import search_above
 from .tracking import BranchTracker
 
 
@@ -37,6 +39,7 @@ def dispersion(
     tail_tol: float | None = None,
     strict: bool = True,
     cache: OperatorCache | None = None,
+    least_stable: bool = False,
 ):
     """Dispersion relation α(k) of the α(0) = 0 branch (figures 7–9, 13).
 
@@ -67,6 +70,13 @@ def dispersion(
         shift-invert while it converges, :func:`_direct_ladder`). Direct answers are flagged
         ``direct = True`` and ``physical = False`` (a direct solve is not known to lie on
         the branch); the attribute ``branch_lost_at`` is the k where the branch was lost.
+    least_stable : bool
+        Also the least-stable mode at each k by the resolver's contract
+        (:func:`~chuteflow.stability.resolver.search_above` on the branch's value: a mode
+        above the branch that passes the paper's tests replaces it, an undecided candidate
+        above flags it): variables ``least_re``, ``least_im``, ``least_converged`` and
+        ``branch_is_least`` (one dense eigensolve at N = 48 per k, 2D: ~30 ms each). The
+        branch's variables are unchanged.
 
     Returns
     -------
@@ -94,6 +104,12 @@ def dispersion(
     direct = np.zeros(len(ks), dtype=bool)
     lost_at = None
     followed: dict[int, Mode] = {}  # the relaxed continuation's modes, by index into ks
+    extra = {
+        "least_re": np.full(len(ks), np.nan),
+        "least_im": np.full(len(ks), np.nan),
+        "least_converged": np.zeros(len(ks), dtype=bool),
+        "branch_is_least": np.zeros(len(ks), dtype=bool),
+    }
     for pos, i in enumerate(order):
         if lost_at is None:
             try:
@@ -143,6 +159,12 @@ def dispersion(
                 f"thresholds {policy.drift_tol:g}, {policy.tail_tol:g}); raise n_max or pass "
                 "strict=False"
             )
+        if least_stable:
+            least = search_above(flow, float(ks[i]), 0.0, mode, policy, cache_for(0.0, cache))
+            assert least is not None  # the branch's own value at least
+            extra["least_re"][i], extra["least_im"][i] = least.alpha.real, least.alpha.imag
+            extra["least_converged"][i] = least.converged
+            extra["branch_is_least"][i] = least is mode
         out["alpha_re"][i], out["alpha_im"][i] = mode.alpha.real, mode.alpha.imag
         out["drift"][i], out["tail"][i] = mode.drift, mode.tail
         # a direct solve is not known to lie on the tracked branch: flagged, not physical
@@ -185,6 +207,27 @@ def dispersion(
         coords={"k": ("k", ks, {"long_name": "wavenumber", "units": WAVENUMBER_UNITS})},
         attrs=attrs,
     )
+    if least_stable:
+        ds["least_re"] = (
+            "k",
+            extra["least_re"],
+            {"long_name": "growth rate of the least-stable mode", "units": u},
+        )
+        ds["least_im"] = (
+            "k",
+            extra["least_im"],
+            {"long_name": "Im alpha of the least-stable mode", "units": u},
+        )
+        ds["least_converged"] = (
+            "k",
+            extra["least_converged"],
+            {"long_name": "the least-stable mode passes drift and tail tests, nothing undecided above"},
+        )
+        ds["branch_is_least"] = (
+            "k",
+            extra["branch_is_least"],
+            {"long_name": "the branch is the least-stable mode"},
+        )
     return ds
 
 
