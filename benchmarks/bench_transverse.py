@@ -140,8 +140,8 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     # 4. the metric's maxima along each axis against the version-2 scans
-    from chuteflow.longwave.transverse import longitudinal_peak, transverse_peak
     from chuteflow.stability import BranchTracker, RejectionPolicy
+    from chuteflow.stability.axis_peaks import longitudinal_peak, transverse_peak
 
     def lon_scan():
         tr = BranchTracker(flow, 80, policy=RejectionPolicy(n_max=160))

@@ -16,7 +16,8 @@ import pytest
 from chuteflow.longwave.theory import null_vector
 from chuteflow.stability import StabilityOperator, null_vectors, qz
 from chuteflow.stability.policy import RejectionPolicy
-from chuteflow.stability.transverse import least_stable_3d, real_form
+from chuteflow.stability.realform import real_form
+from chuteflow.stability.transverse import least_stable_3d
 from chuteflow.steady import steady_tangent
 
 N = 40

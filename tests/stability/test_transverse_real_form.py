@@ -20,14 +20,16 @@ import pytest
 
 from chuteflow.stability import stability_operator
 from chuteflow.stability.modes import nearest_eigenpair, tails
-from chuteflow.stability.transverse import (
-    SEED_N,
-    _finite_spectrum,
+from chuteflow.stability.realform import (
     _nearest_kx0,
     _real_pencil,
     _seed_spectrum,
+    pencil_qz,
     real_form,
 )
+from chuteflow.stability.transverse_tracking import DEFAULT_TRANSVERSE
+
+SEED_N = DEFAULT_TRANSVERSE.seed_n
 
 
 @pytest.mark.parametrize("n", [48, 80])
@@ -68,8 +70,8 @@ def test_real_form_shift_invert_finds_the_same_eigenpair(p1_flow, kz, sigma):
 def test_seed_spectrum_keeps_the_qz_seeds(p1_flow, kz):
     op = stability_operator(p1_flow, SEED_N, True)
     p = op.pencil(0.0, kz)
-    w, V = _finite_spectrum(p, True)
-    w2, V2 = _seed_spectrum(op, kz)
+    w, V = pencil_qz(p, True)
+    w2, V2 = _seed_spectrum(op, kz, DEFAULT_TRANSVERSE.seed_shift)
     t, t2 = tails(p, V, 10), tails(p, V2, 10)
     a = np.nonzero((t < 1e-4) & (w.imag >= 0) & (np.abs(w) > 1e-5))[0][:4]
     b = np.nonzero((t2 < 1e-4) & (w2.imag >= 0) & (np.abs(w2) > 1e-5))[0][:4]

@@ -13,7 +13,8 @@ import pytest
 
 from chuteflow.errors import ParameterError
 from chuteflow.longwave.transverse import transverse, transverse_longwave
-from chuteflow.stability.transverse import TransverseTracker, transverse_dispersion, transverse_mode
+from chuteflow.stability.transverse import transverse_dispersion, transverse_mode
+from chuteflow.stability.transverse_tracking import TransverseTracker
 
 
 @pytest.fixture(scope="module")

@@ -112,8 +112,8 @@ def test_dense_thin_flow_longitudinal_growth_at_the_third_rung():
     flows of the first-step loss): 36 longitudinal-only points of the 40 × 40 φ = 0.05
     diagram had no growth rate. At N = 75 it is followed; checked against the dense QZ
     spectrum at N = 100 (measured 7.05707e-4 against 7.05708e-4)."""
-    from chuteflow.longwave.transverse import longitudinal_peak
     from chuteflow.stability import RejectionPolicy
+    from chuteflow.stability.axis_peaks import longitudinal_peak
     from chuteflow.stability.modes import spectrum
     from chuteflow.steady import solve_steady
 
@@ -133,8 +133,9 @@ def test_transverse_branch_followed_over_its_flat_start():
     checked against the dense spectrum of the k_x = 0 pencil at its k_z (the independent
     method: QZ, N = 100; measured 3.3950426e-3 against 3.3950425e-3, drift 1e-8)."""
     from chuteflow.closures import ChuteModel
-    from chuteflow.longwave.transverse import transverse_longwave, transverse_peak
+    from chuteflow.longwave.transverse import transverse_longwave
     from chuteflow.stability import RejectionPolicy
+    from chuteflow.stability.axis_peaks import transverse_peak
     from chuteflow.stability.transverse import dense_modes
     from chuteflow.steady import solve_steady
 

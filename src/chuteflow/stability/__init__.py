@@ -109,6 +109,7 @@ from .transverse import (
     transverse_dispersion,
     transverse_mode,
 )
+from .transverse_tracking import TransverseTracker, TransverseTrackingPolicy
 
 __all__ = [
     "Pencil",
@@ -145,6 +146,8 @@ __all__ = [
     "OperatorCache",
     "OPERATORS",
     "TransverseDispersion",
+    "TransverseTracker",
+    "TransverseTrackingPolicy",
     "growth_plane",
     "least_stable_3d",
     "transverse_dispersion",

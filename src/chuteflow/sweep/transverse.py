@@ -6,11 +6,11 @@ instability of Forterre & Pouliquen (2002) compete. At each point this metric gi
 - α2z of α(0, k_z) = α2z k_z² + … (bordered perturbation theory at k = 0,
   :func:`chuteflow.longwave.transverse_longwave`), and, where α2z > 0, the most unstable
   k_z* with its growth rate and the cut-off of the band, from the α(0) = 0 branch tracked in
-  k_z (:func:`chuteflow.longwave.transverse.transverse_peak`: a geometric scan that stops
+  k_z (:func:`chuteflow.stability.axis_peaks.transverse_peak`: a geometric scan that stops
   past the cut-off, the maximum refined by a bounded search, only the mode there judged);
 - where the point is long-wave unstable along the slope (Re α2 > 0, the verdict of the
   metric ``longwave`` of the same sweep, not recomputed), the largest growth rate of the
-  longitudinal branch and its k_x (:func:`chuteflow.longwave.transverse.longitudinal_peak`,
+  longitudinal branch and its k_x (:func:`chuteflow.stability.axis_peaks.longitudinal_peak`,
   the same scan on the 2D sinh-mapped grid from N = 48);
 - the classification ``winner``: 0 stable, 1 longitudinal only (the paper's A, B, C
   unstable regions), 2 transverse only, 3 both; and the largest growth rate of the two with
@@ -35,8 +35,9 @@ import numpy as np
 
 from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
-from ..longwave.transverse import PEAK_RATIO, longitudinal_peak, transverse_longwave, transverse_peak
+from ..longwave.transverse import transverse_longwave
 from ..stability import OperatorCache, RejectionPolicy
+from ..stability.axis_peaks import PEAK_RATIO, longitudinal_peak, transverse_peak
 from .points import PointFunction, Variable, register_point_function
 
 __all__ = ["TransverseMetric", "WINNER_CODES"]

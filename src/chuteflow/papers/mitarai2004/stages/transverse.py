@@ -82,7 +82,9 @@ def _run(ctx: StageContext) -> None:
     from ....longwave.transverse import transverse
     from ....stability import OperatorCache, RejectionPolicy, least_stable, stability_operator
     from ....stability.modes import nearest_eigenpair
-    from ....stability.transverse import TransverseTracker, least_stable_3d, real_form
+    from ....stability.realform import real_form
+    from ....stability.transverse import least_stable_3d
+    from ....stability.transverse_tracking import TransverseTracker
     from ....steady import solve_steady
     from ....sweep import SweepConfig, run_sweep
 
