@@ -49,3 +49,25 @@ def test_limit_blas_threads(monkeypatch):
     with limit_blas_threads():
         assert all(p["num_threads"] == 1 for p in threadpool_info() if p["user_api"] == "blas")
         assert os.environ["OPENBLAS_NUM_THREADS"] == "1"
+
+
+def test_no_module_is_shadowed_by_a_name_of_its_package():
+    """``import chuteflow.x.y`` gives the module y: no package re-exports a function or
+    class under the name of one of its modules (``chuteflow.stability.dispersion`` was the
+    function and hid the module)."""
+    import importlib
+    import pkgutil
+    import types
+
+    import chuteflow
+
+    shadowed = []
+    for info in pkgutil.walk_packages(chuteflow.__path__, "chuteflow."):
+        if not info.ispkg:
+            continue
+        pkg = importlib.import_module(info.name)
+        for sub in pkgutil.iter_modules(pkg.__path__):
+            importlib.import_module(f"{info.name}.{sub.name}")
+            if not isinstance(getattr(pkg, sub.name, None), types.ModuleType):
+                shadowed.append(f"{info.name}.{sub.name}")
+    assert not shadowed

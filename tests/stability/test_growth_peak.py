@@ -25,7 +25,7 @@ import math
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.longwave.transverse import (
+from chuteflow.longwave.spanwise import (
     _refine_peak,
     longitudinal_peak,
     transverse_longwave,

@@ -13,7 +13,7 @@ import math
 
 import pytest
 
-from chuteflow.longwave.transverse import (
+from chuteflow.longwave.spanwise import (
     TransverseResult,
     lateral_pressure,
     lubrication_alpha2z,
@@ -50,7 +50,7 @@ def test_alpha2z_from_eigenvalues(lw, p1_flow):
 
 
 def test_lubrication_formula_and_lateral_pressure(lw, p1_flow):
-    """α2z from the lateral lubrication balance (longwave/transverse.py docstring) equals the
+    """α2z from the lateral lubrication balance (longwave/spanwise.py docstring) equals the
     bordered perturbation theory; its sign follows the depth-integrated lateral pressure:
     dP/dρ̄ < 0 (denser columns are colder and push less) ⇒ α2z > 0."""
     assert lubrication_alpha2z(p1_flow) == pytest.approx(lw.alpha2_z.real, rel=1e-5)

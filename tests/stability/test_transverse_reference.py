@@ -34,7 +34,7 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.longwave.transverse import transverse, transverse_longwave
+from chuteflow.longwave.spanwise import transverse, transverse_longwave
 from chuteflow.stability.transverse import transverse_dispersion
 from chuteflow.steady import solve_steady
 

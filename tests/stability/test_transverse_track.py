@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from chuteflow.errors import ParameterError
-from chuteflow.longwave.transverse import transverse, transverse_longwave
+from chuteflow.longwave.spanwise import transverse, transverse_longwave
 from chuteflow.stability.transverse import transverse_dispersion, transverse_mode
 from chuteflow.stability.transverse_tracking import TransverseTracker
 

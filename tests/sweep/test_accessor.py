@@ -14,7 +14,7 @@ from chuteflow.closures import ChuteModel
 from chuteflow.errors import ParameterError
 from chuteflow.reduced import agreement
 from chuteflow.sweep import ChuteAccessor, SweepConfig, classify
-from chuteflow.sweep.classify import regime_summary
+from chuteflow.sweep.regimes import regime_summary
 
 from .test_classify import _synthetic_ds
 

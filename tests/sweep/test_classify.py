@@ -17,7 +17,7 @@ from chuteflow.stability import OperatorCache
 from chuteflow.stability.modes import stability_operator
 from chuteflow.steady import solve_steady, steady_tangent
 from chuteflow.sweep import STATUS, SweepConfig, classify, run_sweep
-from chuteflow.sweep.classify import REGIMES, regimes
+from chuteflow.sweep.regimes import REGIMES, regimes
 
 
 def test_regimes_from_contour_kind():

@@ -133,7 +133,7 @@ def test_transverse_branch_followed_over_its_flat_start():
     checked against the dense spectrum of the k_x = 0 pencil at its k_z (the independent
     method: QZ, N = 100; measured 3.3950426e-3 against 3.3950425e-3, drift 1e-8)."""
     from chuteflow.closures import ChuteModel
-    from chuteflow.longwave.transverse import transverse_longwave
+    from chuteflow.longwave.spanwise import transverse_longwave
     from chuteflow.stability import RejectionPolicy
     from chuteflow.stability.axis_peaks import transverse_peak
     from chuteflow.stability.transverse import dense_modes

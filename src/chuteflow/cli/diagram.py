@@ -101,7 +101,7 @@ def _summary(console, ds, st, out, png):
     from rich.table import Table
 
     from chuteflow.sweep import STATUS
-    from chuteflow.sweep.classify import regime_summary
+    from chuteflow.sweep.regimes import regime_summary
 
     t = Table(title=f"stability diagram φ = {ds.attrs.get('roughness'):g}", show_header=True)
     t.add_column("quantity")

@@ -94,7 +94,7 @@ def transverse_cmd(
 ) -> None:
     """Transverse (k_x = 0) stability: α2z, α(k_z), the most unstable k_z* and its growth."""
     from chuteflow.errors import ParameterError
-    from chuteflow.longwave.transverse import transverse
+    from chuteflow.longwave.spanwise import transverse
     from chuteflow.stability import RejectionPolicy
 
     _check_positive("kz_max", kz_max)

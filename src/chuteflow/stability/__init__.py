@@ -11,7 +11,7 @@ Operator
     ``.slices()``, ``.split(V)``). ``op.series()`` → (A0, A1, A2) with
     A(k) = A0 + (ik) A1 + (ik)² A2 for k ≥ 0 (the top conditions' |k| folded into A1);
     ``op.B`` is independent of k; ``op.pieces[(b, d)]`` are the coefficients of
-    (ik_x)^b (ik_z)^d in 3D. Rows: see :mod:`.operator`. ``operator(flow, k, n=None)`` is
+    (ik_x)^b (ik_z)^d in 3D. Rows: see :mod:`.operator`. ``pencil(flow, k, n=None)`` is
     the one-call form. ``stability_operator(flow, n, cache=None)`` returns a cached
     operator (:class:`OperatorCache`: per flow object, never shared between two flows).
     ``equation_terms(flow, name, fields, kx, kz, alpha)`` → each term of one linearised
@@ -71,7 +71,7 @@ Three dimensions (:mod:`.transverse`)
     by a dense scan (real QZ at k_x = 0) with the same drift/tail rejection;
     ``transverse_mode``, ``transverse_dispersion(flow, kz)`` (k_x = 0) and
     ``growth_plane(flow, kx, kz)`` → xarray Dataset of Re α over (k_x, k_z) with its maximum.
-    α2z and the transverse analysis are in :mod:`chuteflow.longwave.transverse`.
+    α2z and the transverse analysis are in :mod:`chuteflow.longwave.spanwise`.
 
 Numerical notes (see also docs/errata.md): bulk rows are divided by μ0 or κ0, never by ν0
 (which would put 1e9 into the dilute top's rows and bury the dense layer's eigenvalues in
@@ -99,7 +99,7 @@ from .modes import (
 )
 from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
 from .policy import DEFAULT_POLICY, RejectionPolicy, SearchPolicy, TrackingPolicy
-from .resolver import choose_n, least_stable, operator
+from .resolver import choose_n, least_stable, pencil
 from .scan import BranchScan, Crossings, Peak, branch_scan, critical_k, crossings
 from .tracking import BranchTracker, NullVectors, branch_mode, first_order, null_vectors
 from .transverse import (
@@ -116,7 +116,7 @@ __all__ = [
     "StabilityOperator",
     "base_on_grid",
     "equation_terms",
-    "operator",
+    "pencil",
     "ShiftInvert",
     "qz",
     "Mode",

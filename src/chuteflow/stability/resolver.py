@@ -64,7 +64,7 @@ from .operator import Pencil, StabilityOperator, validate_k, validate_n
 from .policy import RejectionPolicy
 from .tracking import branch_mode
 
-__all__ = ["choose_n", "follow_candidate", "least_stable", "operator", "search_above"]
+__all__ = ["choose_n", "follow_candidate", "least_stable", "pencil", "search_above"]
 
 
 def _top_check_n(ladder: list[int], policy: RejectionPolicy) -> int:
@@ -301,7 +301,7 @@ def choose_n(
     ).n
 
 
-def operator(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
+def pencil(flow: SteadyFlow, k: float, n: int | None = None, kz: float = 0.0) -> Pencil:
     """The pencil A V = α B V of ``flow`` at wavenumber ``k`` (and ``kz``) on N = ``n``.
 
     ``n=None`` uses :func:`chuteflow.stability.choose_n` (resolution from the convergence

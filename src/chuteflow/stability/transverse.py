@@ -463,7 +463,7 @@ def judge_resolved(
 
     Returns the mode at the last N tried (drift ``inf`` where no eigenvalue at N' settles;
     None only when the ladder is empty). Used by the metric's longitudinal maximum
-    (:func:`chuteflow.longwave.transverse.longitudinal_peak`); past the tracked branch
+    (:func:`chuteflow.longwave.spanwise.longitudinal_peak`); past the tracked branch
     (:func:`transverse_dispersion`) the same check runs on the real form of the k_x = 0
     pencil, each rung's α(N') reused from the rung below.
     """

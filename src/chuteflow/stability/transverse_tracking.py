@@ -2,7 +2,7 @@
 
 The fast path of the transverse analysis: :class:`TransverseTracker` starts from the k = 0
 null vector ∂X0/∂β, predicts α ≈ α2z k_z² (the perturbation theory of
-:mod:`chuteflow.longwave.transverse`) for the first steps and by quadratic extrapolation of
+:mod:`chuteflow.longwave.spanwise`) for the first steps and by quadratic extrapolation of
 the last three points after that, and solves each step by real inverse iteration (one real
 LU of A' − σB' per k_z, the pencil made real by ŵ → iŵ, :mod:`chuteflow.stability.realform`).
 The steps are chosen by :func:`chuteflow.continuation.continue_to`: the first one from k = 0

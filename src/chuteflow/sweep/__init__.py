@@ -12,7 +12,6 @@
 
 from .._imports import when_imported
 from . import metrics  # noqa: F401  (registers the built-in stability metrics)
-from .classify import classify
 from .config import DEFAULT_RANGES, SweepConfig, Task, default_ranges, parse_grid, resolve_model
 from .engine import Sweep, SweepStats, assemble, load_sweep, markers, run_sweep, write_dataset
 from .points import (
@@ -23,6 +22,7 @@ from .points import (
     register_point_function,
     registered_point_functions,
 )
+from .regimes import classify
 from .runner import STATUS, TaskResult, run_task
 from .store import ConfigMismatchError, PartStore, parts_dir
 

@@ -25,9 +25,9 @@ import xarray as xr
 from ..closures import FIELDS as MODEL_FIELDS
 from ..closures import ChuteModel
 from ..errors import ParameterError
-from .classify import classify, regime_summary
 from .config import SweepConfig
 from .engine import markers
+from .regimes import classify, regime_summary
 
 __all__ = ["ChuteAccessor", "MODEL_ATTRS"]
 
@@ -98,7 +98,7 @@ class ChuteAccessor:
         return classify(self._ds)
 
     def regime_summary(self) -> dict:
-        """:func:`chuteflow.sweep.classify.regime_summary` of the classified Dataset."""
+        """:func:`chuteflow.sweep.regimes.regime_summary` of the classified Dataset."""
         return regime_summary(self._ds)
 
     def markers(self) -> xr.Dataset:

@@ -28,8 +28,8 @@ from .._memory import keep_freed_memory
 from .._threads import limit_blas_threads
 from .._version import __version__
 from ..errors import ParameterError
-from .classify import classify
 from .config import SweepConfig
+from .regimes import classify
 from .runner import STATUS, TaskResult, run_task, warm_up
 from .store import ConfigMismatchError, PartStore, atomic_target
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from ..conventions import RATE_UNITS
 from ..errors import ConvergenceError, ParameterError
-from ..longwave.transverse import transverse_longwave
+from ..longwave.spanwise import transverse_longwave
 from ..stability import OperatorCache, RejectionPolicy
 from ..stability.axis_peaks import PEAK_RATIO, longitudinal_peak, transverse_peak
 from .points import PointFunction, Variable, register_point_function

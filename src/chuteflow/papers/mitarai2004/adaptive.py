@@ -32,9 +32,9 @@ from ..._memory import keep_freed_memory
 from ..._threads import limit_blas_threads
 from ...errors import ChuteflowError, ParameterError
 from ...steady import solve_steady
-from ...sweep.classify import classify
 from ...sweep.metrics import GrowthMetric, LongWaveMetric
 from ...sweep.points import Point, PointFunction, register_point_function
+from ...sweep.regimes import classify
 
 __all__ = ["StridedGrowth", "StridedLongWave", "refine_longwave"]
 

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from ...sweep.classify import REGIMES, regime_summary
+from ...sweep.regimes import REGIMES, regime_summary
 from .points import PAPER_UNSTABLE
 
 __all__ = [

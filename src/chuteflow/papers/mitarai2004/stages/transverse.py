@@ -79,7 +79,7 @@ def _run(ctx: StageContext) -> None:
 
     from ....closures import ChuteModel
     from ....figures.transverse import cross_section_figure, winner_figure
-    from ....longwave.transverse import transverse
+    from ....longwave.spanwise import transverse
     from ....stability import OperatorCache, RejectionPolicy, least_stable, stability_operator
     from ....stability.modes import nearest_eigenpair
     from ....stability.realform import real_form
