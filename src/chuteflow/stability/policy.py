@@ -58,7 +58,8 @@ class SearchPolicy:
         ~1e-9, and the critical-layer mode's drifts are 3e-4, 2e-4, 3e-4, 3e-4 up to N = 94
         before they fall.
     hopeless : float
-        A candidate whose drift, extrapolated to the top of the ladder at its own rate of
+        A candidate whose tail fell at each of the last two rungs and whose drift,
+        extrapolated to the top of the ladder at its own rate of
         fall or at ``fastest_fall`` a rung (the faster), stays above ``hopeless`` × the drift
         threshold is left undecided at once: the ladder cannot decide it (Q1, (0.002, 0.02):
         a critical-layer mode with drifts 3e-4, 2e-4, 3e-4, 3e-4, 2e-4, 4e-5 at N = 48 …
