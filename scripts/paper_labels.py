@@ -22,7 +22,8 @@ import re
 import sys
 from pathlib import Path
 
-DEFAULT = Path("/work/shared/paper/000_27ec9876b06dcf14.txt")
+# The paper's LaTeX source lives outside the repository, in ``shared/`` beside the clone.
+DEFAULT = Path(__file__).resolve().parents[2] / "shared" / "paper" / "000_27ec9876b06dcf14.txt"
 NUMBERED = ("equation", "eqnarray", "align", "gather", "multline")
 TOKEN = re.compile(
     r"\\(section|subsection|subsubsection)\*?\s*\{|\\appendix\b|"
