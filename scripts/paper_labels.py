@@ -62,8 +62,7 @@ def number_labels(text: str) -> list[tuple[str, str, str]]:
             num = eq_name(eq)
         else:
             num = "(not numbered)"
-        for lab in row_labels:
-            out.append((lab, "equation", num))
+        out.extend((lab, "equation", num) for lab in row_labels)
         row_labels, row_numbered = [], True
 
     def in_math() -> str | None:

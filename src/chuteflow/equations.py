@@ -309,8 +309,7 @@ def arguments(base: dict, partials: dict, sin_theta: float, cos_theta: float) ->
     the closures' partials (:data:`FUNCTIONS` × :data:`ORDERS`), sin θ and cos θ."""
     args = [base[b] for b in BASE]
     for name in FUNCTIONS:
-        for o in ORDERS:
-            args.append(partials[name][o])
+        args.extend(partials[name][o] for o in ORDERS)
     return args + [sin_theta, cos_theta]
 
 
