@@ -202,6 +202,7 @@ class Sweep:
 
     # ------------------------------------------------------------------ helpers
     def _existing_final(self, digest):
+        assert self.out is not None  # called only when the sweep writes a file
         if not self.out.exists():
             return None
         try:

@@ -207,7 +207,7 @@ def check_finite_k(ds) -> dict | None:
     neutral curve of A runs through them, where Re α2 ≈ 0)."""
     if "finite_k_disagrees" not in ds:
         return None
-    rows = []  # (label, disagrees, alpha2, growth max, k, h)
+    rows: list[tuple] = []  # (label, disagrees, alpha2, growth max, k, h)
     failed = 0
     for prefix in ("", "marker_"):
         if prefix and "marker_finite_k_disagrees" not in ds:
