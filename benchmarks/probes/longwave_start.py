@@ -45,6 +45,8 @@ def main(argv: list[str]) -> None:
         for nu in cfg.nu0[1::stride]:
             with contextlib.suppress(ChuteflowError):
                 flows.append(solve_steady(th, nu, cfg.model, **kw))
+    if not flows:
+        raise SystemExit(f"no steady flow at the grid points of stride {stride} on the {size} x {size} grid")
     cpu = {True: 0.0, False: 0.0}
     res: dict[bool, list] = {True: [], False: []}
     for i, f in enumerate(flows):
