@@ -22,7 +22,8 @@ import re
 import sys
 from pathlib import Path
 
-DEFAULT = Path("/work/shared/paper/000_27ec9876b06dcf14.txt")
+# The paper's LaTeX source lives outside the repository, in ``shared/`` beside the clone.
+DEFAULT = Path(__file__).resolve().parents[2] / "shared" / "paper" / "000_27ec9876b06dcf14.txt"
 NUMBERED = ("equation", "eqnarray", "align", "gather", "multline")
 TOKEN = re.compile(
     r"\\(section|subsection|subsubsection)\*?\s*\{|\\appendix\b|"
@@ -61,8 +62,7 @@ def number_labels(text: str) -> list[tuple[str, str, str]]:
             num = eq_name(eq)
         else:
             num = "(not numbered)"
-        for lab in row_labels:
-            out.append((lab, "equation", num))
+        out.extend((lab, "equation", num) for lab in row_labels)
         row_labels, row_numbered = [], True
 
     def in_math() -> str | None:

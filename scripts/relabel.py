@@ -146,8 +146,7 @@ class Relabeler:
         text = re.sub(r"\(ERRATA(?:\.md)?,? (?:item )?(\d)\)", r"(docs/errata.md, item \1)", text)
         text = re.sub(r"\bERRATA(?:\.md)?,? (?:item )?(\d)\b", r"docs/errata.md, item \1", text)
         text = re.sub(r"\(see also ERRATA\.md\)", "(see also docs/errata.md)", text)
-        text = re.sub(r"\bERRATA(?:\.md)?\b", "docs/errata.md", text)
-        return text
+        return re.sub(r"\bERRATA(?:\.md)?\b", "docs/errata.md", text)
 
 
 def relabel_file(path: Path, relabel: Relabeler, dry_run: bool = False) -> int:

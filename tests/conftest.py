@@ -1,7 +1,8 @@
 """Test configuration: headless matplotlib, one BLAS thread, opt-in slow tests.
 
 Tests marked ``@pytest.mark.slow`` are skipped unless ``--runslow`` is given or the
-marker expression selects them (``-m slow``).
+marker expression selects them (``-m slow``). The marker is registered in pyproject.toml
+(``[tool.pytest.ini_options]``, with ``--strict-markers``).
 """
 
 from __future__ import annotations
@@ -22,10 +23,6 @@ import pytest  # noqa: E402
 
 def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--runslow", action="store_true", default=False, help="also run tests marked slow")
-
-
-def pytest_configure(config: pytest.Config) -> None:
-    config.addinivalue_line("markers", "slow: long-running test (run with --runslow or -m slow)")
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

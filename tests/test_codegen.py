@@ -59,10 +59,14 @@ def test_cold_then_warm_is_bitwise_identical_to_lambdify(cache):
         return _exprs()
 
     cold = cached_lambdify("test", "k1", build, sources=(__name__,))
-    assert calls == [1] and cold.path is not None and cold.path.is_file()
-    assert cold.path.parent == cache / "codegen" and cold.data == ("a", 1)
+    assert calls == [1]
+    assert cold.path is not None
+    assert cold.path.is_file()
+    assert cold.path.parent == cache / "codegen"
+    assert cold.data == ("a", 1)
     warm = cached_lambdify("test", "k1", _never, sources=(__name__,))
-    assert warm.path == cold.path and warm.data == ("a", 1)
+    assert warm.path == cold.path
+    assert warm.data == ("a", 1)
     spec, _ = _exprs()
     direct = sp.lambdify(spec["f"][0], spec["f"][1], modules="numpy", cse=True)
     assert _bits(cold["f"](x, y)) == _bits(warm["f"](x, y)) == _bits(direct(x, y))
@@ -99,7 +103,8 @@ def test_objects_without_a_stable_repr_are_not_cached_on_disk(cache):
 
     assert cache_key("test", repr(Opaque()), ()) is None
     code = cached_lambdify("test", repr(Opaque()), _exprs)
-    assert code.path is None and not (cache / "codegen").exists()
+    assert code.path is None
+    assert not (cache / "codegen").exists()
     assert code["g"](np.array([1.0]))[0][0] == 2.5
 
 
@@ -114,7 +119,8 @@ def test_corrupt_cache_file_is_rederived_and_repaired(cache):
             return _exprs()
 
         again = cached_lambdify("test", "k1", build)
-        assert calls == [1] and again.path == first.path
+        assert calls == [1]
+        assert again.path == first.path
         assert again["g"](np.array([4.0]))[0][0] == 2.5 / 8.0
         assert cached_lambdify("test", "k1", _never).path == first.path  # repaired
 
@@ -124,7 +130,8 @@ def test_unwritable_or_disabled_cache_falls_back_to_memory(tmp_path, monkeypatch
     blocker.write_text("not a folder")
     monkeypatch.setenv("CHUTEFLOW_CACHE_DIR", str(blocker / "cache"))
     code = cached_lambdify("test", "k1", _exprs)
-    assert code.path is None and code["g"](np.array([1.0]))[0][0] == 2.5
+    assert code.path is None
+    assert code["g"](np.array([1.0]))[0][0] == 2.5
     for off in ("", "off", "none"):
         monkeypatch.setenv("CHUTEFLOW_CACHE_DIR", off)
         assert cache_dir() is None
@@ -202,7 +209,8 @@ def test_fresh_processes_cold_and_warm_agree_and_warm_needs_no_sympy(cache):
     # and the equations
     assert len(list((cache / "codegen").glob("*.py"))) == 3
     warm = run()
-    assert cold.pop("sympy") is True and warm.pop("sympy") is False
+    assert cold.pop("sympy") is True
+    assert warm.pop("sympy") is False
     assert cold == warm
 
 
@@ -213,7 +221,9 @@ def test_old_generated_modules_are_pruned(cache, monkeypatch):
     monkeypatch.setattr(_codegen, "KEEP", 3)
     newest = cached_lambdify("test", "k6", _exprs).path
     left = set((cache / "codegen").glob("test-*.py"))
-    assert newest in left and len(left) == 3 and paths[0] not in left
+    assert newest in left
+    assert len(left) == 3
+    assert paths[0] not in left
 
 
 _CLI = textwrap.dedent("""

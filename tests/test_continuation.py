@@ -22,7 +22,9 @@ def _recorder(fail=lambda s: False):
 def test_reaches_target_exactly_with_growing_steps():
     solve, tried = _recorder()
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=2.0), h=0.125)
-    assert res.reached and res.s == 1.0 and res.reason == "reached"
+    assert res.reached
+    assert res.s == 1.0
+    assert res.reason == "reached"
     assert tried == [0.125, 0.375, 0.875, 1.0]  # 1/8, +1/4, +1/2, then clipped onto 1
     assert all(st.accepted for st in res.steps)
 
@@ -30,7 +32,9 @@ def test_reaches_target_exactly_with_growing_steps():
 def test_halving_after_failure_and_min_step():
     solve, tried = _recorder(fail=lambda s: s > 0.5)
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=1.0, min_step=0.1), h=0.5)
-    assert not res.reached and res.reason == "min_step" and res.s == 0.5
+    assert not res.reached
+    assert res.reason == "min_step"
+    assert res.s == 0.5
     # 0.5 accepted, then 1.0, 0.75, 0.625 fail; the next step (0.0625) is below min_step
     assert tried == [0.5, 1.0, 0.75, 0.625]
     assert [st.accepted for st in res.steps] == [True, False, False, False]
@@ -39,7 +43,8 @@ def test_halving_after_failure_and_min_step():
 def test_max_halvings_and_continuing_step():
     solve, _ = _recorder(fail=lambda s: s > 0.3)
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=1.0, max_halvings=2), h=0.25)
-    assert res.reason == "max_halvings" and res.s == 0.25
+    assert res.reason == "max_halvings"
+    assert res.s == 0.25
     assert res.last.s == 0.25 + 0.0625  # the step tried last, halved twice
 
 
@@ -52,7 +57,8 @@ def test_growth_from_quality_and_ratio_cap():
     s = [st.s for st in res.steps]
     # each step at most twice the distance from the origin: s triples
     assert s[:3] == pytest.approx([1e-3, 3e-3, 9e-3])
-    assert res.reached and math.isclose(res.h, 3 * res.steps[-1].h)
+    assert res.reached
+    assert math.isclose(res.h, 3 * res.steps[-1].h)
 
 
 def test_clip_false_retries_the_target():
@@ -66,13 +72,16 @@ def test_clip_false_retries_the_target():
 def test_max_attempts():
     solve, tried = _recorder()
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=1.0, max_attempts=3), h=0.1)
-    assert len(tried) == 3 and res.reason == "max_attempts" and not res.reached
+    assert len(tried) == 3
+    assert res.reason == "max_attempts"
+    assert not res.reached
 
 
 def test_descending_parameter():
     solve, tried = _recorder()
     res = continue_to(solve, 1.0, 1.0, 0.0, StepRules(grow=1.0), h=0.5)
-    assert tried == [0.5, 0.0] and res.reached
+    assert tried == [0.5, 0.0]
+    assert res.reached
 
 
 def test_subdivide_restarts_from_the_start():
@@ -80,8 +89,11 @@ def test_subdivide_restarts_from_the_start():
     res = continue_to(solve, "start", 0.0, 1.0, StepRules(retry="subdivide", max_depth=2))
     # depth 0: 1; depth 1: 0.5 fails (abandoned); depth 2: 0.25, 0.5 fails
     assert tried == [1.0, 0.5, 0.25, 0.5]
-    assert not res.reached and res.state == "start" and res.reason == "max_depth"
-    assert res.last_at(1.0).s == 1.0 and not res.last_at(1.0).accepted
+    assert not res.reached
+    assert res.state == "start"
+    assert res.reason == "max_depth"
+    assert res.last_at(1.0).s == 1.0
+    assert not res.last_at(1.0).accepted
 
 
 def test_subdivide_succeeds_through_substeps():
@@ -93,7 +105,8 @@ def test_subdivide_succeeds_through_substeps():
 
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(retry="subdivide", max_depth=1))
     assert calls == [(0.0, 1.0), (0.0, 0.5), (0.5, 1.0)]
-    assert res.reached and res.state == 1.0
+    assert res.reached
+    assert res.state == 1.0
 
 
 def test_final_failure_stops_at_once():
@@ -107,11 +120,15 @@ def test_final_failure_stops_at_once():
 
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(grow=1.0, max_halvings=8), h=0.5)
     assert tried == [0.5, 1.0]  # not halved to 0.75, 0.625, …
-    assert res.reason == "final" and not res.reached and res.s == 0.5 and res.state == 0.5
+    assert res.reason == "final"
+    assert not res.reached
+    assert res.s == 0.5
+    assert res.state == 0.5
     tried.clear()
     res = continue_to(solve, 0.0, 0.0, 1.0, StepRules(retry="subdivide", max_depth=3))
     assert tried == [1.0]  # no finer subdivision is tried
-    assert res.reason == "final" and res.state == 0.0
+    assert res.reason == "final"
+    assert res.state == 0.0
 
 
 def test_march_stops_at_first_failure():

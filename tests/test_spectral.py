@@ -82,7 +82,9 @@ def test_mapped_grid_calculus_is_exact_to_round_off(blend):
     from math import erf, pi, sqrt
 
     total = sqrt(pi * 0.18) / 2 * (erf(7 / sqrt(0.18)) + erf(3 / sqrt(0.18))) + 1 - np.cos(10.0)
-    assert g.y[0] == 0.0 and g.y[-1] == 10.0 and (np.diff(g.y) > 0).all()
+    assert g.y[0] == 0.0
+    assert g.y[-1] == 10.0
+    assert (np.diff(g.y) > 0).all()
     assert np.abs(g.D @ f(g.y) - df).max() < 1e-9 * np.abs(df).max()
     assert np.abs(g.D2 @ f(g.y) - d2f).max() < 1e-7 * np.abs(d2f).max()
     assert abs(g.integrate(f(g.y)) - total) < 1e-12
@@ -102,7 +104,8 @@ def test_mapped_grid_clusters_at_the_centre_and_tends_to_the_plain_grid():
     assert h[j] < 0.2 * np.diff(ChebyshevGrid(64, 0.0, 40.0).y)[j]
     wide = MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 1e6)
     assert np.allclose(wide.y, ChebyshevGrid(64, 0.0, 40.0).y, atol=1e-6)
-    assert wide.with_n(32).n == 32 and wide.with_n(32).width == 1e6
+    assert wide.with_n(32).n == 32
+    assert wide.with_n(32).width == 1e6
     with pytest.raises(ValueError, match="width"):
         MappedChebyshevGrid(64, 0.0, 40.0, 10.0, 0.0)
 
@@ -149,4 +152,5 @@ def test_end_nodes_off_by_round_off_are_the_ends():
     with mock.patch.object(spectral, "barycentric", wraps=spectral.barycentric) as bary:
         out = spectral._evaluate(f, 64, x)
     assert bary.call_count == 1
-    assert out[0] == f[0] and out[-1] == f[-1]
+    assert out[0] == f[0]
+    assert out[-1] == f[-1]

@@ -68,7 +68,8 @@ def main(argv: list[str]) -> None:
             A = SteadyNewton(n, ta, na, model, nu_top, grid_map=sa.grid_map)
             B = SteadyNewton(n, tb, nb, model, nu_top, grid_map=sa.grid_map)
             Ja, Jb = A.evaluate(sa)[1], B.evaluate(sb)[1]
-            assert Ja is not None and Jb is not None
+            assert Ja is not None
+            assert Jb is not None
             w, V = np.linalg.eig(np.eye(len(Ja)) - np.linalg.solve(Ja, Jb))
             top = int(np.argmax(np.abs(w)))
             # the Euler predictor of the map's continuation (dX/dν0 and dX/dθ at a)

@@ -38,8 +38,10 @@ def setup_of(ck, model, flow) -> tuple[DnsSetup, float]:
     candidates = []
     for L, init, amp in ((1000.0, "mode", 0.02), (2000.0, "noise", 1e-3)):
         mode = least_stable(flow, 2 * math.pi / L, n=N, cache=OperatorCache(mapped=False))
-        for frame in (7.802854, float(mode.wave_speed)):
-            candidates.append(DnsSetup(16.0, 0.05, L, 1.0, N, M, 4.0, init, amp, 0, model, True, frame))
+        candidates.extend(
+            DnsSetup(16.0, 0.05, L, 1.0, N, M, 4.0, init, amp, 0, model, True, frame)
+            for frame in (7.802854, float(mode.wave_speed))
+        )
     for s in candidates:
         if s.key() == str(ck["key"]):
             return s, s.length

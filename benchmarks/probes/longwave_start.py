@@ -17,6 +17,7 @@ flow's own convergence estimate, and sign changes).
 
 from __future__ import annotations
 
+import contextlib
 import sys
 import time
 from collections import Counter
@@ -42,10 +43,10 @@ def main(argv: list[str]) -> None:
     flows = []
     for th in cfg.theta[1::stride]:
         for nu in cfg.nu0[1::stride]:
-            try:
+            with contextlib.suppress(ChuteflowError):
                 flows.append(solve_steady(th, nu, cfg.model, **kw))
-            except ChuteflowError:
-                pass
+    if not flows:
+        raise SystemExit(f"no steady flow at the grid points of stride {stride} on the {size} x {size} grid")
     cpu = {True: 0.0, False: 0.0}
     res: dict[bool, list] = {True: [], False: []}
     for i, f in enumerate(flows):

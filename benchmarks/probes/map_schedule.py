@@ -33,7 +33,8 @@ def main(argv: list[str]) -> None:
     from chuteflow.papers.mitarai2004.points import DIAGRAM_RANGES
     from chuteflow.steady import steady_map
 
-    log = tempfile.NamedTemporaryFile("w", suffix=".log", delete=False).name
+    with tempfile.NamedTemporaryFile("w", suffix=".log", delete=False) as fh:
+        log = fh.name
 
     def logged(func, label):
         # a module-level name the pool pickles by reference: the forked processes see it

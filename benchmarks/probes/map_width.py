@@ -12,13 +12,11 @@ from __future__ import annotations
 import sys
 import time
 
-import chuteflow.stability  # noqa: F401  (loads the operator module)
+import chuteflow.stability.operator as opmod
 from chuteflow.closures import ChuteModel
 from chuteflow.papers.mitarai2004.points import POINTS
 from chuteflow.stability import OperatorCache, least_stable
 from chuteflow.steady import solve_steady
-
-opmod = sys.modules["chuteflow.stability.operator"]
 
 LADDER = (32, 40, 48, 56, 64, 80, 100, 125, 160, 200, 256)
 
@@ -33,6 +31,8 @@ def n_needed(flow, k, cache):
 
 def main(argv):
     names, ks, grids = (a.split(",") for a in argv[:3])
+    # layer_map is cached per flow: uncached, each grid reads the MAP_WIDTH set below
+    opmod.layer_map = opmod.layer_map.__wrapped__
     for name in names:
         p = POINTS[name]
         flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))

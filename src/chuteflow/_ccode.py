@@ -225,7 +225,7 @@ class Pointwise:
         arrays = [np.asarray(a, dtype=float) for a in args[: self.n_arrays]]
         shape = arrays[0].shape
         if any(a.shape != shape for a in arrays):
-            arrays = np.broadcast_arrays(*arrays)
+            arrays = list(np.broadcast_arrays(*arrays))
             shape = arrays[0].shape
         flat = [np.ascontiguousarray(a).reshape(-1) for a in arrays]
         n = flat[0].size

@@ -37,7 +37,7 @@ class _AfterImport(importlib.abc.MetaPathFinder):
             exec_module(module)
             callback()
 
-        loader.exec_module = exec_then_call  # this spec's loader instance only
+        loader.exec_module = exec_then_call  # type: ignore[method-assign]  # this spec's loader only
         return spec
 
 

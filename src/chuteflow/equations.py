@@ -309,8 +309,7 @@ def arguments(base: dict, partials: dict, sin_theta: float, cos_theta: float) ->
     the closures' partials (:data:`FUNCTIONS` × :data:`ORDERS`), sin θ and cos θ."""
     args = [base[b] for b in BASE]
     for name in FUNCTIONS:
-        for o in ORDERS:
-            args.append(partials[name][o])
+        args.extend(partials[name][o] for o in ORDERS)
     return args + [sin_theta, cos_theta]
 
 
@@ -372,19 +371,19 @@ def _derive_compiled():
     for name, R in eqs.items():
         jets = sorted((s for s in R.free_symbols if _is_jet(s)), key=lambda s: s.name)
         exprs = [R.subs(_k_abs(), 0) if _k_abs() in R.free_symbols else R]
-        terms = []
+        found: list[Term] = []
         for s in jets:
             f, (a, b, c, d) = _parse(s)
             coef = sp.diff(R, s)
             for e, part in _powers_of_k(coef):
                 exprs.append(part)
-                terms.append(Term(f, a, b, c, d, len(terms), e))
+                found.append(Term(f, a, b, c, d, len(found), e))
         at_base = []
         for e in exprs:
             e = repl(sp.sympify(e)).xreplace(zero_jets).xreplace(sub)
             at_base.append(e)
         keep = [i for i, e in enumerate(at_base[1:]) if e != 0]
-        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j, t.k) for j, t in enumerate(terms[i] for i in keep))
+        terms = tuple(Term(t.field, t.a, t.b, t.c, t.d, j, t.k) for j, t in enumerate(found[i] for i in keep))
         spec[name] = (args, [at_base[0]] + [at_base[1 + i] for i in keep])
         data.append((name, tuple((t.field, t.a, t.b, t.c, t.d, t.index, t.k) for t in terms)))
     return spec, tuple(data)

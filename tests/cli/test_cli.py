@@ -32,7 +32,8 @@ def test_help():
     assert "reproduce" in result.output
     result = runner.invoke(app, ["reproduce", "--help"])
     assert result.exit_code == 0, result.output
-    assert "--quick" in result.output and "--stage" in result.output
+    assert "--quick" in result.output
+    assert "--stage" in result.output
 
 
 def test_version():
@@ -65,7 +66,8 @@ def test_parameter_error_is_a_one_line_error():
     result = runner.invoke(demo, ["build", "--restitution", "1.5"])
     assert result.exit_code == 2
     err = _one_line_error(result)
-    assert "restitution" in err and "(0, 1]" in err
+    assert "restitution" in err
+    assert "(0, 1]" in err
     assert runner.invoke(demo, ["build", "--restitution", "0.9"]).exit_code == 0
 
 
@@ -74,7 +76,8 @@ def test_main_returns_2_on_user_error(capsys):
         code = main(["reproduce", "--stage", "no-such-stage"])
     assert code == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("error: ") and len(err.splitlines()) == 1
+    assert err.startswith("error: ")
+    assert len(err.splitlines()) == 1
 
 
 def test_reproduce_with_no_stages_writes_report(tmp_path):
@@ -84,8 +87,10 @@ def test_reproduce_with_no_stages_writes_report(tmp_path):
     assert result.exit_code == 0, result.output
     md = (out / "report.md").read_text(encoding="utf-8")
     html = (out / "report.html").read_text(encoding="utf-8")
-    assert __version__ in md and "mode | quick" in md
-    assert html.startswith("<!DOCTYPE html>") and __version__ in html
+    assert __version__ in md
+    assert "mode | quick" in md
+    assert html.startswith("<!DOCTYPE html>")
+    assert __version__ in html
     data = json.loads((out / "checkpoints.json").read_text(encoding="utf-8"))
     assert data["counts"] == {"pass": 0, "fail": 0, "not checked": 0}
 
@@ -134,15 +139,20 @@ def test_reproduce_failing_stage_is_recorded_and_run_continues(tmp_path):
         # Selecting one stage runs only that one.
         sub = tmp_path / "sub"
         report = run_reproduce(sub, stages=["works"])
-        assert report.ok and [s for s in report.sections] == ["works"]
+        assert report.ok
+        assert list(report.sections) == ["works"]
 
     md = (tmp_path / "report.md").read_text(encoding="utf-8")
     html = (tmp_path / "report.html").read_text(encoding="utf-8")
-    assert "broken.completed" in md and "RuntimeError: boom" in md
-    assert "## Working stage" in md and "![A line](works/line.png)" in md
+    assert "broken.completed" in md
+    assert "RuntimeError: boom" in md
+    assert "## Working stage" in md
+    assert "![A line](works/line.png)" in md
     assert "mode | full" in md
     assert "data:image/png;base64," in html  # self-contained
-    assert 'class="fail"' in html and 'class="pass"' in html and 'class="not-checked"' in html
+    assert 'class="fail"' in html
+    assert 'class="pass"' in html
+    assert 'class="not-checked"' in html
     assert "&lt;html&gt;" in html
     data = json.loads((tmp_path / "checkpoints.json").read_text(encoding="utf-8"))
     assert data["counts"] == {"pass": 2, "fail": 1, "not checked": 1}
@@ -243,7 +253,8 @@ def test_fast_steady_path_matches_typer(capsys):
     assert fast_main(argv) == 0
     fast = capsys.readouterr().out
     res = CliRunner().invoke(app, argv)
-    assert res.exit_code == 0 and res.stdout == fast
+    assert res.exit_code == 0
+    assert res.stdout == fast
     for bad in (["--theta", "abc", "--nu0", "0.05"], ["--theta", "16"], ["--help"], ["--radial", "nope"]):
         assert _parse_steady(bad) is None
     assert fast_main(["steady", "--theta", "95", "--nu0", "0.05"]) == 2

@@ -26,19 +26,25 @@ def test_eig_kx_kz_transverse_mode():
     out = _json(runner.invoke(app, ["eig", *P1, "--kx", "0", "--kz", "0.002", "--json"]))
     assert set(EIG_KEYS) <= set(out)
     assert out["alpha_re"] == pytest.approx(6.1655e-5, rel=1e-4)
-    assert out["kx"] == 0.0 and out["k"] == 0.0 and out["kz"] == 0.002
-    assert out["physical"] and out["stationary"] and out["unstable"]
+    assert out["kx"] == 0.0
+    assert out["k"] == 0.0
+    assert out["kz"] == 0.002
+    assert out["physical"]
+    assert out["stationary"]
+    assert out["unstable"]
 
 
 def test_eig_k_is_kx_with_kz_zero():
     a = _json(runner.invoke(app, ["eig", *P1, "--k", "0.002", "--json"]))
     b = _json(runner.invoke(app, ["eig", *P1, "--kx", "0.002", "--json"]))
-    assert a["alpha_re"] == b["alpha_re"] and a["alpha_im"] == b["alpha_im"]
-    assert a["kz"] == 0.0 and a["kx"] == 0.002
+    assert a["alpha_re"] == b["alpha_re"]
+    assert a["alpha_im"] == b["alpha_im"]
+    assert a["kz"] == 0.0
+    assert a["kx"] == 0.002
 
 
 @pytest.mark.parametrize(
-    "args, needle",
+    ("args", "needle"),
     [
         (["--k", "0.002", "--kx", "0.002"], "--k and --kx"),
         (["--kx", "0", "--kz", "0"], "kx = 0"),
@@ -56,7 +62,8 @@ def test_mode_cross_section_plot(tmp_path):
     png = tmp_path / "cs.png"
     out = _json(runner.invoke(app, ["mode", *P1, "--kx", "0", "--kz", "0.002", "--plot", str(png), "--json"]))
     assert png.stat().st_size > 10_000
-    assert out["plot"] == str(png) and out["alpha_re"] == pytest.approx(6.1655e-5, rel=1e-4)
+    assert out["plot"] == str(png)
+    assert out["alpha_re"] == pytest.approx(6.1655e-5, rel=1e-4)
 
 
 def test_eig3d_is_hidden():

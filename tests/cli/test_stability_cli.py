@@ -28,7 +28,8 @@ def _one_line_error(result) -> str:
     assert result.exit_code == 2, result.output
     assert "Traceback" not in result.output
     err = result.stderr.strip()
-    assert len(err.splitlines()) == 1 and err.startswith("error: "), err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith("error: "), err
     return err
 
 
@@ -47,7 +48,8 @@ def test_help_lists_stability_commands():
     for cmd in ("eig", "dispersion", "longwave", "mode"):
         assert cmd in result.output
     result = runner.invoke(app, ["eig", "--help"])
-    assert "--roughness" in result.output and "--nu-top" in result.output
+    assert "--roughness" in result.output
+    assert "--nu-top" in result.output
 
 
 def test_eig_json_matches_python_api(p1_flow):
@@ -74,8 +76,12 @@ def test_eig_json_matches_python_api(p1_flow):
         "steady",
     ):
         assert key in out, key
-    assert out["k"] == 0.001 and out["theta"] == 16.0 and out["roughness"] == 0.05
-    assert out["physical"] is True and out["drift"] < 1e-7 and out["tail"] < 1e-7
+    assert out["k"] == 0.001
+    assert out["theta"] == 16.0
+    assert out["roughness"] == 0.05
+    assert out["physical"] is True
+    assert out["drift"] < 1e-7
+    assert out["tail"] < 1e-7
     mode = least_stable(p1_flow, 0.001)
     assert out["alpha_re"] == pytest.approx(mode.alpha.real, rel=1e-10)
     assert out["alpha_im"] == pytest.approx(mode.alpha.imag, rel=1e-10)
@@ -88,7 +94,7 @@ def test_eig_json_matches_python_api(p1_flow):
 
 
 @pytest.mark.parametrize(
-    "args, needle",
+    ("args", "needle"),
     [
         (["--k", "-1"], "k = -1"),
         (["--k", "nan"], "k = nan"),
@@ -131,7 +137,8 @@ def test_dispersion_json_plot_netcdf(tmp_path, p1_flow):
     )
     assert out["k"] == pytest.approx([0.0, 0.003, 0.006, 0.009, 0.012])
     assert len(out["alpha_re"]) == len(out["alpha_im"]) == len(out["drift"]) == 5
-    assert all(out["physical"]) and out["max_drift"] < 1e-7
+    assert all(out["physical"])
+    assert out["max_drift"] < 1e-7
     assert abs(complex(out["alpha_re"][0], out["alpha_im"][0])) < 1e-10  # α(0) = 0
     # paper §4.2: P1 unstable for 0 < k ≤ k_c ≈ 0.007 (one significant digit)
     assert out["k_c"] == pytest.approx(0.007, abs=5e-4)
@@ -142,7 +149,8 @@ def test_dispersion_json_plot_netcdf(tmp_path, p1_flow):
     from chuteflow.steady import steady_tangent
 
     assert out["alpha1_im"] == pytest.approx(-steady_tangent(p1_flow)["dQ_drho"], rel=1e-4)
-    assert png.stat().st_size > 10_000 and png.read_bytes()[:4] == b"\x89PNG"
+    assert png.stat().st_size > 10_000
+    assert png.read_bytes()[:4] == b"\x89PNG"
     ds = xr.open_dataset(nc, engine="h5netcdf")
     assert ds.attrs["k_c"] == pytest.approx(out["k_c"])
     np.testing.assert_allclose(ds.alpha_re.values, out["alpha_re"])
@@ -175,7 +183,8 @@ def test_longwave_json_stable_point_has_null_k_c():
         "steady",
     ):
         assert key in out, key
-    assert out["k_c"] is None and out["long_wave_unstable"] is False
+    assert out["k_c"] is None
+    assert out["long_wave_unstable"] is False
     # Appendix B, eq:vp0: α1 = −i dQ0/dρ̄0 with dQ0/dρ̄0 from the steady family (eq:dqdh)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -185,7 +194,8 @@ def test_longwave_json_stable_point_has_null_k_c():
     assert abs(out["alpha1_re"]) < 1e-8
     # P3 is long-wave stable (paper §4.2): Re α2 = Re α/k² at k = 1e-5 ≈ −551 (eigen_sign:
     # −550.6, reproduce snapshot), converged far below the 1 % asserted here
-    assert out["alpha2_re"] == pytest.approx(-551.0, rel=1e-2) and out["alpha2_convergence"] < 1e-2
+    assert out["alpha2_re"] == pytest.approx(-551.0, rel=1e-2)
+    assert out["alpha2_convergence"] < 1e-2
 
 
 def test_longwave_bad_rtol():
@@ -197,16 +207,18 @@ def test_mode_plot_and_diagnostics(tmp_path):
     png = tmp_path / "m.png"
     out = _json(runner.invoke(app, ["mode", *P1, "--k", "0.002", "--plot", str(png), "--json"]))
     assert png.read_bytes()[:4] == b"\x89PNG"
-    assert out["plot"] == str(png) and out["physical"] is True
+    assert out["plot"] == str(png)
+    assert out["physical"] is True
     d = out["diagnostics"]
     # P1 is unstable and its grains converge onto the positive density perturbation (§4.2)
-    assert out["alpha_re"] > 0 and d["compression"] > 0
+    assert out["alpha_re"] > 0
+    assert d["compression"] > 0
     assert d["identity_residual"] < 1e-6
     assert d["compression"] + d["vertical_advection"] == pytest.approx(out["alpha_re"], rel=1e-6)
 
 
 @pytest.mark.parametrize(
-    "args, needle",
+    ("args", "needle"),
     [
         (["--k", "0", "--plot", "x.png"], "k = 0"),
         (["--k", "0.002", "--plot", "x.png", "--y-top", "-1"], "y_top"),

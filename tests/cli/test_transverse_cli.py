@@ -20,7 +20,9 @@ def test_eig3d_json():
     out = json.loads(r.stdout)
     assert set(EIG3D_KEYS) <= set(out)
     assert abs(out["alpha_re"] - 6.1655e-5) < 1e-8  # the growing real mode (issue 10)
-    assert out["alpha_im"] == 0.0 and out["physical"] and out["stationary"]
+    assert out["alpha_im"] == 0.0
+    assert out["physical"]
+    assert out["stationary"]
 
 
 def test_transverse_json_and_plot(tmp_path):
@@ -45,7 +47,8 @@ def test_transverse_json_and_plot(tmp_path):
     assert r.exit_code == 0, r.output
     out = json.loads(r.stdout)
     assert set(TRANSVERSE_KEYS) <= set(out)
-    assert out["unstable"] and out["stationary"]
+    assert out["unstable"]
+    assert out["stationary"]
     assert abs(out["alpha2_z"] - 75.844) < 2e-3
     assert png.stat().st_size > 0
 

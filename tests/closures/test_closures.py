@@ -253,7 +253,7 @@ def test_transport_forms_eq_pmuetc(name):
 # (c) Parameter validation.
 # ---------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
-    "kwargs, name, rng",
+    ("kwargs", "name", "rng"),
     [
         ({"restitution": 1.5}, "restitution", "(0, 1]"),
         ({"restitution": 0.0}, "restitution", "(0, 1]"),
@@ -274,7 +274,8 @@ def test_invalid_parameters_raise(kwargs, name, rng):
     msg = str(info.value)
     assert msg.startswith(name), msg
     assert rng in msg, msg
-    assert isinstance(info.value, ValueError) and isinstance(info.value, ChuteflowError)
+    assert isinstance(info.value, ValueError)
+    assert isinstance(info.value, ChuteflowError)
 
 
 def test_non_numeric_parameter_raises():
@@ -295,7 +296,8 @@ def test_parameter_types_are_checked(value):
 
 def test_parameters_stored_as_float_and_partials_float():
     m = ChuteModel(restitution=1, roughness=np.float32(0.05))
-    assert type(m.restitution) is float and type(m.roughness) is float
+    assert type(m.restitution) is float
+    assert type(m.roughness) is float
     ev = m.evaluate([0.1, 0.2], 1.0)
     assert all(a.dtype == float for f in ev.values() for a in f.values())
 

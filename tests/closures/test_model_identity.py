@@ -51,7 +51,8 @@ def scaled():
 
 def test_registries_hold_the_builtin_closures():
     assert set(RADIALS.names()) >= {"lun_savage", "carnahan_starling"}
-    assert WALLS.names() == ("johnson_jackson",) and TRANSPORTS.names() == ("lun",)
+    assert WALLS.names() == ("johnson_jackson",)
+    assert TRANSPORTS.names() == ("lun",)
     assert CLOSURES == {"radial": RADIALS, "wall": WALLS, "transport": TRANSPORTS}
     assert isinstance(RADIALS.create("carnahan_starling"), CarnahanStarling)
     assert RADIALS.spec(CarnahanStarling()) == "carnahan_starling"
@@ -90,13 +91,16 @@ def test_a_new_closure_is_one_class_and_a_registration(scaled):
     g_ls = ChuteModel().g0(nu)[0]
     np.testing.assert_allclose(m.g0(nu)[0], 2.0 * g_ls, rtol=1e-14)
     np.testing.assert_allclose(ChuteModel(radial="test_scaled_lun_savage").g0(nu)[0], g_ls, rtol=1e-14)
-    assert m != ChuteModel(radial=scaled(3.0)) and m.key() != ChuteModel(radial=scaled(3.0)).key()
+    assert m != ChuteModel(radial=scaled(3.0))
+    assert m.key() != ChuteModel(radial=scaled(3.0)).key()
 
 
 def test_fields_accept_names_or_instances():
     a = ChuteModel(radial="carnahan_starling", wall="johnson_jackson", transport="lun")
     b = ChuteModel(radial=CarnahanStarling(), wall=JohnsonJackson(), transport=LunClosure())
-    assert a == b and hash(a) == hash(b) and a.key() == b.key()
+    assert a == b
+    assert hash(a) == hash(b)
+    assert a.key() == b.key()
     assert a.closures == (LunClosure(), CarnahanStarling(), JohnsonJackson())
     with pytest.raises(ParameterError, match="wall"):
         ChuteModel(wall="no_such_wall")
@@ -116,7 +120,9 @@ def test_to_dict_from_dict_round_trip(model):
     d = model.to_dict()
     assert tuple(d) == FIELDS
     back = ChuteModel.from_dict(json.loads(json.dumps(d)))
-    assert back == model and hash(back) == hash(model) and back.key() == model.key()
+    assert back == model
+    assert hash(back) == hash(model)
+    assert back.key() == model.key()
     assert model.as_dict() == d  # the older name
     assert ChuteModel.from_dict(model.attrs()) == model
 
@@ -129,9 +135,12 @@ def test_from_dict_defaults_and_unknown_fields():
 
 def test_equality_and_hash():
     ls, cs = ChuteModel(), ChuteModel(radial="carnahan_starling")
-    assert ls == ChuteModel() and hash(ls) == hash(ChuteModel())
-    assert ls != cs and hash(ls) != hash(cs)  # closures without parameters still hash apart
-    assert ls != ChuteModel(roughness=0.1) and hash(ls) != hash(ChuteModel(roughness=0.1))
+    assert ls == ChuteModel()
+    assert hash(ls) == hash(ChuteModel())
+    assert ls != cs
+    assert hash(ls) != hash(cs)
+    assert ls != ChuteModel(roughness=0.1)
+    assert hash(ls) != hash(ChuteModel(roughness=0.1))
     assert ChuteModel(restitution=1) == ChuteModel(restitution=1.0)  # ints become floats
     assert len({ls, cs, ChuteModel(), ChuteModel(radial=CarnahanStarling())}) == 2
 

@@ -185,7 +185,7 @@ def test_top_rows_agree_in_linear_phase(p1, p1_mode):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("nu0,sign", [(0.05, 1), (0.10, -1)])
+@pytest.mark.parametrize(("nu0", "sign"), [(0.05, 1), (0.10, -1)])
 def test_linear_phase_p1_p3(nu0, sign):
     """Issue 11 item 2: two periods from the least-stable mode at k = 0.003 (P1 grows, P3
     decays) reproduce Re α and c = −Im α/k of chuteflow.stability to 1 %."""

@@ -55,17 +55,22 @@ def test_dispersion_figure_file_and_labels(tmp_path):
     path = dispersion_figure(
         [("P1", ds), ("P2", _synthetic(k, -(k**2) - 7j * k))], tmp_path / "sub" / "disp.png", title="test"
     )
-    assert path.exists() and path.read_bytes()[:4] == b"\x89PNG"
+    assert path.exists()
+    assert path.read_bytes()[:4] == b"\x89PNG"
     fig = dispersion_figure([("P1", ds)])
     top, bottom = fig.axes[0], fig.axes[1]
-    assert "Re" in top.get_ylabel() and "Im" in bottom.get_ylabel()
+    assert "Re" in top.get_ylabel()
+    assert "Im" in bottom.get_ylabel()
     assert "(g/\\sigma)" in top.get_ylabel()  # units of α
-    assert "wavenumber" in bottom.get_xlabel() and "sigma" in bottom.get_xlabel()
-    assert "P1" in top.get_title() and "16°" in top.get_title() and "φ = 0.05" in top.get_title()
+    assert "wavenumber" in bottom.get_xlabel()
+    assert "sigma" in bottom.get_xlabel()
+    assert "P1" in top.get_title()
+    assert "16°" in top.get_title()
+    assert "φ = 0.05" in top.get_title()
     # the critical wavenumber is marked by a vertical line at k_c
     xs = [ln.get_xdata()[0] for ln in top.get_lines() if len(set(ln.get_xdata())) == 1]
     assert 0.007 in xs
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="at least one"):
         dispersion_figure([])
 
 
@@ -87,7 +92,9 @@ def test_magnification_figure(tmp_path):
     assert path.exists()
     fig = magnification_figure(ds, alpha2=a2, dQ_drho=4.152, k_mag=1e-4)
     (ax1, ax2, ax3) = fig.axes[:3]
-    assert "Re" in ax1.get_ylabel() and "Im" in ax2.get_ylabel() and "k^2" in ax3.get_ylabel()
+    assert "Re" in ax1.get_ylabel()
+    assert "Im" in ax2.get_ylabel()
+    assert "k^2" in ax3.get_ylabel()
     assert all("k" in ax.get_xlabel() for ax in (ax1, ax2, ax3))
     assert ax3.get_xscale() == "log"
     # the long-wave curves: α2 k² on (a), −(dQ0/dρ̄0) k on (b)
@@ -100,7 +107,9 @@ def test_magnification_figure(tmp_path):
 def test_eigenfunction_fields_phase_and_scale(p1):
     flow, mode = p1
     F = eigenfunction_fields(mode, flow, y_top=5.0, nx=201, ny=51, x_peak=0.25)
-    assert F["nu"].shape == (51, 201) and F["x"][-1] == 1.0 and F["y"][-1] == 5.0
+    assert F["nu"].shape == (51, 201)
+    assert F["x"][-1] == 1.0
+    assert F["y"][-1] == 5.0
     assert F["lambda"] == pytest.approx(2 * math.pi / 0.002)
     # P1: |ν̂| is largest at the floor; scaled to 1 there, peaking at x = λ/4
     assert np.abs(F["nu"]).max() == pytest.approx(1.0, abs=1e-3)
@@ -126,7 +135,8 @@ def test_eigenfunction_diagnostics_mass_balance(p1):
     for key in ("temperature_density", "temperature_at_peak", "floor_velocity_density", "velocity_density"):
         assert -1 <= d[key] <= 1
     # paper §4.2, fig eigenu: P1 grains flow into the positive density region, T̂ < 0 there
-    assert d["compression"] > 0 and d["temperature_at_peak"] < 0
+    assert d["compression"] > 0
+    assert d["temperature_at_peak"] < 0
 
 
 def test_eigenfunction_figure(tmp_path, p1):
@@ -137,14 +147,19 @@ def test_eigenfunction_figure(tmp_path, p1):
     panels = [ax for ax in fig.axes if ax.get_xlabel() == r"$x/\lambda$"]
     assert len(panels) == 3
     for ax in panels:
-        assert "y" in ax.get_ylabel() and "sigma" in ax.get_ylabel()
-    assert "density" in panels[0].get_title() and "temperature" in panels[1].get_title()
+        assert "y" in ax.get_ylabel()
+        assert "sigma" in ax.get_ylabel()
+    assert "density" in panels[0].get_title()
+    assert "temperature" in panels[1].get_title()
     assert panels[2].get_xlim() == pytest.approx((0.3, 0.7), abs=0.01)
     colorbar_labels = [ax.get_ylabel() for ax in fig.axes if ax not in panels]
-    assert any("nu" in s for s in colorbar_labels) and any("T" in s for s in colorbar_labels)
+    assert any("nu" in s for s in colorbar_labels)
+    assert any("T" in s for s in colorbar_labels)
     assert len(panels[0].collections) > 0  # contours and arrows drawn
     title = fig._suptitle.get_text()
-    assert "P1" in title and "k = 0.002" in title and "unstable" in title
+    assert "P1" in title
+    assert "k = 0.002" in title
+    assert "unstable" in title
 
 
 def test_eigenfunction_errors(p1):

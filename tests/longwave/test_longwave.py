@@ -115,7 +115,8 @@ def test_alpha2_is_the_dispersion_relations_k2_coefficient(p1):
     assert lw.alpha2_k == k
     assert lw.alpha2.real == pytest.approx(ref.real, rel=1e-5)
     assert lw.alpha2.imag == pytest.approx(ref.imag, rel=1e-4)
-    assert lw.alpha2_convergence < 1e-5 and lw.alpha2_im_convergence < 1e-4
+    assert lw.alpha2_convergence < 1e-5
+    assert lw.alpha2_im_convergence < 1e-4
     assert lw.alpha2_taylor.imag == pytest.approx(-1546.0, rel=1e-3)  # measured −1546.01
     s = lw.summary()
     assert (s["alpha2_re"], s["alpha2_im"]) == (lw.alpha2.real, lw.alpha2.imag)
@@ -137,14 +138,16 @@ def test_alpha2_at_p4_follows_the_dispersion_relation():
     agrees with it to the O(k) term (0.1 %).
     """
     lw = longwave(solve_steady(14.0, 0.05), rtol=0.2)
-    assert lw.unstable and lw.alpha2.real == pytest.approx(44.8, rel=0.05)
+    assert lw.unstable
+    assert lw.alpha2.real == pytest.approx(44.8, rel=0.05)
     assert lw.alpha2.imag == pytest.approx(211.27, rel=1e-3)
-    assert lw.alpha2_convergence < 0.1 and lw.alpha2_im_convergence < 1e-2
+    assert lw.alpha2_convergence < 0.1
+    assert lw.alpha2_im_convergence < 1e-2
     assert lw.alpha2_taylor.imag == pytest.approx(211.49, rel=1e-3)
 
 
 @pytest.mark.parametrize(
-    "theta, nu0, roughness, unstable",
+    ("theta", "nu0", "roughness", "unstable"),
     [
         (16, 0.05, 0.05, True),  # P1, regime B (§4.2.1)
         (16, 0.10, 0.05, False),  # P3, stable
@@ -164,7 +167,8 @@ def test_long_wave_stability_of_paper_points(theta, nu0, roughness, unstable):
 def test_alpha2_converges_and_p2_is_stable(p1):
     """Taylor Re α2 at 1 % (N up to 480) for P1; P2 (16°, 0.08) long-wave stable (§4.2.1)."""
     lw = longwave(p1)
-    assert lw.alpha2_taylor_convergence < 1e-2 and 1.1e4 < lw.alpha2_taylor.real < 1.3e4
+    assert lw.alpha2_taylor_convergence < 1e-2
+    assert 1.1e4 < lw.alpha2_taylor.real < 1.3e4
     p2 = longwave(solve_steady(16, 0.08), rtol=0.05)
     assert not p2.unstable
 
@@ -192,13 +196,15 @@ def test_sweep_sign_agrees_with_longwave_unstable(name):
     # that differ by round-off only (numpy's and the compiled closures; dense and eliminated
     # Newton steps; Clenshaw and barycentric interpolation), Re α/k² = 42.8 … 44.5 in all
     # four (eigen_sign: 44.08 in the last two); elsewhere ≤ 1e-2
-    assert es.converged and conv < (0.1 if name == "P4" else 1e-2)
+    assert es.converged
+    assert conv < (0.1 if name == "P4" else 1e-2)
     assert es.coefficient == pytest.approx(vals[1], rel=0.05)  # eigen_sign stops at rtol 0.05
     assert es.unstable == (vals[1] > 0)
     if name in PAPER_UNSTABLE:
         assert es.unstable == PAPER_UNSTABLE[name]
     out = LongWaveMetric().compute(flow, Point(0, 0, p.theta, p.nu0))
-    assert (out["alpha2_re"] > 0) == es.unstable and out["longwave_consistent"]
+    assert (out["alpha2_re"] > 0) == es.unstable
+    assert out["longwave_consistent"]
 
 
 def test_eigen_sign_alpha1_is_the_exact_kinematic_slope(p1):
@@ -211,7 +217,8 @@ def test_eigen_sign_alpha1_is_the_exact_kinematic_slope(p1):
     es = eigen_sign(p1)
     dq = steady_tangent(p1)["dQ_drho"]
     assert es.alpha1 == complex(0.0, -dq)
-    assert es.n == 48 and abs(es.alpha1_taylor - es.alpha1) == pytest.approx(6.8e-4 * dq, rel=0.05)
+    assert es.n == 48
+    assert abs(es.alpha1_taylor - es.alpha1) == pytest.approx(6.8e-4 * dq, rel=0.05)
 
 
 def test_branch_point_without_taylor_finds_the_same_eigenvalue(p1):
@@ -225,7 +232,9 @@ def test_branch_point_without_taylor_finds_the_same_eigenvalue(p1):
     tangent = steady_tangent(p1)
     on = branch_point(op, tangent, 1e-5)
     off = branch_point(op, tangent, 1e-5, taylor=False)
-    assert np.isnan(off.alpha1) and np.isnan(off.alpha2) and np.isfinite(on.alpha2)
+    assert np.isnan(off.alpha1)
+    assert np.isnan(off.alpha2)
+    assert np.isfinite(on.alpha2)
     assert abs(off.alpha - on.alpha) <= 1e-8 * abs(on.alpha)
     assert off.coefficient == pytest.approx(on.coefficient, rel=1e-6)
     assert off.tail == pytest.approx(on.tail, rel=1e-3)
@@ -241,7 +250,8 @@ def test_sweep_metric_computes_the_taylor_alpha2_only_when_asked(p1):
 
     plain = LongWaveMetric().compute(p1, Point(0, 0, 16.0, 0.05))
     full = LongWaveMetric(taylor=True).compute(p1, Point(0, 0, 16.0, 0.05))
-    assert plain["alpha2_taylor_re"] is None and np.isfinite(full["alpha2_taylor_re"])
+    assert plain["alpha2_taylor_re"] is None
+    assert np.isfinite(full["alpha2_taylor_re"])
     assert plain["longwave_n"] == full["longwave_n"]
     assert plain["alpha2_re"] == pytest.approx(full["alpha2_re"], rel=1e-6)
     with pytest.raises(ParameterError, match="taylor"):
@@ -261,5 +271,6 @@ def test_eigen_sign_reaches_k_through_a_tenth_of_it_where_the_k2_regime_is_short
 
     flow = solve_steady(20.136363636364, 0.0003125, ChuteModel(roughness=0.1))
     es = eigen_sign(flow, n=60, n_max=160, rtol=0.05, cache=OperatorCache(2), taylor=False)
-    assert es.converged and es.convergence < 1e-4
+    assert es.converged
+    assert es.convergence < 1e-4
     assert es.coefficient == pytest.approx(-6508.2425, rel=1e-4)

@@ -21,19 +21,23 @@ def test_reduced_json_reports_the_family_and_the_state():
     )
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)
-    assert d["theta"] == 16.0 and d["roughness"] == 0.05
-    assert d["accuracy"]["F"] <= 1e-4 and len(d["points"]) >= 8
+    assert d["theta"] == 16.0
+    assert d["roughness"] == 0.05
+    assert d["accuracy"]["F"] <= 1e-4
+    assert len(d["points"]) >= 8
     assert d["nu0_range"] == pytest.approx([0.04, 0.2])
     rhos = [p["rho0"] for p in d["points"]]
     assert rhos == sorted(rhos)
     st = d["state"]
-    assert st["unstable"] is True and st["short_wave_unstable"] is False
+    assert st["unstable"] is True
+    assert st["short_wave_unstable"] is False
     assert st["L_c"] == pytest.approx(2 * math.pi / st["k_c"])
     assert st["phase_velocity"] == pytest.approx(st["dq0"])  # c = −Im α1
     # the paper's P1 (16°, 0.05) is on the family: every k grows there, k_c is "inf"
     p1 = min(d["points"], key=lambda p: abs(p["nu0"] - 0.05))
     if abs(p1["nu0"] - 0.05) < 0.01:
-        assert p1["short_wave_unstable"] is True and p1["k_c"] == "inf"
+        assert p1["short_wave_unstable"] is True
+        assert p1["k_c"] == "inf"
 
 
 def test_functions_figure(rm16, tmp_path):
@@ -72,7 +76,9 @@ def test_simulate_writes_netcdf_and_figure(tmp_path):
     )
     assert res.exit_code == 0, res.output
     s = json.loads(res.stdout.strip().splitlines()[-1])
-    assert s["status"] == "completed" and s["n_cells"] == 128 and s["t_end"] == 30.0
+    assert s["status"] == "completed"
+    assert s["n_cells"] == 128
+    assert s["t_end"] == 30.0
     assert s["mass_drift"] < 1e-13
     ds = xr.load_dataset(nc)
     assert ds["rho"].shape == (200, 128)
@@ -83,7 +89,8 @@ def test_simulate_writes_netcdf_and_figure(tmp_path):
 def test_simulate_bad_input_is_one_line_error():
     res = runner.invoke(app, ["simulate", "--theta", "16", "--nu0", "0.12", "--length", "-5"])
     assert res.exit_code == 2
-    assert "length" in res.output and "Traceback" not in res.output
+    assert "length" in res.output
+    assert "Traceback" not in res.output
 
 
 def test_phase_diagram_figure_with_full_model(tmp_path):
@@ -116,7 +123,8 @@ def test_phase_diagram_figure_with_full_model(tmp_path):
     from chuteflow.reduced import agreement
 
     a = agreement(red, full, h_min=0)
-    assert a["compared"] == 20 and a["only_1d_unstable"] == 5
+    assert a["compared"] == 20
+    assert a["only_1d_unstable"] == 5
     png = save(plot_phase_diagrams([red], [full], agreement=[a]), tmp_path / "pd.png")
     assert png.stat().st_size > 10_000
 
@@ -132,7 +140,8 @@ def test_reduced_at_the_lowest_floor_density_of_the_family_answers():
     d = json.loads(res.stdout)
     assert d["nu0_range"][0] == 0.05
     st = d["state"]
-    assert st["nu0"] == 0.05 and st["rho0"] == d["points"][0]["rho0"]
+    assert st["nu0"] == 0.05
+    assert st["rho0"] == d["points"][0]["rho0"]
     # a wave about the end of the family has nowhere to go: one line naming nu0 and the range
     res = runner.invoke(
         app,
@@ -151,5 +160,7 @@ def test_reduced_at_the_lowest_floor_density_of_the_family_answers():
         ],
     )
     assert res.exit_code == 2
-    assert "nu0 = 0.05" in res.output and "[0.05, 0.1]" in res.output
-    assert "Traceback" not in res.output and "f(a) and f(b)" not in res.output
+    assert "nu0 = 0.05" in res.output
+    assert "[0.05, 0.1]" in res.output
+    assert "Traceback" not in res.output
+    assert "f(a) and f(b)" not in res.output

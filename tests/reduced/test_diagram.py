@@ -36,9 +36,12 @@ def test_agreement_counts_on_a_sub_grid():
     # full on the sub-grid (columns 0, 2, 4) is [1, 1, −1] in every row: the third column is
     # unknown there, so 3 × 2 points compare; red agrees at (0,0), (0,1), (2,0)
     assert a["compared"] == 6
-    assert a["agree"] == 3 and a["fraction"] == pytest.approx(0.5)
-    assert a["both_unstable"] == 3 and a["only_full_unstable"] == 3
-    assert a["only_1d_unstable"] == 0 and a["both_stable"] == 0
+    assert a["agree"] == 3
+    assert a["fraction"] == pytest.approx(0.5)
+    assert a["both_unstable"] == 3
+    assert a["only_full_unstable"] == 3
+    assert a["only_1d_unstable"] == 0
+    assert a["both_stable"] == 0
 
 
 def test_agreement_leaves_out_thin_layers():
@@ -47,9 +50,12 @@ def test_agreement_leaves_out_thin_layers():
     red = _red(th, nu, [[0, 0], [0, 1]])
     red["h"] = (("theta", "nu0"), np.array([[0.5, 3.0], [4.0, 5.0]]))
     a = agreement(red, full)  # h < 1 not examined (paper, fig phase005)
-    assert a["compared"] == 3 and a["thin_excluded"] == 1 and a["fraction"] == 1.0
+    assert a["compared"] == 3
+    assert a["thin_excluded"] == 1
+    assert a["fraction"] == 1.0
     b = agreement(red, full, h_min=0)
-    assert b["compared"] == 4 and b["only_full_unstable"] == 1
+    assert b["compared"] == 4
+    assert b["only_full_unstable"] == 1
 
 
 def test_agreement_rejects_foreign_grids_and_missing_variables():
@@ -90,7 +96,8 @@ def test_diagram_values_are_the_local_coefficients(tiny, engine):
     assert ds["r1d_unstable"].values[i, j] == int(c.unstable)
     assert ds["r1d_dq0"].values[i, j] == pytest.approx(c.dq0, rel=1e-6)
     # (θ, ν0) = (16°, 0.05): the paper's P1 — unstable in the 1D model, at every k
-    assert ds["r1d_unstable"].values[1, 0] == 1 and ds["r1d_short_wave"].values[1, 0] == 1
+    assert ds["r1d_unstable"].values[1, 0] == 1
+    assert ds["r1d_short_wave"].values[1, 0] == 1
 
 
 def test_engines_agree(tiny):

@@ -65,7 +65,8 @@ def test_condition_with_errata_is_exactly_the_sign_of_the_growth_rate(c):
 def test_printed_condition_differs_from_the_exact_one_at_finite_k():
     # the paper's (a/ρ0 + μ̄k²)² agrees only when ρ0 = 1 or k → 0: ERRATA item 4
     c = _state(rho0=0.5, dU=5.0, dTbar=-2.0)
-    assert c.dP > 0 and c.unstable
+    assert c.dP > 0
+    assert c.unstable
     k = np.linspace(0.01, 3 * c.k_c, 2000)
     exact = c.growth_rate(k) > 0
     printed = c.condition(k, errata=False)
@@ -85,18 +86,24 @@ def test_k_c_is_the_neutral_wavenumber(c):
     assert c.growth_rate(0.999 * kc) > 0 > c.growth_rate(1.001 * kc)
     assert c.L_c == pytest.approx(2 * math.pi / kc)
     kmax, smax = c.most_unstable()
-    assert 0 < kmax < kc and smax >= c.growth_rate(np.linspace(1e-4, kc, 500)).max() - 1e-12
+    assert 0 < kmax < kc
+    assert smax >= c.growth_rate(np.linspace(1e-4, kc, 500)).max() - 1e-12
 
 
 def test_short_wave_unstable_and_stable_states():
     c = _state(dU=-3.0, dTbar=-10.0)  # (ρ0 T̄)' < 0
-    assert c.short_wave_unstable and c.unstable and c.k_c == math.inf and c.L_c == 0.0
+    assert c.short_wave_unstable
+    assert c.unstable
+    assert c.k_c == math.inf
+    assert c.L_c == 0.0
     k = np.logspace(-3, 3, 50)
     assert (c.growth_rate(k) > 0).all()
     # the growth rate saturates at ρ0 |(ρ0T̄)'| / μ̄ for k → ∞
     assert c.growth_rate(1e5) == pytest.approx(c.rho0 * abs(c.dP) / c.mu_bar, rel=1e-6)
     s = _state(dU=0.5, dTbar=0.5)
-    assert not s.unstable and s.k_c == 0.0 and s.L_c == math.inf
+    assert not s.unstable
+    assert s.k_c == 0.0
+    assert s.L_c == math.inf
     assert (s.growth_rate(k) < 0).all()
 
 
@@ -195,7 +202,7 @@ def test_outside_the_family_is_an_error_naming_the_range(rm16):
 
 
 @pytest.mark.parametrize(
-    "kw, match",
+    ("kw", "match"),
     [
         ({"theta": 95.0}, "theta"),
         ({"theta": 16.0, "nu0_min": 0.3, "nu0_max": 0.2}, "nu0_min"),
@@ -210,10 +217,11 @@ def test_bad_parameters(kw, match):
 
 def test_table_and_summary(rm16):
     ds = rm16.table(20)
-    assert set(("F", "Tbar", "a", "U", "criterion_margin", "k_c")) <= set(ds.data_vars)
+    assert {"F", "Tbar", "a", "U", "criterion_margin", "k_c"} <= set(ds.data_vars)
     assert ds.attrs["theta"] == 16.0
     s = rm16.summary()
-    assert s["knots"] == len(rm16.rho) and s["rho_range"][0] == rm16.rho_range[0]
+    assert s["knots"] == len(rm16.rho)
+    assert s["rho_range"][0] == rm16.rho_range[0]
 
 
 def test_rho_at_nu0_is_exact_at_every_knot(rm16):
@@ -253,9 +261,11 @@ def test_walk_goes_on_where_continuation_stalls_inside_the_family():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         rm = reduced_model(16.237, _LOW, tol=1e-3, seeds=(0.0219,))
-    assert rm.nu0[0] == 0.005 and 0.024 < rm.nu0[-1] < 0.026
+    assert rm.nu0[0] == 0.005
+    assert 0.024 < rm.nu0[-1] < 0.026
     c = rm.coefficients(rm.rho_at_nu0(0.0219))
-    assert np.isfinite(c.alpha2) and c.rho0 > 0
+    assert np.isfinite(c.alpha2)
+    assert c.rho0 > 0
 
 
 def test_no_family_at_all_is_one_clear_error():

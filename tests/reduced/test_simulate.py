@@ -61,7 +61,9 @@ def test_discrete_dispersion_converges_to_the_2x2_relation_at_second_order(rm16,
         errs.append(np.abs(d - a).max())
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
     # 3.43, 3.82, 3.95: approaching 4 from below (asymptotic from N ≈ 256, k dx ≲ 0.07)
-    assert np.all(ratios > 3.3) and np.all(np.diff(ratios) > 0) and 3.8 < ratios[-1] < 4.2, ratios
+    assert np.all(ratios > 3.3), ratios
+    assert np.all(np.diff(ratios) > 0), ratios
+    assert 3.8 < ratios[-1] < 4.2, ratios
     assert errs[-1] < 1e-3 * np.abs(a).max()  # (k dx)² ≈ 3e-4 for n = 3
 
 
@@ -75,7 +77,8 @@ def test_long_wave_phase_velocity_is_minus_dq0_drho(rm16, state16):
         alpha = s.discrete_dispersion(state16.rho0, 1)[0]
         errs.append(abs(alpha.imag / k + state16.dq0) / state16.dq0)
         assert alpha.real == pytest.approx(state16.alpha2 * k**2, rel=0.05)  # Re α ≈ α2 k²
-    assert errs[0] > errs[1] > errs[2] and errs[2] < 1e-6, errs
+    assert errs[0] > errs[1] > errs[2], errs
+    assert errs[2] < 1e-6, errs
 
 
 @pytest.fixture(scope="module")
@@ -164,7 +167,8 @@ def test_second_order_convergence_in_space_nonlinear(rm16, state16):
     err = {N: np.abs(sols[N] - _restrict(ref, 2048 // N)).max() for N in (128, 256, 512)}
     r1, r2 = err[128] / err[256], err[256] / err[512]
     # measured 3.59, 4.11 (the 2048 reference contributes ~1/16 of err[512])
-    assert 3.3 < r1 < 4.5 and 3.6 < r2 < 4.5, (err, r1, r2)
+    assert 3.3 < r1 < 4.5, (err, r1, r2)
+    assert 3.6 < r2 < 4.5, (err, r1, r2)
     assert err[512] < 2e-3 * state16.rho0
 
 
@@ -203,7 +207,7 @@ def test_stable_state_decays(rm16):
 
 
 @pytest.mark.parametrize(
-    "kw, match",
+    ("kw", "match"),
     [
         ({"rho0": 0.5, "nu0": 0.1}, "exactly one"),
         ({"rho0": 5.0}, "rho0"),
@@ -235,13 +239,18 @@ def test_stepper_with_trackers_is_what_simulate_returns(rm16, state16):
         trackers=[snaps, ProgressTracker(lambda t, te: seen.append((t, te)))],
     )
     ds = sim.dataset(snaps, info)
-    assert info.status == "completed" and info.t == 30.0 and not info.auto_time
+    assert info.status == "completed"
+    assert info.t == 30.0
+    assert not info.auto_time
     assert np.array_equal(ds["rho"].values, ref["rho"].values)
     assert ds.attrs["frame_speed"] == ref.attrs["frame_speed"]
-    assert set(ds.attrs) == set(ref.attrs) and set(ds.data_vars) == set(ref.data_vars)
+    assert set(ds.attrs) == set(ref.attrs)
+    assert set(ds.data_vars) == set(ref.data_vars)
     # progress after every step, in increasing time, against the requested end
     ts = [t for t, _ in seen]
-    assert len(seen) == info.steps and ts == sorted(ts) and ts[-1] == 30.0
+    assert len(seen) == info.steps
+    assert ts == sorted(ts)
+    assert ts[-1] == 30.0
     assert {te for _, te in seen} == {30.0}
 
 
@@ -264,10 +273,13 @@ def test_snapshot_interval_and_a_custom_stop_condition(rm16, state16):
     info = sim.run(sim.perturbed(mode=1, amplitude=1e-3), 1000.0, trackers=[snaps, GrownTenfold()])
     # mode 1 grows at Re α ≈ 0.036: ten-fold after ln 10 / 0.036 ≈ 64
     rate = float(sim.growth_discrete[0].real)
-    assert info.status == "grown" and abs(info.t - math.log(10) / rate) < 0.1 * info.t
-    assert np.allclose(np.diff(snaps.times), 5.0) and snaps.times[-1] <= info.t
+    assert info.status == "grown"
+    assert abs(info.t - math.log(10) / rate) < 0.1 * info.t
+    assert np.allclose(np.diff(snaps.times), 5.0)
+    assert snaps.times[-1] <= info.t
     ds = sim.dataset(snaps, info)
-    assert ds.attrs["status"] == "grown" and ds.attrs["mass_drift"] < 1e-14
+    assert ds.attrs["status"] == "grown"
+    assert ds.attrs["mass_drift"] < 1e-14
 
 
 def test_saturation_stop_and_leave_family_stop(rm16, state16):
@@ -278,7 +290,9 @@ def test_saturation_stop_and_leave_family_stop(rm16, state16):
     assert sim.max_growth_rate < 0
     stop = SaturationStop(count=40)
     info = sim.run(sim.perturbed(amplitude=1e-3), trackers=[stop])
-    assert info.auto_time and info.status == "decayed" and info.t < info.t_end
+    assert info.auto_time
+    assert info.status == "decayed"
+    assert info.t < info.t_end
     assert stop.amplitudes[-1] < math.exp(-10) * stop.amplitudes[0] * 1.01
     # a large wave leaves the family: raise without LeaveFamilyStop, stop with it
     sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=256)
@@ -287,12 +301,14 @@ def test_saturation_stop_and_leave_family_stop(rm16, state16):
         sim.run(init, 2000.0)
     snaps = SnapshotTracker(count=50)
     info = sim.run(init, 2000.0, trackers=[snaps, LeaveFamilyStop()])
-    assert info.status == "left_family" and "left the steady family" in info.left_family
-    assert snaps.times[-1] == info.t and np.array_equal(snaps.states[-1], info.y)
+    assert info.status == "left_family"
+    assert "left the steady family" in info.left_family
+    assert snaps.times[-1] == info.t
+    assert np.array_equal(snaps.states[-1], info.y)
 
 
 @pytest.mark.parametrize(
-    "cls, kw, match",
+    ("cls", "kw", "match"),
     [
         ("SnapshotTracker", {"count": 1}, "n_out"),
         ("SnapshotTracker", {}, "exactly one"),

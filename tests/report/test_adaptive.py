@@ -57,9 +57,13 @@ def test_agreeing_corners_are_interpolated_and_row_ends_computed():
     assert counts == {"coarse": 4, "refined": 2, "inferred": 10, "failed": 0}
     flag = ds["alpha2_inferred"].values
     a2 = ds["alpha2_re"].values
-    assert (flag[[0, 0, 3, 3], [0, 3, 0, 3]] == 0).all() and flag[1, 0] == 0 and flag[2, 0] == 0
-    assert flag[1, 1] == 1 and flag[2, 3] == 1
-    assert np.isfinite(a2).all() and (a2 < 0).all()
+    assert (flag[[0, 0, 3, 3], [0, 3, 0, 3]] == 0).all()
+    assert flag[1, 0] == 0
+    assert flag[2, 0] == 0
+    assert flag[1, 1] == 1
+    assert flag[2, 3] == 1
+    assert np.isfinite(a2).all()
+    assert (a2 < 0).all()
     assert (ds["unstable"].values == 0).all()
 
 
@@ -74,9 +78,11 @@ def test_sign_change_cell_is_computed():
     )
     ds = _dataset(cfg, {(0, 0): 1.0, (1, 1): -1.0})
     out, counts = refine_longwave(ds, cfg, workers=1)
-    assert counts["inferred"] == 0 and counts["refined"] == 2
+    assert counts["inferred"] == 0
+    assert counts["refined"] == 2
     # P1 (16°, 0.05) is long-wave unstable, (16.1°, 0.05) too (paper §4.2, regime B)
-    assert out["alpha2_re"].values[1, 0] > 0 and out["alpha2_inferred"].values[1, 0] == 0
+    assert out["alpha2_re"].values[1, 0] > 0
+    assert out["alpha2_inferred"].values[1, 0] == 0
 
 
 def test_stride_validated():
@@ -103,14 +109,20 @@ def test_refine_reuses_the_sweeps_flows():
     sweep = Sweep(cfg)
     ds = sweep.run(workers=1, keep_flows=True)
     ok = ds["status"].values == 0
-    assert ok.all() and set(sweep.flows) == {(i, j) for i in range(4) for j in range(4)}
+    assert ok.all()
+    assert set(sweep.flows) == {(i, j) for i in range(4) for j in range(4)}
     flow = sweep.flows[(3, 0)]
-    assert flow.theta == pytest.approx(16.3) and flow.nu0 == pytest.approx(0.05)
+    assert flow.theta == pytest.approx(16.3)
+    assert flow.nu0 == pytest.approx(0.05)
     a, ca = refine_longwave(ds, cfg, workers=1, flows=sweep.flows)
     b, cb = refine_longwave(ds, cfg, workers=1)
-    assert ca == cb and ca["coarse"] == 4 and ca["refined"] == 12
+    assert ca == cb
+    assert ca["coarse"] == 4
+    assert ca["refined"] == 12
     ra, rb = a["alpha2_re"].values, b["alpha2_re"].values
-    assert np.isfinite(ra).all() and (ra[:, 0] > 0).all() and (ra[:, 3] < 0).all()
+    assert np.isfinite(ra).all()
+    assert (ra[:, 0] > 0).all()
+    assert (ra[:, 3] < 0).all()
     # the two flows differ within the steady rtol (1e-8); α2 moves by less than its own
     # convergence estimate (the relative change between its two finest resolutions;
     # measured: differences ≤ 2.6e-6 relative against estimates ≥ 6.7e-5)
@@ -152,9 +164,13 @@ def test_row_ends_take_the_sweeps_flows():
 
     with mock.patch.object(edges, "solve_steady", refused):
         (end,) = edges.row_ends(ds, flows={(0, 1): flow}, bisections=2)
-    assert len(calls) == 2 and all(g is flow for g in calls)  # bisection only, from the flow
-    assert end["nu0"] == flow.nu0 and end["how"] == "grid" and end["h"] == flow.h
-    assert end["kind"] == "stable" and end["alpha2_re"] < 0
+    assert len(calls) == 2
+    assert all(g is flow for g in calls)
+    assert end["nu0"] == flow.nu0
+    assert end["how"] == "grid"
+    assert end["h"] == flow.h
+    assert end["kind"] == "stable"
+    assert end["alpha2_re"] < 0
 
 
 def test_row_ends_below_the_grid_leave_the_sweeps_flows_alone():
@@ -171,7 +187,8 @@ def test_row_ends_below_the_grid_leave_the_sweeps_flows_alone():
     cfg, ds = _row_ends_dataset(shape=(2, 1), theta_range=(16.0, 16.1), nu0_range=(0.08, 0.08))
     flows = {(i, 0): solve_steady(float(th), 0.08) for i, th in enumerate(cfg.theta)}
     ends = edges.row_ends(ds, flows=flows, halvings=1)
-    assert len(ends) == 2 and all(e["kind"] != "error" for e in ends)
+    assert len(ends) == 2
+    assert all(e["kind"] != "error" for e in ends)
     assert all(e["nu0"] <= 0.08 and e["how"] in ("below grid", "grid, no flow found below") for e in ends)
 
 
@@ -197,7 +214,9 @@ def test_row_end_without_a_long_wave_value_is_a_failed_row():
     flow = SimpleNamespace(theta=20.14, nu0=3.1e-4)
     fns = [Fixed({"dU_drho": -9226.9}), Fixed({"alpha2_re": None}, "longwave: Re α/k² = nan")]
     rec = edges._classify_flow(flow, fns)
-    assert rec["kind"] == "error" and "Re α/k² = nan" in rec["error"] and not rec["consistent"]
+    assert rec["kind"] == "error"
+    assert "Re α/k² = nan" in rec["error"]
+    assert not rec["consistent"]
     end = {"theta": 20.14, "nu0": 3.1e-4, "h": 84.0, **rec}
     ok = {
         "theta": 16.0,
@@ -209,5 +228,6 @@ def test_row_end_without_a_long_wave_value_is_a_failed_row():
         "consistent": True,
     }
     c = checks.check_low_density_unstable(xr.Dataset(attrs={"roughness": 0.1}), [ok, end])
-    assert "1 of 1 θ rows" in c["computed"] and "1 rows failed" in c["computed"]
+    assert "1 of 1 θ rows" in c["computed"]
+    assert "1 rows failed" in c["computed"]
     assert "undetermined" not in c["computed"]

@@ -24,7 +24,8 @@ def test_points_are_the_papers():
     assert [m[0] for m in markers(0.05)] == ["P1", "P2", "P3", "P4", "P5"]
     assert markers(0.10) == (("Q1", 20.0, 0.10), ("Q2", 20.0, 0.15), ("Q3", 20.0, 0.17))
     assert markers(0.2) == ()
-    assert POINTS["P4"].theta == 14.0 and POINTS["P4"].nu0 == 0.05
+    assert POINTS["P4"].theta == 14.0
+    assert POINTS["P4"].nu0 == 0.05
     assert set(PAPER_UNSTABLE) <= set(POINTS)
 
 
@@ -36,7 +37,8 @@ def test_figure_numbers_match_the_label_table():
 
 
 def test_stages_belong_to_the_default_paper():
-    assert DEFAULT_PAPERS == ("mitarai2004",) and set(DEFAULT_PAPERS) <= set(PAPERS)
+    assert DEFAULT_PAPERS == ("mitarai2004",)
+    assert set(DEFAULT_PAPERS) <= set(PAPERS)
     assert load_stages() == {}
     names = [s.name for s in registered_stages(DEFAULT_PAPERS)]
     assert names == ["steady", "stability", "diagrams", "reduced", "waves", "transverse", "dns"]

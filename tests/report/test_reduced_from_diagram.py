@@ -26,12 +26,14 @@ def test_diagram_metric_equals_reduced_sweep():
     full = classify(run_sweep(cfg, None, workers=1, progress=False))
     own = reduced_diagram(0.05, grid=GRID)
     red = _from_full(full)
-    assert (red["status"].values == 0).all() and (own["status"].values == 0).all()
+    assert (red["status"].values == 0).all()
+    assert (own["status"].values == 0).all()
     for v in ("r1d_margin", "r1d_alpha2", "r1d_dq0", "r1d_dP", "r1d_Tbar", "h"):
         np.testing.assert_allclose(red[v].values, own[v].values, rtol=1e-6, err_msg=v)
     np.testing.assert_array_equal(red["r1d_unstable"].values, own["r1d_unstable"].values)
     agr = agreement(red, full)
-    assert agr["compared"] == 6 and agr == agreement(own, full)
+    assert agr["compared"] == 6
+    assert agr == agreement(own, full)
 
 
 def test_not_critical_and_status_from_full():

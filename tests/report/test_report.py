@@ -14,7 +14,7 @@ def test_checkpoint_status_and_coercion():
     assert Checkpoint("a", "§1", "s", "c", np.bool_(True)).passed is True
     assert Checkpoint("a", "§1", "s", "c", False).status == "fail"
     assert Checkpoint("a", "§1", "s", "c", None).status == "not checked"
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="non-empty string"):
         Checkpoint("", "§1", "s", "c", True)
 
 
@@ -22,7 +22,9 @@ def test_checkpoint_compare():
     ok = Checkpoint.compare(
         "h", source="§3", statement="h ≈ 23", value=23.5, expected=23.0, rtol=0.05, name="h"
     )
-    assert ok.passed and "h = 23.5" in ok.computed and "paper 23" in ok.computed
+    assert ok.passed
+    assert "h = 23.5" in ok.computed
+    assert "paper 23" in ok.computed
     bad = Checkpoint.compare("h2", source="§3", statement="h ≈ 23", value=30.0, expected=23.0, rtol=0.05)
     assert bad.passed is False
     assert (
@@ -38,12 +40,15 @@ def test_report_sections_and_duplicates(tmp_path):
         rep.check("s1", source="s", statement="x", computed="y", passed=False)
         rep.add_figure(tmp_path / "missing.png", "not written")
     assert list(rep.sections) == ["general", "steady"]
-    assert rep.counts() == {"pass": 1, "fail": 1, "not checked": 0} and not rep.ok
+    assert rep.counts() == {"pass": 1, "fail": 1, "not checked": 0}
+    assert not rep.ok
     with pytest.raises(ValueError, match="duplicate"):
         rep.check("s1", source="s", statement="x", computed="y", passed=True)
     paths = rep.write(tmp_path, wall_time=1.5)
     html = paths["html"].read_text(encoding="utf-8")
-    assert "missing figure" in html and "theta" in html and "1.5 s" in html
+    assert "missing figure" in html
+    assert "theta" in html
+    assert "1.5 s" in html
     assert "## Steady flows" in paths["md"].read_text(encoding="utf-8")
 
 
@@ -59,7 +64,8 @@ def test_adopt_replaces_a_section_in_place():
     other = Section("b", "B", status="ok")
     other.checkpoints.append(Checkpoint(id="b.y", source="-", statement="-", computed="-", passed=True))
     rep.adopt(other)
-    assert list(rep.sections) == ["a", "b"] and rep.sections["b"] is other
+    assert list(rep.sections) == ["a", "b"]
+    assert rep.sections["b"] is other
     clash = Section("b", "B")
     clash.checkpoints.append(Checkpoint(id="a.x", source="-", statement="-", computed="-", passed=True))
     with pytest.raises(ValueError, match="duplicate checkpoint id 'a.x'"):

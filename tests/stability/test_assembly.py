@@ -100,7 +100,8 @@ def test_plan_counts_every_term_once():
         ):
             expected += sum(1 for t in eqs[name].terms if t.field in fields and not t.d and (bulk or not t.a))
     assert len(plan.entries) == expected
-    assert plan.keys[0] == (0, 0) and all(d == 0 for _b, d in plan.keys)
+    assert plan.keys[0] == (0, 0)
+    assert all(d == 0 for _b, d in plan.keys)
     # the top rows carry the |k| terms: the last row of every block but ν̂'s
     m = 41
     assert plan.k_rows == tuple(i * m + m - 1 for i in range(1, len(fields)))

@@ -86,7 +86,8 @@ def test_p1_is_unstable_below_k_c_of_about_0_007(p1_flow):
     assert 0.0065 < k_c < 0.0075
     assert k_c == pytest.approx(0.00712486, rel=2e-6)
     ds = dispersion(p1_flow, [0.3 * k_c, 0.9 * k_c, 1.1 * k_c, 2 * k_c])
-    assert (ds["alpha_re"].values[:2] > 0).all() and (ds["alpha_re"].values[2:] < 0).all()
+    assert (ds["alpha_re"].values[:2] > 0).all()
+    assert (ds["alpha_re"].values[2:] < 0).all()
 
 
 def test_dispersion_dataset(p1_flow):
@@ -95,9 +96,11 @@ def test_dispersion_dataset(p1_flow):
     assert np.allclose(ds["k"].values, ks[::-1])
     assert ds["physical"].values.all()
     # the paper's criterion: eigenvalues change by less than 1e-7 between resolutions
-    assert (ds["drift"].values < 1e-7).all() and (ds["tail"].values < 1e-7).all()
+    assert (ds["drift"].values < 1e-7).all()
+    assert (ds["tail"].values < 1e-7).all()
     assert abs(ds["alpha_re"].values[-1]) < 1e-11  # k = 0 (last, as given)
-    assert ds.attrs["theta"] == P1[0] and ds.attrs["roughness"] == 0.05
+    assert ds.attrs["theta"] == P1[0]
+    assert ds.attrs["roughness"] == 0.05
     assert ds.attrs["dQ_drho"] == pytest.approx(4.1524, abs=1e-4)
     assert ds["alpha_re"].attrs["units"]
 
@@ -113,7 +116,8 @@ def test_p4_unstable(flows):
     max Re α ≈ 9.8e-6 near k = 1e-3, stable again by k = 2e-3."""
     ds = dispersion(flows("P4"), [1e-4, 5e-4, 1e-3, 3e-3])
     re = ds["alpha_re"].values
-    assert (re[:3] > 0).all() and re[3] < 0
+    assert (re[:3] > 0).all()
+    assert re[3] < 0
 
 
 @pytest.mark.slow
@@ -123,10 +127,12 @@ def test_p3_stable_for_all_k(flows):
     default grid resolves the layer edge and needs N ≤ 80 (benchmarks/probes/n_table.py)."""
     ks = np.linspace(0.0, 0.05, 26)[1:]
     ds = dispersion(flows("P3"), ks)
-    assert (ds["alpha_re"].values < 0).all() and ds["physical"].values.all()
+    assert (ds["alpha_re"].values < 0).all()
+    assert ds["physical"].values.all()
     assert ds["n"].values.max() <= 80
     plain = dispersion(flows("P3"), ks, cache=OperatorCache(mapped=False))
-    assert (plain["alpha_re"].values < 0).all() and plain["n"].values.max() >= 100
+    assert (plain["alpha_re"].values < 0).all()
+    assert plain["n"].values.max() >= 100
     # two discretisations of one problem agree to the paper's eigenvalue criterion
     assert np.abs(plain["alpha_re"].values - ds["alpha_re"].values).max() < 1e-7
 
@@ -202,7 +208,8 @@ def test_first_step_from_k0_is_halved_until_alpha1_k_predicts_it():
     ref = min(qz, key=lambda m: abs(m.alpha - mode.alpha))
     # measured α(1e-4) = 6.7911e-4 − 6.1612e-4i, drift 1.8e-12 against N' = 64
     assert abs(mode.alpha - ref.alpha) < 1e-9 * abs(ref.alpha) + 1e-12
-    assert ref.alpha.real > 6e-4 and ref.alpha.real == max(m.alpha.real for m in qz)
+    assert ref.alpha.real > 6e-4
+    assert ref.alpha.real == max(m.alpha.real for m in qz)
     # and the branch starts on α1 k: at k = 1e-7 the first step hits the predictor
     a = BranchTracker(flow, 80, n_max=80).mode(1e-7).alpha
     assert abs(a - tracker.alpha1 * 1e-7) < 0.02 * abs(tracker.alpha1) * 1e-7
@@ -224,7 +231,8 @@ def test_dispersion_past_a_dissolved_branch_is_resolved_cheaply():
     ds = dispersion(flow, ks, strict=False)
     assert ds.attrs["branch_lost_at"] == pytest.approx(0.0079)
     for i in (1, 2):
-        assert bool(ds["direct"].values[i]) and ds["n"].values[i] <= 100
+        assert bool(ds["direct"].values[i])
+        assert ds["n"].values[i] <= 100
         assert ds["drift"].values[i] < 1e-7
     # measured −0.0214659 − 0.2570957i at N = 80 (drift 2.9e-8 against N' = 64)
     assert complex(ds.alpha_re.values[2], ds.alpha_im.values[2]) == pytest.approx(
@@ -253,8 +261,10 @@ def test_direct_ladder_follows_the_first_rungs_candidate_to_the_qz_ladders_answe
     policy = RejectionPolicy()
     got = disp._direct_ladder(flow, 0.0155, policy, OperatorCache(2))
     ref = least_stable(flow, 0.0155, method="qz", policy=policy, cache=OperatorCache(2))
-    assert ref.physical and ref.n == 125  # the case: the first rung does not resolve it
-    assert got.physical and got.n == ref.n
+    assert ref.physical
+    assert ref.n == 125
+    assert got.physical
+    assert got.n == ref.n
     # both converge the same eigenvalue at N = 125 (a dense QZ and shift-invert: round-off
     # apart, ~1e-13); 1e-10 is far below the drift 2.9e-8 that both report
     assert abs(got.alpha - ref.alpha) < 1e-10

@@ -76,7 +76,7 @@ def _hand_written_operator(op):
     return old
 
 
-@pytest.mark.parametrize("kx, kz", [(2e-3, 0.0), (0.02, 0.0), (2e-3, 1e-3), (0.0, 5e-3)])
+@pytest.mark.parametrize(("kx", "kz"), [(2e-3, 0.0), (0.02, 0.0), (2e-3, 1e-3), (0.0, 5e-3)])
 def test_eigenvalues_unchanged(p1_flow, kx, kz):
     """The least-stable eigenvalue of the derived and of the hand-written operator agree to
     round-off, in 2D and for oblique wavevectors (|k| = √(k_x² + k_z²))."""

@@ -52,7 +52,8 @@ def test_refine_peak_skewed_maximum():
 
     xs = [-0.9, -0.2, 0.5]
     x, y, pay, n = _refine_peak(f, xs, [f(v)[0] for v in xs])
-    assert abs(x) < 0.02 and pay == x
+    assert abs(x) < 0.02
+    assert pay == x
     assert y == pytest.approx(0.5, rel=1e-3)
     assert n <= 12
 
@@ -63,7 +64,8 @@ def test_longitudinal_peak_p1(p1_flow):
     physical mode, and is the least-stable mode there (``least_stable``, an independent
     solve; tolerance 1e-7, the drift threshold)."""
     pk = longitudinal_peak(p1_flow)
-    assert pk.physical and pk.direction == "longitudinal"
+    assert pk.physical
+    assert pk.direction == "longitudinal"
     assert pk.growth == pytest.approx(1.187488e-3, rel=1e-5)
     assert pk.k == pytest.approx(2.28e-3, rel=0.03)
     assert pk.cutoff == pytest.approx(7.125e-3, rel=0.02)  # k_c ≈ 0.00712 (paper ≈ 0.007)
@@ -80,7 +82,8 @@ def test_transverse_peak_p1(p1_flow):
     (its Brent tolerance); the mode there is physical and stationary."""
     a2z = float(transverse_longwave(p1_flow, 80).alpha2_z.real)
     pk = transverse_peak(p1_flow, alpha2z=a2z, policy=RejectionPolicy(n_start=48))
-    assert pk.physical and pk.alpha_im == 0.0
+    assert pk.physical
+    assert pk.alpha_im == 0.0
     assert pk.growth == pytest.approx(6.18015e-5, rel=2e-5)
     assert pk.k == pytest.approx(1.928e-3, rel=0.02)
     assert pk.cutoff == pytest.approx(3.2539e-3, rel=1e-3)
@@ -118,6 +121,9 @@ def test_one_resolution_check_serves_both_axes(p1_flow):
     alpha, w = tr.advance(0.005)
     ref = tr.mode(0.005)
     mode = judge_resolved(p1_flow, 0.005, 0.0, alpha, w, 80, three_d=False, policy=RejectionPolicy(n_max=80))
-    assert mode is not None and mode.physical == ref.physical and mode.n == ref.n == 80
-    assert mode.alpha == ref.alpha and mode.drift == pytest.approx(ref.drift, rel=1e-6, abs=1e-15)
+    assert mode is not None
+    assert mode.physical == ref.physical
+    assert mode.n == ref.n == 80
+    assert mode.alpha == ref.alpha
+    assert mode.drift == pytest.approx(ref.drift, rel=1e-6, abs=1e-15)
     assert mode.tail == pytest.approx(ref.tail, rel=1e-9)

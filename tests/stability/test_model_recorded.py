@@ -18,6 +18,7 @@ def test_mode_records_the_model(p1_flow):
 
 def test_longwave_records_the_model(p1_flow):
     lw = longwave(p1_flow, rtol=0.2)
-    assert isinstance(lw, LongWave) and lw.model == p1_flow.model
+    assert isinstance(lw, LongWave)
+    assert lw.model == p1_flow.model
     assert lw.summary()["radial"] == "lun_savage"
     assert hash(lw) == hash(lw)

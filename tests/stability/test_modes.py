@@ -56,10 +56,13 @@ def test_continuum_passes_drift_but_fails_tail(flows):
     flow = flows("P3")
     modes = spectrum(flow, K, n=80, physical_only=False)
     top = modes[0]
-    assert top.alpha.real > -1e-6 and abs(top.alpha.imag + K * flow.u[-1]) < 1e-6
-    assert top.drift < 1e-7 < top.tail and not top.physical
+    assert top.alpha.real > -1e-6
+    assert abs(top.alpha.imag + K * flow.u[-1]) < 1e-6
+    assert top.drift < 1e-7 < top.tail
+    assert not top.physical
     physical = [m for m in modes if m.physical]
-    assert physical and physical[0].alpha.real < -1e-3  # P3 is stable (figure 7c)
+    assert physical
+    assert physical[0].alpha.real < -1e-3
 
 
 @pytest.mark.slow
@@ -76,15 +79,19 @@ def test_qz_scan_and_branch_agree_on_the_least_stable_mode(flows):
 
 def test_mode_carries_convergence_and_exports(p1_flow):
     m = least_stable(p1_flow, K)
-    assert isinstance(m, Mode) and m.physical
-    assert m.drift < 1e-7 and m.tail < 1e-7 and m.n_check < m.n
+    assert isinstance(m, Mode)
+    assert m.physical
+    assert m.drift < 1e-7
+    assert m.tail < 1e-7
+    assert m.n_check < m.n
     assert set(m.fields) == {"nu", "u", "v", "T"}
     big = max(np.abs(f).max() for f in m.fields.values())
     assert big == pytest.approx(1.0)
     s = m.summary()
     assert {"k", "alpha_re", "alpha_im", "drift", "tail", "n"} <= set(s)
     ds = m.to_xarray()
-    assert ds["nu"].shape == m.y.shape and ds.attrs["n"] == m.n
+    assert ds["nu"].shape == m.y.shape
+    assert ds.attrs["n"] == m.n
     assert m.wave_speed == pytest.approx(-m.alpha.imag / K)
 
 

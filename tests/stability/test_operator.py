@@ -249,7 +249,8 @@ def test_k_expansion_pieces_rebuild_the_operator(p1_flow):
     assert np.count_nonzero(op.B - np.diag(B)) == 0  # diagonal
     boundary = np.zeros(op.size, bool)
     boundary[0::m] = boundary[m - 1 :: m] = True
-    assert (B[boundary] == 0).all() and (B[~boundary] > 0).all()
+    assert (B[boundary] == 0).all()
+    assert (B[~boundary] > 0).all()
     assert np.allclose(B[1 : m - 1], 1.0)  # mass rows: ∂_t ν̂ with coefficient 1
 
 

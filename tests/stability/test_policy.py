@@ -29,7 +29,8 @@ def test_default_policy_is_the_papers():
     assert RejectionPolicy(n_max=100).ladder() == [80, 100]
     assert RejectionPolicy(n_max=64).ladder() == [64]
     assert RejectionPolicy(n_start=48).ladder() == [48, 60, 75, 94, 118, 148, 185, 231, 256]
-    assert p.accepts(9e-8, 9e-8) and not p.accepts(1e-7, 0.0)
+    assert p.accepts(9e-8, 9e-8)
+    assert not p.accepts(1e-7, 0.0)
 
 
 def test_policy_is_frozen_and_checked():
@@ -82,7 +83,9 @@ def test_policy_ranks_a_direct_mode_over_the_relaxed_branch():
 def test_policy_and_keywords_agree(p1_flow):
     a = least_stable(p1_flow, K, n=80, policy=RejectionPolicy(drift_tol=1e-6))
     b = least_stable(p1_flow, K, n=80, drift_tol=1e-6)
-    assert a.alpha == b.alpha and a.drift_tol == b.drift_tol == 1e-6 and a.physical
+    assert a.alpha == b.alpha
+    assert a.drift_tol == b.drift_tol == 1e-6
+    assert a.physical
 
 
 def test_two_flows_never_share_an_operator(p1_flow):
@@ -90,7 +93,9 @@ def test_two_flows_never_share_an_operator(p1_flow):
     twin = dataclasses.replace(p1_flow)  # equal content, another object
     op1 = stability_operator(p1_flow, 24, cache=cache)
     op2 = stability_operator(twin, 24, cache=cache)
-    assert op1 is not op2 and op1.flow is p1_flow and op2.flow is twin
+    assert op1 is not op2
+    assert op1.flow is p1_flow
+    assert op2.flow is twin
     assert stability_operator(p1_flow, 24, cache=cache) is op1  # a hit
     assert stability_operator(p1_flow, 24, True, cache=cache) is not op1  # 3D: another one
 

@@ -59,7 +59,8 @@ def test_p5_oblique_answer_is_the_least_stable_resolved_mode(p5):
     assert abs(mode.alpha - ref.alpha) < 1e-6, (mode.alpha, ref.alpha)
     assert abs(mode.alpha - (-0.0070865 - 0.0179171j)) < 1e-6
     # the branch, resolved too, is more damped: the search found the mode above it
-    assert mode.method == "global" and "more damped" in mode.note
+    assert mode.method == "global"
+    assert "more damped" in mode.note
 
 
 def test_without_the_search_the_branch_is_returned(p5):
@@ -101,7 +102,9 @@ def test_continuum_candidate_is_decided_not_a_mode(p5):
     # the resolved mode, followed the same way, passes both tests
     k = int(np.argmin(np.abs(w - (-0.0070865 - 0.0179171j))))
     g = follow_candidate(p5, KX, KZ, complex(w[k]), V[:, k], 48, rungs, DEFAULT_POLICY, cache)
-    assert g.verdict == "mode" and g.mode is not None and abs(g.mode.alpha - w[k]) < 1e-5
+    assert g.verdict == "mode"
+    assert g.mode is not None
+    assert abs(g.mode.alpha - w[k]) < 1e-5
 
 
 def test_search_keeps_a_resolved_answer_with_nothing_above(flows):
@@ -134,7 +137,9 @@ def test_a_slowly_converging_mode_above_flags_the_answer(flows):
     assert not mode.converged
     # within its own drift estimate (2.6e-3 at N = 94) of the value the longer ladder converges to
     assert abs(mode.alpha - (-0.0511 - 0.0385j)) < 2 * mode.drift, (mode.alpha, mode.drift)
-    assert "-0.0847" in mode.note and "not decided" in mode.note and "stays above" in mode.note
+    assert "-0.0847" in mode.note
+    assert "not decided" in mode.note
+    assert "stays above" in mode.note
 
 
 @pytest.mark.slow
@@ -146,7 +151,9 @@ def test_the_slow_mode_above_keeps_converging_on_a_longer_ladder(flows):
     # followed to the top of the ladder (no early "undecided")
     longer = DEFAULT_POLICY.replace(n_max=512, search=SearchPolicy(hopeless=1e12))
     mode = least_stable(flows("P3"), 0.005, kz=0.1, policy=longer)
-    assert mode.n == 512 and mode.drift < 2e-6 and mode.tail < 1e-9
+    assert mode.n == 512
+    assert mode.drift < 2e-6
+    assert mode.tail < 1e-9
     assert abs(mode.alpha - (-0.0511007 - 0.0384992j)) < 5e-6
     assert mode.alpha.real > -0.0847714 + 0.03
 
@@ -165,7 +172,8 @@ def test_dispersion_reports_where_the_branch_is_not_the_least_stable_mode(flows)
     assert list(ds.branch_is_least.values) == [True, False]
     assert ds.least_converged.values.all()
     least = complex(ds.least_re.values[1], ds.least_im.values[1])
-    assert abs(ds.alpha_re.values[1] - (-0.12788)) < 1e-4 and abs(least.real - (-0.12217)) < 1e-4
+    assert abs(ds.alpha_re.values[1] - (-0.12788)) < 1e-4
+    assert abs(least.real - (-0.12217)) < 1e-4
     cache = OperatorCache(2)
     p = cache.get(p1, 156, False).pencil(ks[1])
     w1, V1 = qz(*p.equilibrated())

@@ -65,9 +65,11 @@ def test_wavelength_below_a_diameter_is_refused(p1_flow):
         least_stable(p1_flow, 7.0)
     assert K_HYDRO_MAX == pytest.approx(2 * math.pi)
     result = runner.invoke(app, ["eig", "--theta", "16", "--nu0", "0.05", "--k", "1e6"])
-    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert result.exit_code == 2
+    assert "Traceback" not in result.output
     err = result.stderr.strip()
-    assert len(err.splitlines()) == 1 and "particle diameter" in err, err
+    assert len(err.splitlines()) == 1, err
+    assert "particle diameter" in err, err
 
 
 def test_large_k_is_solved_directly(p1_flow):
@@ -76,7 +78,9 @@ def test_large_k_is_solved_directly(p1_flow):
     rung no longer needs (TrackingPolicy.top_check_below), gave the same answer
     (measured with it: −1.1187050263 − 24.2834542581i, drift 1.9e-8, 107 s; 47 s without)."""
     mode = least_stable(p1_flow, 3.0)
-    assert mode.method == "qz" and mode.physical and mode.alpha.real < 0
+    assert mode.method == "qz"
+    assert mode.physical
+    assert mode.alpha.real < 0
     assert mode.n == 244
     assert mode.alpha == pytest.approx(-1.1187050263 - 24.2834542581j, abs=mode.drift + 1e-9)
 
@@ -87,19 +91,23 @@ def test_lost_branch_falls_back_to_direct_solve(point):
     flow = _flow(theta, nu0, phi, wall_loss)
     mode = least_stable(flow, 0.005)
     assert mode.method == "qz (branch lost)"
-    assert "lost the branch" in mode.note and "continuum" in mode.note
+    assert "lost the branch" in mode.note
+    assert "continuum" in mode.note
     if point == LOST[0]:
         # the relaxed branch is rejected by the tests at every N (it wanders between −0.00530
         # and −0.00614, drift ≥ 1.8e-4 up to N = 256); the least-stable physical mode is the
         # resolved −0.00522663 − 0.0310785i (independent: dense QZ at N = 256, drift
         # 1.3e-11, tail 2.4e-12), which passes both tests from N = 125 (drift 2.8e-8)
-        assert mode.physical and mode.n <= 156
+        assert mode.physical
+        assert mode.n <= 156
         assert mode.alpha.real == pytest.approx(-0.00522663, abs=2e-8)
         assert mode.alpha.imag == pytest.approx(-0.0310785, abs=1e-7)
         assert "rejected by the paper's tests" in mode.note
     # the answer is the least-stable (nearly) resolved mode, not a far more stable one that
     # passes the tests (measured: Re α ≈ −0.005 … −0.004 at the first and third point)
-    assert mode.drift < 1e-5 and mode.tail < 1e-5 and mode.alpha.real < 0
+    assert mode.drift < 1e-5
+    assert mode.tail < 1e-5
+    assert mode.alpha.real < 0
     # the CLI answers with exit 0 and one warning line
     result = runner.invoke(
         app,
@@ -120,8 +128,10 @@ def test_lost_branch_falls_back_to_direct_solve(point):
     )
     assert result.exit_code == 0, result.output
     out = json.loads(result.stdout)
-    assert out["method"] == "qz (branch lost)" and out["converged"] is mode.converged
-    assert result.stderr.startswith("warning: ") and len(result.stderr.splitlines()) == 1
+    assert out["method"] == "qz (branch lost)"
+    assert out["converged"] is mode.converged
+    assert result.stderr.startswith("warning: ")
+    assert len(result.stderr.splitlines()) == 1
 
 
 def test_strict_still_raises(p1_flow):
@@ -132,14 +142,17 @@ def test_strict_still_raises(p1_flow):
     with pytest.raises(ConvergenceError, match="least-stable mode"):
         least_stable(p1_flow, 0.002, policy=tight, strict=True)
     mode = least_stable(p1_flow, 0.002, policy=tight)
-    assert not mode.converged and mode.n == 80 and mode.drift > 0
+    assert not mode.converged
+    assert mode.n == 80
+    assert mode.drift > 0
 
 
 def test_eigen_coefficient_converges_at_100_nodes(p1_flow):
     """Re α/k² at k = 1e-5 from the tracked eigenvalue converges to ~1e-6 by N ≈ 100
     (measured: P1 12308.05 ± 0.01 for N = 80…200), unlike the Taylor α2 (ERRATA)."""
     vals, conv, n = eigen_coefficient(p1_flow)
-    assert n <= 125 and conv < 1e-4
+    assert n <= 125
+    assert conv < 1e-4
     assert vals[1] == pytest.approx(12308.05, rel=1e-5)
     assert vals[0] > vals[1] > vals[2] > 0  # measured: Re α/k² falls with k (ERRATA)
 
@@ -149,10 +162,12 @@ def test_longwave_never_raises_and_flags(flows):
     estimate; Re α2 = Re α/k² at 1e-5 (measured −39.996 at N = 125) decides the sign. At N = 100 the
     Taylor Re α2 even has the wrong sign (measured +841; −91.4 at N = 480): the flag says so."""
     lw = longwave(flows("P2"), n=80, n_max=100, rtol=1e-3, strict=False)
-    assert not lw.taylor_converged and lw.alpha2_taylor_convergence > 1e-3
+    assert not lw.taylor_converged
+    assert lw.alpha2_taylor_convergence > 1e-3
     assert lw.alpha2.real == pytest.approx(-39.996, rel=2e-4)
     assert not lw.unstable
-    assert lw.alpha2_taylor.real > 0 and not lw.sign_consistent
+    assert lw.alpha2_taylor.real > 0
+    assert not lw.sign_consistent
     with pytest.raises(ConvergenceError, match="raise n_max"):
         longwave(flows("P2"), n=80, n_max=100, rtol=1e-3)
     assert lw.summary()["alpha2_re"] == lw.alpha2.real
@@ -166,12 +181,15 @@ def test_p4_critical_k_without_error(flows):
     the whole scan converges (measured k_c = 0.00189515 at N ≤ 185)."""
     plain = OperatorCache(mapped=False)
     found = crossings(flows("P4"), k_max=0.05, cache=plain)
-    assert isinstance(found, Crossings) and not found.converged and "0.04" in found.message
+    assert isinstance(found, Crossings)
+    assert not found.converged
+    assert "0.04" in found.message
     assert found[0] == pytest.approx(0.0019, rel=0.02)
     with pytest.raises(ConvergenceError):
         crossings(flows("P4"), k_max=0.05, strict=True, cache=OperatorCache(mapped=False))
     mapped = crossings(flows("P4"), k_max=0.05)
-    assert isinstance(mapped, Crossings) and mapped.converged
+    assert isinstance(mapped, Crossings)
+    assert mapped.converged
     # plain and mapped grids: independent discretisations of one problem (1e-4: the plain
     # grid's flagged value is converged near k_c itself, only the points near 0.04 are not)
     assert mapped[0] == pytest.approx(found[0], rel=1e-4)
@@ -189,7 +207,8 @@ def test_cli_longwave_p2_p4_exit_zero(args):
     if args[4] == "0.08":  # P2: the Taylor α2 (a diagnostic) converges only algebraically:
         # flagged in the JSON (measured relative change 1.6e-2 at N = 480 > rtol 1e-2), while
         # α2 itself converged (measured 3.6e-6; −39.995 at N = 125)
-        assert out["taylor_converged"] is False and out["alpha2_convergence"] < 1e-4
+        assert out["taylor_converged"] is False
+        assert out["alpha2_convergence"] < 1e-4
     # no warning: α2 is converged (P4: Re α2 to ~1e-2, round-off), the Taylor sign agrees, and
     # P4's k_c is converged on the sinh-mapped grid (it was flagged on the plain one)
     assert result.stderr == ""
@@ -212,20 +231,24 @@ def test_lost_branch_is_followed_near_the_continuum(point):
     if point == LOST[0]:
         # the branch itself, as least_stable followed it before it looks for a resolved mode
         mode = after_lost_branch(flow, 0.005, n=125, check_direct=False)
-        assert mode is not None and mode.n == 125
-    assert mode.method == "branch (relaxed)" and not mode.converged
+        assert mode is not None
+        assert mode.n == 125
+    assert mode.method == "branch (relaxed)"
+    assert not mode.converged
     assert "phase velocity" in mode.note
     c = -mode.alpha.imag / mode.k
     assert float(flow.u.min()) < c < float(flow.u.max()) + 0.01  # inside the u0 range
     # measured drifts |α(N) − α(0.8 N)| on the ladder: 1.8e-4 … 4.9e-4 (first point, where
     # the branch is entangled with the continuum: Re α scatters −0.0053 … −0.0061 for
     # N = 80 … 256), 3.3e-6 at N = 244 (second point)
-    assert mode.drift < 5e-4 and mode.alpha.real < 0
+    assert mode.drift < 5e-4
+    assert mode.alpha.real < 0
     if point == LOST[1]:
         # the branch tracked at fixed N with the relaxed threshold (independent runs):
         # −0.0028442 − 0.0189068i (N = 160), −0.0028347 − 0.0188997i (195),
         # −0.0028371 − 0.0188973i (256): spread 1.5e-5
-        assert mode.n == 244 and mode.drift < 1e-5
+        assert mode.n == 244
+        assert mode.drift < 1e-5
         assert abs(mode.alpha - complex(-0.0028376, -0.0188980)) < 2e-5
     if point == LOST[0]:
         return
@@ -237,9 +260,11 @@ def test_lost_branch_is_followed_near_the_continuum(point):
     )
     assert result.exit_code == 0, result.output
     out = json.loads(result.stdout)
-    assert out["method"] == "branch (relaxed)" and out["converged"] is False
+    assert out["method"] == "branch (relaxed)"
+    assert out["converged"] is False
     assert out["alpha_re"] == pytest.approx(mode.alpha.real, abs=1e-12)
-    assert result.stderr.startswith("warning: ") and len(result.stderr.splitlines()) == 1
+    assert result.stderr.startswith("warning: ")
+    assert len(result.stderr.splitlines()) == 1
 
 
 @pytest.mark.slow
@@ -254,13 +279,15 @@ def test_every_paper_point_answers(name):
     ds = dispersion(flow, [0.0, 0.001, 0.002, 0.005, 0.01, 0.02], strict=False)
     assert ds.alpha_re.notnull().all()
     lw = longwave(flow, strict=False)
-    assert math.isfinite(lw.alpha2.real) and math.isfinite(lw.alpha2_taylor.real)
+    assert math.isfinite(lw.alpha2.real)
+    assert math.isfinite(lw.alpha2_taylor.real)
     kc = critical_k(flow, k_max=0.05)
     if name == "P1":
         assert kc == pytest.approx(0.00712, rel=0.01)
         assert lw.unstable
     if name in ("P2", "P3"):
-        assert not lw.unstable and kc is None
+        assert not lw.unstable
+        assert kc is None
 
 
 def test_near_continuum_branch_reaches_k_where_the_tracker_stalls():
@@ -275,8 +302,11 @@ def test_near_continuum_branch_reaches_k_where_the_tracker_stalls():
     with pytest.raises(ConvergenceError, match="lost the branch"):
         BranchTracker(flow, 80, n_max=80).advance(0.005)
     mode = near_continuum_branch(flow, 0.005, n=80)
-    assert mode is not None and mode.method == "branch (relaxed)" and mode.n == 80
-    assert mode.drift < 3e-4 and abs(mode.alpha - complex(-0.0028376, -0.0188980)) < 2 * mode.drift
+    assert mode is not None
+    assert mode.method == "branch (relaxed)"
+    assert mode.n == 80
+    assert mode.drift < 3e-4
+    assert abs(mode.alpha - complex(-0.0028376, -0.0188980)) < 2 * mode.drift
 
 
 @pytest.mark.slow
@@ -290,7 +320,8 @@ def test_dispersion_follows_a_lost_branch_with_the_relaxed_threshold():
     flow = _flow(16.5, 0.13, 0.08, 0.30)
     ds = dispersion(flow, [0.001, 0.005], strict=False, policy=RejectionPolicy(n_start=80, n_max=80))
     assert ds.attrs["branch_lost_at"] == 0.005
-    assert not ds.direct.values.any() and not ds.physical.values[1]
+    assert not ds.direct.values.any()
+    assert not ds.physical.values[1]
     alpha = complex(float(ds.alpha_re[1]), float(ds.alpha_im[1]))
     assert abs(alpha - complex(-0.0027679, -0.0192902)) < 1e-6
     assert float(ds.drift[1]) < 3e-4

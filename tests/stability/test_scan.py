@@ -30,14 +30,21 @@ def test_long_wave_unstable_branch():
     s = _scan([3.0, 5.0, 5.0, 3.0, -1.0, -7.0, -15.0])
     # crossing in [4, 5]/256: 4/256 + 3/(3 + 1)·(1/256) = 4.75/256
     assert s.crossings == (4.75 / 256,)
-    assert s.k_c == 4.75 / 256 and s.cutoff() == s.k_c
+    assert s.k_c == 4.75 / 256
+    assert s.cutoff() == s.k_c
     # parabola through (1, 3), (2, 5), (3, 5) (k in 1/256): 5 − (x − 2.5)² + 0.25 … vertex
     # at x = 2.5 with value 5.25
     pk = s.peak()
-    assert pk.k == 2.5 / 256 and pk.growth == 5.25 and pk.refined and not pk.at_edge
+    assert pk.k == 2.5 / 256
+    assert pk.growth == 5.25
+    assert pk.refined
+    assert not pk.at_edge
     assert s.converged
     c = s.to_crossings()
-    assert isinstance(c, Crossings) and list(c) == [4.75 / 256] and c.converged and c.k_reached == 7 / 256
+    assert isinstance(c, Crossings)
+    assert list(c) == [4.75 / 256]
+    assert c.converged
+    assert c.k_reached == 7 / 256
 
 
 def test_long_wave_stable_branch_with_a_finite_band():
@@ -48,16 +55,22 @@ def test_long_wave_stable_branch_with_a_finite_band():
     assert s.k_c is None
     assert s.cutoff() == 5.5 / 256
     pk = s.peak()
-    assert pk.k == 4 / 256 and pk.growth == 1.0 and pk.refined and not pk.at_edge
+    assert pk.k == 4 / 256
+    assert pk.growth == 1.0
+    assert pk.refined
+    assert not pk.at_edge
 
 
 def test_signs_kept_on_the_scan():
     """No sign change: no k_c, no cut-off; the peak at the edge of the scan is not refined."""
     up = _scan([1.0, 2.0, 3.0, 4.0])
-    assert up.crossings == () and up.k_c is None and up.cutoff() is None  # band goes on past the scan
+    assert up.crossings == ()
+    assert up.k_c is None
+    assert up.cutoff() is None
     assert up.peak() == (4 / 256, 4.0, False, True)
     down = _scan([-1.0, -2.0, -3.0])
-    assert down.k_c is None and down.cutoff() is None
+    assert down.k_c is None
+    assert down.cutoff() is None
     assert down.peak() == (1 / 256, -1.0, False, True)
 
 
@@ -65,9 +78,12 @@ def test_exact_zero_and_unreached_samples():
     """A sample exactly 0 closes the bracket that ends there (counted once); no sign change is
     decided across an unreached sample (NaN), and the scan is then not converged."""
     s = _scan([2.0, 0.0, -2.0])
-    assert s.crossings == (2 / 256,) and s.k_c == 2 / 256
+    assert s.crossings == (2 / 256,)
+    assert s.k_c == 2 / 256
     gap = _scan([2.0, math.nan, -2.0])
-    assert gap.crossings == () and gap.k_c is None and not gap.converged
+    assert gap.crossings == ()
+    assert gap.k_c is None
+    assert not gap.converged
     assert gap.k_reached == 3 / 256
 
 
@@ -77,17 +93,21 @@ def test_the_sampled_rule():
     assert sign_changes(v) == [0, 2, 5]
     assert critical_index(v) is None  # first change − → +
     assert cutoff_index(v) == 5
-    assert critical_index([1.0, -1.0, 1.0, -1.0]) == 0 and cutoff_index([1.0, -1.0, 1.0, -1.0]) == 2
+    assert critical_index([1.0, -1.0, 1.0, -1.0]) == 0
+    assert cutoff_index([1.0, -1.0, 1.0, -1.0]) == 2
     assert cutoff_index([1.0, -1.0, 1.0]) is None  # positive at the last sample
-    assert peak_index(v) == 2 and peak_index([math.nan, -np.inf]) is None
+    assert peak_index(v) == 2
+    assert peak_index([math.nan, -np.inf]) is None
     assert peak_index([5.0, 1.0, 2.0], k=[0.0, 1.0, 2.0]) == 2  # k = 0 is outside (0, k_max]
     assert linear_crossing([1.0, 3.0], [1.0, -3.0], 0) == 1.5
 
 
 def test_to_xarray():
     ds = _scan([3.0, 5.0, 5.0, 3.0, -1.0, -7.0, -15.0]).to_xarray()
-    assert ds.attrs["k_c"] == 4.75 / 256 and ds.attrs["cutoff"] == 4.75 / 256
-    assert ds.attrs["peak_growth"] == 5.25 and ds.attrs["converged"] == 1
+    assert ds.attrs["k_c"] == 4.75 / 256
+    assert ds.attrs["cutoff"] == 4.75 / 256
+    assert ds.attrs["peak_growth"] == 5.25
+    assert ds.attrs["converged"] == 1
     np.testing.assert_array_equal(ds.alpha_re.values, [3.0, 5.0, 5.0, 3.0, -1.0, -7.0, -15.0])
     assert "k_c" not in _scan([-1.0, -0.5, 0.5, 1.0, 0.5, -0.5, -1.0]).to_xarray().attrs
 
@@ -104,9 +124,11 @@ def test_api_forms_agree_with_the_scan(p1_flow):
     scan = branch_scan(p1_flow, k_max=0.02, num=15)
     assert scan.k_c == critical_k(p1_flow, k_max=0.02, num=15)
     assert tuple(crossings(p1_flow, k_max=0.02, num=15)) == scan.crossings
-    assert scan.k_c == pytest.approx(0.00712486, rel=2e-6) and scan.cutoff() == scan.k_c
+    assert scan.k_c == pytest.approx(0.00712486, rel=2e-6)
+    assert scan.cutoff() == scan.k_c
     # the peak (tests/stability/test_growth_peak.py: 1.187485e-3 at k = 2.273e-3)
     pk = scan.peak()
-    assert pk.refined and pk.growth == pytest.approx(1.187488e-3, rel=1e-5)
+    assert pk.refined
+    assert pk.growth == pytest.approx(1.187488e-3, rel=1e-5)
     assert pk.k == pytest.approx(2.28e-3, rel=0.01)
     assert pk.growth >= np.nanmax(scan.growth)

@@ -42,11 +42,13 @@ def test_alpha2z_from_eigenvalues(lw, p1_flow):
     the extrapolation's gain 2.5 and the O(k_z²) remainder, measured 9e-5 relative overall."""
     k1, k3 = 1e-5, 3e-5
     m1, m3 = transverse_mode(p1_flow, k1), transverse_mode(p1_flow, k3)
-    assert m1.physical and m3.physical
+    assert m1.physical
+    assert m3.physical
     f1, f3 = m1.alpha.real / k1**2, m3.alpha.real / k3**2
     f0 = f1 - (f3 - f1) * k1 / (k3 - k1)
     assert f0 == pytest.approx(lw.alpha2_z.real, rel=3e-4)
-    assert abs(m1.alpha.imag) < 1e-20 and abs(m3.alpha.imag) < 1e-20
+    assert abs(m1.alpha.imag) < 1e-20
+    assert abs(m3.alpha.imag) < 1e-20
 
 
 def test_lubrication_formula_and_lateral_pressure(lw, p1_flow):
@@ -76,7 +78,8 @@ def test_transverse_result_summary(p1_flow):
     s = r.summary()
     for key in ("alpha2_z", "kz_max", "growth_max", "stationary", "unstable"):
         assert key in s
-    assert s["unstable"] and s["stationary"]
+    assert s["unstable"]
+    assert s["stationary"]
     assert 1e-3 < s["kz_max"] < 3e-3
     assert s["growth_max"] == pytest.approx(6.18e-5, rel=2e-2)
     with pytest.raises(dataclasses.FrozenInstanceError):

@@ -39,7 +39,8 @@ def test_real_pieces_equal_the_assembled_real_form(p1_flow, n, kz):
     A, B, s = real_form(op.pencil(0.0, kz))
     _, Ar, bd, s2 = _real_pencil(op, kz)
     assert np.abs(Ar - A).max() <= 1e-14 * np.abs(A).max()
-    assert np.array_equal(bd, np.diag(B)) and np.array_equal(s, s2)
+    assert np.array_equal(bd, np.diag(B))
+    assert np.array_equal(s, s2)
 
 
 @pytest.mark.parametrize(
@@ -55,7 +56,8 @@ def test_real_form_shift_invert_finds_the_same_eigenpair(p1_flow, kz, sigma):
     shift = sigma * (1 + 1e-4)
     a_ref, w_ref = nearest_eigenpair(pencil, shift)
     a, w, p = _nearest_kx0(op, kz, shift, v0=w_ref)
-    assert p.n == 80 and p.kz == kz
+    assert p.n == 80
+    assert p.kz == kz
     # both settle to the inverse iteration's tolerance 1e-7 |α − σ| (ShiftInvert.iterate)
     tol = 1e-7 * abs(a_ref - shift) + 1e-12 * (1 + abs(a_ref))
     assert abs(a - a_ref) <= tol

@@ -30,7 +30,8 @@ def test_tracked_branch_equals_dense_scan(p1_flow, a2z, kz):
     tr = TransverseTracker(p1_flow, alpha2z=a2z)
     m = tr.mode(kz)
     ref = transverse_mode(p1_flow, kz)
-    assert m.physical and ref.physical
+    assert m.physical
+    assert ref.physical
     assert abs(m.alpha - ref.alpha) < 2e-12 + 1e-7 * abs(ref.alpha)
     assert m.method == "branch"
 
@@ -62,10 +63,12 @@ def test_fast_transverse_analysis_matches_dense_numbers(p1_flow):
     points before the continuum equals brentq on dense solves (3.254e-3) to 1e-3."""
     r = transverse(p1_flow, num=50)
     s = r.summary()
-    assert s["method"] == "track" and s["all_physical"]
+    assert s["method"] == "track"
+    assert s["all_physical"]
     assert s["kz_max"] == pytest.approx(1.928e-3, rel=1e-2)
     assert s["growth_max"] == pytest.approx(6.1801e-5, rel=1e-4)
-    assert s["stationary"] and s["unstable"]
+    assert s["stationary"]
+    assert s["unstable"]
     assert s["kz_cutoff"] == pytest.approx(3.254e-3, rel=1e-3)
 
 
@@ -86,7 +89,8 @@ def test_beyond_the_branch_candidates_match_dense(p1_flow, a2z):
     d = transverse_dispersion(p1_flow, ks, alpha2z=a2z, beyond=True)
     ref = transverse_dispersion(p1_flow, ks[1:], method="dense")
     assert list(d.method) == ["branch", "shift", "shift"]
-    assert bool(d.physical.all()) and bool(ref.physical.all())
+    assert bool(d.physical.all())
+    assert bool(ref.physical.all())
     assert np.allclose(d.alpha_re[1:], ref.alpha_re, rtol=0, atol=1e-7)
     assert np.allclose(np.abs(d.alpha_im[1:]), np.abs(ref.alpha_im), rtol=0, atol=1e-7)
     assert d.alpha_re[1] == pytest.approx(-0.2839, abs=1e-3)

@@ -37,7 +37,8 @@ def test_json_output():
         assert k in d, k
     f = solve_steady(16, 0.05)
     assert d["rho_bar"] == pytest.approx(f.rho_bar, rel=1e-12)
-    assert d["monotonic"] is True and d["roughness"] == 0.05
+    assert d["monotonic"] is True
+    assert d["roughness"] == 0.05
 
 
 def test_model_options_reach_the_solver():
@@ -67,17 +68,19 @@ def test_model_options_reach_the_solver():
     from chuteflow.closures import ChuteModel
 
     f = solve_steady(20, 0.1, ChuteModel(roughness=0.1))
-    assert d["roughness"] == 0.1 and d["h"] == pytest.approx(f.h, rel=1e-12)
+    assert d["roughness"] == 0.1
+    assert d["h"] == pytest.approx(f.h, rel=1e-12)
 
 
 def test_table_output():
     r = runner.invoke(app, ["steady", "--theta", "16", "--nu0", "0.05"])
     assert r.exit_code == 0, r.output
-    assert "slip velocity" in r.stdout and "8.19453" in r.stdout
+    assert "slip velocity" in r.stdout
+    assert "8.19453" in r.stdout
 
 
 @pytest.mark.parametrize(
-    "args, words",
+    ("args", "words"),
     [
         (["--theta", "16", "--nu0", "0.7"], ["nu0", "nu_max"]),
         (["--theta", "-2", "--nu0", "0.05"], ["theta"]),
@@ -89,7 +92,8 @@ def test_bad_input_one_line_error(args, words):
     r = runner.invoke(app, ["steady", *args])
     assert r.exit_code == 2
     err = r.stderr.strip()
-    assert "Traceback" not in r.output and len(err.splitlines()) == 1
+    assert "Traceback" not in r.output
+    assert len(err.splitlines()) == 1
     assert err.startswith("error: ")
     for w in words:
         assert w in err
@@ -100,7 +104,8 @@ def test_no_steady_flow_is_a_user_error():
     r = runner.invoke(app, ["steady", "--theta", "12", "--nu0", "0.1"])
     assert r.exit_code == 2
     err = r.stderr.strip()
-    assert len(err.splitlines()) == 1 and "too small" in err
+    assert len(err.splitlines()) == 1
+    assert "too small" in err
 
 
 def test_unresolved_flow_is_printed_with_a_warning():
@@ -126,10 +131,13 @@ def test_strict_option_makes_an_unresolved_flow_an_error():
     r = CliRunner().invoke(app, argv)
     code = fast_main(argv)
     if r.exit_code == 0:  # resolved after all (then both paths print it)
-        assert json.loads(r.stdout)["converged"] is True and code == 0
+        assert json.loads(r.stdout)["converged"] is True
+        assert code == 0
     else:
-        assert r.exit_code == 2 and code == 2
-        assert "did not converge" in r.stderr and "Traceback" not in r.stderr
+        assert r.exit_code == 2
+        assert code == 2
+        assert "did not converge" in r.stderr
+        assert "Traceback" not in r.stderr
 
 
 def test_transverse_at_an_unresolved_flow_prints_one_warning():
@@ -146,6 +154,8 @@ def test_transverse_at_an_unresolved_flow_prints_one_warning():
     d = json.loads(r.stdout)
     assert d["alpha2_z"] < 0
     if d["kz_computed"] == 0:
-        assert d["drift_max"] is None and d["tail_max"] is None
+        assert d["drift_max"] is None
+        assert d["tail_max"] is None
     lines = r.stderr.strip().splitlines()
-    assert len(lines) <= 1 and all(x.startswith("warning: the steady flow") for x in lines)
+    assert len(lines) <= 1
+    assert all(x.startswith("warning: the steady flow") for x in lines)

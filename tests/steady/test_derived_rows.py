@@ -71,7 +71,7 @@ class _HandWrittenNewton(SteadyNewton):
 CASES = [(16.0, 0.05), (16.0, 0.15), (20.0, 0.17)]
 
 
-@pytest.mark.parametrize("theta, nu0", CASES)
+@pytest.mark.parametrize(("theta", "nu0"), CASES)
 @pytest.mark.parametrize("integrated", [True, False])
 def test_derived_rows_equal_hand_written(theta, nu0, integrated):
     """At a state away from the solution (the isothermal cold start, and that start
@@ -95,7 +95,7 @@ def test_derived_rows_equal_hand_written(theta, nu0, integrated):
                 assert np.abs(a - b).max() <= 1e-13 * np.abs(b).max(), rows
 
 
-@pytest.mark.parametrize("theta, nu0", CASES)
+@pytest.mark.parametrize(("theta", "nu0"), CASES)
 def test_same_newton_iterates_as_hand_written(theta, nu0):
     """Cold start and polish with the derived and with the hand-written rows: the same
     number of iterations, residual histories that agree to round-off (absolute a few 1e-12,

@@ -30,13 +30,16 @@ def test_integrate_events_and_dense_output():
     an event with the wrong direction does not stop it, and at y_cap status 0."""
     fun = lambda y, z: [-z[0], z[0]]  # noqa: E731
     tr = integrate(fun, [1.0, 0.0], 10.0, 1e-10, [("half", lambda z: z[0] - 0.5, -1)], dense=True)
-    assert tr.event == "half" and tr.status == 0
+    assert tr.event == "half"
+    assert tr.status == 0
     assert tr.t[-1] == pytest.approx(math.log(2.0), abs=1e-9)
     assert tr.y[1, -1] == pytest.approx(0.5, abs=1e-9)
     yy = np.linspace(0.0, math.log(2.0), 50)
     np.testing.assert_allclose(tr.sol(yy)[0], np.exp(-yy), atol=1e-8)
     tr = integrate(fun, [1.0, 0.0], 3.0, 1e-10, [("up", lambda z: z[0] - 0.5, +1)])
-    assert tr.event is None and tr.status == 0 and tr.t[-1] == pytest.approx(3.0)
+    assert tr.event is None
+    assert tr.status == 0
+    assert tr.t[-1] == pytest.approx(3.0)
     assert tr.sol is None
 
 
@@ -77,7 +80,8 @@ def test_ode_matches_independent_transcription():
         np.testing.assert_allclose(mine, theirs, rtol=1e-12)
         T0, dT0 = ode.floor_values(math.exp(z[0]), z[1])
         rT0, rdT0 = ref.floor_values(theta, math.exp(z[0]), z[1], ref.Material(phi=phi))
-        assert T0 == pytest.approx(rT0, rel=1e-12) and dT0 == pytest.approx(rdT0, rel=1e-10)
+        assert T0 == pytest.approx(rT0, rel=1e-12)
+        assert dT0 == pytest.approx(rdT0, rel=1e-10)
 
 
 def _ref_sign(theta, nu0, u, mat, rtol):
@@ -162,7 +166,8 @@ def test_flow_found_where_cold_start_failed():
     gives the flow (u0(0) by the independent shooting: 17.17271897)."""
     f = solve_steady(18.0, 0.05, continuation=False)
     assert f.u_floor == pytest.approx(17.17271897, rel=1e-7)
-    assert f.convergence < 1e-8 and not f.monotonic
+    assert f.convergence < 1e-8
+    assert not f.monotonic
 
 
 def test_flow_found_where_old_code_stalled():
@@ -181,11 +186,17 @@ def test_verdicts_name_the_case():
     """No sign change: every trial hot (12°, ν0(0) = 0.1: angle too small) or every trial
     cold (19°, 0.05: too large); a thin solution (14°, 0.045) is a solution but h < 1."""
     small = steady_existence(12.0, 0.1)
-    assert not small.exists and small.kind == "too_small" and "too small" in small.reason
+    assert not small.exists
+    assert small.kind == "too_small"
+    assert "too small" in small.reason
     large = steady_existence(19.0, 0.05)
-    assert not large.exists and large.kind == "too_large" and "too large" in large.reason
+    assert not large.exists
+    assert large.kind == "too_large"
+    assert "too large" in large.reason
     thin = steady_existence(14.0, 0.045)
-    assert thin.exists and not thin.physical and thin.h < 1
+    assert thin.exists
+    assert not thin.physical
+    assert thin.h < 1
     with pytest.raises(NoSteadyFlowError, match="too large"):
         solve_steady(19.0, 0.05, continuation=False)
 
@@ -195,8 +206,10 @@ def test_shot_agrees_with_newton():
     u0(0) to 1e-6, h and y_max to 1e-4 (loose scan tolerances)."""
     v = steady_existence(16.0, 0.05)
     f = solve_steady(16.0, 0.05)
-    assert v.physical and v.u_floor == pytest.approx(f.u_floor, rel=1e-6)
-    assert v.h == pytest.approx(f.h, rel=1e-4) and v.y_max == pytest.approx(f.y_max, rel=1e-4)
+    assert v.physical
+    assert v.u_floor == pytest.approx(f.u_floor, rel=1e-6)
+    assert v.h == pytest.approx(f.h, rel=1e-4)
+    assert v.y_max == pytest.approx(f.y_max, rel=1e-4)
 
 
 def test_scan_trial_that_changes_sign_with_the_tolerance():
@@ -211,7 +224,8 @@ def test_scan_trial_that_changes_sign_with_the_tolerance():
     model = ChuteModel(roughness=0.0455, wall_loss=0.469, restitution=0.688)
     nu0 = 0.16556300557587944
     v = steady_existence(17.161, nu0, model)
-    assert v.exists and v.kind == "flow"
+    assert v.exists
+    assert v.kind == "flow"
     assert v.u_floor == pytest.approx(17.18868648, rel=1e-5)  # the scan's root at fine_rtol
     f = solve_steady(17.161, nu0, model)
     with warnings.catch_warnings(), np.errstate(all="ignore"):

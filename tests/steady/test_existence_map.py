@@ -59,7 +59,8 @@ def _check_map(phi, n_theta, n_nu, seed):
                 assert physical, where
             elif st[i, j] == "not_converged":
                 # only a flow that exists but is not resolved, with the scan's estimate
-                assert exists and "a steady flow exists" in err[i, j], where
+                assert exists, where
+                assert "a steady flow exists" in err[i, j], where
             else:  # no_steady_flow or thin: none at least one diameter thick
                 assert not physical, where
     return st
@@ -87,7 +88,9 @@ def test_family_decides_every_point():
     st = ds.status.values
     assert set(st) <= {"ok", "thin", "no_steady_flow"}
     ok = np.nonzero(st == "ok")[0]
-    assert len(ok) and (np.diff(ok) == 1).all() and ok[-1] == len(nus) - 1
+    assert len(ok)
+    assert (np.diff(ok) == 1).all()
+    assert ok[-1] == len(nus) - 1
     for j in range(ok[0]):
         assert st[j] in ("thin", "no_steady_flow")
         assert "shooting" in ds.error.values[j] or "thickness" in ds.error.values[j]
@@ -96,7 +99,11 @@ def test_family_decides_every_point():
 def test_proof_quadrants():
     """A verdict 'too small' covers smaller θ and ν0(0); 'too large' larger ones."""
     low = Proof(14.0, 0.05, "too_small", "")
-    assert low.covers(13.0, 0.04) and low.covers(14.0, 0.05)
-    assert not low.covers(14.5, 0.04) and not low.covers(13.0, 0.06)
+    assert low.covers(13.0, 0.04)
+    assert low.covers(14.0, 0.05)
+    assert not low.covers(14.5, 0.04)
+    assert not low.covers(13.0, 0.06)
     high = Proof(17.0, 0.2, "too_large", "")
-    assert high.covers(18.0, 0.25) and not high.covers(16.0, 0.3) and not high.covers(18.0, 0.1)
+    assert high.covers(18.0, 0.25)
+    assert not high.covers(16.0, 0.3)
+    assert not high.covers(18.0, 0.1)

@@ -29,7 +29,8 @@ def test_family_dataset(fam16):
     for k in ("restitution", "nu_max", "roughness", "wall_loss", "nu_top", "rtol", "theta"):
         assert k in ds.attrs
     assert ds.attrs["chuteflow_version"] == __version__
-    assert ds.attrs["roughness"] == 0.05 and ds.attrs["theta"] == 16.0
+    assert ds.attrs["roughness"] == 0.05
+    assert ds.attrs["theta"] == 16.0
     assert float(ds.convergence.max()) < 1e-8
 
 
@@ -58,9 +59,11 @@ def test_points_without_flow_are_nan_with_status():
     """No exception for points without a steady flow: NaN and a status string."""
     ds = steady_family(14.0, [0.02, 0.08, 0.1])
     st = ds.status.values
-    assert st[1] == "ok" and st[2] == "ok"
+    assert st[1] == "ok"
+    assert st[2] == "ok"
     assert st[0] != "ok"
-    assert np.isnan(ds.h.values[0]) and np.isnan(ds.monotonic.values[0])
+    assert np.isnan(ds.h.values[0])
+    assert np.isnan(ds.monotonic.values[0])
 
 
 def test_family_rejects_bad_input():
@@ -79,7 +82,8 @@ def test_flux_monotonic_at_14_degrees():
     ds = steady_family(14.0, np.geomspace(0.05, 0.3, 8))
     ok = ds.status.values == "ok"
     assert ok.sum() >= 6
-    assert (ds.dQ_drho.values[ok] > 0).all() and (ds.drho_dnu0.values[ok] > 0).all()
+    assert (ds.dQ_drho.values[ok] > 0).all()
+    assert (ds.drho_dnu0.values[ok] > 0).all()
     assert flux_minimum(14.0, nu0_values=np.geomspace(0.05, 0.3, 8)) is None
 
 
@@ -101,7 +105,8 @@ def test_flux_phi010_monotonic_20_minimum_21():
     nus = np.geomspace(0.01, 0.2, 8)
     assert flux_minimum(20.0, PHI10, nu0_values=nus) is None
     r = flux_minimum(21.0, PHI10, nu0_values=nus)
-    assert r is not None and 0.05 < r["rho_bar"] < 0.3
+    assert r is not None
+    assert 0.05 < r["rho_bar"] < 0.3
 
 
 def test_small_map():
@@ -110,7 +115,8 @@ def test_small_map():
     ths = [15.0, 16.0, 17.0]
     nus = np.geomspace(0.02, 0.12, 5)
     ds = steady_map(ths, nus, workers=1)
-    assert ds.h.dims == ("theta", "nu0") and ds.h.shape == (3, 5)
+    assert ds.h.dims == ("theta", "nu0")
+    assert ds.h.shape == (3, 5)
     assert (ds.status.values == "ok").all()
     fam = steady_family(17.0, nus)
     assert np.allclose(ds.h.sel(theta=17.0), fam.h, rtol=1e-9)
@@ -138,7 +144,8 @@ def test_existence_range_phi005():
     )
     lo = existence_limit(flows, ds, "low")
     hi = existence_limit(flows, ds, "high")
-    assert abs(lo["theta"] - 8.0) <= 2.0 and abs(hi["theta"] - 20.0) <= 2.0
+    assert abs(lo["theta"] - 8.0) <= 2.0
+    assert abs(hi["theta"] - 20.0) <= 2.0
 
 
 @pytest.mark.slow
@@ -163,7 +170,9 @@ def test_steady_row_is_steady_family_without_the_table():
     for (_, f, _), g in zip(row, flows):
         assert (f is None) == (g is None)
         if f is not None:
-            assert np.array_equal(f.u, g.u) and np.array_equal(f.T, g.T) and f.y_max == g.y_max
+            assert np.array_equal(f.u, g.u)
+            assert np.array_equal(f.T, g.T)
+            assert f.y_max == g.y_max
 
 
 def test_no_step_up_from_a_layer_at_the_top_changes_no_answer():

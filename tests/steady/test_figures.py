@@ -19,7 +19,8 @@ def small():
 def test_phase_figure(tmp_path, small):
     mp, fam = small
     png = steady_phase_figure(mp, [fam], tmp_path / "phase.png", minima={16.0: None})
-    assert png.exists() and png.stat().st_size > 10_000
+    assert png.exists()
+    assert png.stat().st_size > 10_000
 
 
 def test_h_nubar_lines_are_the_rows(small):
@@ -42,11 +43,13 @@ def test_flux_density_plot(small):
     ax = plot_flux_density([fam])
     x, y = ax.get_lines()[0].get_data()
     ok = fam.status.values == "ok"
-    assert np.allclose(x, fam.rho_bar.values[ok]) and np.allclose(y, fam.Q.values[ok])
+    assert np.allclose(x, fam.rho_bar.values[ok])
+    assert np.allclose(y, fam.Q.values[ok])
     plt.close(ax.figure)
 
 
 def test_profiles_figure(tmp_path):
     flows = [solve_steady(16.0, v) for v in (0.05, 0.15)]
     png = profiles_figure(flows + [None], tmp_path / "steady.png")
-    assert png.exists() and png.stat().st_size > 10_000
+    assert png.exists()
+    assert png.stat().st_size > 10_000

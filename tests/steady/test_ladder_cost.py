@@ -73,7 +73,8 @@ def test_noise_exit_keeps_statuses_and_values():
         assert n_new <= n_ref
         floors += n_new < n_ref
         assert [p.status for p in new] == [p.status for p in ref]
-        assert any(p.status == "ok" for p in ref) and any(p.status != "ok" for p in ref)
+        assert any(p.status == "ok" for p in ref)
+        assert any(p.status != "ok" for p in ref)
         for p, q in zip(new, ref):
             if p.status == "ok":
                 assert p.flow.Q == pytest.approx(q.flow.Q, rel=1e-12)
@@ -115,7 +116,8 @@ def test_cold_starts_wait_for_the_verdict_at_the_branch_end():
     pts, colds, _ = _row(12.0 + 18.0 / 19.0, nus, model, family.Options(min_thickness=0.0, tangent=False))
     st = [p.status for p in pts]
     ok = [j for j, s in enumerate(st) if s == "ok"]
-    assert ok and ok == list(range(ok[0], len(nus)))  # the flows: the dense end of the row
+    assert ok
+    assert ok == list(range(ok[0], len(nus)))
     assert all(s == "no_steady_flow" for s in st[: ok[0]])
     assert sum(not u for u in colds) <= 1, colds
     assert any("too small" in p.error or "heats up" in p.error for p in pts[: ok[0]])
@@ -135,14 +137,17 @@ def test_layer_below_a_diameter_gets_two_newton_starts():
 
     def failing(theta, nu0, model, opts, start, n, cold=False):
         starts.append(n)
-        assert start is not None and start.n == n  # the shot profile on that grid
+        assert start is not None
+        assert start.n == n
         return family._Point("not_converged", None, "Newton stalled (made to fail by the test)")
 
     with np.errstate(all="ignore"), mock.patch.object(family, "_attempt", failing):
         p, v = family._decide(13.263157894737, 0.098421052632, model, opts)
-    assert v.exists and v.h < 1.0
+    assert v.exists
+    assert v.h < 1.0
     assert starts == [64, 128]
-    assert p.status == "no_steady_flow" and "thinner than one diameter" in p.error
+    assert p.status == "no_steady_flow"
+    assert "thinner than one diameter" in p.error
 
 
 def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
@@ -155,8 +160,11 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
     opts = family.Options(min_thickness=1.0, tangent=False)
     with np.errstate(all="ignore"):
         p, v = family._decide(13.263157894737, 0.098421052632, model, opts)
-    assert v.exists and not v.physical and 0.1 < v.h < 0.2
-    assert p.status == "thin" and "below 1 particle diameter" in p.error
+    assert v.exists
+    assert not v.physical
+    assert 0.1 < v.h < 0.2
+    assert p.status == "thin"
+    assert "below 1 particle diameter" in p.error
     if p.flow is not None:
         assert abs(p.flow.h - v.h) < 1e-3 * v.h
 
@@ -165,5 +173,7 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
 
     with np.errstate(all="ignore"), mock.patch.object(family, "_attempt", failing):
         q, _ = family._decide(13.263157894737, 0.098421052632, model, opts)
-    assert q.status == "thin" and q.flow is None and not q.usable
+    assert q.status == "thin"
+    assert q.flow is None
+    assert not q.usable
     assert "below 1 particle diameter" in q.error

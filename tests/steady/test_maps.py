@@ -11,7 +11,7 @@ from chuteflow.steady import maps, steady_family, steady_map
 
 
 @pytest.mark.parametrize(
-    "n, starts",
+    ("n", "starts"),
     [(9, [4]), (12, [3, 8]), (60, [15, 44]), (13, [3, 4]), (2, [0]), (2, [1]), (1, [0])],
 )
 def test_chains_cover_every_row_once(n, starts):
@@ -21,7 +21,8 @@ def test_chains_cover_every_row_once(n, starts):
     for start, chain in chains:
         # contiguous, going away from the start row, each row seeded by the one before
         steps = np.diff([start, *chain])
-        assert (steps == steps[0]).all() and abs(steps[0]) == 1
+        assert (steps == steps[0]).all()
+        assert abs(steps[0]) == 1
     # two starts: four chains; the two between the starts meet in the middle
     if len(starts) == 2 and starts[1] - starts[0] > 1:
         a, b = starts

@@ -18,7 +18,9 @@ CS = ChuteModel(radial="carnahan_starling")
 
 def test_equal_flows_compare_and_hash_equal():
     a, b = solve_steady(16.0, 0.05), solve_steady(16.0, 0.05)
-    assert a is not b and a == b and hash(a) == hash(b)
+    assert a is not b
+    assert a == b
+    assert hash(a) == hash(b)
     assert {a: 1}[b] == 1
     assert (a != b) is False
 
@@ -26,10 +28,12 @@ def test_equal_flows_compare_and_hash_equal():
 def test_different_flows_differ():
     a = solve_steady(16.0, 0.05)
     c = solve_steady(16.0, 0.05, CS)
-    assert a != c and hash(a) != hash(c)
+    assert a != c
+    assert hash(a) != hash(c)
     assert a != solve_steady(16.0, 0.06)
     shifted = dataclasses.replace(a, u=a.u + 1e-12)  # same labels, other profile
-    assert shifted != a and hash(shifted) == hash(a)
+    assert shifted != a
+    assert hash(shifted) == hash(a)
     assert a != "not a flow"
     nan = dataclasses.replace(a, convergence=float("nan"))
     assert nan == dataclasses.replace(a, convergence=float("nan"))  # NaN fields compare equal

@@ -36,7 +36,8 @@ def test_dask_local_cluster_equals_local_run(tmp_path):
     ):
         sw = Sweep(cfg, tmp_path / "dask.nc")
         got = sw.run(client=client)
-    assert sw.stats.backend == "dask" and sw.stats.computed == len(cfg.tasks())
+    assert sw.stats.backend == "dask"
+    assert sw.stats.computed == len(cfg.tasks())
     xr.testing.assert_identical(got, local)
 
 

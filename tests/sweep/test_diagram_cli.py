@@ -35,7 +35,7 @@ def _synthetic():
     st = np.zeros(T.shape, np.int8)
     st[0, 0] = 1
     d = ("theta", "nu0")
-    ds = xr.Dataset(
+    return xr.Dataset(
         {
             "h": (d, np.where(st == 0, h, np.nan)),
             "nu_mean": (d, np.where(st == 0, nb, np.nan)),
@@ -48,7 +48,6 @@ def _synthetic():
         coords={"theta": th, "nu0": nu},
         attrs={"roughness": 0.05},
     )
-    return ds
 
 
 def test_plot_diagram_draws_unstable_fill():
@@ -72,7 +71,8 @@ def test_plot_diagram_draws_unstable_fill():
             for p in c.get_paths()
         ]
     )
-    assert fills and verts[:, 1].max() <= 0.125 + 1e-9
+    assert fills
+    assert verts[:, 1].max() <= 0.125 + 1e-9
     assert verts[:, 1].min() >= 0.05 - 1e-9
     plt.close(fig)
 
@@ -101,9 +101,11 @@ def test_cli_diagram_then_plot(tmp_path, capsys):
         ]
     )
     assert rc == 0
-    assert out.exists() and out.with_suffix(".png").stat().st_size > 10_000
+    assert out.exists()
+    assert out.with_suffix(".png").stat().st_size > 10_000
     ds = load_sweep(out)
-    assert ds.attrs["roughness"] == 0.05 and dict(ds.sizes) == {"theta": 2, "nu0": 2}
+    assert ds.attrs["roughness"] == 0.05
+    assert dict(ds.sizes) == {"theta": 2, "nu0": 2}
     png = tmp_path / "again.png"
     assert main(["plot", str(out), "--out", str(png)]) == 0
     assert png.stat().st_size > 10_000
@@ -139,7 +141,8 @@ def test_cli_diagram_then_plot(tmp_path, capsys):
 def test_cli_errors_are_one_line(tmp_path, capsys):
     assert main(["plot", str(tmp_path / "missing.nc")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("error: file:") and err.count("\n") == 1
+    assert err.startswith("error: file:")
+    assert err.count("\n") == 1
     assert main(["diagram", "--grid", "0x3", "--out", str(tmp_path / "x.nc")]) == 2
     assert "grid" in capsys.readouterr().err
     assert (
@@ -156,5 +159,7 @@ def test_plot_of_a_file_that_is_not_netcdf_is_one_line(tmp_path, capsys):
     for path, why in ((text, "is not a NetCDF-4 file"), (tmp_path, "is a directory")):
         assert main(["plot", str(path)]) == 2
         err = capsys.readouterr().err
-        assert err.startswith(f"error: file: {path} ") and why in err and err.count("\n") == 1
+        assert err.startswith(f"error: file: {path} ")
+        assert why in err
+        assert err.count("\n") == 1
         assert "Traceback" not in err

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import subprocess
@@ -79,9 +80,11 @@ def test_point_status_and_messages():
     st, msg = ds["status"].values[0], ds["message"].values[0]
     assert list(st) == [STATUS["ok"], STATUS["not_converged"], STATUS["error"], STATUS["error"]]
     assert msg[0] == ""
-    assert "test_faulty" in msg[1] and "on purpose" in msg[1]
+    assert "test_faulty" in msg[1]
+    assert "on purpose" in msg[1]
     assert "ZeroDivisionError" in msg[2]
-    assert "undeclared" in msg[3] and "not_declared" in msg[3]
+    assert "undeclared" in msg[3]
+    assert "not_declared" in msg[3]
     # the steady quantities are kept where only a later metric failed
     assert np.isfinite(ds["h"].values[0]).all()
     assert ds["twice_h"].values[0, 0] == pytest.approx(2 * ds["h"].values[0, 0], rel=1e-15)
@@ -92,7 +95,8 @@ def test_netcdf_round_trip_with_attrs(tmp_path):
     out = tmp_path / "s.nc"
     cfg = _cfg(markers=(("P1", 16.0, 0.05),))
     ds = run_sweep(cfg, out)
-    assert out.exists() and not parts_dir(out).exists()
+    assert out.exists()
+    assert not parts_dir(out).exists()
     back = load_sweep(out)
     xr.testing.assert_identical(ds, back)
     from chuteflow import __version__
@@ -149,7 +153,8 @@ def test_foreign_part_is_ignored(tmp_path):
     out.unlink()
     sw = Sweep(cfg, out, keep_parts=True)
     again = sw.run(workers=1)
-    assert sw.stats.computed == 1 and sw.stats.reused == len(cfg.tasks()) - 1
+    assert sw.stats.computed == 1
+    assert sw.stats.reused == len(cfg.tasks()) - 1
     xr.testing.assert_identical(again, full)
 
 
@@ -197,10 +202,8 @@ def test_resume_after_sigkill_equals_uninterrupted(tmp_path):
                 break
             time.sleep(0.01)
     finally:
-        try:
+        with contextlib.suppress(ProcessLookupError):
             os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers
-        except ProcessLookupError:
-            pass
         proc.wait()
     err = proc.stderr.read().decode()
     assert proc.returncode == -signal.SIGKILL, err
@@ -267,10 +270,12 @@ def test_ctrl_c_then_resume(tmp_path):
         pytest.skip("the sweep finished before SIGINT arrived")
     assert proc.returncode == 130, err
     assert "run the same command again" in err
-    assert not out.exists() and parts.exists()
+    assert not out.exists()
+    assert parts.exists()
     done = subprocess.run(args, env=env, capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert out.exists() and not parts.exists()
+    assert out.exists()
+    assert not parts.exists()
 
 
 def test_config_validation():
@@ -333,8 +338,10 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
         theta=(16.0,), nu0=nus, metrics=({"name": "test_faulty"},), min_thickness=0.5, nu_top=1e-10
     )
     ds = run_sweep(cfg, workers=1)
-    assert seen["nus"] == list(nus) and seen["theta"] == 16.0
-    assert seen["min_thickness"] == 0.5 and seen["nu_top"] == 1e-10
+    assert seen["nus"] == list(nus)
+    assert seen["theta"] == 16.0
+    assert seen["min_thickness"] == 0.5
+    assert seen["nu_top"] == 1e-10
     st, msg = ds["status"].values[0], ds["message"].values[0]
     assert list(st) == [
         STATUS["not_converged"],
@@ -344,8 +351,10 @@ def test_steady_family_statuses_map_to_point_status(monkeypatch):
         STATUS["not_converged"],
     ]
     assert msg[0] == "steady: not attempted: why unreached"
-    assert msg[1] == "steady: why no_steady_flow" and msg[2] == ""
-    assert ds["twice_h"].values[0, 2] == 3.0 and np.isnan(ds["twice_h"].values[0, [0, 1, 3, 4]]).all()
+    assert msg[1] == "steady: why no_steady_flow"
+    assert msg[2] == ""
+    assert ds["twice_h"].values[0, 2] == 3.0
+    assert np.isnan(ds["twice_h"].values[0, [0, 1, 3, 4]]).all()
 
 
 def test_non_critical_metric_failure_keeps_status():
@@ -368,6 +377,7 @@ def test_non_critical_metric_failure_keeps_status():
     cfg = SweepConfig(theta=(16.0,), nu0=(0.05, 0.06), metrics=("steady", "test_check"))
     ds = run_sweep(cfg, workers=1)
     assert list(ds["status"].values[0]) == [STATUS["ok"], STATUS["ok"]]
-    assert np.isnan(ds["checked"].values[0, 0]) and ds["checked"].values[0, 1] == 1.0
+    assert np.isnan(ds["checked"].values[0, 0])
+    assert ds["checked"].values[0, 1] == 1.0
     assert "test: check failed" in ds["message"].values[0, 0]
     assert ds["message"].values[0, 1] == "test: a remark"

@@ -50,6 +50,7 @@ def test_sweep_outputs_are_0644_under_umask_022(tmp_path):
         os.umask(old)
     assert _mode(out) == 0o644
     parts = list(parts_dir(out).iterdir())
-    assert any(p.suffix == ".npz" for p in parts) and any(p.name == "config.json" for p in parts)
+    assert any(p.suffix == ".npz" for p in parts)
+    assert any(p.name == "config.json" for p in parts)
     for p in parts:
         assert _mode(p) == 0o644, p.name

@@ -17,10 +17,12 @@ def test_unconverged_k_keeps_values_with_flag_and_drift():
     flow = solve_steady(theta, nu0)
     point = Point(-1, -1, theta, nu0)
     out = GrowthMetric().compute(flow, point)
-    assert out["dispersion_sampled"] and out["growth_converged"] is False
+    assert out["dispersion_sampled"]
+    assert out["growth_converged"] is False
     assert 1e-7 < out["growth_drift"] < 1e-6  # the convergence estimate (measured 3.5e-7)
     # stable at every sampled k (the long-wave verdict there: stable)
-    assert out["growth_max"] < 0 and out["k_growth_max"] == pytest.approx(1e-4)
+    assert out["growth_max"] < 0
+    assert out["k_growth_max"] == pytest.approx(1e-4)
     assert "k_c" not in out
     assert any("not converged to the paper's thresholds" in n for n in point.notes)
 
@@ -92,11 +94,14 @@ def test_lost_branch_keeps_the_part_of_the_grid_reached(losing):
     assert calls == [rest]  # one continuation through the rest of the grid
     reached = [k for k in ks if k <= 0.0125]
     re = [k * (1 - k / 0.02) for k in reached]
-    assert out["growth_max"] == max(re) and out["k_growth_max"] == reached[re.index(max(re))]
-    assert out["growth_k_reached"] == reached[-1] and out["growth_converged"] is False
+    assert out["growth_max"] == max(re)
+    assert out["k_growth_max"] == reached[re.index(max(re))]
+    assert out["growth_k_reached"] == reached[-1]
+    assert out["growth_converged"] is False
     assert "k_c" not in out  # Re α > 0 up to the last k reached: no sign change seen
     note = " ".join(point.notes)
-    assert f"up to k = {reached[-1]:.3g}" in note and "not reached: their values are missing" in note
+    assert f"up to k = {reached[-1]:.3g}" in note
+    assert "not reached: their values are missing" in note
 
 
 def test_lost_branch_followed_to_the_end_of_the_grid(losing):
@@ -107,8 +112,10 @@ def test_lost_branch_followed_to_the_end_of_the_grid(losing):
     ks = metric.k_grid()
     assert calls == [[float(k) for k in ks if k >= _LosingTracker.k_lost]]
     re = [k * (1 - k / 0.02) for k in ks]
-    assert out["growth_max"] == max(re) and out["k_growth_max"] == ks[re.index(max(re))]
-    assert out["k_c"] == 0.02 and out["growth_converged"]
+    assert out["growth_max"] == max(re)
+    assert out["k_growth_max"] == ks[re.index(max(re))]
+    assert out["k_c"] == 0.02
+    assert out["growth_converged"]
     assert out["growth_k_reached"] == ks[-1]
     assert any("followed with the relaxed tail threshold from there" in n for n in point.notes)
 
@@ -126,7 +133,8 @@ def test_branch_dissolving_into_the_continuum_keeps_its_values():
     flow = solve_steady(theta, nu0)
     point = Point(-1, -1, theta, nu0)
     out = GrowthMetric().compute(flow, point)
-    assert out["dispersion_sampled"] and out["growth_converged"] is False
+    assert out["dispersion_sampled"]
+    assert out["growth_converged"] is False
     assert 0.0027 < out["growth_k_reached"] < 0.05
     assert out["k_growth_max"] == pytest.approx(1e-4)  # long-wave stable: the least damped k
     assert "k_c" not in out

@@ -34,32 +34,43 @@ GRID = {"theta": (16.0,), "nu0": (0.05, 0.08), "metrics": ("steady",), "markers"
 
 def test_config_holds_the_model():
     cfg = SweepConfig(**GRID, model=CS)
-    assert cfg.model == CS and cfg.radial == CarnahanStarling() and cfg.roughness == 0.05
+    assert cfg.model == CS
+    assert cfg.radial == CarnahanStarling()
+    assert cfg.roughness == 0.05
     # keyword convenience replaces fields of the model; the model stays the source of truth
     kw = SweepConfig(**GRID, radial="carnahan_starling")
-    assert kw == cfg and hash(kw) == hash(cfg) and kw.digest() == cfg.digest()
+    assert kw == cfg
+    assert hash(kw) == hash(cfg)
+    assert kw.digest() == cfg.digest()
     assert SweepConfig(**GRID, model=CS, roughness=0.1).model == ChuteModel(
         roughness=0.1, radial="carnahan_starling"
     )
     assert resolve_model(CS.to_dict()) == CS
     again = dataclasses.replace(cfg, chunk=1)
-    assert again.model == CS and again.chunk == 1 and dataclasses.replace(cfg) == cfg
+    assert again.model == CS
+    assert again.chunk == 1
+    assert dataclasses.replace(cfg) == cfg
     with pytest.raises(ValueError, match="unknown parameters"):
         SweepConfig(**GRID, roughnes=0.1)
 
 
 def test_closures_change_hash_and_round_trip():
     a, b = SweepConfig(**GRID), SweepConfig(**GRID, model=CS)
-    assert a != b and hash(a) != hash(b) and a.digest() != b.digest()
+    assert a != b
+    assert hash(a) != hash(b)
+    assert a.digest() != b.digest()
     assert a.to_dict()["model"] == LS.to_dict()
     back = SweepConfig.from_dict(json.loads(json.dumps(b.to_dict())))
-    assert back == b and back.model == CS and back.digest() == b.digest()
+    assert back == b
+    assert back.model == CS
+    assert back.digest() == b.digest()
     # the flat model keys of older files are read too
     old = {k: v for k, v in a.to_dict().items() if k != "model"}
     old.update(roughness=0.05, wall_loss=0.39, restitution=0.7, nu_max=0.6)
     assert SweepConfig.from_dict(old) == a
     g = SweepConfig.grid(shape=(2, 2), model=CS, metrics=("steady",))
-    assert g.model == CS and g.digest() != SweepConfig.grid(shape=(2, 2), metrics=("steady",)).digest()
+    assert g.model == CS
+    assert g.digest() != SweepConfig.grid(shape=(2, 2), metrics=("steady",)).digest()
 
 
 def test_sweep_with_carnahan_starling(tmp_path):
@@ -75,7 +86,8 @@ def test_sweep_with_carnahan_starling(tmp_path):
     # g0 differs by O(ν) at these densities: so do the flows (here by > 1 %)
     assert np.all(np.abs(cs["h"].values / ls["h"].values - 1) > 1e-2)
     back = load_sweep(out)
-    assert back.attrs["radial"] == "carnahan_starling" and back.attrs["model_key"] == CS.key()
+    assert back.attrs["radial"] == "carnahan_starling"
+    assert back.attrs["model_key"] == CS.key()
     assert ls.attrs["radial"] == "lun_savage"
     assert SweepConfig.from_dataset(back).model == CS
     assert SweepConfig.from_dataset(back) == SweepConfig(**GRID, model=CS)
@@ -88,14 +100,16 @@ def test_reduced_diagram_computes_with_the_model_given():
     grid = ((16.0,), (0.05, 0.08))
     cs = reduced_diagram(model=CS, grid=grid, workers=1)
     ls = reduced_diagram(grid=grid, workers=1)
-    assert cs.attrs["radial"] == "carnahan_starling" and ls.attrs["radial"] == "lun_savage"
+    assert cs.attrs["radial"] == "carnahan_starling"
+    assert ls.attrs["radial"] == "lun_savage"
     for name in ("h", "r1d_margin", "r1d_U"):
         assert np.all(np.abs(cs[name].values / ls[name].values - 1) > 1e-3), name
     ref = solve_steady(16.0, 0.08, CS, min_thickness=0.0)
     assert cs["h"].values[0, 1] == pytest.approx(ref.h, rel=1e-7)
     a = reduced_diagram_config(grid=grid, model=CS)
     b = reduced_diagram_config(grid=grid)
-    assert a.model == CS and a.digest() != b.digest()
+    assert a.model == CS
+    assert a.digest() != b.digest()
     # the walk engine (no sweep) uses the model too
     walk = reduced_diagram(model=CS, grid=grid, engine="walk")
     assert walk.attrs["radial"] == "carnahan_starling"

@@ -36,7 +36,8 @@ def test_p1_values_and_winner(p1_sweep):
     assert float(p.transverse_kz_max) == pytest.approx(1.93e-3, rel=2e-2)
     # the longitudinal maximum: the refined branch maximum is at least the grid value 1.179e-3
     assert float(p.longitudinal_growth_max) == pytest.approx(1.18e-3, rel=2e-2)
-    assert int(p.winner) == 3 and WINNER_CODES[3] == "both"
+    assert int(p.winner) == 3
+    assert WINNER_CODES[3] == "both"
     assert int(p.fastest) == 1
     assert float(p.fastest_kz) == 0.0
     assert float(p.fastest_kx) == pytest.approx(float(p.longitudinal_kx_max))
@@ -97,7 +98,9 @@ def test_thick_dilute_flow_unstable_both_ways_has_a_winner():
     point = Point(-1, -1, 16.475, 0.02)
     point.values.update(LongWaveMetric().compute(flow, point))
     out = TransverseMetric().compute(flow, point)
-    assert out["winner"] == 3 and out["fastest"] == 1 and not point.notes
+    assert out["winner"] == 3
+    assert out["fastest"] == 1
+    assert not point.notes
     k, growth = out["longitudinal_kx_max"], out["longitudinal_growth_max"]
     # measured: 1.93618e-3 at k_x = 1.437e-3 against the transverse 5.39e-4 at k_z = 1.92e-3
     assert growth > 2 * out["transverse_growth_max"]
@@ -119,7 +122,8 @@ def test_dense_thin_flow_longitudinal_growth_at_the_third_rung():
 
     flow = solve_steady(16.0, 0.25)
     peak = longitudinal_peak(flow, k_max=0.05, policy=RejectionPolicy(n_start=48, n_max=160))
-    assert peak.physical and peak.growth > 0
+    assert peak.physical
+    assert peak.growth > 0
     qz = max(m.alpha.real for m in spectrum(flow, peak.k, n=100))
     assert peak.growth == pytest.approx(qz, rel=1e-5)
 
@@ -142,7 +146,9 @@ def test_transverse_branch_followed_over_its_flat_start():
     flow = solve_steady(17.846153846154, 0.028461538462, ChuteModel(roughness=0.05))
     a2z = float(transverse_longwave(flow, 80).alpha2_z.real)
     peak = transverse_peak(flow, alpha2z=a2z, policy=RejectionPolicy(n_start=48, n_max=160))
-    assert peak.physical and peak.cutoff is not None and peak.k > 1e-3
+    assert peak.physical
+    assert peak.cutoff is not None
+    assert peak.k > 1e-3
     modes, _ = dense_modes(flow, 0.0, peak.k, n=100)
     qz = max(m.alpha.real for m in modes if m.physical)
     assert peak.growth == pytest.approx(qz, abs=peak.mode.drift + 1e-12)

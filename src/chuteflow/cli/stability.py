@@ -139,10 +139,9 @@ def _steady(console, theta, nu0, model, nu_top):
     from chuteflow.steady import solve_steady
 
     limit_blas_threads(1)
-    with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
+    with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
     if not flow.converged:
         _warn(flow.precision_warning())
     return flow

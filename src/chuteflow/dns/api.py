@@ -587,7 +587,7 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         "Q0": flow.Q,
         **{f"model_{k_}": v for k_, v in setup.model.attrs().items()},
     }
-    ds = xr.Dataset(
+    return xr.Dataset(
         {
             "rho_bar": (("time", "x"), rho, {"long_name": "ρ̄ = ∫ν dy (with the isothermal tail)"}),
             "Q": (("time", "x"), Q, {"long_name": "Q = ∫νu dy"}),
@@ -607,7 +607,6 @@ def _dataset(disc, setup, flow, mode, rec_t, rec_rho, rec_Q, snaps_t, snaps, C, 
         },
         attrs=attrs,
     )
-    return ds
 
 
 def summary(ds: xr.Dataset) -> dict:

@@ -77,8 +77,7 @@ class CompiledResidual:
         """Residual at every point of ``state`` (jet name → array)."""
         args = [state[j] for j in self.jets]
         for name in FUNCTIONS:
-            for o in ORDERS:
-                args.append(partials[name][o])
+            args.extend(partials[name][o] for o in ORDERS)
         out = self._fun(*args, sin_theta, cos_theta)[0]
         return np.broadcast_to(out, np.shape(state["nu"]))
 

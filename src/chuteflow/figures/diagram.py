@@ -64,16 +64,16 @@ def grid_triangulation(x, y, valid):
                 tris.append([idx[p] for p, o in zip(c, ok) if o])
     if not tris:
         return None
-    tris = np.array(tris)
+    tri = np.array(tris)
     xf, yf = np.nan_to_num(x.ravel()), np.nan_to_num(y.ravel())
     area = 0.5 * (
-        (xf[tris[:, 1]] - xf[tris[:, 0]]) * (yf[tris[:, 2]] - yf[tris[:, 0]])
-        - (xf[tris[:, 2]] - xf[tris[:, 0]]) * (yf[tris[:, 1]] - yf[tris[:, 0]])
+        (xf[tri[:, 1]] - xf[tri[:, 0]]) * (yf[tri[:, 2]] - yf[tri[:, 0]])
+        - (xf[tri[:, 2]] - xf[tri[:, 0]]) * (yf[tri[:, 1]] - yf[tri[:, 0]])
     )
-    tris = tris[np.abs(area) > 1e-14 * (np.ptp(xf) * np.ptp(yf) + 1e-300)]
-    if len(tris) == 0:
+    tri = tri[np.abs(area) > 1e-14 * (np.ptp(xf) * np.ptp(yf) + 1e-300)]
+    if len(tri) == 0:
         return None
-    return mtri.Triangulation(xf, yf, tris)
+    return mtri.Triangulation(xf, yf, tri)
 
 
 def refined_triangulation(X, Y, fields, valid, n: int = 4):

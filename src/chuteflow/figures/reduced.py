@@ -88,13 +88,14 @@ def plot_functions(rm, n: int = 300):
 
 
 def _panel(ax, ds, var, title, *, short_var=None, disagree=None):
+    from matplotlib.artist import Artist
     from matplotlib.lines import Line2D
     from matplotlib.patches import Patch
 
     h, nb = ds["h"].values, ds["nu_mean"].values
     ok = (ds["status"].values == 0) & np.isfinite(h) & np.isfinite(nb)
     tri = grid_triangulation(h, nb, ok)
-    handles = []
+    handles: list[Artist] = []
     if tri is not None:
         for name, colour, label in (
             (var, "0.72", "unstable"),

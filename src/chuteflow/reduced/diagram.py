@@ -289,8 +289,8 @@ def _walk_grid(thetas, nus, model, progress):
             if solved:
                 c = solved[len(solved) // 2]
                 seeds = sorted(solved, key=lambda j: abs(j - c))[:3]
-        for j in seeds:
-            f = _try(th, nus[j], model, prev[j])
+        for j in seeds:  # seeds only where prev is a row
+            f = _try(th, nus[j], model, prev[j] if prev is not None else None)
             if f is not None:
                 row[j] = f
                 break

@@ -567,7 +567,6 @@ class ProgressTracker(Tracker):
 
     def handle(self, sim, step):
         self.callback(step.t, self._t_end)
-        return None
 
 
 class LeaveFamilyStop(Tracker):
@@ -784,7 +783,8 @@ class WaveSimulation:
                 if solver.out_of_range is None:
                     raise ConvergenceError(f"time integration failed at t = {ode.t:.6g}: {msg}")
                 left = self._left_message(ode.t)
-                if not any([tr.left_family(self, left) for tr in trackers]):
+                stops = [tr.left_family(self, left) for tr in trackers]  # every tracker is told
+                if not any(stops):
                     raise NoSteadyFlowError(left)
                 status = "left_family"
                 break

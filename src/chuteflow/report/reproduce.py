@@ -8,6 +8,7 @@ is rewritten after every stage, so an interrupted run still leaves one.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import time
 import traceback
@@ -154,10 +155,8 @@ def _run_detached_stages(names: list[str], out: Path, quick: bool) -> list[Secti
     limit_blas_threads(1)
     keep_freed_memory()
     if hasattr(os, "nice"):
-        try:
+        with contextlib.suppress(OSError):  # not permitted here: same priority, still beside the others
             os.nice(19)
-        except OSError:  # not permitted here: same priority, still beside the others
-            pass
     report = Report()
     sections = []
     for name in names:

@@ -183,10 +183,7 @@ class _RealFormShiftInvert(ShiftInvert):
         self.size = Ar.shape[0]
         self._memo = {} if memo is None else memo
         self._real = self.sigma.imag == 0
-        if self._real:
-            M = _shifted(Ar, bdiag, self.sigma.real)
-        else:
-            M = _shifted(Ar, bdiag, self.sigma, complex)
+        M = _shifted(Ar, bdiag, self.sigma.real) if self._real else _shifted(Ar, bdiag, self.sigma, complex)
         self.lu = factor_shifted(M, self.sigma)
         (self._getrs,) = sla.get_lapack_funcs(("getrs",), (self.lu[0],))
 

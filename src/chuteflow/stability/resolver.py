@@ -535,15 +535,19 @@ def search_above(
                 c._decide("below", f"Re α = {c.alpha.real:.6g} at N = {c.n_from}")
                 continue
             f = c.step(nn, best.alpha.real if best is not None else -math.inf, len(rungs) - 1 - i)
-            if f is not None and f.verdict == "mode" and f.mode is not None:
-                if best is None or f.mode.alpha.real > best.alpha.real:
-                    if answer is not None:
-                        notes.append(
-                            f"the tracked/direct answer {answer.alpha:.6g} (N = {answer.n}, "
-                            f"{'passes' if answer.physical else 'fails'} the tests) is more damped than "
-                            f"this mode, found by the global solve at N = {search.n}"
-                        )
-                    best = f.mode
+            if (
+                f is not None
+                and f.verdict == "mode"
+                and f.mode is not None
+                and (best is None or f.mode.alpha.real > best.alpha.real)
+            ):
+                if answer is not None:
+                    notes.append(
+                        f"the tracked/direct answer {answer.alpha:.6g} (N = {answer.n}, "
+                        f"{'passes' if answer.physical else 'fails'} the tests) is more damped than "
+                        f"this mode, found by the global solve at N = {search.n}"
+                    )
+                best = f.mode
         undecided += [c.done for c in active if c.done is not None and c.done.verdict == "undecided"]
         active = [c for c in active if c.done is None]
     undecided += [c.result() for c in active]

@@ -367,9 +367,8 @@ class BranchScan:
             "converged": int(self.converged),
             "message": self.message,
         }
-        for name, value in (("k_c", self.k_c), ("cutoff", self.cutoff())):
-            if value is not None:
-                attrs[name] = value
+        optional = (("k_c", self.k_c), ("cutoff", self.cutoff()))
+        attrs.update({name: value for name, value in optional if value is not None})
         return xr.Dataset(
             {
                 "alpha_re": ("k", self.alpha.real, {"long_name": "growth rate Re alpha", "units": u}),

@@ -93,7 +93,7 @@ def _derive_rows(layout):
             raise ValueError(f"{name}: its compiled arguments differ from the other equations'")
         res = ex[0]
         scale = {"nu": 1 / b["nu"], "T": 1 / kappa, "u": inv_nu0, "one": sp.S.One}[kind]
-        out = {k: sp.S.Zero for k in OUTPUTS}
+        out = dict.fromkeys(OUTPUTS, sp.S.Zero)
         for field, a, bx, c, d, index, k in terms[name]:
             if a or bx or d or k or field not in jets:
                 continue  # a uniform steady state feels no t, x, z or |k| terms, v = w = 0

@@ -242,10 +242,8 @@ def follow(
     th0, nu00 = flow.theta, flow.nu0
     th1 = th0 if theta is None else float(theta)
     nu1 = nu00 if nu0 is None else float(nu0)
-    if th1 != th0:
-        scale = abs(th1 - th0)  # degrees per unit s
-    else:
-        scale = abs(nu1 - nu00) * 10.0 / max(nu00, 1e-12)
+    # degrees per unit s along θ, else ten times the relative change of ν0(0)
+    scale = abs(th1 - th0) if th1 != th0 else abs(nu1 - nu00) * 10.0 / max(nu00, 1e-12)
     if scale == 0:
         return flow, True
     model, nu_top = flow.model, flow.nu_top

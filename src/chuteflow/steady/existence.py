@@ -282,6 +282,7 @@ def integrate(fun, z0, y_cap: float, rtol: float, events, *, dense: bool = False
                             hi = mid
                     if best is None or hi < best[1]:
                         best = (name, hi)
+                assert best is not None  # found is not empty
                 hit.append(best[0])
                 stop.extend([t_old, z_old, best[1], float(t)])
                 return -1

@@ -944,13 +944,14 @@ def flux_minimum(
     seeds = [_with_tangent(_Point("ok", flows[i - 1]), opts), _with_tangent(_Point("ok", flows[i]), opts)]
 
     def g(nu0):
-        nb = min(seeds, key=lambda p: abs(p.flow.nu0 - nu0))
+        nb = min(seeds, key=lambda p: abs(p.flow.nu0 - nu0))  # type: ignore[union-attr]  # seeds have flows
         p = _continue(nb, theta, nu0, model, opts)
         if not p.usable:
             raise ConvergenceError(
                 f"flux minimum at theta = {theta:g}: no converged flow at nu0 = {nu0:g} ({p.error})"
             )
         cache[nu0] = p
+        assert p.tangent is not None  # a usable point has its tangent
         return p.tangent["dQ_drho"]
 
     root = brentq(g, float(fam.nu0[i - 1]), float(fam.nu0[i]), xtol=xtol, rtol=1e-12)

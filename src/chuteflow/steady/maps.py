@@ -78,6 +78,7 @@ def _first_good(ths, nus, model, opts, fracs, proofs, cold):
             best = (k, good, n_ok)
         if good:
             return k, True
+    assert best is not None  # fracs is not empty
     return best[0], best[1]
 
 

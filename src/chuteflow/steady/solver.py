@@ -279,6 +279,7 @@ class SteadyNewton:
         """:meth:`_residual` by the compiled rows (:func:`._newton_kernel.row_kernel`): the
         scaled residual, and the Jacobian's coefficients kept for :meth:`_jacobian`."""
         n, m, L = self.n, self.n + 1, st.L
+        assert self._fast is not None  # set when the compiled rows are used
         closures, rows, plan, cparams, rparams = self._fast
         X = np.empty((plan.n_args, m))  # the kernel's arguments: BASE jets, then partials
         self._jets(st, X)
@@ -298,6 +299,7 @@ class SteadyNewton:
         round-off): each row block's field block is diag(d) + diag(e1) D1 + diag(e2) D2,
         the products only where the equation has such a term (:func:`_row_plan`)."""
         n, m, L = self.n, self.n + 1, ctx["L"]
+        assert self._fast is not None
         plan = self._fast[2]
         V = ctx["out"][plan.gather]  # (outputs, rows)
         N = 3 * m + 1

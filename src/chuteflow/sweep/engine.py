@@ -191,10 +191,7 @@ class Sweep:
                     else:
                         st.backend, st.workers = "processes", n
                         _run_pool(cfg, todo, finished, n, keep_flows)
-        if store is not None:
-            parts = [store.read(t.key) for t in tasks]
-        else:
-            parts = [results[t.key] for t in tasks]
+        parts = [store.read(t.key) for t in tasks] if store is not None else [results[t.key] for t in tasks]
         ds = assemble(cfg, parts)
         if self.out is not None:
             write_dataset(ds, self.out)
@@ -205,6 +202,7 @@ class Sweep:
 
     # ------------------------------------------------------------------ helpers
     def _existing_final(self, digest):
+        assert self.out is not None  # called only when the sweep writes a file
         if not self.out.exists():
             return None
         try:

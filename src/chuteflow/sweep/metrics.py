@@ -306,10 +306,10 @@ class GrowthMetric(PointFunction):
                     found = relaxed_branch_modes(flow, below, n=tr.n, policy=policy, cache=cache, lost=lost)
                     modes.extend(found)
                     modes.extend([None] * (len(below) - len(found)))
-                    for kk in rest[len(below) :]:
-                        modes.append(
-                            after_lost_branch(flow, kk, n=tr.n, policy=policy, cache=cache, lost=lost)
-                        )
+                    modes.extend(
+                        after_lost_branch(flow, kk, n=tr.n, policy=policy, cache=cache, lost=lost)
+                        for kk in rest[len(below) :]
+                    )
                     reached = [float(kk) for kk, m in zip(ks, modes) if m is not None]
                     lost_note = f"growth: {lost}; followed with the relaxed tail threshold from there"
                     if len(reached) < len(ks):

@@ -87,8 +87,7 @@ def _coerce(var, value):
         return np.int8(1 if bool(value) else 0)
     if var.kind == "int":
         return np.int32(int(value))
-    v = float(value)
-    return v
+    return float(value)
 
 
 #: steady_family status → sweep status

@@ -207,7 +207,7 @@ def check_finite_k(ds) -> dict | None:
     neutral curve of A runs through them, where Re α2 ≈ 0)."""
     if "finite_k_disagrees" not in ds:
         return None
-    rows = []  # (label, disagrees, alpha2, growth max, k, h)
+    rows: list[tuple] = []  # (label, disagrees, alpha2, growth max, k, h)
     failed = 0
     for prefix in ("", "marker_"):
         if prefix and "marker_finite_k_disagrees" not in ds:
@@ -225,8 +225,7 @@ def check_finite_k(ds) -> dict | None:
         else:
             T, N = np.meshgrid(ds["theta"].values, ds["nu0"].values, indexing="ij")
             labels = [f"θ={t:.3g}°, ν0={n:.3g}" for t, n in zip(T.ravel(), N.ravel())]
-        for q in np.nonzero(d >= 0)[0]:
-            rows.append((labels[q], d[q] == 1, a2[q], gm[q], kk[q], hh[q]))
+        rows.extend((labels[q], d[q] == 1, a2[q], gm[q], kk[q], hh[q]) for q in np.nonzero(d >= 0)[0])
     judged = [r for r in rows if r[5] >= 1]
     bad = [r for r in judged if r[1]]
     thin_bad = [r for r in rows if r[5] < 1 and r[1]]

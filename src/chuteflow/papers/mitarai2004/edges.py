@@ -42,10 +42,7 @@ def _classify_flow(flow, fns):
             "error": f"the long-wave coefficient at the row's end (ν0 = {flow.nu0:.4g}) is missing: {why}",
             "consistent": False,
         }
-    if a2 > 0:
-        kind = "B" if dU < 0 else "A"
-    else:
-        kind = "stable"
+    kind = ("B" if dU < 0 else "A") if a2 > 0 else "stable"
     return {
         "alpha2_re": float(a2),
         "dU_drho": float(dU),

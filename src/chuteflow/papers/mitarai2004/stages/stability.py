@@ -361,7 +361,7 @@ def _stability_verdicts(ctx, R):
         if ds.k.values[0] == 0.0
     }
     if a0:
-        worst = max(a0, key=a0.get)
+        worst = max(a0, key=lambda n: a0[n])
         rep.check(
             "stability.alpha0",
             source="§4.2",
@@ -516,7 +516,7 @@ def _convergence(ctx, R):
         npts = sum(ds.sizes["k"] for ds in R.disp.values())
         nphys = sum(int(ds.physical.values.sum()) for ds in R.disp.values())
         ns = sorted({int(v) for ds in R.disp.values() for v in ds.n.values})
-        w = max(drift, key=drift.get)
+        w = max(drift, key=lambda n: drift[n])
         rep.check(
             "stability.convergence",
             source="§4.1",
