@@ -178,10 +178,10 @@ def cache_for(kz: float, cache: OperatorCache | None = None) -> OperatorCache:
 
     Finite-wavevector modes, 2D and 3D, are solved on the sinh-mapped grid clustered at the
     layer's edge (:func:`~chuteflow.stability.operator.layer_map`): at P5, (k_x, k_z) =
-    (0.002, 0.02) the least-stable mode passes the paper's tests at N = 94 on it and needs
+    (0.002, 0.02) the least-stable mode passes the paper's tests at N = 75 on it and needs
     N ≈ 200–250 on the plain grid. The plain grid stays only where a k → 0 quantity needs it:
     α2z and the tracked transverse branch (:mod:`chuteflow.longwave.spanwise`,
-    :mod:`.transverse`, which build their operators from :data:`OPERATORS`), whose
+    :mod:`chuteflow.stability.transverse`, which build their operators from :data:`OPERATORS`), whose
     relative change N = 80 → 100 is 4e-5 on the mapped grid against 8e-6 on the plain one.
     ``cache`` (default :data:`OPERATORS`) keeps its own choice when it maps 3D operators or
     builds plain ones only (``OperatorCache(mapped=False)``, the independent check)."""

@@ -14,15 +14,13 @@ y, clustered at the edge of the dense layer (:func:`layer_map`, issue 9: ~2× fe
 than the plain grid for the paper's 1e-7 at k ≤ 0.02; ``mapped=True``, what the solvers'
 operator cache builds in 2D), or of the plain Chebyshev grid (the default). Rows:
 
-========  =================  ===========================  =================================
-block     interior nodes     floor (y = 0)                top (y = y_max)
-========  =================  ===========================  =================================
-ν̂         mass (eq. 2.1)      y-momentum at y = 0 (extra)  ν̂' = −(cos θ/T0) ν̂ (extra)
-û         x-momentum         eq. (2.9) (eq. A 5)             û' = −k û
-v̂         y-momentum         v̂ = 0 (impermeable, docs/errata.md)  v̂' = −k v̂
-ŵ (3D)    z-momentum         eq. (2.9), z component          ŵ' = −k ŵ
-T̂         energy (eq. 2.3)   eq. (2.10) (eq. A 6)             T̂' = −k T̂
-========  =================  ===========================  =================================
+- ν̂ block: the mass balance (eq. 2.1) at the interior nodes; the y-momentum balance at the
+  floor y = 0 (an extra condition); ν̂' = −(cos θ/T0) ν̂ at the top y = y_max (extra);
+- û block: the x-momentum balance; the floor condition eq. (2.9) (eq. A 5); û' = −k û;
+- v̂ block: the y-momentum balance; v̂ = 0 at the floor (impermeable, docs/errata.md);
+  v̂' = −k v̂;
+- ŵ block (3D): the z-momentum balance; eq. (2.9), z component; ŵ' = −k ŵ;
+- T̂ block: the energy balance (eq. 2.3); eq. (2.10) (eq. A 6); T̂' = −k T̂.
 
 Momentum rows are divided by μ0(y) and energy rows by κ0(y), so that every row is O(D²)
 from the floor to the dilute top; B is then diagonal with entries 1 (mass), ν0/μ0
