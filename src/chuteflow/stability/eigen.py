@@ -48,47 +48,63 @@ def qz(A: np.ndarray, B: np.ndarray, *, vectors: bool = True):
 
 
 def shifted_spectrum(
-    A: np.ndarray, B: np.ndarray, sigma: complex = 0.5, *, vectors_above: float | None = None
+    A: np.ndarray,
+    bdiag: np.ndarray,
+    sigma: complex = 0.5,
+    *,
+    vectors_above: float | None = None,
+    keep_rtol: float = 1e-12,
+    normalise: bool = True,
 ):
-    """Finite eigenvalues and right eigenvectors of A V = α B V with B diagonal, by the
-    standard eigenproblem of C = (A − σB)⁻¹B: its eigenvalues θ ≠ 0 are 1/(α − σ), the
+    """Finite eigenvalues and right eigenvectors of A V = α B V with B = diag(``bdiag``), by
+    the standard eigenproblem of C = (A − σB)⁻¹B: its eigenvalues θ ≠ 0 are 1/(α − σ), the
     infinite α (boundary rows, B = 0 there) mapping to θ = 0. C vanishes on the columns of
     the boundary rows, so only its block on the other rows is solved (``geev``), and the
     boundary components follow as y_b = C_bi y_i / θ. One LU and a standard eigensolve
     instead of the generalized QZ: 3–4.5 × faster at N = 48 (196 × 196 in 2D: 29 against
     89 ms; 245 × 245 in 3D: 37 against 163 ms), the same eigenpairs to round-off near σ,
-    less accurate far from it (|α − σ| large: θ near 0). Falls back on :func:`qz` where σ
-    lies on an eigenvalue. Returns what :func:`qz` returns (decreasing Re α, unit norm).
-    With ``vectors_above``, the eigenvectors are computed only when some eigenvalue has
-    Re α above it (else V is None): the eigenvalues alone cost a third."""
-    bd = np.real_if_close(np.diag(B))
-    if np.count_nonzero(B - np.diag(np.diag(B))):
-        raise ValueError("shifted_spectrum: B must be diagonal")
-    inner = bd != 0
-    try:
-        lu = factor_shifted(np.array(A - sigma * B, dtype=complex), sigma)
-    except ConvergenceError:
-        return qz(A, B)
+    less accurate far from it (|α − σ| large: θ near 0). Real A, ``bdiag`` and σ (the real
+    form at k_x = 0) stay in real arithmetic.
+
+    Returns (α, V) as :func:`qz` does (decreasing Re α; unit-norm columns unless
+    ``normalise=False``; θ below ``keep_rtol`` × the largest dropped as infinite α), or None
+    where σ lies on an eigenvalue (a zero pivot): the caller falls back on QZ. With
+    ``vectors_above``, the eigenvectors are computed only when some eigenvalue has Re α
+    above it (else V is None): the eigenvalues alone cost a third."""
+    real = not (np.iscomplexobj(A) or np.iscomplexobj(bdiag) or complex(sigma).imag != 0)
+    dtype = float if real else complex
+    sig = float(np.real(sigma)) if real else complex(sigma)
     m = A.shape[0]
-    C = sla.lu_solve(lu, np.eye(m, dtype=complex)[:, inner], check_finite=False) * bd[inner][None, :]
+    M = np.empty(A.shape, dtype=dtype, order="F")  # LAPACK's order: factored in place
+    M[...] = A
+    i = np.arange(m)
+    M[i, i] -= sig * bdiag
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sla.LinAlgWarning)
+        lu, piv = sla.lu_factor(M, overwrite_a=True, check_finite=False)
+    d = np.abs(np.diag(lu))
+    if not np.all(np.isfinite(d)) or d.min() == 0.0:
+        return None
+    inner = bdiag != 0
+    C = sla.lu_solve((lu, piv), np.eye(m, dtype=dtype)[:, inner], check_finite=False) * bdiag[inner][None, :]
     if vectors_above is not None:
         theta = np.linalg.eigvals(C[inner])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            if not np.any((sigma + 1.0 / theta[theta != 0]).real > vectors_above):
-                w = sigma + 1.0 / theta[np.abs(theta) > 1e-12 * np.abs(theta).max()]
-                return w[np.argsort(-w.real, kind="stable")], None
+        big = np.abs(theta) > keep_rtol * np.abs(theta).max()
+        w = sig + 1.0 / theta[big]
+        if not np.any(w.real > vectors_above):
+            return w[np.argsort(-w.real, kind="stable")], None
     theta, Yi = np.linalg.eig(C[inner])
     if not np.all(np.isfinite(theta)):  # pragma: no cover - σ on an eigenvalue
-        return qz(A, B)
-    keep = np.abs(theta) > 1e-12 * np.abs(theta).max()
+        return None
+    keep = np.abs(theta) > keep_rtol * np.abs(theta).max()
     theta, Yi = theta[keep], Yi[:, keep]
     Y = np.empty((m, len(theta)), dtype=complex)
     Y[inner] = Yi
     Y[~inner] = (C[~inner] @ Yi) / theta[None, :]
-    w = sigma + 1.0 / theta
+    w = sig + 1.0 / theta
     order = np.argsort(-w.real, kind="stable")
     Y = Y[:, order]
-    return w[order], Y / np.linalg.norm(Y, axis=0)
+    return w[order], (Y / np.linalg.norm(Y, axis=0) if normalise else Y)
 
 
 def factor_shifted(M: np.ndarray, sigma: complex):

@@ -24,7 +24,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from ..errors import ConvergenceError, ParameterError
-from .eigen import ShiftInvert, factor_shifted, qz
+from .eigen import ShiftInvert, factor_shifted, qz, shifted_spectrum
 from .operator import Pencil, StabilityOperator
 
 __all__ = ["pencil_qz", "real_form"]
@@ -264,23 +264,8 @@ def _seed_spectrum(op: StabilityOperator, kz: float, shift: float = 0.5):
     (eigenvalues and tails) agree with the QZ ones to 1e-12 and 1e-9 relative. Falls back
     on QZ when σ lies on an eigenvalue (a zero pivot or θ not finite)."""
     p, Ar, bd, s = _real_pencil(op, kz)
-    m = Ar.shape[0]
-    lu, piv = sla.lu_factor(_shifted(Ar, bd, shift), overwrite_a=True, check_finite=False)
-    d = np.abs(np.diag(lu))
-    if not np.all(np.isfinite(d)) or d.min() == 0.0:
+    got = shifted_spectrum(Ar, bd, shift, keep_rtol=1e-10, normalise=False)  # real arithmetic
+    if got is None:
         return pencil_qz(p, True)
-    # C is zero on the columns of the boundary rows (B' = 0 there): its eigenvalues θ ≠ 0
-    # are those of the block on the other rows and columns, y = (y_i, C_bi y_i / θ)
-    inner = bd != 0
-    C = sla.lu_solve((lu, piv), np.eye(m)[:, inner], check_finite=False) * bd[inner][None, :]
-    theta, Yi = np.linalg.eig(C[inner])
-    if not np.all(np.isfinite(theta)):  # pragma: no cover - σ on an eigenvalue
-        return pencil_qz(p, True)
-    keep = np.abs(theta) > 1e-10 * np.abs(theta).max()
-    theta, Yi = theta[keep], Yi[:, keep]
-    Y = np.empty((m, len(theta)), dtype=complex)
-    Y[inner] = Yi
-    Y[~inner] = (C[~inner] @ Yi) / theta[None, :]
-    w = shift + 1.0 / theta
-    order = np.argsort(-w.real, kind="stable")
-    return w[order], Y[:, order] * s[:, None]
+    w, Y = got
+    return w, Y * s[:, None]

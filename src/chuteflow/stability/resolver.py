@@ -40,7 +40,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ParameterError
 from ..steady import SteadyFlow
-from .eigen import shifted_spectrum
+from .eigen import qz, shifted_spectrum
 from .lost import _better, _direct_candidate, _outranked, after_lost_branch
 from .modes import (
     K_DIRECT,
@@ -469,7 +469,9 @@ def global_candidates(
         floor = answer.alpha.real + max(
             answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol
         )
-    w, V = shifted_spectrum(*p.equilibrated(), sigma, vectors_above=floor)
+    A, B = p.equilibrated()
+    got = shifted_spectrum(A, np.real(np.diag(B)), sigma, vectors_above=floor)
+    w, V = qz(A, B) if got is None else got
     above = np.nonzero(w.real > floor)[0]
     if len(above) == 0 or V is None:
         return []
