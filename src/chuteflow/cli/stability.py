@@ -181,7 +181,7 @@ def _warn_mode(mode) -> None:
         _warn(
             f"k = {mode.k:g}: not converged to the paper's thresholds (drift "
             f"{mode.drift:.1e}, tail {mode.tail:.1e} at N = {mode.n}, method {mode.method}); "
-            "the best estimate is shown"
+            "the best estimate is shown" + (f" ({mode.note})" if mode.note else "")
         )
     elif not mode.method.startswith("branch") and mode.method != "shift":
         how = "a mode above the tracked branch" if mode.method == "global" else "direct solve at k"
