@@ -27,16 +27,6 @@ if __package__ in (None, ""):
 
 KXS = (0.002, 0.005)
 KZS = (0.002, 0.02, 0.1)
-POINTS = {
-    "P1": (16.0, 0.05, 0.05),
-    "P2": (16.0, 0.08, 0.05),
-    "P3": (16.0, 0.10, 0.05),
-    "P4": (14.0, 0.05, 0.05),
-    "P5": (17.0, 0.10, 0.05),
-    "Q1": (20.0, 0.10, 0.10),
-    "Q2": (20.0, 0.15, 0.10),
-    "Q3": (20.0, 0.17, 0.10),
-}
 
 
 def _unit_qz() -> float:
@@ -56,6 +46,7 @@ def _unit_qz() -> float:
 
 def run(quick: bool = False) -> list[dict]:
     from chuteflow import ChuteModel, solve_steady
+    from chuteflow.papers.mitarai2004.points import POINTS
     from chuteflow.stability import least_stable
     from chuteflow.stability.modes import OPERATORS, OPERATORS_3D
 
@@ -63,8 +54,8 @@ def run(quick: bool = False) -> list[dict]:
     rows = []
     names = ("P1", "P4", "P5") if quick else tuple(POINTS)
     for name in names:
-        theta, nu0, phi = POINTS[name]
-        flow = solve_steady(theta, nu0, ChuteModel(roughness=phi))
+        pt = POINTS[name]
+        flow = solve_steady(pt.theta, pt.nu0, ChuteModel(roughness=pt.roughness))
         least_stable(flow, KXS[0], kz=KZS[0])  # warm-up: compiled code, caches of the flow
         times, conv = [], []
         for kx in KXS:

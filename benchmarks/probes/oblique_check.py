@@ -23,20 +23,10 @@ import numpy as np
 
 from chuteflow import ChuteModel, solve_steady
 from chuteflow.errors import ChuteflowError
+from chuteflow.papers.mitarai2004.points import POINTS
 from chuteflow.stability import least_stable
 from chuteflow.stability.eigen import qz
 from chuteflow.stability.modes import OPERATORS, OPERATORS_3D, OperatorCache, check_n, make_mode
-
-PAPER = [
-    ("P1", 16.0, 0.05, 0.05),
-    ("P2", 16.0, 0.08, 0.05),
-    ("P3", 16.0, 0.10, 0.05),
-    ("P4", 14.0, 0.05, 0.05),
-    ("P5", 17.0, 0.10, 0.05),
-    ("Q1", 20.0, 0.10, 0.10),
-    ("Q2", 20.0, 0.15, 0.10),
-    ("Q3", 20.0, 0.17, 0.10),
-]
 
 
 def reference(flow, kx, kz, n=156, mapped=True):
@@ -79,10 +69,10 @@ def main():
     ap.add_argument("--plain-check", action="store_true", help="reference on the plain grid at N = 250")
     a = ap.parse_args()
     rng = random.Random(a.seed)
-    flows = []
-    for name, th, nu0, phi in PAPER:
-        flows.append((name, dict(theta=th, nu0=nu0), dict(roughness=phi)))
-    while len(flows) < len(PAPER) + a.random:
+    flows = [
+        (pt.name, dict(theta=pt.theta, nu0=pt.nu0), dict(roughness=pt.roughness)) for pt in POINTS.values()
+    ]
+    while len(flows) < len(POINTS) + a.random:
         phi = round(rng.uniform(0.04, 0.11), 4)
         th = round(rng.uniform(11.5 + 70 * (phi - 0.05), 19.5 + 110 * (phi - 0.05)), 3)
         nu0 = round(10 ** rng.uniform(-2.1, -0.66), 4)
@@ -95,7 +85,7 @@ def main():
             solve_steady(theta=th, nu0=nu0, model=ChuteModel(**mk))
         except ChuteflowError:
             continue
-        flows.append((f"R{len(flows) - len(PAPER) + 1}", dict(theta=th, nu0=nu0), mk))
+        flows.append((f"R{len(flows) - len(POINTS) + 1}", dict(theta=th, nu0=nu0), mk))
     unit = unit_qz()
     print(f"one dense QZ of a 405 x 405 complex pencil: {unit:.3f} s", flush=True)
     times, wrong, flagged, bad_ref = [], [], [], 0

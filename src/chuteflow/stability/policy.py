@@ -19,6 +19,16 @@ from .operator import validate_n
 __all__ = ["DEFAULT_POLICY", "RejectionPolicy", "SearchPolicy", "TrackingPolicy"]
 
 
+def _require(owner: str, policy, names, ok, need: str, *, integer: bool = False) -> None:
+    """:class:`ParameterError` naming the first field of ``names`` whose value is not a
+    number (an integer with ``integer``) for which ``ok(value)`` holds."""
+    kind = int if integer else (int, float)
+    for name in names:
+        v = getattr(policy, name)
+        if isinstance(v, bool) or not (isinstance(v, kind) and ok(v)):
+            raise ParameterError(f"{owner} {name} = {v!r}: need {need}")
+
+
 @dataclass(frozen=True)
 class SearchPolicy:
     """How the mode resolver looks for modes above an answer (:mod:`.resolver`).
@@ -84,18 +94,15 @@ class SearchPolicy:
             object.__setattr__(self, "n", validate_n(self.n))
         except ParameterError as exc:
             raise ParameterError(f"search n: {exc}") from None
-        if isinstance(self.hopeless, bool) or not (
-            isinstance(self.hopeless, (int, float)) and self.hopeless >= 1
-        ):
-            raise ParameterError(f"search hopeless = {self.hopeless!r}: need a number >= 1")
-        for name in ("candidate_tail", "stall", "jump", "fastest_fall"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not (isinstance(v, (int, float)) and 0 < v < 1):
-                raise ParameterError(f"search {name} = {v!r} is outside (0, 1)")
-        if isinstance(self.max_candidates, bool) or not (
-            isinstance(self.max_candidates, int) and self.max_candidates >= 0
-        ):
-            raise ParameterError(f"search max_candidates = {self.max_candidates!r}: need an integer >= 0")
+        _require("search", self, ("hopeless",), lambda v: v >= 1, "a number >= 1")
+        _require(
+            "search",
+            self,
+            ("candidate_tail", "stall", "jump", "fastest_fall"),
+            lambda v: 0 < v < 1,
+            "a number in (0, 1)",
+        )
+        _require("search", self, ("max_candidates",), lambda v: v >= 0, "an integer >= 0", integer=True)
 
     def ladder(self, n_max: int, growth: float) -> list[int]:
         """The rungs a candidate is followed on: ``n``, round(``growth`` n), … up to ``n_max``."""
@@ -250,11 +257,10 @@ class TrackingPolicy:
     top_check_below: float = 0.9
 
     def __post_init__(self):
-        for name in ("coarse_n", "stall_rejections", "restarts", "memo_bytes"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not (isinstance(v, int) and v >= (0 if name == "memo_bytes" else 1)):
-                raise ParameterError(f"tracking {name} = {v!r}: need a positive integer")
-        for name in (
+        ints = ("coarse_n", "stall_rejections", "restarts")
+        _require("tracking", self, ints, lambda v: v >= 1, "an integer >= 1", integer=True)
+        _require("tracking", self, ("memo_bytes",), lambda v: v >= 0, "an integer >= 0", integer=True)
+        positive = (
             "first_step",
             "first_step_min",
             "first_predictor_min",
@@ -267,16 +273,9 @@ class TrackingPolicy:
             "band_tail_gain",
             "seed_drift",
             "top_check_below",
-        ):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not (isinstance(v, (int, float)) and v > 0):
-                raise ParameterError(f"tracking {name} = {v!r}: need a number > 0")
-        if isinstance(self.crossing_jump, bool) or not (
-            isinstance(self.crossing_jump, (int, float)) and self.crossing_jump >= 0
-        ):
-            raise ParameterError(
-                f"tracking crossing_jump = {self.crossing_jump!r}: need a number >= 0 (0: no rule)"
-            )
+        )
+        _require("tracking", self, positive, lambda v: v > 0, "a number > 0")
+        _require("tracking", self, ("crossing_jump",), lambda v: v >= 0, "a number >= 0 (0: no rule)")
         if not (isinstance(self.relaxed_splits, tuple) and self.relaxed_splits) or not all(
             isinstance(m, int) and m >= 1 for m in self.relaxed_splits
         ):
