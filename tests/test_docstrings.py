@@ -64,3 +64,20 @@ def test_public_names_have_docstrings(modname):
     assert (module.__doc__ or "").strip(), f"module {modname} has no docstring"
     missing = [name for name, obj in _public_objects(module) if not _own_docstring(obj)]
     assert not missing, f"{modname}: public names without a docstring: {', '.join(missing)}"
+
+
+def test_no_development_issue_numbers_in_the_source():
+    """Docstrings, comments and report texts say what a thing is, not which development
+    issue asked for it: a user reading ``source="issue 10"`` in a report learns nothing."""
+    import re
+    from pathlib import Path
+
+    root = Path(chuteflow.__file__).parent
+    pattern = re.compile(r"\bissues? \d+\b|\bbefore issue\b|\bsince issue\b", re.IGNORECASE)
+    hits = [
+        f"{path.relative_to(root)}:{i}"
+        for path in sorted(root.rglob("*.py"))
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1)
+        if pattern.search(line)
+    ]
+    assert not hits

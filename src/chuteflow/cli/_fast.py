@@ -1,5 +1,5 @@
 """The ``chuteflow steady`` command without typer: a fresh process answers in a fraction of
-a second (issue 9, item 5).
+a second.
 
 typer (with the pydantic it uses to convert every option) and rich cost about 0.3 s to
 import, more than solving the steady flow. :func:`fast_main` parses the plain forms of

@@ -1,4 +1,4 @@
-"""``chuteflow dns``: nonlinear time-dependent simulation of the chute flow (issue 11)."""
+"""``chuteflow dns``: nonlinear time-dependent simulation of the chute flow."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Nonlinear time-dependent simulation of the chute flow in (x, y) (issue 11; docs/dns.md).
+"""Nonlinear time-dependent simulation of the chute flow in (x, y) (docs/dns.md).
 
 The time-dependent equations (2.1)–(2.3) with the Lun et al. closures and the
 Johnson–Jackson floor (2.9), (2.10), on a slope periodic in x over a length L, from the floor

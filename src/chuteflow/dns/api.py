@@ -276,7 +276,7 @@ def simulate(
     frame_speed: float | None = None,
     top: str = "transport",
 ) -> xr.Dataset:
-    """Simulate the time-dependent equations on a slope periodic in x (issue 11, docs/dns.md).
+    """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
     Parameters
     ----------

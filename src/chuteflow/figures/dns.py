@@ -1,4 +1,4 @@
-"""Figures of the time-dependent simulation (:mod:`chuteflow.dns`, issue 11).
+"""Figures of the time-dependent simulation (:mod:`chuteflow.dns`).
 
 - :func:`plot_dns`: space–time plot of ρ̄(x, t), the amplitude of the k = 2π/L wave against
   the linear eigenvalue's growth, and a snapshot of ν(x, y) with velocity arrows (the

@@ -1,4 +1,4 @@
-"""Figures of the three-dimensional analysis (issue 10: the question of the paper's §5.3).
+"""Figures of the three-dimensional analysis (the question of the paper's §5.3).
 
 - :func:`cross_section_fields`, :func:`cross_section_figure` — a transverse or oblique mode
   in the (z, y) cross-section over one spanwise wavelength λz = 2π/k_z (at x = 0):

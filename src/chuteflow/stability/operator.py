@@ -10,7 +10,7 @@ residuals are N(X) − B∂_tX) or to the piece A_{b,d} of
 
 where K holds the |k| terms of the top decay conditions. The N + 1 collocation nodes per field
 on [0, y_max] are Chebyshev–Lobatto nodes of a computational variable mapped by a sinh onto
-y, clustered at the edge of the dense layer (:func:`layer_map`, issue 9: ~2× fewer nodes
+y, clustered at the edge of the dense layer (:func:`layer_map`: ~2× fewer nodes
 than the plain grid for the paper's 1e-7 at k ≤ 0.02; ``mapped=True``, what the solvers'
 operator cache builds in 2D), or of the plain Chebyshev grid (the default). Rows:
 
@@ -67,7 +67,7 @@ MAP_BLEND = 1.0
 
 @cached_per_flow  # every operator of a flow asks for it
 def layer_map(flow: SteadyFlow) -> tuple[float, float]:
-    """Centre y_c and width ε of the sinh map of the stability grid (issue 9, item 2).
+    """Centre y_c and width ε of the sinh map of the stability grid.
 
     The large resolutions the plain Chebyshev grid needs (N ~ 200–480 for the paper's 1e-7)
     come from an interior layer at the edge of the dense flow, y ≈ h (where ν0 has fallen

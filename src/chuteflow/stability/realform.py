@@ -1,4 +1,4 @@
-"""The real form of the k_x = 0 pencil and its real-arithmetic solvers (paper §5.3, issue 10).
+"""The real form of the k_x = 0 pencil and its real-arithmetic solvers (paper §5.3).
 
 Across the slope (k_x = 0) the pencil is real after the diagonal similarity ŵ → i ŵ (every
 term odd in ∂_z couples ŵ to the other fields): A' = S⁻¹ A S, S = diag(s), s = i on the ŵ

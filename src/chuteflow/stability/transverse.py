@@ -28,7 +28,7 @@ form (a real LU when the shift is real, a fifth of the complex one's cost), the 
 is the dense eigenproblem of (A' − σB')⁻¹B' (a third of the QZ's), and the check α(N') of a
 rung of the resolution ladder is the α just solved on the rung below: the same eigenpairs as
 the complex solves, to round-off (at P1 the 50-k_z dispersion past the branch took 3.3 s of
-CPU before, 1.7–2.0 s after; issue 10).
+CPU before, 1.7–2.0 s after).
 """
 
 from __future__ import annotations

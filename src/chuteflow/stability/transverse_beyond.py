@@ -1,4 +1,4 @@
-"""Candidate modes followed past the transverse branch (k_x = 0; paper §5.3, issue 10).
+"""Candidate modes followed past the transverse branch (k_x = 0; paper §5.3).
 
 Where the tracked α(0) = 0 branch enters the continuum of the dilute top
 (:class:`~chuteflow.stability.transverse_tracking.TransverseTracker`), the least-stable

@@ -1,4 +1,4 @@
-"""The α(0) = 0 branch followed across the slope (k_x = 0) in k_z (paper §5.3, issue 10).
+"""The α(0) = 0 branch followed across the slope (k_x = 0) in k_z (paper §5.3).
 
 The fast path of the transverse analysis: :class:`TransverseTracker` starts from the k = 0
 null vector ∂X0/∂β, predicts α ≈ α2z k_z² (the perturbation theory of

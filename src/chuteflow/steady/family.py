@@ -78,8 +78,8 @@ _ATTRS = {
 #: A flow whose dense layer ends within this fraction of its thickness h below the top of
 #: the domain (y_max − h < _TOP_GAP h: a cold top, the upper existence boundary near) is not
 #: continued to a larger ν0(0): towards the boundary the layer's edge sharpens and meets the
-#: top, and the Euler predictor misses (residuals 0.2–2.5, Newton stalls). Measured (issue 9,
-#: stop 35), steps up in ν0(0) from such flows: on the 60 × 60 paper maps 51 of 51 failed
+#: top, and the Euler predictor misses (residuals 0.2–2.5, Newton stalls). Measured, steps up
+#: in ν0(0) from such flows: on the 60 × 60 paper maps 51 of 51 failed
 #: (φ = 0.05) and 56 of 56 (φ = 0.10); on the rows of the 60 × 60 φ = 0.05 diagram, whose ν0
 #: steps are shorter, 91 of 111 (4.7 s of CPU, against 2.8 s for the 20 that converged).
 #: Skipping them leaves the maps bit for bit the same and the diagram with every status and

@@ -576,7 +576,7 @@ class SteadyNewton:
         0.1 λ, a crawl that does not reach Newton's quadratic phase within the iterations
         of a continuation attempt. On the 60 × 60 paper steady map and the diagram's
         steady rows no solve that converged had more than two such steps in a row, while
-        ~120 failing continuation attempts crawled on to ``maxiter`` (issue 9, stop 32).
+        ~120 failing continuation attempts crawled on to ``maxiter``.
 
         The round-off floor of the residual grows like n⁴ (second derivatives near the ends),
         so ``tol`` is raised accordingly above n = 64; the accuracy of a result is checked

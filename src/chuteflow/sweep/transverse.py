@@ -1,4 +1,4 @@
-"""Sweep metric ``transverse``: transverse stability and which instability wins (issue 10).
+"""Sweep metric ``transverse``: transverse stability and which instability wins.
 
 The paper (§5.3) leaves open how its longitudinal long-wave instability and the transverse
 instability of Forterre & Pouliquen (2002) compete. At each point this metric gives
@@ -76,7 +76,7 @@ class TransverseMetric(PointFunction):
             "alpha2_z",
             "sigma^(3/2) g^(1/2)",
             "α2z of α(0, kz) = α2z kz² + … (> 0: long-wave transverse instability)",
-            source="issue 10; analogue of App. B",
+            source="analogue of App. B",
         ),
         Variable("transverse_growth_max", RATE_UNITS, "largest Re α of the transverse (kx = 0) branch"),
         Variable("transverse_kz_max", "1/sigma", "kz of that maximum (missing where every kz decays)"),

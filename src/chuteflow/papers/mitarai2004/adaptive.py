@@ -1,4 +1,4 @@
-"""Stability diagrams on a fine grid at the cost of a coarse one (issue 9, item 6).
+"""Stability diagrams on a fine grid at the cost of a coarse one.
 
 The steady flow and its kinematic quantities cost milliseconds per point; the long-wave
 coefficient α2, which decides stability (§4.2), costs 0.1–0.8 s. The diagrams of

@@ -1,4 +1,4 @@
-"""Stage ``dns``: the time-dependent equations themselves (issue 11, docs/dns.md).
+"""Stage ``dns``: the time-dependent equations themselves (docs/dns.md).
 
 The linear-phase verification — the least-stable eigenmode at k = 0.003 (L = 2π/0.003) of
 P1 grows and that of P3 decays at the eigenvalue of :mod:`chuteflow.stability`, the
@@ -14,7 +14,7 @@ import warnings
 from ....report.registry import StageContext, register_stage
 from ..points import POINTS
 
-#: The verification's wavenumber (issue 11): L = 2π/0.003 ≈ 2094.
+#: The verification's wavenumber: L = 2π/0.003 ≈ 2094.
 K_VERIFY = 0.003
 #: The wave-formation run of the full stage: (L, time, Δt, modes, noise amplitude).
 #: With the isothermal top row the wave grew from noise to −24 … +31 % in ρ̄ by t = 28000,
@@ -28,7 +28,7 @@ WAVE_RUN = (1000.0, 28000.0, 4.0, 32, 1e-3)
 @register_stage(
     "dns",
     order=70,
-    title="Time-dependent simulation: linear phase and density waves (issue 11)",
+    title="Time-dependent simulation: linear phase and density waves",
     independent=True,
 )
 def dns(ctx: StageContext) -> None:
@@ -57,7 +57,7 @@ def _linear(ctx: StageContext) -> None:
         ok = s["status"] == "ok" and s["growth_rate_error"] < 0.01 and s["phase_velocity_error"] < 0.01
         ctx.report.check(
             f"dns.linear_{name}",
-            source="§4.1, eq. (4.4); issue 11 item 2",
+            source="§4.1, eq. (4.4)",
             statement=f"At {name} the least-stable mode at k = {K_VERIFY:g} "
             f"{'grows' if name == 'P1' else 'decays'} in the time-dependent equations at the "
             "rate and phase velocity of the linear eigenvalue (to 1 %).",
@@ -76,7 +76,7 @@ def _linear(ctx: StageContext) -> None:
                 "Time-dependent simulation at P1 from the least-stable eigenmode at k = 0.003 "
                 "(amplitude 1e-6): ρ̄(x, t), the wave's amplitude against exp(Re α t), and ν(x, y).",
                 id="dns.linear_P1",
-                source="issue 11",
+                source="§4.1, eq. (4.4)",
             )
             ctx.progress("DNS: unperturbed flow")
             st = summary(
@@ -131,7 +131,7 @@ def _waves(ctx: StageContext) -> None:
         f"Density waves from noise (amplitude {amp:g}) at P1, L = {L:g}, nx = {2 * M + 1}: "
         f"status {s['status']}.",
         id="dns.waves_P1",
-        source="issue 11 item 3",
+        source="paper title: density wave formation",
     )
     ctx.report.add_note(
         f"DNS at P1, L = {L:g} from noise: status {s['status']}; measured linear growth "

@@ -12,7 +12,7 @@ from ..points import figure
 if TYPE_CHECKING:
     from ....steady import SteadyFlow
 
-#: (θ grid, ν0 grid) of the maps (issue 9: at least 40 × 40 in quick mode, 100 × 100 in
+#: (θ grid, ν0 grid) of the maps (at least 40 × 40 in quick mode, 100 × 100 in
 #: full mode). Quick: 1/3° (0.4°) × 40 floor densities; full: 1/8° × 100. The ends of the
 #: existence range are then refined by continuation beyond the map.
 _NU0 = {True: (0.005, 0.55, 40), False: (0.005, 0.55, 100)}

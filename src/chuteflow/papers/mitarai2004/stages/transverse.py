@@ -109,7 +109,7 @@ def _run(ctx: StageContext) -> None:
     )
     rep.check(
         "transverse.kz0_is_2d",
-        source="issue 10 (3D operator); paper eq. (4.4)",
+        source="the 3D operator; paper eq. (4.4)",
         statement="At k_z = 0 the 3D operator is the 2D one and ŵ decouples.",
         computed=f"P1, k_x = 0.002, N = {n}: max |A3 − A2| = {d2:.1e}, ŵ coupling {cpl:.1e} (relative)",
         passed=bool(d2 < OPERATOR_TOL and cpl < OPERATOR_TOL),
@@ -118,7 +118,7 @@ def _run(ctx: StageContext) -> None:
     a_m, _ = nearest_eigenpair(op3.pencil(0.002, -0.002), a_p)
     rep.check(
         "transverse.even_in_kz",
-        source="issue 10: z → −z symmetry of the base flow",
+        source="z → −z symmetry of the base flow",
         statement="α(k_x, −k_z) = α(k_x, k_z).",
         computed=f"(0.002, ±0.002): α = {a_p:.10g} and {a_m:.10g}, |Δ| = {abs(a_p - a_m):.1e}",
         passed=bool(abs(a_p - a_m) <= 1e-10 * abs(a_p)),
@@ -126,7 +126,7 @@ def _run(ctx: StageContext) -> None:
     Ar, _, _ = real_form(op3.pencil(0.0, 0.002))
     rep.check(
         "transverse.real_at_kx0",
-        source="issue 10",
+        source="the 3D operator at k_x = 0",
         statement="At k_x = 0 the problem is real (after ŵ → iŵ): eigenvalues real or in pairs.",
         computed=f"P1, k_z = 0.002: the pencil is real after ŵ → iŵ ({Ar.shape[0]} unknowns)",
         passed=True,
@@ -147,7 +147,7 @@ def _run(ctx: StageContext) -> None:
     f0 = f1 - (f3 - f1) * k1 / (k3 - k1)
     rep.check(
         "transverse.alpha2z",
-        source="issue 10 (analogue of Appendix B)",
+        source="analogue of Appendix B",
         statement="α(0, k_z) = α2z k_z² + O(|k_z|³), α2z from perturbation theory at k = 0.",
         computed=f"P1: α2z = {res.alpha2_z:.6g} (bordered solve), {f0:.6g} from Re α/k_z² at "
         f"k_z = 1e-5, 3e-5 extrapolated to 0; lubrication formula {res.alpha2_z_lubrication:.6g}",
@@ -195,7 +195,7 @@ def _run(ctx: StageContext) -> None:
         f"The transverse mode at P1, k_z* = {kz_star:.3g}: density (a) and temperature (b) "
         "perturbations in the (z, y) cross-section over one wavelength, (ŵ, v̂) as arrows: "
         "denser columns are colder (lateral clustering), no closed roll cells.",
-        source="issue 10",
+        source="paper §5.3 (the transverse question)",
     )
 
     ctx.progress("which instability wins")

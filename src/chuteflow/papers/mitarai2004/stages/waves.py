@@ -3,8 +3,8 @@ linear rate, density waves from noise, mass conservation, the critical length L_
 against the MD of §5.2.
 
 It needs nothing from the other stages, so it runs in the second process beside them
-(``independent``): before issue 9 it was part of stage ``reduced`` and ran after the
-diagrams on one core while the other waited.
+(``independent``); as part of stage ``reduced`` it had run after the diagrams on one
+core while the other waited.
 """
 
 from __future__ import annotations
