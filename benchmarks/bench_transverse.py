@@ -125,9 +125,9 @@ def run(quick: bool = False) -> list[dict]:
     # 3. the whole transverse analysis: tracked vs dense (same grid)
     t_all, res = _best(lambda: transverse(flow, num=25), rep)
     c_all = _CPU["last"]
-    s = res.summary()
+    s = res.to_dict()
     t_den, rden = _best(lambda: transverse(flow, num=25, method="dense"), 1)
-    sd = rden.summary()
+    sd = rden.to_dict()
     rows.append(
         {
             "name": "transverse_analysis",

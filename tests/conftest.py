@@ -1,4 +1,6 @@
-"""Test configuration: headless matplotlib, one BLAS thread, opt-in slow tests.
+"""Test configuration: headless matplotlib, one BLAS thread, opt-in slow tests, and the
+paper's named flows shared by every test (``p1_flow``, ``flows("P4")``: solved once per
+session from :data:`chuteflow.papers.mitarai2004.points.POINTS`).
 
 Tests marked ``@pytest.mark.slow`` are skipped unless ``--runslow`` is given or the
 marker expression selects them (``-m slow``). The marker is registered in pyproject.toml
@@ -32,3 +34,28 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     for item in items:
         if "slow" in item.keywords:
             item.add_marker(skip)
+
+
+@pytest.fixture(scope="session")
+def flows():
+    """The paper's named steady flows (§4.2: P1–P5 at φ = 0.05, Q1–Q3 at φ = 0.10), solved
+    lazily once per session: ``flows("P3")``."""
+    from chuteflow.closures import ChuteModel
+    from chuteflow.papers.mitarai2004.points import POINTS
+    from chuteflow.steady import solve_steady
+
+    cache: dict = {}
+
+    def get(name: str):
+        if name not in cache:
+            p = POINTS[name]
+            cache[name] = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
+        return cache[name]
+
+    return get
+
+
+@pytest.fixture(scope="session")
+def p1_flow(flows):
+    """The steady flow P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), solved once per session."""
+    return flows("P1")

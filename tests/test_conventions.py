@@ -16,7 +16,6 @@ from chuteflow.conventions import (
 )
 from chuteflow.longwave import longwave
 from chuteflow.stability import least_stable
-from chuteflow.steady import solve_steady
 
 
 def test_phase_velocity_helper():
@@ -32,8 +31,8 @@ def test_phase_velocity_helper():
 
 
 @pytest.fixture(scope="module")
-def p1():
-    return solve_steady(16.0, 0.05)
+def p1(p1_flow):
+    return p1_flow
 
 
 def test_mode_and_longwave_agree_on_the_sign(p1):

@@ -234,6 +234,24 @@ def test_cli_model_defaults_are_the_model_defaults():
     assert {k: v[0] for k, v in MODEL_OPTIONS.items()} == {k: getattr(m, k) for k in MODEL_OPTIONS}
 
 
+def test_steady_options_are_declared_once():
+    """The typer command ``steady`` is generated from STEADY_OPTIONS (and the model options):
+    the same parameters, flags, defaults and help as the plain-call parser reads."""
+    import typer.main
+
+    from chuteflow.cli._fast import REQUIRED, STEADY_OPTIONS
+
+    cmd = typer.main.get_command(app).commands["steady"]  # type: ignore[attr-defined]
+    params = {p.name: p for p in cmd.params}
+    for o in STEADY_OPTIONS:
+        p = params[o.name]
+        assert set(o.flags()) == set(p.opts) | set(p.secondary_opts)
+        assert p.required == (o.default is REQUIRED)
+        if o.default is not REQUIRED:
+            assert p.default == o.default
+        assert p.help == o.help
+
+
 def test_fast_steady_path_matches_typer(capsys):
     """The plain parser of ``chuteflow steady`` (cli/_fast.py) prints what the typer command
     prints, and leaves what it does not know (help, bad values) to typer."""
@@ -257,5 +275,8 @@ def test_fast_steady_path_matches_typer(capsys):
     assert res.stdout == fast
     for bad in (["--theta", "abc", "--nu0", "0.05"], ["--theta", "16"], ["--help"], ["--radial", "nope"]):
         assert _parse_steady(bad) is None
+    opts = _parse_steady(["--theta", "16", "--nu0", "0.05", "--no-strict", "--nu-top=1e-8", "--strict"])
+    assert opts is not None
+    assert (opts["strict"], opts["nu_top"], opts["as_json"]) == (True, 1e-8, False)
     assert fast_main(["steady", "--theta", "95", "--nu0", "0.05"]) == 2
     assert capsys.readouterr().err.startswith("error: theta = 95")

@@ -33,15 +33,6 @@ def _one_line_error(result) -> str:
     return err
 
 
-@pytest.fixture(scope="module")
-def p1_flow():
-    from chuteflow.steady import solve_steady
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        return solve_steady(16.0, 0.05)
-
-
 def test_help_lists_stability_commands():
     result = runner.invoke(app, ["--help"])
     assert result.exit_code == 0

@@ -9,22 +9,17 @@ code as the reference.
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 from chuteflow.figures.stability import eigenfunction_diagnostics
-from chuteflow.stability import base_on_grid, least_stable
-from chuteflow.steady import solve_steady
+from chuteflow.stability import least_stable
+from chuteflow.stability.operator import base_on_grid
 
 
 @pytest.fixture(scope="module")
-def modes():
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        p1 = solve_steady(16.0, 0.05)
-        p5 = solve_steady(17.0, 0.10)
+def modes(flows):
+    p1, p5 = flows("P1"), flows("P5")
     return [(p1, least_stable(p1, 2e-3)), (p1, least_stable(p1, 2e-2)), (p5, least_stable(p5, 1e-2))]
 
 

@@ -22,14 +22,10 @@ from chuteflow.figures.stability import (
 
 
 @pytest.fixture(scope="module")
-def p1():
+def p1(p1_flow):
     from chuteflow.stability import least_stable
-    from chuteflow.steady import solve_steady
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(16.0, 0.05)
-    return flow, least_stable(flow, 0.002)
+    return p1_flow, least_stable(p1_flow, 0.002)
 
 
 def _synthetic(k, alpha, physical=None, **attrs):

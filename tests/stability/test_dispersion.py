@@ -168,12 +168,12 @@ def test_domain_top_moves_results_as_in_errata():
 
 
 @pytest.mark.slow
-def test_unconverged_branch_raises(flows):
+def test_unconverged_branch_raises_when_strict(flows):
     """P4 at k = 0.05: the wave speed lies within the range of u0(y) (critical layer), the
-    eigenfunction is not resolved by N = 100, and the solver says so instead of returning
-    numbers."""
+    eigenfunction is not resolved by N = 100, and with ``strict=True`` the solver says so
+    instead of returning numbers."""
     with pytest.raises(ConvergenceError, match="branch|not converged"):
-        dispersion(flows("P4"), [0.01, 0.05], n_max=100)
+        dispersion(flows("P4"), [0.01, 0.05], n_max=100, strict=True)
 
 
 def test_dispersion_rejects_bad_k(p1_flow):
@@ -185,7 +185,7 @@ def test_dispersion_rejects_bad_k(p1_flow):
 
 @pytest.mark.slow
 def test_non_strict_dispersion_flags_instead_of_raising(flows):
-    ds = dispersion(flows("P4"), [1e-3, 0.05], n_max=100, strict=False)
+    ds = dispersion(flows("P4"), [1e-3, 0.05], n_max=100)  # strict=False: the default
     assert ds["physical"].values.tolist() == [True, False]
     assert ds["alpha_re"].values[0] > 0
 

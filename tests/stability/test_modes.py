@@ -7,8 +7,8 @@ import pytest
 
 from chuteflow.errors import ParameterError
 from chuteflow.spectral import ChebyshevGrid
-from chuteflow.stability import Mode, ShiftInvert, least_stable, qz, spectrum, stability_operator, tail
-from chuteflow.stability.modes import nearest_eigenpair, normalise
+from chuteflow.stability import Mode, ShiftInvert, least_stable, qz, spectrum, stability_operator
+from chuteflow.stability.modes import nearest_eigenpair, normalise, tail
 
 K = 2e-3  # the wavenumber of the paper's eigenfunction figures (eigens, eigenu)
 
@@ -87,7 +87,7 @@ def test_mode_carries_convergence_and_exports(p1_flow):
     assert set(m.fields) == {"nu", "u", "v", "T"}
     big = max(np.abs(f).max() for f in m.fields.values())
     assert big == pytest.approx(1.0)
-    s = m.summary()
+    s = m.to_dict()
     assert {"k", "alpha_re", "alpha_im", "drift", "tail", "n"} <= set(s)
     ds = m.to_xarray()
     assert ds["nu"].shape == m.y.shape

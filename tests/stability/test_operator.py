@@ -10,7 +10,8 @@ import pytest
 from chuteflow.equations import compiled_equations
 from chuteflow.errors import ParameterError
 from chuteflow.spectral import ChebyshevGrid, MappedChebyshevGrid
-from chuteflow.stability import OperatorCache, StabilityOperator, base_on_grid, least_stable
+from chuteflow.stability import OperatorCache, StabilityOperator, least_stable
+from chuteflow.stability.operator import base_on_grid
 
 from .conftest import P1
 

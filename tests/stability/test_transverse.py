@@ -75,7 +75,7 @@ def test_p1_growing_real_mode_at_kz_0002(p1_flow):
 def test_transverse_result_summary(p1_flow):
     r = transverse(p1_flow, kz_max=3e-3, num=5)
     assert isinstance(r, TransverseResult)
-    s = r.summary()
+    s = r.to_dict()
     for key in ("alpha2_z", "kz_max", "growth_max", "stationary", "unstable"):
         assert key in s
     assert s["unstable"]
@@ -99,7 +99,7 @@ def test_transverse_full_range_p1(p1_flow):
     """0 < k_z ≤ 3: every point resolved; only the long-wave band k_z < 3.25e-3 grows; beyond
     it the least-stable mode is an oscillatory pair (not stationary)."""
     r = transverse(p1_flow, num=25, method="dense")
-    s = r.summary()
+    s = r.to_dict()
     assert s["all_physical"]
     assert s["kz_max"] == pytest.approx(1.9e-3, rel=0.1)
     assert s["kz_cutoff"] == pytest.approx(3.254e-3, rel=1e-2)
@@ -144,7 +144,7 @@ def test_p1_branch_followed_past_its_maximum_whatever_the_round_off(eps):
     theta, nu0, phi = REFERENCE["P1"]["flow"]
     ref = REFERENCE["P1"]["summary"]
     flow = solve_steady(theta, nu0 * (1.0 + eps), ChuteModel(roughness=phi))
-    s = transverse(flow, num=25).summary()
+    s = transverse(flow, num=25).to_dict()
     assert s["kz_cutoff"] == pytest.approx(ref["kz_cutoff"], rel=1e-3)
     assert s["growth_max"] == pytest.approx(ref["growth_max"], abs=1e-11)
     assert s["branch_lost_at"] > s["kz_cutoff"]

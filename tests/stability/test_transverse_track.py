@@ -62,7 +62,7 @@ def test_fast_transverse_analysis_matches_dense_numbers(p1_flow):
     6.18e-5: tests/stability/test_transverse.py); the cut-off from the branch's last three
     points before the continuum equals brentq on dense solves (3.254e-3) to 1e-3."""
     r = transverse(p1_flow, num=50)
-    s = r.summary()
+    s = r.to_dict()
     assert s["method"] == "track"
     assert s["all_physical"]
     assert s["kz_max"] == pytest.approx(1.928e-3, rel=1e-2)

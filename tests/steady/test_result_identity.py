@@ -41,7 +41,7 @@ def test_different_flows_differ():
 
 def test_summary_and_dataset_record_the_model():
     c = solve_steady(16.0, 0.05, CS)
-    s = c.summary()
+    s = c.to_dict()
     assert {k: s[k] for k in CS.to_dict()} == CS.to_dict()
     ds = c.to_xarray()
     assert ChuteModel.from_dict({k: ds.attrs[k] for k in CS.to_dict()}) == CS

@@ -371,7 +371,7 @@ def test_fallback_finds_non_monotonic_branch():
 
 
 def test_summary_and_xarray(p1):
-    s = p1.summary()
+    s = p1.to_dict()
     for k in (
         "theta",
         "nu0",
@@ -437,8 +437,8 @@ def test_unresolved_flow_is_returned_flagged_without_strict():
         assert f.convergence <= 1e-8
     else:
         assert 1e-8 < f.convergence < 1e-6
-        assert "not converged to the requested tolerance" in f.precision_warning()
-        assert f.summary()["converged"] is False
+        assert "not converged to the requested tolerance" in f.note
+        assert f.to_dict()["converged"] is False
         with pytest.raises(ConvergenceError):
             solve_steady(16.2712, 0.25, model)
     v = steady_existence(16.2712, 0.25, model)
@@ -447,8 +447,8 @@ def test_unresolved_flow_is_returned_flagged_without_strict():
     # a converged flow says so and has no warning
     g = solve_steady(16.0, 0.05, model, strict=False)
     assert g.converged
-    assert g.precision_warning() == ""
-    assert g.summary()["converged"] is True
+    assert g.note == ""
+    assert g.to_dict()["converged"] is True
 
 
 @pytest.mark.parametrize("n_max", [100, 130])

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from chuteflow.longwave.theory import coefficients
+from chuteflow.longwave.theory import taylor_coefficients
 from chuteflow.papers.mitarai2004.checks import (
     check_C_monotonicity,
     check_low_density_unstable,
@@ -149,5 +149,5 @@ def test_known_points_of_the_paper():
     for j, nu0 in enumerate((0.05, 0.08, 0.10)):
         flow = solve_steady(16.0, nu0)
         op = stability_operator(flow, 160, cache=OperatorCache(1, mapped=False))
-        a1, _ = coefficients(op, steady_tangent(flow))
+        a1, _ = taylor_coefficients(op, steady_tangent(flow))
         assert a1.imag == pytest.approx(float(ds["alpha1_im"].values[0, j]), rel=1e-6)

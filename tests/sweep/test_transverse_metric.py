@@ -159,7 +159,7 @@ def test_metric_keeps_no_operator_past_its_flow():
     module's cache (six operators; a three-dimensional one at N = 195 holds ~110 MB) kept
     those of earlier flows, and a worker of the 40 × 40 §5.3 diagram reached 577 MiB
     (measured on an 8 × 12 sweep of the same range: peak 640 → 569 MiB, the same values)."""
-    from chuteflow.stability import OPERATORS
+    from chuteflow.stability.modes import OPERATORS
     from chuteflow.steady import solve_steady
     from chuteflow.sweep.metrics import LongWaveMetric
     from chuteflow.sweep.points import Point

@@ -1,13 +1,15 @@
-"""The ``chuteflow steady`` command without typer: a fresh process answers in a fraction of
-a second.
+"""The ``chuteflow steady`` command: its options declared once, and its plain calls answered
+without typer (a fresh process answers in a fraction of a second).
 
 typer (with the pydantic it uses to convert every option) and rich cost about 0.3 s to
-import, more than solving the steady flow. :func:`fast_main` parses the plain forms of
-``chuteflow steady`` (``--theta``, ``--nu0``, ``--nu-top``, ``--json`` and the model options
-``--roughness`` … ``--transport``) itself and runs the command; anything else (``--help``, an
-unknown option, a value that is not a number or not a registered closure name) returns
-``None`` and goes to the typer application, which gives the usual help and usage errors.
-Both paths run :func:`steady_command`, so their output is the same.
+import, more than solving the steady flow. The command's options are declared once, in
+:data:`STEADY_OPTIONS` (and the model options, one per :class:`ChuteModel` field): the typer
+command of :mod:`chuteflow.cli.steady` is generated from that declaration, and
+:func:`fast_main` reads plain calls (``--flag value``, ``--flag=value``, the boolean flags)
+with the same declaration; anything else (``--help``, an unknown option, a value that is not
+a number or not a registered closure name) returns ``None`` and goes to the typer
+application, which gives the usual help and usage errors. Both paths run
+:func:`steady_command`, so their output is the same.
 """
 
 from __future__ import annotations
@@ -15,13 +17,54 @@ from __future__ import annotations
 import json
 import os
 import sys
-import warnings
 from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
 
 from chuteflow.closures import CLOSURES, PARAMETERS, ChuteModel
 from chuteflow.errors import ChuteflowError
 
-__all__ = ["JSON_KEYS", "fast_main", "steady_command"]
+__all__ = ["JSON_KEYS", "REQUIRED", "STEADY_OPTIONS", "Option", "fast_main", "steady_command"]
+
+#: Default of a required option.
+REQUIRED: Any = ...
+
+
+@dataclass(frozen=True)
+class Option:
+    """One option of ``chuteflow steady``: the parameter ``name`` of :func:`steady_command`,
+    its ``flag`` (a boolean's ``"--on/--off"`` pair, or one flag that sets True), type,
+    default (:data:`REQUIRED` if none) and help."""
+
+    name: str
+    flag: str
+    kind: type
+    default: Any
+    help: str
+
+    def flags(self) -> dict[str, Any]:
+        """Each flag and the value it gives a boolean (None: the flag takes a value)."""
+        if self.kind is not bool:
+            return {self.flag: None}
+        on, _, off = self.flag.partition("/")
+        return {on: True, **({off: False} if off else {})}
+
+
+#: The options of ``chuteflow steady`` besides the model's, in the order of its ``--help``.
+STEADY_OPTIONS: tuple[Option, ...] = (
+    Option("theta", "--theta", float, REQUIRED, "Inclination θ in degrees."),
+    Option("nu0", "--nu0", float, REQUIRED, "Floor packing fraction ν0(0)."),
+    Option("nu_top", "--nu-top", float, 1e-9, "Density where the domain ends (paper: 1e-9)."),
+    Option("as_json", "--json", bool, False, "Print one JSON object."),
+    Option(
+        "strict",
+        "--strict/--no-strict",
+        bool,
+        False,
+        "Fail (exit 2) where the flow misses the tolerance 1e-8 between two resolutions, "
+        "or print it, flagged converged = false, with a warning (default).",
+    ),
+)
 
 #: Keys of the JSON output, in order (the summary of :class:`~chuteflow.steady.SteadyFlow`).
 JSON_KEYS = (
@@ -80,12 +123,10 @@ def steady_command(
     ``strict`` raises (:func:`~chuteflow.steady.solve_steady`)."""
     from chuteflow.steady import solve_steady
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=strict)
+    flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=strict)
     if not flow.converged:
-        print(f"warning: {flow.precision_warning()}", file=sys.stderr, flush=True)
-    summary = flow.summary()
+        print(f"warning: {flow.note}", file=sys.stderr, flush=True)
+    summary = flow.to_dict()
     if as_json:
         print(json.dumps({k: summary[k] for k in JSON_KEYS}), flush=True)
         return
@@ -105,24 +146,29 @@ def steady_command(
 
 
 def _parse_steady(args: Sequence[str]) -> dict | None:
-    """Options of a plain ``chuteflow steady`` call, or None (let typer handle it)."""
-    floats = {"--theta": "theta", "--nu0": "nu0", "--nu-top": "nu_top"}
-    floats.update({"--" + p.replace("_", "-"): p for p in PARAMETERS})
-    names = {"--" + c.replace("_", "-"): c for c in CLOSURES}
-    out: dict = {"nu_top": 1e-9, "as_json": False, "strict": False, "model": {}}
+    """Options of a plain ``chuteflow steady`` call by :data:`STEADY_OPTIONS` and the model
+    options, or None (let typer handle it)."""
+    values: dict[str, Any] = {"--" + p.replace("_", "-"): ("model", p, float) for p in PARAMETERS}
+    values.update({"--" + c.replace("_", "-"): ("model", c, str) for c in CLOSURES})
+    switches: dict[str, tuple[str, bool]] = {}
+    for opt in STEADY_OPTIONS:
+        for flag, value in opt.flags().items():
+            if value is None:
+                values[flag] = ("command", opt.name, opt.kind)
+            else:
+                switches[flag] = (opt.name, value)
+    out: dict = {o.name: o.default for o in STEADY_OPTIONS}
+    out["model"] = {}
     i = 0
     while i < len(args):
         a = args[i]
+        if a in switches:
+            name, on = switches[a]
+            out[name] = on
+            i += 1
+            continue
         key, eq, value = a.partition("=")
-        if a == "--json":
-            out["as_json"] = True
-            i += 1
-            continue
-        if a in ("--strict", "--no-strict"):
-            out["strict"] = a == "--strict"
-            i += 1
-            continue
-        if key not in floats and key not in names:
+        if key not in values:
             return None
         if not eq:
             if i + 1 >= len(args):
@@ -130,20 +176,21 @@ def _parse_steady(args: Sequence[str]) -> dict | None:
             value = args[i + 1]
             i += 1
         i += 1
-        if key in names:
-            if value not in CLOSURES[names[key]].names():
+        where, name, kind = values[key]
+        if kind is str:
+            if value not in CLOSURES[name].names():
                 return None
-            out["model"][names[key]] = value
+            out["model"][name] = value
             continue
         try:
-            x = float(value)
+            x = kind(value)
         except ValueError:
             return None
-        if floats[key] in PARAMETERS:
-            out["model"][floats[key]] = x
+        if where == "model":
+            out["model"][name] = x
         else:
-            out[floats[key]] = x
-    if "theta" not in out or "nu0" not in out:
+            out[name] = x
+    if any(out[o.name] is REQUIRED for o in STEADY_OPTIONS):
         return None
     return out
 
@@ -157,14 +204,8 @@ def fast_main(argv: Sequence[str]) -> int | None:
     if opts is None:
         return None
     try:
-        steady_command(
-            opts["theta"],
-            opts["nu0"],
-            ChuteModel(**opts["model"]),
-            opts["nu_top"],
-            opts["as_json"],
-            strict=opts["strict"],
-        )
+        model = ChuteModel(**opts.pop("model"))
+        steady_command(model=model, **opts)
     except (ChuteflowError, ValueError) as exc:
         if os.environ.get("CHUTEFLOW_DEBUG"):
             raise

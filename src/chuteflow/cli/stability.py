@@ -53,7 +53,7 @@ EIG_KEYS = (
     "converged",
     "note",
 )
-#: Keys of ``longwave --json`` taken from :meth:`LongWave.summary` (with the model's keys,
+#: Keys of ``longwave --json`` taken from :meth:`LongWave.to_dict` (with the model's keys,
 #: ``k_c``, ``k_max``, ``lambda_c``, ``k_c_converged`` and the nested ``steady``; every key is
 #: documented in docs/cli.md). ``alpha2_*`` is the dispersion relation's k² coefficient (from
 #: the eigenvalue at k = 1e-5); the Taylor coefficient is the diagnostic ``alpha2_taylor_*``.
@@ -92,6 +92,8 @@ LONGWAVE_KEYS = (
     "eig_alpha2_re",
     "eig_n",
     "sign_consistent",
+    "converged",
+    "note",
     "k_c_converged",
 )
 
@@ -143,7 +145,7 @@ def _steady(console, theta, nu0, model, nu_top):
         warnings.simplefilter("ignore", RuntimeWarning)
         flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
     if not flow.converged:
-        _warn(flow.precision_warning())
+        _warn(flow.note)
     return flow
 
 
@@ -189,7 +191,7 @@ def _warn_mode(mode) -> None:
 
 
 def _mode_summary(mode, flow, method) -> dict:
-    s = mode.summary()
+    s = mode.to_dict()
     out = _params(flow)
     out.update({k: s[k] for k in ("k", "alpha_re", "alpha_im", "drift", "tail", "physical", "n", "n_check")})
     # k stays the wavenumber along the slope (the 2D commands' key); kx, kz the wavevector
@@ -204,12 +206,13 @@ def _mode_summary(mode, flow, method) -> dict:
         converged=bool(mode.physical),
         note=mode.note,
     )
-    out["steady"] = flow.summary()
+    out["steady"] = flow.to_dict()
     return out
 
 
 def _least_stable(console, flow, k, n, method, policy):
-    from chuteflow.stability import check_hydrodynamic_k, least_stable
+    from chuteflow.stability import least_stable
+    from chuteflow.stability.modes import check_hydrodynamic_k
 
     check_hydrodynamic_k(k)
     with console.status(f"least-stable mode at k = {k:g} ({method})"):
@@ -271,7 +274,8 @@ def _wavevector(k, kx, kz):
 def _mode_3d(console, flow, kx, kz, n, method, policy):
     """The least-stable mode at (k_x, k_z ≠ 0): the α(0) = 0 branch along the ray (branch),
     or the dense scan of the 3D spectrum (qz)."""
-    from chuteflow.stability import check_hydrodynamic_k, least_stable
+    from chuteflow.stability import least_stable
+    from chuteflow.stability.modes import check_hydrodynamic_k
 
     check_hydrodynamic_k(kx, kz)
     with console.status(f"least-stable mode at kx = {kx:g}, kz = {kz:g} ({method})"):
@@ -351,7 +355,8 @@ def dispersion_cmd(
     import numpy as np
 
     from chuteflow.errors import ParameterError
-    from chuteflow.stability import RejectionPolicy, check_hydrodynamic_k, dispersion
+    from chuteflow.stability import RejectionPolicy, dispersion
+    from chuteflow.stability.modes import check_hydrodynamic_k
     from chuteflow.stability.scan import peak_index
 
     _check_positive("k_max", k_max)
@@ -368,7 +373,7 @@ def dispersion_cmd(
         scan, kc_error = _k_c(flow, k_max, max(num, 12), policy, strict)
     found, k_c = scan.to_crossings(), scan.k_c
     if kc_error is None and not found.converged:
-        _warn(f"k_c: {found.message}")
+        _warn(f"k_c: {found.note}")
     if found:
         ds.attrs["crossings"] = np.asarray(found, dtype=float)
     if k_c is not None:
@@ -443,7 +448,7 @@ def dispersion_cmd(
         "all_physical": bool(v["physical"].all()),
         "alpha1_im": ds.attrs.get("alpha1_im"),
         **{name: arr.tolist() for name, arr in v.items()},
-        "steady": flow.summary(),
+        "steady": flow.to_dict(),
     }
     if as_json:
         _echo_json(summary)
@@ -489,7 +494,7 @@ def _k_c(flow, k_max, num, policy, strict):
     except ConvergenceError as exc:
         if strict:
             raise
-        empty = BranchScan.from_samples([0.5 * k_max, k_max], np.full(2, np.nan), message=str(exc))
+        empty = BranchScan.from_samples([0.5 * k_max, k_max], np.full(2, np.nan), note=str(exc))
         return empty, str(exc)
 
 
@@ -564,8 +569,8 @@ def longwave_cmd(
             scan = branch_scan(flow, k_max=k_max, refine_peak=False)
             k_c, kc_ok = scan.k_c, scan.converged
             if not kc_ok:
-                _warn(f"k_c: {scan.to_crossings().message}")
-    s = lw.summary()
+                _warn(f"k_c: {scan.note}")
+    s = lw.to_dict()
     out = _params(flow)
     out.update({k: s[k] for k in LONGWAVE_KEYS if k in s})
     out.update(
@@ -573,7 +578,7 @@ def longwave_cmd(
         k_max=k_max,
         lambda_c=2 * math.pi / k_c if k_c else None,
         k_c_converged=kc_ok,
-        steady=flow.summary(),
+        steady=flow.to_dict(),
     )
     if as_json:
         _echo_json(out)

@@ -1,31 +1,44 @@
-"""``chuteflow steady``: one steady flow (paper §3) as a table or one JSON object."""
+"""``chuteflow steady``: one steady flow (paper §3) as a table or one JSON object.
+
+The command's options are declared once, in :data:`chuteflow.cli._fast.STEADY_OPTIONS`; the
+typer command below is generated from that declaration (and the model options), and so is
+the plain-call parser of :mod:`chuteflow.cli._fast`.
+"""
 
 from __future__ import annotations
 
+import inspect
+from typing import Any
+
 import typer
 
-from chuteflow.closures import ChuteModel
-
 from ._app import MODEL_OPTIONS_HERE, app, with_model_options
-from ._fast import JSON_KEYS, steady_command
+from ._fast import JSON_KEYS, STEADY_OPTIONS, steady_command
 
 __all__ = ["JSON_KEYS", "steady"]
 
 
+def _declared(command):
+    """Give ``command(**kwargs)`` the signature of :data:`STEADY_OPTIONS` plus ``model``."""
+    kind = inspect.Parameter.POSITIONAL_OR_KEYWORD
+    params = [
+        inspect.Parameter(
+            o.name,
+            kind,
+            default=typer.Option(o.default, o.flag, help=o.help),
+            annotation=o.kind,
+        )
+        for o in STEADY_OPTIONS
+    ]
+    params.insert(2, inspect.Parameter("model", kind, default=MODEL_OPTIONS_HERE, annotation=Any))
+    command.__signature__ = inspect.Signature(params)
+    command.__annotations__ = {p.name: p.annotation for p in params}
+    return command
+
+
 @app.command("steady")
 @with_model_options
-def steady(
-    theta: float = typer.Option(..., "--theta", help="Inclination θ in degrees."),
-    nu0: float = typer.Option(..., "--nu0", help="Floor packing fraction ν0(0)."),
-    model: ChuteModel = MODEL_OPTIONS_HERE,
-    nu_top: float = typer.Option(1e-9, "--nu-top", help="Density where the domain ends (paper: 1e-9)."),
-    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
-    strict: bool = typer.Option(
-        False,
-        "--strict/--no-strict",
-        help="Fail (exit 2) where the flow misses the tolerance 1e-8 between two resolutions, "
-        "or print it, flagged converged = false, with a warning (default).",
-    ),
-) -> None:
+@_declared
+def steady(**options: Any) -> None:
     """Solve for the steady flow at (θ, ν0(0)) and print its quantities."""
-    steady_command(theta, nu0, model, nu_top, as_json, strict=strict)
+    steady_command(**options)

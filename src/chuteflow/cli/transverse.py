@@ -109,7 +109,7 @@ def transverse_cmd(
     flow = _flow(theta, nu0, model, nu_top)
     policy = RejectionPolicy(n_max=n_max)
     res = transverse(flow, kz_max=kz_max, num=num, policy=policy, method=method)
-    out = {**res.summary(), "nu_top": flow.nu_top}
+    out = {**res.to_dict(), "nu_top": flow.nu_top}
     if plot is not None:
         _plot(res, plot)
     if plane_plot is not None:

@@ -89,7 +89,7 @@ def directional_coefficients(
 ) -> tuple[complex, complex]:
     """(α1, α2) of α(s k̂) = α1 s + α2 s² + … on one discretised 3D operator.
 
-    Bordered perturbation theory at k = 0 (as :func:`chuteflow.longwave.theory.coefficients`)
+    Bordered perturbation theory at k = 0 (as :func:`chuteflow.longwave.theory.taylor_coefficients`)
     along the unit direction k̂ = (k̂x, k̂z); ``op`` must be three-dimensional when k̂z ≠ 0.
     """
     cx, cz = (float(direction[0]), float(direction[1]))
@@ -116,12 +116,44 @@ class TransverseLongWave:
         Chebyshev intervals of the finer resolution.
     convergence_alpha2 : float
         Relative change of α2z between n and 4n/5.
+    rtol : float
+        The accepted relative change (:attr:`converged`: ``convergence_alpha2 <= rtol``).
     """
 
     alpha1_z: complex
     alpha2_z: complex
     n: int
     convergence_alpha2: float
+    rtol: float = 1e-3
+
+    @property
+    def converged(self) -> bool:
+        """α2z changed by at most :attr:`rtol` between the two finest resolutions."""
+        return bool(self.convergence_alpha2 <= self.rtol)
+
+    @property
+    def note(self) -> str:
+        """Empty when converged; else by how much α2z still changed."""
+        if self.converged:
+            return ""
+        return (
+            f"alpha2_z changed by {self.convergence_alpha2:.1e} between the two finest resolutions "
+            f"(n = {self.n}; rtol = {self.rtol:g})"
+        )
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict (complex coefficients as real and imaginary parts)."""
+        return {
+            "alpha1_z_re": self.alpha1_z.real,
+            "alpha1_z_im": self.alpha1_z.imag,
+            "alpha2_z_re": self.alpha2_z.real,
+            "alpha2_z_im": self.alpha2_z.imag,
+            "n": self.n,
+            "convergence_alpha2": self.convergence_alpha2,
+            "rtol": self.rtol,
+            "converged": self.converged,
+            "note": self.note,
+        }
 
 
 def transverse_longwave(
@@ -131,14 +163,14 @@ def transverse_longwave(
     rtol: float = 1e-3,
     n_max: int = 320,
     cache: OperatorCache | None = None,
+    strict: bool = False,
 ) -> TransverseLongWave:
     """α2z by bordered perturbation theory, n raised by 25 % until it changes < ``rtol``;
     the three-dimensional operators come from ``cache`` (default: the module's).
 
-    Raises
-    ------
-    ConvergenceError
-        If α2z has not converged to ``rtol`` by ``n_max``.
+    Where α2z has not converged to ``rtol`` by ``n_max``, the estimate at ``n_max`` is
+    returned flagged (``converged`` False, :attr:`TransverseLongWave.note`), or with
+    ``strict=True`` :class:`ConvergenceError` is raised.
     """
     tangent = steady_tangent(flow)
     ladder = RejectionPolicy(n_start=n, n_max=n_max)
@@ -150,12 +182,12 @@ def transverse_longwave(
         if c2 <= rtol or n >= n_max:
             break
         b2, n2, n = a2, n, ladder.next_n(n)
-    if not c2 <= rtol:
+    if strict and not c2 <= rtol:
         raise ConvergenceError(
             f"transverse long-wave coefficient at theta = {flow.theta:g}, nu0 = {flow.nu0:g} "
             f"changed by {c2:.1e} between n = {n2} and n = {n} (rtol = {rtol:g})"
         )
-    return TransverseLongWave(a1, a2, n, float(c2))
+    return TransverseLongWave(a1, a2, n, float(c2), float(rtol))
 
 
 def lateral_pressure(flow: SteadyFlow) -> dict:
@@ -309,13 +341,30 @@ class TransverseResult:
     dispersion: TransverseDispersion = field(repr=False)
     model: ChuteModel | None = None
     method: str = "track"
+    alpha2_z_note: str = ""
+
+    @property
+    def converged(self) -> bool:
+        """α2z converged (:attr:`TransverseLongWave.converged`) and every computed k_z passed
+        the drift and tail tests."""
+        return not self.note
+
+    @property
+    def note(self) -> str:
+        """Empty when converged; else what missed its tolerance."""
+        d = self.dispersion
+        bad = int((~d.physical[np.isfinite(d.alpha_re)]).sum())
+        parts = [self.alpha2_z_note] if self.alpha2_z_note else []
+        if bad:
+            parts.append(f"{bad} of the computed k_z miss the drift or tail test")
+        return "; ".join(parts)
 
     @property
     def unstable(self) -> bool:
         """Some k_z grows (on the grid, or α2z > 0)."""
         return bool((math.isfinite(self.growth_max) and self.growth_max > 0) or self.alpha2_z > 0)
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         """JSON-ready dict: alpha2_z, kz_max (None if all decay), growth_max, stationary,
         unstable, and the convergence estimates and model parameters."""
         d = self.dispersion
@@ -345,6 +394,8 @@ class TransverseResult:
             "drift_max": float(np.nanmax(d.drift)) if not np.isnan(d.drift).all() else math.nan,
             "tail_max": float(np.nanmax(d.tail)) if not np.isnan(d.tail).all() else math.nan,
             "all_physical": bool(d.physical[np.isfinite(d.alpha_re)].all()),
+            "converged": self.converged,
+            "note": self.note,
             **(self.model.to_dict() if self.model is not None else {}),
         }
 
@@ -450,4 +501,5 @@ def transverse(
         disp,
         flow.model,
         method=method,
+        alpha2_z_note=lw.note,
     )

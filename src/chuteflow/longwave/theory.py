@@ -58,6 +58,9 @@ EIG_KS = (1e-6, 1e-5, 1e-4)
 #: absolute near the continuum) is 1e-4 of Re α; at 1e-5 Re α/k² converges to ~1e-6 by N ≈ 100
 #: (P1, P2) and stays within a few per cent of its k → 0 limit.
 K_EIG = 1e-5
+#: Largest relative change of Re α2 between its two finest rungs with which
+#: :attr:`LongWave.converged` holds: the sign of α2 (long-wave stability) is then decided.
+ALPHA2_SIGN_RTOL = 0.2
 
 
 def eigen_coefficient(
@@ -378,6 +381,35 @@ class LongWave:
     eig_n: int = 0
 
     @property
+    def converged(self) -> bool:
+        """:attr:`alpha2`, the coefficient that decides long-wave stability, was reached and
+        its real part changed by at most :data:`ALPHA2_SIGN_RTOL` (20 %) between its two
+        finest rungs, so its sign is decided. The Taylor coefficients are a diagnostic
+        (:attr:`taylor_converged`); :attr:`note` says what is not converged."""
+        return bool(math.isfinite(self.alpha2.real) and self.alpha2_convergence <= ALPHA2_SIGN_RTOL)
+
+    @property
+    def note(self) -> str:
+        """Empty when :attr:`converged` and the Taylor diagnostic converged too; else why not."""
+        parts = []
+        if not math.isfinite(self.alpha2.real):
+            parts.append(
+                f"the branch's eigenvalue at k = {self.alpha2_k:g} was not reached: alpha2 is "
+                "unknown and the sign is that of the Taylor alpha2"
+            )
+        elif not self.alpha2_convergence <= ALPHA2_SIGN_RTOL:
+            parts.append(
+                f"Re alpha2 changed by {self.alpha2_convergence:.1e} (relative) between N = "
+                f"{self.eig_n} and the rung below"
+            )
+        if not self.taylor_converged:
+            parts.append(
+                "the Taylor coefficients (a diagnostic) changed by "
+                f"{self.alpha2_taylor_convergence:.1e} at N = {self.n}"
+            )
+        return "; ".join(parts)
+
+    @property
     def sign_consistent(self) -> bool:
         """The Taylor Re α2 and Re :attr:`alpha2` agree in sign (True when the latter was not
         computed)."""
@@ -405,7 +437,7 @@ class LongWave:
         e = self.alpha2.real
         return bool(e > 0) if math.isfinite(e) else bool(self.alpha2_taylor.real > 0)
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         """JSON-ready dict (the keys of ``chuteflow longwave --json``, docs/cli.md)."""
         check = self.alpha2_check
         return {
@@ -425,6 +457,8 @@ class LongWave:
             "alpha2_taylor_im": self.alpha2_taylor.imag,
             "alpha2_taylor_convergence": self.alpha2_taylor_convergence,
             "taylor_converged": bool(self.taylor_converged),
+            "converged": self.converged,
+            "note": self.note,
             "k_check": self.k_check,
             "alpha2_check_re": check.real,
             "alpha2_check_im": check.imag,
@@ -437,7 +471,7 @@ class LongWave:
         }
 
 
-def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
+def tangent_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
     """V0 = ∂X0/∂β at fixed height y on the operator's grid (v̂ = ŵ = 0).
 
     The tangent is taken at fixed ξ = y/y_max; at fixed y, ∂f/∂β|_y = ∂f/∂β|_ξ − (y/y_max)
@@ -451,7 +485,7 @@ def null_vector(op: StabilityOperator, tangent: dict) -> np.ndarray:
 
 def fixed_height_tangent(flow, tangent: dict, y: np.ndarray) -> dict[str, np.ndarray]:
     """∂ν0/∂β, ∂u0/∂β, ∂T0/∂β at fixed height, at the heights ``y`` (keys "nu", "u", "T";
-    the non-zero fields of :func:`null_vector`)."""
+    the non-zero fields of :func:`tangent_vector`)."""
     g, L, dL = flow.grid, flow.y_max, tangent["y_max"]
     shift = (g.y / L) * dL
     fixed_y = {
@@ -464,7 +498,7 @@ def fixed_height_tangent(flow, tangent: dict, y: np.ndarray) -> dict[str, np.nda
     return dict(zip(fixed_y, vals))
 
 
-def coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:
+def taylor_coefficients(op: StabilityOperator, tangent: dict) -> tuple[complex, complex]:
     """(α1, α2) of one discretised operator by bordered perturbation theory."""
     return bordered_coefficients(op, tangent, *op.series_products())
 
@@ -489,7 +523,7 @@ def _bordered(op, tangent, A0, P1, P2):
     """(α1, α2, V0, V1) of :func:`bordered_coefficients` (V0, V1 of (A, B), not equilibrated)."""
     B = np.asarray(op.B, dtype=float)
     M = A0.shape[0]
-    V0 = null_vector(op, tangent)
+    V0 = tangent_vector(op, tangent)
     c = np.zeros(M)
     i = op.fields.index("nu") * (op.n + 1)
     c[i : i + op.n + 1] = op.grid.weights  # c·V = ∫ ν̂ dy
@@ -577,7 +611,7 @@ def branch_point(
     and the answer must lie within 5 % of it. ``taylor=False`` skips the Taylor coefficients
     (``alpha1``, ``alpha2`` NaN: the bordered matrix's LU and solves less); without
     ``guess`` the shift is then the exact α1 k, α1 = −i dQ0/dρ̄0 of the steady tangent
-    (eq. (B 2)), and the start the null vector V0 (:func:`null_vector`), which differs from
+    (eq. (B 2)), and the start the null vector V0 (:func:`tangent_vector`), which differs from
     the eigenvector at k by O(k): the same eigenpair, to the solve's round-off.
     """
     a1 = a2 = complex("nan")
@@ -587,7 +621,7 @@ def branch_point(
     elif guess is None:
         # without perturbation theory: the exact slope α1 = −i dQ0/dρ̄0 (eq. (B 2)) and the
         # k = 0 null vector V0 (the eigenvector at k differs from it by O(k))
-        pred, start = complex(0.0, -float(tangent["dQ_drho"])) * k, null_vector(op, tangent) / op.col_eq
+        pred, start = complex(0.0, -float(tangent["dQ_drho"])) * k, tangent_vector(op, tangent) / op.col_eq
     if guess is not None:
         pred, start = complex(guess), v0
     pencil = op.pencil(k)
@@ -614,7 +648,7 @@ def longwave(
     rtol: float = 1e-2,
     n_max: int = 480,
     k_check: float | None = 1e-6,
-    strict: bool = True,
+    strict: bool = False,
     eig_ks=EIG_KS,
 ) -> LongWave:
     """Long-wave coefficients α1, α2 of the least-stable branch, α = α1 k + α2 k² + O(k³).
@@ -643,9 +677,10 @@ def longwave(
         Wavenumber of the eigenvalue cross-check (:attr:`LongWave.alpha2_check`); None
         skips it.
     strict : bool
-        True (default): raise when ``rtol`` is not met by ``n_max``. False: return the
-        estimate at ``n_max`` flagged ``taylor_converged = False`` (its relative change in
-        :attr:`LongWave.alpha2_taylor_convergence`).
+        False (default, the package's convention): return the estimate at ``n_max``
+        flagged ``taylor_converged = False`` (its relative change in
+        :attr:`LongWave.alpha2_taylor_convergence`). True: raise when ``rtol`` is not met
+        by ``n_max``.
     eig_ks : tuple of float or None
         Wavenumbers of the branch's eigenvalues (:func:`branch_eigenvalues`, default 1e-6,
         1e-5, 1e-4); :attr:`LongWave.alpha2` is taken at :data:`K_EIG` (1e-5; the middle
@@ -681,10 +716,10 @@ def longwave(
     # sinh-mapped grid, which takes nodes from the dilute top whose continuum it feels (P2,
     # N = 100: Re α2 = 846 plain, 1.2e4 mapped; both → −91 … −40 only algebraically)
     plain = OperatorCache(2, mapped=False)
-    b1, b2 = coefficients(stability_operator(flow, n2, cache=plain), tangent)
+    b1, b2 = taylor_coefficients(stability_operator(flow, n2, cache=plain), tangent)
     while True:
         op = stability_operator(flow, n, cache=plain)
-        a1, a2 = coefficients(op, tangent)
+        a1, a2 = taylor_coefficients(op, tangent)
         c1 = abs(a1 - b1) / max(abs(a1), 1e-300)
         c2 = abs(a2 - b2) / max(abs(a2), 1e-300)
         ok = math.isfinite(c1) and math.isfinite(c2) and c2 <= rtol and c1 <= rtol / 100

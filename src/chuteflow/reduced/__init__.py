@@ -14,7 +14,6 @@
   waves on a periodic slope.
 """
 
-from . import accessor as _accessor  # noqa: F401 - adds ds.chute.agreement
 from .diagram import Reduced1D, agreement, reduced_diagram, reduced_diagram_config
 from .model import LocalCoefficients, ReducedModel, local_coefficients, reduced_model
 from .wave_solver import (

@@ -38,7 +38,7 @@ Modes (every one carries its convergence estimate)
     :class:`Mode` — ``alpha``, ``k``, ``kz``, ``theta``, ``nu0``, ``n``, ``y``, ``fields``
     (dict of nodal values, largest component 1), ``drift`` (|α(N) − α(N')|,
     N' = round(0.8N)), ``tail`` (paper's Chebyshev-tail statistic), ``physical`` (both
-    < 1e-7), ``summary()``, ``to_xarray()``.
+    < 1e-7), ``to_dict()``, ``to_xarray()``.
     ``least_stable(flow, k, kz=0, n=None, sigma=None, method="branch"|"qz")`` → Mode
     (:mod:`.resolver`): the mode of largest Re α among the modes that pass both tests under
     refinement, at any wavevector — the tracked (or direct) answer, then one dense solve at
@@ -46,13 +46,11 @@ Modes (every one carries its convergence estimate)
     one is returned flagged. N adaptive (80, 100, 125, …, 256) unless given; finite
     wavevectors on the sinh-mapped grid (:func:`~.modes.cache_for`).
     ``spectrum(flow, k, n=80)`` → all physical modes
-    by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift;
-    ``nearest_eigenpair(pencil, σ, v0=None)`` → (α, w) on the equilibrated pencil.
+    by QZ. ``mode_near(flow, k, σ, n=…)`` → the mode nearest a shift.
 
 Branch α(0) = 0 (the kinematic-wave mode of Appendix B)
     ``null_vectors(op)`` → :class:`NullVectors` (``alpha0``, ``right`` ∝ ∂X0/∂β,
-    ``left``; lᴴ B r = 1). ``first_order(op, nv)`` → α1 estimate (a predictor; the
-    long-wave stage computes α1, α2 accurately). ``BranchTracker(flow, n)`` — continuation
+    ``left``; lᴴ B r = 1). ``BranchTracker(flow, n)`` — continuation
     in k with ``.advance(k)`` and ``.mode(k)`` (:mod:`.tracking`; where it loses the branch,
     the fallbacks of :mod:`.lost`). ``dispersion(flow, ks)`` →
     :class:`xarray.Dataset` (alpha_re, alpha_im, drift, tail, n, physical over k; the
@@ -82,26 +80,12 @@ drift test but fails the tail test, and shift-invert estimates near it carry rou
 
 from .dispersion_relation import dispersion
 from .eigen import ShiftInvert, qz
-from .modes import (
-    K_DIRECT,
-    K_HYDRO_MAX,
-    OPERATORS,
-    Mode,
-    OperatorCache,
-    check_hydrodynamic_k,
-    check_n,
-    direct_mode,
-    mode_near,
-    nearest_eigenpair,
-    spectrum,
-    stability_operator,
-    tail,
-)
-from .operator import Pencil, StabilityOperator, base_on_grid, equation_terms
+from .modes import Mode, OperatorCache, mode_near, spectrum, stability_operator
+from .operator import Pencil, StabilityOperator, equation_terms
 from .policy import DEFAULT_POLICY, RejectionPolicy, SearchPolicy, TrackingPolicy
-from .resolver import choose_n, least_stable, pencil
+from .resolver import least_stable, pencil
 from .scan import BranchScan, Crossings, Peak, branch_scan, critical_k, crossings
-from .tracking import BranchTracker, NullVectors, branch_mode, first_order, null_vectors
+from .tracking import BranchTracker, NullVectors, branch_mode, null_vectors
 from .transverse import (
     TransverseDispersion,
     growth_plane,
@@ -111,50 +95,41 @@ from .transverse import (
 )
 from .transverse_tracking import TransverseTracker, TransverseTrackingPolicy
 
+# What users call: the operator, the solvers, the modes and results, the policies. Helpers
+# of the solvers (resolution checks, direct solves, tails) are imported from their modules.
 __all__ = [
-    "Pencil",
     "StabilityOperator",
-    "base_on_grid",
-    "equation_terms",
+    "Pencil",
     "pencil",
-    "ShiftInvert",
-    "qz",
-    "Mode",
-    "check_n",
-    "choose_n",
-    "least_stable",
-    "mode_near",
-    "nearest_eigenpair",
-    "spectrum",
+    "equation_terms",
     "stability_operator",
-    "tail",
+    "OperatorCache",
+    "qz",
+    "ShiftInvert",
+    "Mode",
+    "least_stable",
+    "spectrum",
+    "mode_near",
+    "dispersion",
     "BranchTracker",
-    "NullVectors",
     "branch_mode",
-    "critical_k",
-    "crossings",
+    "NullVectors",
+    "null_vectors",
     "BranchScan",
+    "Crossings",
     "Peak",
     "branch_scan",
-    "dispersion",
-    "first_order",
-    "null_vectors",
-    "RejectionPolicy",
-    "DEFAULT_POLICY",
-    "SearchPolicy",
-    "TrackingPolicy",
-    "OperatorCache",
-    "OPERATORS",
+    "critical_k",
+    "crossings",
     "TransverseDispersion",
     "TransverseTracker",
-    "TransverseTrackingPolicy",
     "growth_plane",
     "least_stable_3d",
     "transverse_dispersion",
     "transverse_mode",
-    "Crossings",
-    "K_DIRECT",
-    "K_HYDRO_MAX",
-    "check_hydrodynamic_k",
-    "direct_mode",
+    "RejectionPolicy",
+    "DEFAULT_POLICY",
+    "TrackingPolicy",
+    "SearchPolicy",
+    "TransverseTrackingPolicy",
 ]

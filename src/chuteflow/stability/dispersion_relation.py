@@ -37,7 +37,7 @@ def dispersion(
     n_max: int | None = None,
     drift_tol: float | None = None,
     tail_tol: float | None = None,
-    strict: bool = True,
+    strict: bool = False,
     cache: OperatorCache | None = None,
     least_stable: bool = False,
 ):
@@ -57,9 +57,9 @@ def dispersion(
     n_max, drift_tol, tail_tol : optional
         Overrides of the policy's fields of the same names.
     strict : bool
-        Raise :class:`ConvergenceError` when a point is not physical at N = ``n_max`` or
-        the branch is lost (default); otherwise return such points flagged
-        ``physical = False``. Where the continuation loses the branch (non-strict), that
+        False (default, the package's convention): return points that are not physical at
+        N = ``n_max`` flagged ``physical = False``; True: raise :class:`ConvergenceError`
+        there or where the branch is lost. Where the continuation loses the branch (non-strict), that
         and every larger k up to ``policy.relaxed_k_max`` are followed once more from k = 0
         with the relaxed tail threshold (:func:`relaxed_branch_modes`, judged by the paper's
         tests), where a direct mode that passes both tests and is less damped outranks a

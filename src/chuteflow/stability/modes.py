@@ -283,7 +283,7 @@ class Mode:
         appendix B); the convention of :mod:`chuteflow.conventions`."""
         return phase_velocity(self.alpha, self.k)
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         """JSON-ready scalars (keys used by the CLI)."""
         return {
             "k": self.k,
@@ -318,7 +318,7 @@ class Mode:
             {f: ("y", v, {"long_name": names[f]}) for f, v in self.fields.items()},
             coords={"y": ("y", self.y, {"long_name": "height above the floor", "units": "sigma"})},
         )
-        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.summary().items()})
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.to_dict().items()})
         if self.model is not None:
             ds.attrs.update(self.model.attrs())
         return ds

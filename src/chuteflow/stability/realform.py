@@ -214,7 +214,7 @@ class _RealFormShiftInvert(ShiftInvert):
         return (y[:, 0::2] + 1j * y[:, 1::2]).reshape(x.shape)
 
 
-def _null_vector(op: StabilityOperator) -> np.ndarray:
+def _real_null_vector(op: StabilityOperator) -> np.ndarray:
     """The right eigenvector of the equilibrated k = 0 pencil for its eigenvalue nearest 0:
     the shift-invert Arnoldi at σ = 0 of :func:`~chuteflow.stability.tracking.null_vectors`
     on the real form (a real LU; the left vector is not needed here)."""

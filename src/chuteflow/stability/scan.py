@@ -35,7 +35,9 @@ themselves (the sweep's ``growth`` metric, the transverse peaks) apply the same
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -134,13 +136,17 @@ def _parabola_peak(k, values, i: int) -> tuple[float, float] | None:
 
 
 # -- the result --------------------------------------------------------------------------------
-class Crossings(tuple):
-    """The wavenumbers where Re α of the tracked branch changes sign (a tuple of floats, in
-    increasing order), with the convergence of the scan that found them
-    (:meth:`BranchScan.to_crossings`).
+@dataclass(frozen=True)
+class Crossings:
+    """The wavenumbers where Re α of the tracked branch changes sign, in increasing order,
+    with the convergence of the scan that found them (:meth:`BranchScan.to_crossings`).
+
+    Iterating, ``len`` and indexing go over the wavenumbers ``ks``.
 
     Attributes
     ----------
+    ks : tuple of float
+        The sign changes of Re α.
     converged : bool
         Every grid point of the scan passed the drift and tail tests, the branch was
         followed up to ``k_max`` and every crossing was refined on the branch.
@@ -150,22 +156,32 @@ class Crossings(tuple):
         Largest resolution N used.
     k_reached : float
         Largest k of the scan (< ``k_max`` when the branch was lost).
-    message : str
+    note : str
         Empty when converged; else what was not reached.
     """
 
+    ks: tuple[float, ...] = ()
     converged: bool = True
     max_drift: float = 0.0
     max_tail: float = 0.0
     n: int = 0
     k_reached: float = math.nan
-    message: str = ""
+    note: str = ""
 
-    def __new__(cls, ks=(), **info):
-        obj = super().__new__(cls, tuple(ks))
-        for name, value in info.items():
-            setattr(obj, name, value)
-        return obj
+    def __iter__(self) -> Iterator[float]:
+        return iter(self.ks)
+
+    def __len__(self) -> int:
+        return len(self.ks)
+
+    def __getitem__(self, i):
+        return self.ks[i]
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict of the fields (``ks`` as a list)."""
+        d = dataclasses.asdict(self)
+        d["ks"] = [float(k) for k in self.ks]
+        return d
 
 
 class Peak(NamedTuple):
@@ -209,7 +225,7 @@ class BranchScan:
         The scan's intended end (the last grid point).
     theta, nu0 : float
         The flow's parameters (NaN when not known).
-    message : str
+    note : str
         Empty when converged; else what was not reached.
     """
 
@@ -225,7 +241,7 @@ class BranchScan:
     k_max: float = math.nan
     theta: float = math.nan
     nu0: float = math.nan
-    message: str = ""
+    note: str = ""
 
     @classmethod
     def from_samples(
@@ -239,7 +255,7 @@ class BranchScan:
         physical=None,
         theta: float = math.nan,
         nu0: float = math.nan,
-        message: str = "",
+        note: str = "",
     ) -> BranchScan:
         """A scan from sampled values alone (a synthetic or an already computed α(k)):
         crossings by linear interpolation, the peak by the parabola through the largest
@@ -266,7 +282,7 @@ class BranchScan:
             k_max=float(k[-1]),
             theta=theta,
             nu0=nu0,
-            message=message,
+            note=note,
         )
 
     # -- the rule ---------------------------------------------------------------------------
@@ -322,8 +338,8 @@ class BranchScan:
     @property
     def converged(self) -> bool:
         """Every point reached and passing the paper's drift and tail tests, and every
-        crossing refined on the branch (``message`` empty)."""
-        return bool(not self.message and self.reached.all() and self.physical.all())
+        crossing refined on the branch (``note`` empty)."""
+        return bool(not self.note and self.reached.all() and self.physical.all())
 
     @property
     def max_drift(self) -> float:
@@ -336,14 +352,37 @@ class BranchScan:
     def to_crossings(self) -> Crossings:
         """The crossings with the scan's convergence (:func:`crossings`)."""
         return Crossings(
-            self.crossings,
+            tuple(self.crossings),
             converged=self.converged,
             max_drift=self.max_drift,
             max_tail=self.max_tail,
             n=int(self.n.max()) if len(self.n) else 0,
             k_reached=self.k_reached,
-            message=self.message,
+            note=self.note,
         )
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: k_c, the cut-off, the peak, the crossings and the
+        convergence (the per-point arrays are in :meth:`to_xarray`)."""
+        pk = self.peak()
+        return {
+            "theta": self.theta,
+            "nu0": self.nu0,
+            "k_max": self.k_max,
+            "k_c": self.k_c,
+            "cutoff": self.cutoff(),
+            "crossings": [float(k) for k in self.crossings],
+            "peak_k": pk.k,
+            "peak_growth": pk.growth,
+            "peak_refined": bool(pk.refined),
+            "peak_at_edge": bool(pk.at_edge),
+            "k_reached": self.k_reached,
+            "n_max": int(self.n.max()) if len(self.n) else 0,
+            "max_drift": self.max_drift,
+            "max_tail": self.max_tail,
+            "converged": self.converged,
+            "note": self.note,
+        }
 
     def to_xarray(self):
         """:class:`xarray.Dataset` over k (alpha_re, alpha_im, drift, tail, n, physical),
@@ -365,7 +404,7 @@ class BranchScan:
             "peak_refined": int(pk.refined),
             "peak_at_edge": int(pk.at_edge),
             "converged": int(self.converged),
-            "message": self.message,
+            "note": self.note,
         }
         optional = (("k_c", self.k_c), ("cutoff", self.cutoff()))
         attrs.update({name: value for name, value in optional if value is not None})
@@ -431,7 +470,7 @@ def branch_scan(
         False (default): points that miss the paper's thresholds by N = ``n_max`` are kept
         with their best estimate, a lost branch ends the scan at the last point reached
         (NaN beyond), and a crossing whose refinement leaves the branch keeps the bracket's
-        linear estimate; ``message`` says which. True: :class:`ConvergenceError` instead.
+        linear estimate; ``note`` says which. True: :class:`ConvergenceError` instead.
     refine_peak : bool
         Refine the largest sample by a bounded search between its neighbours on the branch.
     """
@@ -528,7 +567,7 @@ def branch_scan(
         k_max=float(k_max),
         theta=float(flow.theta),
         nu0=float(flow.nu0),
-        message="; ".join(messages),
+        note="; ".join(messages),
     )
 
 
@@ -625,7 +664,7 @@ def crossings(
     Returns a :class:`Crossings` (a tuple of floats with the scan's convergence). With
     ``strict=False`` (default) points that miss the paper's thresholds by N = ``n_max`` are
     used with their best estimate, and a lost branch ends the scan at the last point
-    reached; ``.converged`` is then False and ``.message`` says why. ``strict=True`` raises
+    reached; ``.converged`` is then False and ``.note`` says why. ``strict=True`` raises
     :class:`ConvergenceError` instead.
     """
     return branch_scan(

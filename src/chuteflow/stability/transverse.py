@@ -176,6 +176,41 @@ class TransverseDispersion:
     method: np.ndarray | None = None
     branch_lost_at: float | None = None
 
+    @property
+    def converged(self) -> bool:
+        """Every k_z was computed and passed the policy's drift and tail tests."""
+        return bool(np.isfinite(self.alpha_re).all() and np.asarray(self.physical, dtype=bool).all())
+
+    @property
+    def note(self) -> str:
+        """Empty when converged; else how many k_z were not computed or missed a test."""
+        done = np.isfinite(self.alpha_re)
+        bad = int((~np.asarray(self.physical, dtype=bool)[done]).sum())
+        parts = []
+        if not done.all():
+            parts.append(f"{int((~done).sum())} of {len(done)} k_z not computed")
+        if bad:
+            parts.append(f"{bad} k_z miss the drift or tail test")
+        return "; ".join(parts)
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict: the arrays as lists, the flow and the convergence."""
+        return {
+            "theta": self.theta,
+            "nu0": self.nu0,
+            "kz": [float(v) for v in self.kz],
+            "alpha_re": [float(v) for v in self.alpha_re],
+            "alpha_im": [float(v) for v in self.alpha_im],
+            "drift": [float(v) for v in self.drift],
+            "tail": [float(v) for v in self.tail],
+            "n": [int(v) for v in self.n],
+            "physical": [bool(v) for v in self.physical],
+            "branch_lost_at": self.branch_lost_at,
+            "converged": self.converged,
+            "note": self.note,
+            **self.attrs,
+        }
+
     def to_xarray(self):
         """An :class:`xarray.Dataset` over ``kz``."""
         import xarray as xr

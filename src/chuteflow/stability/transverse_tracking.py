@@ -26,7 +26,7 @@ from ..continuation import StepRules, Trial, continue_to
 from ..steady import SteadyFlow
 from .modes import Mode, OperatorCache, check_n, interp_vector, make_mode, stability_operator, tail
 from .policy import DEFAULT_POLICY, RejectionPolicy
-from .realform import _inverse_iteration, _null_vector, _real_lu, _real_pencil
+from .realform import _inverse_iteration, _real_lu, _real_null_vector, _real_pencil
 
 __all__ = ["DEFAULT_TRANSVERSE", "TransverseTracker", "TransverseTrackingPolicy"]
 
@@ -154,7 +154,7 @@ class TransverseTracker:
         self.alpha2z = None if alpha2z is None else float(alpha2z)
         self.n = int(policy.n_start if n is None else n)
         self.max_ratio = tracking.max_ratio
-        w = _null_vector(self._op(self.n))  # eigenvector of the equilibrated pencil at k = 0
+        w = _real_null_vector(self._op(self.n))  # eigenvector of the equilibrated pencil at k = 0
         w = w / w[np.argmax(np.abs(w))]
         self.history: list[_Point] = [_Point(0.0, 0.0, np.ascontiguousarray(w.real), self.n)]
         self.lost_at: float | None = None

@@ -184,7 +184,7 @@ class SteadyFlow:
             "T_yy": g.D2 @ self.T,
         }
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         """Scalar quantities as a JSON-ready dict (keys used by the CLI)."""
         d = {"theta": self.theta, "nu0": self.nu0}
         d.update(self.model.to_dict())
@@ -216,7 +216,8 @@ class SteadyFlow:
             )
         return d
 
-    def precision_warning(self) -> str:
+    @property
+    def note(self) -> str:
         """One line saying how far from converged the flow is ('' when ``converged``): for
         results returned with ``strict=False`` (:func:`~chuteflow.steady.solve_steady`)."""
         if self.converged:
@@ -240,7 +241,7 @@ class SteadyFlow:
             },
             coords={"y": ("y", self.y, {"long_name": "height above the floor", "units": "sigma"})},
         )
-        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.summary().items()})
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) else v) for k, v in self.to_dict().items()})
         ds.attrs.update(self.model.attrs())
         return ds
 

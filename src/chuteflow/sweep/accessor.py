@@ -8,17 +8,19 @@ Importing :mod:`chuteflow.sweep` registers it on every :class:`xarray.Dataset`::
     ds.chute.regime_summary()   # per regime: points, median h and ν̄, …
     ds.chute.markers()          # the marked points as their own Dataset
 
-Methods that need a higher layer are added by that layer with :meth:`ChuteAccessor.method`
-(e.g. ``reduced_ds.chute.agreement(full_ds)`` from :mod:`chuteflow.reduced`), so that this
-module imports nothing above :mod:`chuteflow.sweep`. The free functions
-(:func:`~chuteflow.sweep.classify`, :func:`~chuteflow.sweep.markers`, …) stay and do the same.
+The accessor has the same methods whatever else is imported: those of :mod:`chuteflow.sweep`
+and below (operations of higher layers are their functions, e.g.
+:func:`chuteflow.reduced.agreement`). The free functions (:func:`~chuteflow.sweep.classify`,
+:func:`~chuteflow.sweep.markers`, …) stay and do the same.
+
+It is registered when xarray is imported (at once if it already is): a sweep's forked
+workers never build a Dataset, and a parent that has not imported xarray forks them without
+its ~44 MiB (measured: 60 × 60 diagram, worker peak 329 → 277 MiB; ``chuteflow._imports``).
 """
 
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
-from typing import Any
 
 import xarray as xr
 
@@ -43,21 +45,6 @@ class ChuteAccessor:
 
     def __init__(self, ds: xr.Dataset) -> None:
         self._ds = ds
-
-    # ------------------------------------------------------------------ extension
-    @classmethod
-    def method(cls, name: str) -> Callable[[Callable[..., Any]], Callable[..., Any]]:
-        """Decorator adding ``func(accessor, *args, **kw)`` as method ``name`` (for layers
-        above :mod:`chuteflow.sweep`). A name already taken raises ``ValueError``."""
-
-        def decorator(func: Callable[..., Any]) -> Callable[..., Any]:
-            old = cls.__dict__.get(name)
-            if old is not None and getattr(old, "__qualname__", None) != func.__qualname__:
-                raise ValueError(f"ds.chute.{name} is already defined")
-            setattr(cls, name, func)
-            return func
-
-        return decorator
 
     # ------------------------------------------------------------------ metadata
     @property

@@ -115,7 +115,7 @@ class TransverseMetric(PointFunction):
         # three-dimensional ones at N = 160 hold ~70 MB each (a worker of the 40 × 40 §5.3
         # diagram reached 577 MiB)
         cache = OperatorCache(2)
-        a2z = float(transverse_longwave(flow, int(o["n"]), cache=cache).alpha2_z.real)
+        a2z = float(transverse_longwave(flow, int(o["n"]), cache=cache, strict=True).alpha2_z.real)
         out["alpha2_z"] = a2z
         t_unstable = a2z > 0
         if t_unstable:

@@ -149,7 +149,6 @@ def _run(ctx: StageContext) -> None:
     _longwave_signs(ctx, R)
     _convergence(ctx, R)
     _eigenfunctions(ctx, R)
-    ctx.shared["stability"] = {"dispersion": R.disp, "longwave": R.lw, "crossings": R.kc}
 
 
 def _dispersion_figures(ctx, R):

@@ -285,4 +285,3 @@ def _run(ctx: StageContext) -> None:
         "ν0(y_max) = 1e-9 (not the paper's RK4 shooting), validated against scipy shooting "
         "in the tests."
     )
-    ctx.shared["steady"] = {"reference": f}
