@@ -18,7 +18,7 @@ import pytest
 from chuteflow.closures import ChuteModel
 from chuteflow.papers.mitarai2004.points import DIAGRAM_RANGES
 from chuteflow.steady import steady_family, steady_map
-from chuteflow.steady.family import Proof
+from chuteflow.steady.proofs import Proof
 
 from . import shooting as ref
 from .test_existence import reference_verdict

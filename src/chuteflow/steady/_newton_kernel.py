@@ -1,6 +1,6 @@
 """Compiled rows of the steady Newton system: scaled residual and Jacobian coefficients.
 
-At every Newton iterate :class:`~chuteflow.steady.solver.SteadyNewton` needs, at the nodes,
+At every Newton iterate :class:`~chuteflow.steady.newton.SteadyNewton` needs, at the nodes,
 the scaled residual of each equation of its layout and the coefficients of its exact
 Jacobian: for the unknowns s = ln ν0, u0, T0 and each derivative order c, the factor of
 d^c/dy^c in the row (diag(d) + diag(e1) D1 + diag(e2) D2 per field). The numpy road
@@ -40,7 +40,7 @@ from ..equations import BASE, _derive_compiled
 
 sp = lazy_module("sympy")
 
-#: Row scales of the layout (:class:`~chuteflow.steady.solver.SteadyNewton`): ν-rows by
+#: Row scales of the layout (:class:`~chuteflow.steady.newton.SteadyNewton`): ν-rows by
 #: 1/ν0, T-rows by 1/κ, x-momentum rows by the constant 1/ν0(0), the top condition by 1.
 SCALES = ("nu", "T", "u", "one")
 #: The outputs per equation, in order: the scaled residual, the y_max sum, then
