@@ -63,7 +63,7 @@ def test_noise_exit_keeps_statuses_and_values():
     floors = 0
     for theta, nus in _FLOOR_ROWS:
         out = {}
-        with np.errstate(all="ignore"), mock.patch.object(ladder, "solve_state", counted):
+        with mock.patch.object(ladder, "solve_state", counted):
             for noise_exit in (False, True):
                 sizes.clear()
                 opts = Options(min_thickness=0.0, tangent=False, noise_exit=noise_exit)
@@ -98,7 +98,6 @@ def _row(theta, nus, model, opts):
         return attempt(theta, nu0, model, opts, start, n, cold, **kw)
 
     with (
-        np.errstate(all="ignore"),
         mock.patch.object(rows, "_cold", counted_cold),
         mock.patch.object(continuation_step, "_attempt", counted_attempt),
         mock.patch.object(proofs, "_attempt", counted_attempt),
@@ -143,7 +142,7 @@ def test_layer_below_a_diameter_gets_two_newton_starts():
         assert start.n == n
         return continuation_step._Point("not_converged", None, "Newton stalled (made to fail by the test)")
 
-    with np.errstate(all="ignore"), mock.patch.object(proofs, "_attempt", failing):
+    with mock.patch.object(proofs, "_attempt", failing):
         p, v = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert v.exists
     assert v.h < 1.0
@@ -160,8 +159,7 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
     change of round-off flipped 6 such points of the 60 × 60 paper map)."""
     model = ChuteModel(roughness=0.05)
     opts = Options(min_thickness=1.0, tangent=False)
-    with np.errstate(all="ignore"):
-        p, v = proofs._decide(13.263157894737, 0.098421052632, model, opts)
+    p, v = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert v.exists
     assert not v.physical
     assert 0.1 < v.h < 0.2
@@ -173,7 +171,7 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
     def failing(theta, nu0, model, opts, start, n, cold=False):
         return continuation_step._Point("not_converged", None, "Newton stalled (made to fail by the test)")
 
-    with np.errstate(all="ignore"), mock.patch.object(proofs, "_attempt", failing):
+    with mock.patch.object(proofs, "_attempt", failing):
         q, _ = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert q.status == "thin"
     assert q.flow is None

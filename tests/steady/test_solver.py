@@ -255,7 +255,7 @@ def test_map_rows_reuse_the_neighbours_lu():
     rows, counts = [], []
     for exact in (True, False):
         patch, lus = _counting_lu()
-        with patch, np.errstate(all="ignore"):
+        with patch:
             rows.append(continue_row(16.0, nus, ChuteModel(), Options(tangent=False, beta_tangents=exact)))
         counts.append(lus[0])
     exact_row, map_row = rows

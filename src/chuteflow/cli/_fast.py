@@ -15,7 +15,6 @@ from __future__ import annotations
 import json
 import os
 import sys
-import warnings
 from collections.abc import Sequence
 
 from chuteflow.closures import CLOSURES, PARAMETERS, ChuteModel
@@ -80,9 +79,7 @@ def steady_command(
     ``strict`` raises (:func:`~chuteflow.steady.solve_steady`)."""
     from chuteflow.steady import solve_steady
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=strict)
+    flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=strict)
     if not flow.converged:
         print(f"warning: {flow.precision_warning()}", file=sys.stderr, flush=True)
     summary = flow.summary()

@@ -65,12 +65,22 @@ class SteadyNewton(SteadySystem):
         return eliminated_step(self, st, B, keep)
 
     def solve(self, st: NewtonState, tol=1e-10, maxiter=60, y_cap=1e5, lam_min=1e-6, min_iter=0):
-        # trial steps may leave the closures' domain (ν > ν_m, T < 0): the NaN/inf they give
-        # is handled by the line search, so numpy's warnings about it are noise
-        with np.errstate(all="ignore"):
-            out = self._solve(st, tol, maxiter, y_cap, lam_min, min_iter)
+        """Damped Newton from ``st``: (state, corrections, residual, history); raises
+        :class:`_NewtonFailure` (see :meth:`_solve`)."""
+        out = self._solve(st, tol, maxiter, y_cap, lam_min, min_iter)
         out[0].lu = self._latest  # the last LU used (with chord), for a neighbour's solve
         return out
+
+    def trial_residual(self, st: NewtonState) -> np.ndarray:
+        """The scaled residual at a trial state (a start, a chord or a line-search step).
+
+        A trial may leave the closures' domain (ν0 > ν_m, T0 ≤ 0 between the nodes, overflow
+        of e^s): its residual is then NaN or ±inf, which the line search rejects (a shorter
+        step) — an expected, handled outcome, so numpy's floating-point warnings are
+        silenced here, and only here (the Jacobian and the linear solves are taken at
+        accepted states, with a finite residual)."""
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self.evaluate(st, jac=False)[0]
 
     def _solve(self, st, tol, maxiter, y_cap, lam_min, min_iter):
         """Damped Newton. Converged when the scaled residual is below ``tol``, or when the
@@ -95,7 +105,7 @@ class SteadyNewton(SteadySystem):
         # the relative distance from the state of that Jacobian, and its dX/dβ
         again = self._latest = self.inherit if self.chord else None
         walked, tangent = math.inf, None
-        R, _ = self.evaluate(st, jac=False)
+        R = self.trial_residual(st)
         res = np.abs(R).max()
         for _ in range(maxiter):
             hist.append(res)
@@ -115,7 +125,7 @@ class SteadyNewton(SteadySystem):
                 rt = math.inf
                 kept = self._last  # st's residual pieces, for its Jacobian if this step fails
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
-                    Rt, _ = self.evaluate(trial, jac=False)
+                    Rt = self.trial_residual(trial)
                     rt = np.abs(Rt).max()
                 # (a correction that keeps the residual below tol counts for min_iter: the
                 # finer rung of a ladder from a neighbour's LU)
@@ -169,7 +179,7 @@ class SteadyNewton(SteadySystem):
             while lam >= lam_min:
                 trial = NewtonState.unpack(self.n, X0 + lam * dX, self.grid_map)
                 if (trial.T > 0).all() and 0 < trial.L < y_cap:
-                    Rt, _ = self.evaluate(trial, jac=False)
+                    Rt = self.trial_residual(trial)
                     rt = np.abs(Rt).max()
                     better = rt < (1 - 0.1 * lam) * res or (lam == 1.0 and rt < 1e-6)
                     if np.isfinite(rt) and better:

@@ -56,12 +56,8 @@ def _existence(ds, physical: bool):
 @register_stage("steady", order=10, title="Steady flows (§3, figures 2–5)")
 def steady(ctx: StageContext) -> None:
     """Steady flows uniform along the slope: existence, profiles, Q0(ρ̄0), (h, ν̄) maps."""
-    import warnings
 
-    with warnings.catch_warnings():
-        # trial Newton steps outside the closures' domain are handled by the solver
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _run(ctx)
+    _run(ctx)
 
 
 def _run(ctx: StageContext) -> None:
