@@ -54,11 +54,11 @@ _COARSE = 32
 
 def _cold_start(theta, nu0, model, nu_top, n, maxiter=30):
     """Isothermal guess polished by Newton (second-order x-momentum form, see
-    :meth:`SteadyNewton.evaluate`) on the coarse grid; (state, iterations). If the coarse Newton
-    got close (residual < 1e-3) but not below tolerance, the layer may be under-resolved
-    and the n grid is tried too. A cold start that converges needs at most ~15 iterations:
-    failing after ``maxiter`` (and backtracking at most 10 halvings) keeps the cost of a
-    point without a steady flow bounded."""
+    :meth:`~chuteflow.steady.newton.SteadyNewton.evaluate`) on the coarse grid; (state,
+    iterations). If the coarse Newton got close (residual < 1e-3) but not below tolerance, the
+    layer may be under-resolved and the n grid is tried too. A cold start that converges needs
+    at most ~15 iterations: failing after ``maxiter`` (and backtracking at most 10 halvings)
+    keeps the cost of a point without a steady flow bounded."""
     levels = (_COARSE, n) if n > _COARSE else (n,)
     first = None
     for m in levels:

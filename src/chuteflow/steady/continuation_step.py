@@ -176,10 +176,11 @@ def _predict(point: _Point, theta: float, nu0: float) -> NewtonState:
 
 def _with_tangent(point: _Point, opts: Options) -> _Point:
     """Tangent vectors of a converged point: for the predictor of its neighbours and, with
-    ``opts.tangent``, the derivatives along the family (:func:`tangent_from`). Those are
-    outputs and use the exact Jacobian at the accepted resolution; a predictor needs no such
-    accuracy, so without ``opts.tangent`` the vectors come from the coarser of the two
-    resolutions the flow was checked at (a third of the cost of the LU factorisation)."""
+    ``opts.tangent``, the derivatives along the family
+    (:func:`~chuteflow.steady.tangent.tangent_from`). Those are outputs and use the exact
+    Jacobian at the accepted resolution; a predictor needs no such accuracy, so without
+    ``opts.tangent`` the vectors come from the coarser of the two resolutions the flow was
+    checked at (a third of the cost of the LU factorisation)."""
     if point.flow is not None and point.vectors is None:
         f = point.flow
         try:
@@ -206,7 +207,7 @@ def _continue(nb: _Point, theta: float, nu0: float, model, opts: Options, memo: 
     2, then 4, … (up to 2**``opts.substeps``) equal steps on the straight path from the
     neighbour (:func:`~chuteflow.continuation.continue_to`, ``retry="subdivide"``).
 
-    ``memo`` (a dict shared by the calls of one row, :func:`continue_row`) keeps every
+    ``memo`` (a dict shared by the calls of one row, :func:`~chuteflow.steady.rows.continue_row`) keeps every
     step's outcome by (start point, target, settings): a retry with more substeps repeats
     the whole step and the half steps of the first try exactly, and gets them from there
     (the solver is deterministic, so the outcome is the same, at no cost)."""

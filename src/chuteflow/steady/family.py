@@ -47,12 +47,12 @@ def steady_family(
         Also compute dQ0/dρ̄0, dρ̄0/dν0(0), dQ0/dν0(0) from the exact family tangent
         (eq. (B 6)); about 2 ms per point.
     return_flows : bool
-        Also return the list of :class:`SteadyFlow` (None where there is none).
+        Also return the list of :class:`~chuteflow.steady.result.SteadyFlow` (None where there is none).
 
     Returns
     -------
     xarray.Dataset
-        Over ``nu0``: the scalars of :data:`SCALARS`, ``monotonic`` (1/0), ``n``,
+        Over ``nu0``: the scalars of :data:`~chuteflow.steady.schema.SCALARS`, ``monotonic`` (1/0), ``n``,
         ``status`` and ``error`` (strings). Points without a physical steady flow are NaN
         with their status; no exception is raised for them. Attributes: the model
         parameters, ``theta``, ``nu_top``, ``rtol``, ``min_thickness`` and the chuteflow

@@ -36,10 +36,10 @@ def follow(
     """Follow the branch of ``flow`` along the straight path to (``theta``, ``nu0``).
 
     Adaptive natural-parameter continuation (:func:`chuteflow.continuation.continue_to`,
-    ``retry="halve"``) in the path parameter s ∈ [0, 1] (``step`` and
-    ``min_step`` are in degrees when θ moves, else in units of ν0(0)/10): Euler predictor
-    along the exact tangents dX/dθ, dX/dν0(0), Newton corrector (every point converged to
-    ``rtol`` between two resolutions, as :func:`solve_steady`), step ×1.5 after a success,
+    ``retry="halve"``) in the path parameter s ∈ [0, 1] (``step`` and ``min_step`` are in
+    degrees when θ moves, else in units of ν0(0)/10): Euler predictor along the exact tangents
+    dX/dθ, dX/dν0(0), Newton corrector (every point converged to ``rtol`` between two
+    resolutions, as :func:`~chuteflow.steady.solve.solve_steady`), step ×1.5 after a success,
     halved after a failure. Thin layers are kept.
 
     Returns

@@ -47,7 +47,8 @@ def solve_point(
     inherit: dict | None = None,
     inherit_fine: bool = False,
 ):
-    """solve_steady after validation; ``start`` is a :class:`NewtonState` (or None: cold start).
+    """solve_steady after validation; ``start`` is a :class:`~chuteflow.steady.state.NewtonState`
+    (or None: cold start).
 
     ``opts`` (:class:`~chuteflow.steady.options.Options`) gives ``nu_top``, the first rung
     ``n``, ``rtol``, ``n_max``, ``min_thickness``, Newton's ``maxiter`` and ``lam_min``, and

@@ -44,7 +44,8 @@ def _steady_terms(ce) -> tuple[tuple[int, str, int, int], ...]:
 
 @functools.lru_cache(maxsize=32)
 def _layout(n: int, integrated: bool) -> tuple[tuple, Any]:
-    """The rows of :class:`SteadyNewton` at n: ((equation, rows of the system, nodes it is
+    """The rows of :class:`~chuteflow.steady.newton.SteadyNewton` at n: ((equation, rows of the
+    system, nodes it is
     imposed at, row-scaling kind), ...), and :func:`_u_prime_pattern` of them (None where
     u0' is not eliminated)."""
     m = n + 1
@@ -79,7 +80,8 @@ def _layout(n: int, integrated: bool) -> tuple[tuple, Any]:
 
 
 def _u_prime_pattern(layout, eqs):
-    """Where u0' enters the steady rows once it is an unknown (:meth:`SteadyNewton.step`):
+    """Where u0' enters the steady rows once it is an unknown
+    (:meth:`~chuteflow.steady.newton.SteadyNewton.step`):
     (diagonal, full), ``diagonal`` the (rows, first node) of the rows at nodes ≥ 1 other than
     eq. (3.7)'s, each holding u0' at its own node only; ``full`` the rows at the floor,
     holding u0'(0) = g0 · (u0(0), w). None where u0' cannot be eliminated: u0 enters a bulk
@@ -105,7 +107,8 @@ def _u_prime_pattern(layout, eqs):
 
 
 class _RowPlan(NamedTuple):
-    """Index arrays of the compiled road of :class:`SteadyNewton` for one layout and n."""
+    """Index arrays of the compiled road of :class:`~chuteflow.steady.newton.SteadyNewton` for one
+    layout and n."""
 
     products: tuple  # (r0, r1, j0, j1, field k, order c, first) of the terms c ≥ 1
     products_w: tuple  # the same without those of u0 (eliminated: SteadyNewton.step)
@@ -177,7 +180,8 @@ def _orders(ce) -> tuple[tuple[int, int], ...]:
 
 @functools.lru_cache(maxsize=32)
 def _road_parts(n: int, integrated: bool, closures: tuple):
-    """(closures' kernel, rows' kernel, plan) of the compiled road of :class:`SteadyNewton`
+    """(closures' kernel, rows' kernel, plan) of the compiled road of
+    :class:`~chuteflow.steady.newton.SteadyNewton`
     for the closure objects ``closures``, or None where compiled kernels are unavailable."""
     from ..closures.model import _compiled_c
 

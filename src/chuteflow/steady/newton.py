@@ -37,22 +37,23 @@ class SteadyNewton(SteadySystem):
         self.tangents = False
         #: Newton reuses its last LU for chord steps while they contract fast (see _solve)
         self.chord = False
-        #: with chord: a neighbour's LU at this n (:attr:`NewtonState.lu`), for chord steps
-        #: from the start (continuation: the Jacobian of a nearby flow)
+        #: with chord: a neighbour's LU at this n
+        #: (:attr:`~chuteflow.steady.state.NewtonState.lu`), for chord steps from the start
+        #: (continuation: the Jacobian of a nearby flow)
         self.inherit = None
         self._latest = None  # the last LU a chord solve used (see solve)
 
     def step(self, st: NewtonState, B: np.ndarray) -> np.ndarray:
         """J⁻¹ B for the exact Jacobian J at ``st`` (columns of B: right-hand sides).
 
-        Where the equations allow (:attr:`eliminate`: u0 enters every row only through
-        u0', except the floor rows, which may also hold u0(0); the integrated x-momentum
-        eq. (3.7) μ u0' = tanθ p is the first such row), the unknowns u0(ξ_j) are replaced
-        by (u0(0), w_j = u0'(ξ_j), j = 1…n), u0 = M⁻¹ (u0(0), w) with M = [e_0; D1 rows
-        1…n] (:func:`_u_basis`). The x-momentum rows then hold w_j at their own node only
-        (a diagonal block), and so do the energy rows; eliminating w leaves a dense system of
-        2(n + 1) + 1 instead of 3(n + 1) + 1 unknowns (a third of the LU's work), whose
-        Schur complement costs O(n²). Otherwise, a dense LU of J."""
+        Where the equations allow (:attr:`eliminate`: u0 enters every row only through u0',
+        except the floor rows, which may also hold u0(0); the integrated x-momentum eq. (3.7) μ
+        u0' = tanθ p is the first such row), the unknowns u0(ξ_j) are replaced by (u0(0), w_j =
+        u0'(ξ_j), j = 1…n), u0 = M⁻¹ (u0(0), w) with M = [e_0; D1 rows 1…n]
+        (:func:`~chuteflow.steady.linear._u_basis`). The x-momentum rows then hold w_j at their
+        own node only (a diagonal block), and so do the energy rows; eliminating w leaves a
+        dense system of 2(n + 1) + 1 instead of 3(n + 1) + 1 unknowns (a third of the LU's
+        work), whose Schur complement costs O(n²). Otherwise, a dense LU of J."""
         return self._step(st, B, keep=False)[0]
 
     def factored_step(self, st: NewtonState, B: np.ndarray) -> tuple[np.ndarray, Any]:
@@ -96,7 +97,7 @@ class SteadyNewton(SteadySystem):
 
         The round-off floor of the residual grows like n⁴ (second derivatives near the ends),
         so ``tol`` is raised accordingly above n = 64; the accuracy of a result is checked
-        independently by the change between two resolutions (:func:`solve_steady`)."""
+        independently by the change between two resolutions (:func:`~chuteflow.steady.solve.solve_steady`)."""
         tol = max(tol, 1e-11 * (self.n / 64.0) ** 4)
         hist = []
         crawl = 0  # steps in a row accepted at λ < 4 lam_min

@@ -31,14 +31,16 @@ def solve_state(
 ):
     """Solve the steady problem; returns (state, iterations, residual). Raises on failure.
 
-    Without ``guess`` the cold start runs Newton on a coarse grid first (n = 32: its
-    iterations are a third of the cost) and refines; the result does not depend on it.
-    The grid is ``grid_map`` ((ξ_c, ξ_w) or None: plain Chebyshev nodes); by default
-    (``"auto"``) the map of :func:`layer_grid_map` for the starting state (cold start or
-    ``guess``). ``tangents`` sets the state's :attr:`NewtonState.tangents` (dX/dβ from
-    Newton's last Jacobian). ``chord``: Newton reuses its last LU while that contracts
-    fast (:attr:`SteadyNewton.chord`; imports scipy.linalg), from the start with
-    ``inherit`` (:attr:`SteadyNewton.inherit`: a neighbour's LU at n) if given.
+    Without ``guess`` the cold start runs Newton on a coarse grid first (n = 32: its iterations
+    are a third of the cost) and refines; the result does not depend on it. The grid is
+    ``grid_map`` ((ξ_c, ξ_w) or None: plain Chebyshev nodes); by default (``"auto"``) the map of
+    :func:`~chuteflow.steady.grid.layer_grid_map` for the starting state (cold start or
+    ``guess``). ``tangents`` sets the state's
+    :attr:`~chuteflow.steady.state.NewtonState.tangents` (dX/dβ from Newton's last Jacobian).
+    ``chord``: Newton reuses its last LU while that contracts fast
+    (:attr:`~chuteflow.steady.newton.SteadyNewton.chord`; imports scipy.linalg), from the start
+    with ``inherit`` (:attr:`~chuteflow.steady.newton.SteadyNewton.inherit`: a neighbour's LU at
+    n) if given.
     """
     it0 = 0
     if guess is None:

@@ -67,7 +67,8 @@ def _estimate(v: ExistenceVerdict) -> str:
 
 
 def _decide(theta, nu0, model, opts: Options) -> tuple[_Point, ExistenceVerdict | None]:
-    """The shooting scan's verdict at (θ, ν0(0)) (:func:`steady_existence`); where a flow
+    """The shooting scan's verdict at (θ, ν0(0))
+    (:func:`~chuteflow.steady.shooting.verdict.steady_existence`); where a flow
     exists, Newton from the shot profile at n, 2n, … ≤ n_max (a layer thinner than
     ``min_thickness``: from n only; one thinner than a diameter: from n and 2n)."""
     try:

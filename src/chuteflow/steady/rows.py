@@ -109,16 +109,16 @@ def continue_row(
 
     Continuation is only the fast road. Every point it does not reach is decided
     (``opts.decide``) by the shooting scan :func:`~chuteflow.steady.shooting.steady_existence`
-    or by an earlier scan's verdict that covers it (:class:`Proof`; ``proofs`` collects
-    them and may be shared by the rows of a map): no flow (with the scan's reason), or a
-    flow, solved by Newton from the shot profile and then continued to its neighbours. A
-    run of undecided points is scanned at its end next to a converged flow, where the
-    existence boundary lies (or next to a point already scanned: outwards), so that one
-    verdict usually settles the whole run; while such a run is undecided no cold start is
-    tried, and none ever at a point a verdict covers. In a family (no ``previous``) a point
-    where the scan finds a flow that Newton from the shot profile does not resolve gets the
-    cold start as the last resort. With ``opts.decide = False`` the points continuation did
-    not reach are 'unreached'.
+    or by an earlier scan's verdict that covers it (:class:`~chuteflow.steady.proofs.Proof`;
+    ``proofs`` collects them and may be shared by the rows of a map): no flow (with the scan's
+    reason), or a flow, solved by Newton from the shot profile and then continued to its
+    neighbours. A run of undecided points is scanned at its end next to a converged flow, where
+    the existence boundary lies (or next to a point already scanned: outwards), so that one
+    verdict usually settles the whole run; while such a run is undecided no cold start is tried,
+    and none ever at a point a verdict covers. In a family (no ``previous``) a point where the
+    scan finds a flow that Newton from the shot profile does not resolve gets the cold start as
+    the last resort. With ``opts.decide = False`` the points continuation did not reach are
+    'unreached'.
     """
     nus = [float(v) for v in nu0_values]
     N = len(nus)

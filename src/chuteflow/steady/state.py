@@ -19,7 +19,7 @@ from .result import SteadyFlow, derived_quantities, steady_grid
 @dataclass
 class NewtonState:
     """Nodal unknowns: s = ln ν0 (keeps relative accuracy over nine decades), u0, T0, y_max,
-    on the nodes ξ_j y_max of :func:`reference_grid` (n, ``grid_map``)."""
+    on the nodes ξ_j y_max of :func:`~chuteflow.steady.grid.reference_grid` (n, ``grid_map``)."""
 
     n: int
     s: np.ndarray
@@ -27,13 +27,14 @@ class NewtonState:
     T: np.ndarray
     L: float
     grid_map: tuple[float, float] | None = None
-    #: Set by Newton (:meth:`SteadyNewton.solve` with ``tangents``) on the state it returns:
-    #: (dX/dβ, relative size of the last Newton step), the family tangent (β = ν0(0))
-    #: solved with the last Jacobian, which was taken at the state before that step.
+    #: Set by Newton (:meth:`~chuteflow.steady.newton.SteadyNewton.solve` with ``tangents``) on
+    #: the state it returns: (dX/dβ, relative size of the last Newton step), the family tangent
+    #: (β = ν0(0)) solved with the last Jacobian, which was taken at the state before that step.
     tangents: tuple | None = field(default=None, repr=False, compare=False)
-    #: Set by Newton with chord steps (:attr:`SteadyNewton.chord`) on the state it returns:
-    #: J⁻¹ B from the last LU it used (:meth:`SteadyNewton.factored_step`), for the chord
-    #: steps of a neighbour's solve at the same n (:attr:`SteadyNewton.inherit`).
+    #: Set by Newton with chord steps (:attr:`~chuteflow.steady.newton.SteadyNewton.chord`) on
+    #: the state it returns: J⁻¹ B from the last LU it used
+    #: (:meth:`~chuteflow.steady.newton.SteadyNewton.factored_step`), for the chord steps of a
+    #: neighbour's solve at the same n (:attr:`~chuteflow.steady.newton.SteadyNewton.inherit`).
     lu: Any = field(default=None, repr=False, compare=False)
 
     @property

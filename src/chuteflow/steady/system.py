@@ -108,7 +108,7 @@ class SteadySystem:
     def _jacobian_compiled(self, ctx: dict, g0: np.ndarray | None = None) -> np.ndarray:
         """:meth:`_jacobian` from the compiled rows' coefficients (the same matrix to
         round-off): each row block's field block is diag(d) + diag(e1) D1 + diag(e2) D2,
-        the products only where the equation has such a term (:func:`_row_plan`)."""
+        the products only where the equation has such a term (:func:`~chuteflow.steady.layout._row_plan`)."""
         n, m, L = self.n, self.n + 1, ctx["L"]
         assert self._fast is not None
         plan = self._fast[2]
@@ -198,10 +198,12 @@ class SteadySystem:
         }
 
     def _jacobian(self, ctx: dict, g0: np.ndarray | None = None) -> np.ndarray:
-        """The exact Jacobian J; with ``g0`` = row 0 of D1 M⁻¹ (:func:`_u_basis`), J T
+        """The exact Jacobian J; with ``g0`` = row 0 of D1 M⁻¹
+        (:func:`~chuteflow.steady.linear._u_basis`), J T
         instead, T = diag(I, M⁻¹, I, 1): the columns of u0 at the nodes replaced by those of
-        (u0(0), u0'(ξ_1…ξ_n)), which is how :meth:`step` eliminates u0' (the equations'
-        u0-terms are then those :func:`_u_prime_pattern` allows)."""
+        (u0(0), u0'(ξ_1…ξ_n)), which is how :meth:`~chuteflow.steady.newton.SteadyNewton.step`
+        eliminates u0' (the equations' u0-terms are then those
+        :func:`~chuteflow.steady.layout._u_prime_pattern` allows)."""
         n, m = self.n, self.n + 1
         L, D1, D2, nu, s1, s2 = ctx["L"], ctx["D1"], ctx["D2"], ctx["nu"], ctx["s1"], ctx["s2"]
         jets, kap = ctx["jets"], ctx["kap"]

@@ -52,7 +52,8 @@ _BETA_TANGENTS = _PerObject()
 
 
 def newton_tangent(st: NewtonState) -> np.ndarray | None:
-    """dX/dβ of a converged state from Newton's last LU (:attr:`NewtonState.tangents`) if
+    """dX/dβ of a converged state from Newton's last LU
+    (:attr:`~chuteflow.steady.state.NewtonState.tangents`) if
     that Jacobian was taken within :data:`TANGENT_STEP` of the state (accurate to about that
     step, as an output); None otherwise (factorise at the state instead)."""
     if st.tangents is not None and st.tangents[1] <= TANGENT_STEP:
@@ -124,7 +125,8 @@ def tangent_vectors(flow: SteadyFlow, theta: bool = True):
 
 
 def state_tangent_vectors(theta_deg, nu0, model, nu_top, st: NewtonState, theta: bool = True):
-    """:func:`tangent_vectors` at a solution given as a :class:`NewtonState` (any n)."""
+    """:func:`tangent_vectors` at a solution given as a
+    :class:`~chuteflow.steady.state.NewtonState` (any n)."""
     newton = SteadyNewton(st.n, theta_deg, nu0, model, nu_top, grid_map=st.grid_map)
     rhs = np.zeros((st.pack().size, 2 if theta else 1))
     rhs[0, 0] = -1.0 / nu0

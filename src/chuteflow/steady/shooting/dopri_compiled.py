@@ -12,9 +12,10 @@ from .trajectory import Trajectory, _hermite, _hermite_output, _level, _secant_e
 
 class _Kernel:
     """The compiled shooting integrator (:func:`~chuteflow.steady._scalar_ode.compiled_kernel`)
-    for one θ and model: :meth:`integrate` does what :func:`integrate` does with scipy's
-    dopri5 and :meth:`SteadyODE.rhs_bounded`, the stepping loop and the right-hand side in C
-    (one call per trajectory instead of ~10³ Python calls)."""
+    for one θ and model: :meth:`~chuteflow.steady.shooting.dopri_scipy.integrate` does what
+    :func:`~chuteflow.steady.shooting.dopri_scipy.integrate` does with scipy's dopri5 and
+    :meth:`~chuteflow.steady.shooting.ode.SteadyODE.rhs_bounded`, the stepping loop and the
+    right-hand side in C (one call per trajectory instead of ~10³ Python calls)."""
 
     def __init__(self, lib, params):
         import ctypes
@@ -44,7 +45,7 @@ class _Kernel:
         return a.ctypes.data_as(self._dp)
 
     def rhs(self, z) -> np.ndarray:
-        """d/dy of z (a copy), bounded as :meth:`SteadyODE.rhs_bounded`."""
+        """d/dy of z (a copy), bounded as :meth:`~chuteflow.steady.shooting.ode.SteadyODE.rhs_bounded`."""
         self._z[:] = z
         self.lib.cf_rhs(self._p_par, self._p_z, self._p_f)
         return self._f.copy()
@@ -84,14 +85,15 @@ class _Kernel:
 
     def state_at(self, t0, z0, t_end, rtol) -> np.ndarray:
         """The state at ``t_end`` integrated from (t0, z0) (no events; scipy's dopri5 with
-        ``nsteps = 10**4`` in :func:`integrate`)."""
+        ``nsteps = 10**4`` in :func:`~chuteflow.steady.shooting.dopri_scipy.integrate`)."""
         self._run(t0, z0, t_end, rtol, 10**4, (), record=False)
         return self._out[1 : 1 + NEQ].copy()
 
     def integrate(self, z0, y_cap: float, rtol: float, levels, *, dense: bool = False) -> Trajectory:
-        """:func:`integrate` of the steady ODE from y = 0 with the events z[k] − c of
+        """:func:`~chuteflow.steady.shooting.dopri_scipy.integrate` of the steady ODE from y = 0
+        with the events z[k] − c of
         ``levels`` ((name, k, c, direction), in order of priority for simultaneous
-        crossings at the same height as in :func:`integrate`)."""
+        crossings at the same height as in :func:`~chuteflow.steady.shooting.dopri_scipy.integrate`)."""
         status = self._run(0.0, z0, y_cap, rtol, 10**6, levels, record=True)
         n = self._nrec.value
         t = self._ts[:n].copy()

@@ -90,10 +90,10 @@ class SteadyODE:
 
     def rhs_bounded(self, y, z):
         """:meth:`rhs` with every non-finite value replaced by ±1e300, for the compiled
-        Dormand–Prince loop of :func:`integrate` (a huge derivative makes its error estimate
-        reject the trial step and shorten it, as NaN does in scipy's Python loop). Called
-        ~10⁵ times per scan with the integrator's array: one call level, no checks beyond
-        the finiteness of the result."""
+        Dormand–Prince loop of :func:`~chuteflow.steady.shooting.dopri_scipy.integrate` (a huge
+        derivative makes its error estimate reject the trial step and shorten it, as NaN does in
+        scipy's Python loop). Called ~10⁵ times per scan with the integrator's array: one call
+        level, no checks beyond the finiteness of the result."""
         s, u, T, T_y = z.tolist()
         try:
             nu_y, u_y, T_yy = self._rhs(math.exp(s), u, T, T_y, *self._trailing)

@@ -121,10 +121,11 @@ def steady_existence(
     reaches the top is a separatrix (typically a dense band packing to ν_m that either
     collapses or heats up above it), not a solution, and the scan goes on below it.
 
-    Cost: about 18 coarse trials plus 10–30 refining ones, 0.02–0.4 s per point on one core
-    (the right-hand side is generated scalar code, :mod:`chuteflow.steady._scalar_ode`, ~5 µs
-    a call, and the stepping loop is scipy's compiled ``dopri5``, :func:`integrate`: most of
-    the time is now the right-hand side's Python calls).
+    Cost: about 18 coarse trials plus 10–30 refining ones, 0.02–0.4 s per point on one core (the
+    right-hand side is generated scalar code, :mod:`chuteflow.steady._scalar_ode`, ~5 µs a call,
+    and the stepping loop is scipy's compiled ``dopri5``,
+    :func:`~chuteflow.steady.shooting.dopri_scipy.integrate`: most of the time is now the
+    right-hand side's Python calls).
 
     Parameters
     ----------
