@@ -9,16 +9,16 @@ resolution (:mod:`.one_grid`), the resolution ladder (:mod:`.ladder`), the tange
 (:mod:`.solve`), the shooting scan (:mod:`.shooting`), and for families and maps the settings
 (:mod:`.options`), the continuation step (:mod:`.continuation_step`), the scan's verdicts in a
 row (:mod:`.proofs`), the row scheduler (:mod:`.rows`), the Dataset schema (:mod:`.schema`),
-families (:mod:`.family`), maps (:mod:`.maps`), the flux minimum (:mod:`.flux_minimum`) and
-the separatrix (:mod:`.separatrix`).
+families (:mod:`.family`), maps (:mod:`.maps`), the flux minimum (:mod:`.flux`) and
+the separatrix of the θ contours (:mod:`.contours`).
 """
 
+from .contours import Separatrix, separatrix
 from .family import steady_family, steady_row
-from .flux_minimum import FluxMinimum, flux_minimum
+from .flux import FluxMinimum, flux_minimum
 from .maps import steady_map
 from .options import Options
 from .result import SteadyFlow
-from .separatrix import Separatrix, separatrix
 from .shooting import ExistenceVerdict, steady_existence
 from .solve import solve_steady
 from .tangent import steady_tangent
