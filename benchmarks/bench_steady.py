@@ -14,7 +14,7 @@ chuteflow), note — the interface of ``benchmarks/run.py``. Run alone:
 - ``steady_map_paper_60x60`` (30 × 30 with ``--quick``): the φ = 0.05 diagram grid of the
   paper, steady flows only, every point decided; baseline: continuation alone (points it does
   not reach left 'unreached'). Target (issue 9): < 10 s.
-- ``steady_existence_scan``: the shooting scan (:func:`~chuteflow.steady.existence.steady_existence`)
+- ``steady_existence_scan``: the shooting scan (:func:`~chuteflow.steady.shooting.steady_existence`)
   at six points of the φ = 0.05 map (flows, too small, too large with a separatrix), CPU time.
   Baseline: the same scan with the right-hand side of before issue 9 item 4 (the closures'
   and equations' numpy code called with scalars); the verdicts and u0(0), h must agree.
@@ -185,7 +185,7 @@ def _numpy_ode():
     """SteadyODE with the right-hand side of before issue 9 item 4 (baseline)."""
     from chuteflow.closures.model import FUNCTIONS, ORDERS, _compiled
     from chuteflow.equations import BASE, compiled_equations
-    from chuteflow.steady.existence import SteadyODE, _term_index
+    from chuteflow.steady.shooting.ode import SteadyODE, _term_index
 
     class NumpyODE(SteadyODE):
         def __init__(self, theta, model):
@@ -228,11 +228,11 @@ def _numpy_ode():
 
 
 def _solve_ivp_integrate(fun, z0, y_cap, rtol, events, *, dense=False):
-    """``steady.existence.integrate`` as it was before: scipy's ``solve_ivp`` (RK45, its
+    """``steady.shooting.integrate`` as it was before: scipy's ``solve_ivp`` (RK45, its
     stepping loop in Python) with terminal events on its dense output (baseline)."""
     from scipy.integrate import solve_ivp
 
-    from chuteflow.steady.existence import Trajectory
+    from chuteflow.steady.shooting.trajectory import Trajectory
 
     evs = []
     for _, g, d in events:
@@ -256,7 +256,7 @@ def _scan_pair(name: str, baseline, note) -> dict:
     manager ``baseline`` (which swaps in the baseline's piece); the verdicts and u0(0) of the
     two are compared. ``note(new, same, agree)`` writes the row's note."""
     from chuteflow.closures import ChuteModel
-    from chuteflow.steady import existence
+    from chuteflow.steady import shooting as existence
 
     model = ChuteModel(roughness=0.05)
     existence.steady_existence(16.0, 0.05, model)  # generated code loaded (or derived) once
@@ -314,7 +314,7 @@ def _diagram_rows_row(quick: bool) -> dict:
     from unittest import mock
 
     from chuteflow.papers.mitarai2004.stages.diagrams import stage_config
-    from chuteflow.steady import family
+    from chuteflow.steady import family, options
     from chuteflow.sweep.runner import _steady_chunk
 
     cfg = stage_config(0.05, True)
@@ -327,7 +327,7 @@ def _diagram_rows_row(quick: bool) -> dict:
     c0 = time.process_time()
     new = sweep()
     c_new = time.process_time() - c0
-    plain = family.Options(noise_exit=False)
+    plain = options.Options(noise_exit=False)
     with mock.patch.object(family, "Options", lambda **kw: dataclasses.replace(plain, **kw)):
         c0 = time.process_time()
         old = sweep()

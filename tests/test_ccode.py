@@ -18,7 +18,7 @@ import sympy as sp
 from chuteflow import _ccode
 from chuteflow.closures import ChuteModel
 from chuteflow.closures import model as closure_model
-from chuteflow.steady.existence import SteadyODE, shoot, steady_existence
+from chuteflow.steady.shooting import SteadyODE, shoot, steady_existence
 
 pytestmark = pytest.mark.skipif(_ccode.compiler() is None, reason="no C compiler on this machine")
 

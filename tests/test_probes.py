@@ -4,7 +4,7 @@ package, which no other test runs. A refactor that moves or renames what they us
 - every probe imports, and has a ``main``;
 - every ``chuteflow`` import in it resolves, the ones inside functions included (most probes
   import the package in ``main``), and so does every attribute chain on what it imports from
-  the package (``solver.SteadyNewton.step``, ``opmod.MAP_WIDTH``): the targets of its
+  the package (``newton.SteadyNewton.step``, ``spectral.LAYER_MAP_WIDTH``): the targets of its
   monkeypatches and the functions it calls;
 - (slow) the probes that take a size or a list of points run on a tiny case.
 """

@@ -2,9 +2,9 @@
 
     PYTHONPATH=src python benchmarks/probes/chord_contraction.py [ROUGHNESS] [SIZE]
 
-A steady map's continuation step (:func:`chuteflow.steady.family._continue`) starts Newton
+A steady map's continuation step (:func:`chuteflow.steady.continuation_step._continue`) starts Newton
 from the Euler predictor of its neighbour and may take *chord* steps with the neighbour's LU
-(:attr:`chuteflow.steady.solver.SteadyNewton.chord`, ``inherit``); a chord step is kept
+(:attr:`chuteflow.steady.newton.SteadyNewton.chord`, ``inherit``); a chord step is kept
 while it lowers the residual at least ten times. On the 60 × 60 paper map the first such step
 is kept at most points (it removes the predictor's O(Δν0²) error) and the second is not, so
 every converged point still factorises once at its coarse rung (stop 35).
@@ -39,8 +39,10 @@ def main(argv: list[str]) -> None:
     from chuteflow.closures import ChuteModel
     from chuteflow.errors import ChuteflowError
     from chuteflow.papers.mitarai2004.points import DIAGRAM_RANGES
-    from chuteflow.steady.api import state_tangent_vectors
-    from chuteflow.steady.solver import NewtonState, SteadyNewton, solve_state
+    from chuteflow.steady.newton import SteadyNewton
+    from chuteflow.steady.one_grid import solve_state
+    from chuteflow.steady.state import NewtonState
+    from chuteflow.steady.tangent import state_tangent_vectors
 
     model = ChuteModel(roughness=roughness)
     (t0, t1), (n0, n1) = DIAGRAM_RANGES[roughness]

@@ -4,7 +4,8 @@ drift and tail tests (1e-7), on the plain grid and on sinh maps of several width
     PYTHONPATH=src python benchmarks/probes/map_width.py P1,P4 0.005,0.5,3 plain,0.45,1,2
 
 Arguments: paper points, wavenumbers, grids ("plain" or a width factor of
-``chuteflow.stability.operator.MAP_WIDTH``). Prints N_needed (or ">256") per combination.
+``chuteflow.spectral.LAYER_MAP_WIDTH``, shared with the steady grid). Prints N_needed (or
+">256") per combination.
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ from __future__ import annotations
 import sys
 import time
 
+import chuteflow.spectral as spectral
 import chuteflow.stability.operator as opmod
 from chuteflow.closures import ChuteModel
 from chuteflow.papers.mitarai2004.points import POINTS
@@ -31,10 +33,13 @@ def n_needed(flow, k, cache):
 
 def main(argv):
     names, ks, grids = (a.split(",") for a in argv[:3])
-    # layer_map is cached per flow: uncached, each grid reads the MAP_WIDTH set below
+    # layer_map is cached per flow: uncached, each grid reads the LAYER_MAP_WIDTH set below
+    # (the steady grid reads it too: each flow is solved with the default width)
+    default = spectral.LAYER_MAP_WIDTH
     opmod.layer_map = opmod.layer_map.__wrapped__
     for name in names:
         p = POINTS[name]
+        spectral.LAYER_MAP_WIDTH = default
         flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
         for k in map(float, ks):
             row = []
@@ -42,7 +47,7 @@ def main(argv):
                 if g == "plain":
                     cache = OperatorCache(4, mapped=False)
                 else:
-                    opmod.MAP_WIDTH = float(g)
+                    spectral.LAYER_MAP_WIDTH = float(g)
                     cache = OperatorCache(4)
                 t0 = time.perf_counter()
                 n, m = n_needed(flow, k, cache)

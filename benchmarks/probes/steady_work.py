@@ -34,15 +34,20 @@ def main(argv: list[str]) -> None:
     from chuteflow._threads import limit_blas_threads
 
     limit_blas_threads(1)
-    import chuteflow.steady.family as family
-    import chuteflow.steady.solver as solver
+    import chuteflow.steady.continuation_step as continuation_step
+    import chuteflow.steady.newton as newton
+    import chuteflow.steady.proofs as proofs
     from chuteflow.papers.mitarai2004.points import DIAGRAM_RANGES
     from chuteflow.steady import solve_steady, steady_map
 
     solve_steady(16.0, 0.05)  # generated code and caches, outside the count
     work: collections.Counter = collections.Counter()
     attempts: collections.Counter = collections.Counter()
-    step, residual, attempt = solver.SteadyNewton.step, solver.SteadyNewton._residual, family._attempt
+    step, residual, attempt = (
+        newton.SteadyNewton.step,
+        newton.SteadyNewton._residual,
+        continuation_step._attempt,
+    )
 
     def counted_step(self, st, B):
         work["newton steps (LUs)"] += 1
@@ -59,9 +64,9 @@ def main(argv: list[str]) -> None:
         attempts[p.status] += 1
         return p
 
-    solver.SteadyNewton.step = counted_step
-    solver.SteadyNewton._residual = counted_residual
-    family._attempt = counted_attempt
+    newton.SteadyNewton.step = counted_step
+    newton.SteadyNewton._residual = counted_residual
+    continuation_step._attempt = proofs._attempt = counted_attempt
 
     (t0, t1), (n0, n1) = DIAGRAM_RANGES[0.05]
     ths, nus = np.linspace(t0, t1, size), np.geomspace(n0, n1, size)

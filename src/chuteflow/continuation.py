@@ -2,7 +2,7 @@
 
 The package follows solutions along a parameter in several places: steady flows along the
 floor density ν0(0) or the inclination θ (paper §3.2; :mod:`chuteflow.steady.family`,
-:func:`chuteflow.steady.api.follow`), the least-stable eigenvalue along the wavenumber k
+:func:`chuteflow.steady.follow.follow`), the least-stable eigenvalue along the wavenumber k
 (§4.2; :class:`chuteflow.stability.BranchTracker`) and the steady flows of the 1D model's
 diagrams (:mod:`chuteflow.reduced.diagram`). Each supplies only ``solve(state, s)``, the
 solution at parameter ``s`` from the last accepted ``state`` (predictor and corrector are
@@ -27,7 +27,7 @@ attempt is recorded as a :class:`Step` in the :class:`Continuation` returned;
 
 Which neighbour seeds which point of a (θ, ν0(0)) row — the point below or above in ν0, the
 neighbouring θ row, spread-out cold starts — is decided by one row scheduler,
-:func:`chuteflow.steady.family.continue_row`, shared by steady families, maps
+:func:`chuteflow.steady.rows.continue_row`, shared by steady families, maps
 (:mod:`chuteflow.steady.maps`) and sweep rows (:mod:`chuteflow.sweep.runner`); each single
 continuation it starts goes through :func:`continue_to`.
 

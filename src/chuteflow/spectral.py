@@ -253,6 +253,42 @@ class MappedChebyshevGrid(ChebyshevGrid):
         return MappedChebyshevGrid(n, self.a, self.b, self.center, self.width, self.blend)
 
 
+#: Width of the sinh map that clusters nodes at the edge of a flowing layer, in units of the
+#: density scale height T0/cos θ of the dilute top at the edge (:func:`layer_edge_map`). The
+#: factor 2 is chosen from the stability operator's resolution at the paper's points
+#: (:func:`chuteflow.stability.operator.layer_map`, ``benchmarks/probes/map_width.py``); the
+#: steady grid uses the same map.
+LAYER_MAP_WIDTH = 2.0
+#: A map wider than this fraction of the domain is dropped (plain Chebyshev nodes): the layer
+#: then has no sharp edge and the sinh map would only move nodes away from the floor.
+LAYER_MAP_MAX = 0.5
+
+
+def layer_edge_map(edge: float, T_edge: float, theta_deg: float, y_max: float) -> tuple[float, float] | None:
+    """The sinh map (centre, width) of :class:`MappedChebyshevGrid` that clusters nodes at the
+    edge of a flowing layer on [0, ``y_max``]: the one map of the steady grid
+    (:func:`chuteflow.steady.grid.layer_grid_map`) and the stability grid
+    (:func:`chuteflow.stability.operator.layer_map`), with one fallback rule.
+
+    Above a dense layer on a slope θ the density falls with the scale height T0/cos θ of an
+    isothermal atmosphere (y-momentum balance p' = −ν cos θ with p ≈ νT, paper eq. (3.5)): the
+    transport coefficients change from their dense to their dilute form within a few scale
+    heights of the edge, which a plain Chebyshev grid resolves only with many nodes (they
+    crowd the ends instead). The map is centred at ``edge`` (a height where ν0 has fallen to
+    1 % of its peak; each caller locates it) with width
+
+        ε = :data:`LAYER_MAP_WIDTH` × ``T_edge`` / cos θ.
+
+    Returns (``edge``, ε) in the units of ``y_max``, or None — the plain Chebyshev grid —
+    where ε is not a positive number at most :data:`LAYER_MAP_MAX` × ``y_max`` (no sharp
+    edge: a broad layer, or a state far from converged) or ``edge`` is not inside (0, y_max).
+    """
+    width = LAYER_MAP_WIDTH * T_edge / math.cos(math.radians(theta_deg))
+    if not (math.isfinite(width) and 0.0 < width <= LAYER_MAP_MAX * y_max and 0.0 < edge < y_max):
+        return None
+    return edge, width
+
+
 def barycentric(f: np.ndarray, n: int, x: np.ndarray) -> np.ndarray:
     """The interpolant of nodal values ``f`` (last axis: the n + 1 nodes x_j = −cos(πj/n))
     at points ``x`` ∈ [−1, 1], by the second (true) barycentric formula with the Lobatto

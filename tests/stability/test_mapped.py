@@ -14,9 +14,10 @@ import pytest
 
 from chuteflow.closures import ChuteModel
 from chuteflow.papers.mitarai2004.points import POINTS
+from chuteflow.spectral import LAYER_MAP_WIDTH as MAP_WIDTH
 from chuteflow.spectral import ChebyshevGrid, MappedChebyshevGrid
 from chuteflow.stability import OperatorCache, StabilityOperator, least_stable
-from chuteflow.stability.operator import MAP_WIDTH, layer_map
+from chuteflow.stability.operator import layer_map
 from chuteflow.steady import solve_steady
 
 

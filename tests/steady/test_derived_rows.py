@@ -16,7 +16,9 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.steady.solver import NewtonState, SteadyNewton, isothermal_guess
+from chuteflow.steady.cold_start import isothermal_guess
+from chuteflow.steady.newton import SteadyNewton
+from chuteflow.steady.state import NewtonState
 
 
 def hand_written_rows(newton, st, jac=True):

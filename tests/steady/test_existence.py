@@ -1,4 +1,4 @@
-"""Existence of the steady flow by a shooting scan in u0(0) (steady/existence.py, issue 9).
+"""Existence of the steady flow by a shooting scan in u0(0) (steady/shooting/, issue 9).
 
 The verdicts are checked against the independent transcription of the paper's equations in
 tests/steady/shooting.py (Table 1 typed again, ν-derivatives by complex step), scanned here
@@ -18,13 +18,13 @@ import pytest
 from chuteflow.closures import ChuteModel
 from chuteflow.errors import NoSteadyFlowError
 from chuteflow.steady import solve_steady
-from chuteflow.steady.existence import SteadyODE, integrate, shoot, steady_existence
+from chuteflow.steady.shooting import SteadyODE, integrate, shoot, steady_existence
 
 from . import shooting as ref
 
 
 def test_integrate_events_and_dense_output():
-    """The compiled Dormand–Prince loop with events (steady/existence.py ``integrate``) on
+    """The compiled Dormand–Prince loop with events (steady/shooting/dopri_compiled.py, as ``integrate``) on
     z' = (−z₀, z₀) from (1, 0), exact solution (e^{−y}, 1 − e^{−y}): the event z₀ = 1/2 lies
     at y = ln 2, and the dense interpolant is accurate to ~rtol (cubic Hermite per step);
     an event with the wrong direction does not stop it, and at y_cap status 0."""

@@ -8,9 +8,17 @@ import pytest
 from chuteflow import __version__
 from chuteflow.closures import ChuteModel
 from chuteflow.errors import ParameterError
-from chuteflow.steady import flux_minimum, solve_steady, steady_family, steady_map
-from chuteflow.steady.family import SCALARS, separatrix
+from chuteflow.steady import (
+    FluxMinimum,
+    Separatrix,
+    flux_minimum,
+    separatrix,
+    solve_steady,
+    steady_family,
+    steady_map,
+)
 from chuteflow.steady.maps import existence_limit
+from chuteflow.steady.schema import SCALARS
 
 PHI10 = ChuteModel(roughness=0.10)
 
@@ -91,10 +99,20 @@ def test_flux_minimum_at_16_degrees():
     """§3.2: at θ = 16° Q0 decreases with ρ̄0 for ρ̄0 ≲ 0.2 and has a minimum. Found by
     Brent on the exact tangent: ρ̄0 = 0.2272, Q0 = 2.3103 at ν0(0) = 0.03434."""
     r = flux_minimum(16.0, nu0_values=np.geomspace(0.02, 0.08, 6))
-    assert r is not None
-    assert r["nu0"] == pytest.approx(0.034338, rel=1e-4)
-    assert 0.15 < r["rho_bar"] < 0.3
-    f = solve_steady(16.0, r["nu0"])
+    assert isinstance(r, FluxMinimum)
+    assert r.nu0 == pytest.approx(0.034338, rel=1e-4)
+    assert 0.15 < r.rho_bar < 0.3
+    assert r.bracket[0] < r.nu0 < r.bracket[1]
+    # converged: Brent to xtol and the flow there to rtol (its estimate below 1e-8)
+    assert r.converged
+    assert r.convergence <= 1e-8
+    assert "xtol" in r.note
+    d = r.to_dict()
+    assert d["nu0"] == r.nu0
+    assert d["converged"] is True
+    assert "family" not in d
+    assert int((r.family.status.values == "ok").sum()) == 6
+    f = solve_steady(16.0, r.nu0)
     from chuteflow.steady import steady_tangent
 
     assert abs(steady_tangent(f)["dQ_drho"]) < 1e-6
@@ -106,7 +124,7 @@ def test_flux_phi010_monotonic_20_minimum_21():
     assert flux_minimum(20.0, PHI10, nu0_values=nus) is None
     r = flux_minimum(21.0, PHI10, nu0_values=nus)
     assert r is not None
-    assert 0.05 < r["rho_bar"] < 0.3
+    assert 0.05 < r.rho_bar < 0.3
 
 
 def test_small_map():
@@ -153,8 +171,12 @@ def test_separatrix():
     """§3.2: contours of θ separate near h ≈ 7 around θ ≈ 15° (θ ≤ 14° → h → 0, θ ≥ 15°
     diverge). Measured θ* ≈ 14.5°, h ≈ 5.8 at ν̄ ≈ 1e-3."""
     sp = separatrix(xtol=0.05)
-    assert 14.0 < sp["theta"] < 15.0
-    assert abs(sp["h"] - 7.0) < 0.3 * 7.0
+    assert isinstance(sp, Separatrix)
+    assert 14.0 < sp.theta < 15.0
+    assert abs(sp.h - 7.0) < 0.3 * 7.0
+    assert sp.converged
+    assert sp.bracket[1] - sp.bracket[0] <= 0.05
+    assert sp.to_dict()["theta"] == sp.theta
 
 
 def test_steady_row_is_steady_family_without_the_table():
@@ -176,7 +198,7 @@ def test_steady_row_is_steady_family_without_the_table():
 
 
 def test_no_step_up_from_a_layer_at_the_top_changes_no_answer():
-    """family._TOP_GAP: a flow whose dense layer ends within 0.1 h of the top of the domain
+    """rows._TOP_GAP: a flow whose dense layer ends within 0.1 h of the top of the domain
     is not continued to a larger ν0(0) (those steps fail: 107 of 107 on the two 60 × 60
     paper maps). On a row that crosses the upper existence boundary (θ = 17°, φ = 0.05)
     the rule skips such steps, takes fewer continuation attempts, and gives the same
@@ -184,11 +206,11 @@ def test_no_step_up_from_a_layer_at_the_top_changes_no_answer():
     the row with every step tried."""
     from unittest import mock
 
-    from chuteflow.steady import family, steady_row
+    from chuteflow.steady import continuation_step, proofs, rows, steady_row
 
     nus = list(np.geomspace(0.12, 0.2, 10))
     skips, attempts = [], {"rule": 0, "all": 0}
-    top_bound, attempt = family._top_bound, family._attempt
+    top_bound, attempt = rows._top_bound, continuation_step._attempt
 
     def counting_top_bound(point):
         out = top_bound(point)
@@ -202,9 +224,18 @@ def test_no_step_up_from_a_layer_at_the_top_changes_no_answer():
 
         return run
 
-    with mock.patch.multiple(family, _top_bound=counting_top_bound, _attempt=counting_attempt("rule")):
+    rule_attempt, all_attempt = counting_attempt("rule"), counting_attempt("all")
+    with (
+        mock.patch.object(rows, "_top_bound", counting_top_bound),
+        mock.patch.object(continuation_step, "_attempt", rule_attempt),
+        mock.patch.object(proofs, "_attempt", rule_attempt),
+    ):
         rule = steady_row(17.0, nus)
-    with mock.patch.multiple(family, _TOP_GAP=0.0, _attempt=counting_attempt("all")):
+    with (
+        mock.patch.object(rows, "_TOP_GAP", 0.0),
+        mock.patch.object(continuation_step, "_attempt", all_attempt),
+        mock.patch.object(proofs, "_attempt", all_attempt),
+    ):
         every = steady_row(17.0, nus)
     assert sum(skips) >= 1
     assert attempts["rule"] < attempts["all"]

@@ -16,7 +16,8 @@ import pytest
 from numpy.polynomial.chebyshev import chebval
 
 from chuteflow.closures import ChuteModel
-from chuteflow.steady import api, family
+from chuteflow.steady import continuation_step, ladder, proofs, rows
+from chuteflow.steady.options import Options
 from chuteflow.steady.result import _chebval1, _series
 
 
@@ -53,7 +54,7 @@ _FLOOR_ROWS = (
 def test_noise_exit_keeps_statuses_and_values():
     model = ChuteModel(roughness=0.05)
     sizes: list[int] = []
-    solve_state = api.solve_state
+    solve_state = ladder.solve_state
 
     def counted(*args, **kw):
         sizes.append(args[4])
@@ -62,11 +63,11 @@ def test_noise_exit_keeps_statuses_and_values():
     floors = 0
     for theta, nus in _FLOOR_ROWS:
         out = {}
-        with np.errstate(all="ignore"), mock.patch.object(api, "solve_state", counted):
+        with mock.patch.object(ladder, "solve_state", counted):
             for noise_exit in (False, True):
                 sizes.clear()
-                opts = family.Options(min_thickness=0.0, tangent=False, noise_exit=noise_exit)
-                out[noise_exit] = (family.continue_row(theta, nus, model, opts), max(sizes))
+                opts = Options(min_thickness=0.0, tangent=False, noise_exit=noise_exit)
+                out[noise_exit] = (rows.continue_row(theta, nus, model, opts), max(sizes))
         (ref, n_ref), (new, n_new) = out[False], out[True]
         # the ladders at the round-off floor went up to n = 486 (> n_max = 384): with the
         # noise exit they stop before, where the change grows at the floor
@@ -85,7 +86,7 @@ def test_noise_exit_keeps_statuses_and_values():
 def _row(theta, nus, model, opts):
     """continue_row with its cold starts and the Newton starts of its scans' flows counted."""
     colds, starts = [], []
-    cold, attempt = family._cold, family._attempt
+    cold, attempt = rows._cold, continuation_step._attempt
 
     def counted_cold(*args, **kw):
         p = cold(*args, **kw)
@@ -97,23 +98,23 @@ def _row(theta, nus, model, opts):
         return attempt(theta, nu0, model, opts, start, n, cold, **kw)
 
     with (
-        np.errstate(all="ignore"),
-        mock.patch.object(family, "_cold", counted_cold),
-        mock.patch.object(family, "_attempt", counted_attempt),
+        mock.patch.object(rows, "_cold", counted_cold),
+        mock.patch.object(continuation_step, "_attempt", counted_attempt),
+        mock.patch.object(proofs, "_attempt", counted_attempt),
     ):
-        return family.continue_row(theta, nus, model, opts), colds, starts
+        return rows.continue_row(theta, nus, model, opts), colds, starts
 
 
 def test_cold_starts_wait_for_the_verdict_at_the_branch_end():
     """A row of the quick φ = 0.05 diagram grid whose flows lie at the dense end: once the
     cold start in the middle has found them, the scan at the end of that piece of the branch
     goes before any further cold start, and its verdict ('too small': no flow at any smaller
-    θ and ν0(0), :class:`~chuteflow.steady.family.Proof`) covers the rest of the row. Before,
+    θ and ν0(0), :class:`~chuteflow.steady.proofs.Proof`) covers the rest of the row. Before,
     three more cold starts below it failed there (~0.15 s each); statuses and values of the
     40 × 40 quick diagrams of both φ are unchanged (measured: 0 status changes)."""
     model = ChuteModel(roughness=0.05)
     nus = np.linspace(0.01, 0.25, 20)
-    pts, colds, _ = _row(12.0 + 18.0 / 19.0, nus, model, family.Options(min_thickness=0.0, tangent=False))
+    pts, colds, _ = _row(12.0 + 18.0 / 19.0, nus, model, Options(min_thickness=0.0, tangent=False))
     st = [p.status for p in pts]
     ok = [j for j, s in enumerate(st) if s == "ok"]
     assert ok
@@ -132,17 +133,17 @@ def test_layer_below_a_diameter_gets_two_newton_starts():
     interpolation, not since): the attempts are made to fail here, so that the rule itself
     is what is tested."""
     model = ChuteModel(roughness=0.05)
-    opts = family.Options(min_thickness=0.0, tangent=False)
+    opts = Options(min_thickness=0.0, tangent=False)
     starts = []
 
     def failing(theta, nu0, model, opts, start, n, cold=False):
         starts.append(n)
         assert start is not None
         assert start.n == n
-        return family._Point("not_converged", None, "Newton stalled (made to fail by the test)")
+        return continuation_step._Point("not_converged", None, "Newton stalled (made to fail by the test)")
 
-    with np.errstate(all="ignore"), mock.patch.object(family, "_attempt", failing):
-        p, v = family._decide(13.263157894737, 0.098421052632, model, opts)
+    with mock.patch.object(proofs, "_attempt", failing):
+        p, v = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert v.exists
     assert v.h < 1.0
     assert starts == [64, 128]
@@ -157,9 +158,8 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
     of the two found it (it did: one route said 'thin', the other 'no_steady_flow', and a
     change of round-off flipped 6 such points of the 60 × 60 paper map)."""
     model = ChuteModel(roughness=0.05)
-    opts = family.Options(min_thickness=1.0, tangent=False)
-    with np.errstate(all="ignore"):
-        p, v = family._decide(13.263157894737, 0.098421052632, model, opts)
+    opts = Options(min_thickness=1.0, tangent=False)
+    p, v = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert v.exists
     assert not v.physical
     assert 0.1 < v.h < 0.2
@@ -169,10 +169,10 @@ def test_layer_below_a_diameter_is_solved_from_the_shot_profile():
         assert abs(p.flow.h - v.h) < 1e-3 * v.h
 
     def failing(theta, nu0, model, opts, start, n, cold=False):
-        return family._Point("not_converged", None, "Newton stalled (made to fail by the test)")
+        return continuation_step._Point("not_converged", None, "Newton stalled (made to fail by the test)")
 
-    with np.errstate(all="ignore"), mock.patch.object(family, "_attempt", failing):
-        q, _ = family._decide(13.263157894737, 0.098421052632, model, opts)
+    with mock.patch.object(proofs, "_attempt", failing):
+        q, _ = proofs._decide(13.263157894737, 0.098421052632, model, opts)
     assert q.status == "thin"
     assert q.flow is None
     assert not q.usable

@@ -14,9 +14,11 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
+from chuteflow.spectral import LAYER_MAP_WIDTH as MAP_WIDTH
 from chuteflow.steady import solve_steady, steady_family
-from chuteflow.steady.api import _quantities, state_of
-from chuteflow.steady.solver import MAP_WIDTH, layer_grid_map, solve_state
+from chuteflow.steady.grid import layer_grid_map
+from chuteflow.steady.one_grid import solve_state
+from chuteflow.steady.state import quantities, state_of
 
 KEYS = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
 
@@ -54,7 +56,7 @@ def test_mapped_and_plain_grids_agree(p1):
     m = p1.model
     st, _, _ = solve_state(16.0, 0.05, m, p1.nu_top, 216, guess=state_of(p1), grid_map=None, min_iter=1)
     assert st.grid_map is None
-    q = _quantities(16.0, st, m)[1]
+    q = quantities(16.0, st, m)[1]
     for k in KEYS:
         assert q[k] == pytest.approx(getattr(p1, k), rel=1e-9), k
 

@@ -17,8 +17,10 @@ import pytest
 from chuteflow import _ccode
 from chuteflow.closures import ChuteModel
 from chuteflow.steady import solve_steady
-from chuteflow.steady.api import state_of
-from chuteflow.steady.solver import SteadyNewton, _node_interpolation, _resample, _u_basis, reference_grid
+from chuteflow.steady.grid import reference_grid
+from chuteflow.steady.linear import _u_basis
+from chuteflow.steady.newton import SteadyNewton
+from chuteflow.steady.state import _node_interpolation, resample, state_of
 
 pytestmark = pytest.mark.skipif(_ccode.compiler() is None, reason="no C compiler: only the numpy road")
 
@@ -35,7 +37,7 @@ def flows():
 @pytest.mark.parametrize("n", [48, 96])
 def test_compiled_rows_equal_the_numpy_road(flows, point, integrated, n):
     flow = flows[point]
-    st = _resample(state_of(flow), n)
+    st = resample(state_of(flow), n)
     st.u = st.u * (1 + 1e-3 * np.sin(np.arange(n + 1)))  # off the solution, as Newton's iterates
     st.T = st.T * (1 + 1e-3 * np.cos(np.arange(n + 1)))
     theta, nu0 = point
@@ -55,7 +57,7 @@ def test_solve_without_compiled_kernels_agrees(monkeypatch):
     """CHUTEFLOW_CCODE=off: the numpy road alone gives the same flow within its own
     convergence estimate."""
     flow = solve_steady(16.0, 0.05)
-    monkeypatch.setattr("chuteflow.steady.solver._road_parts", lambda *a: None)
+    monkeypatch.setattr("chuteflow.steady.system._road_parts", lambda *a: None)
     plain = solve_steady(16.0, 0.06)  # another point: the flow cache cannot answer
     back = solve_steady(16.0, 0.05, guess=plain)
     for k in ("h", "Q", "rho_bar", "u_floor", "T_floor"):

@@ -12,8 +12,10 @@ import pytest
 
 from chuteflow.closures import ChuteModel
 from chuteflow.steady import solve_steady
-from chuteflow.steady.api import state_of
-from chuteflow.steady.solver import SteadyNewton, _resample, _u_basis, _u_basis_ref, reference_grid
+from chuteflow.steady.grid import reference_grid
+from chuteflow.steady.linear import _u_basis, _u_basis_ref
+from chuteflow.steady.newton import SteadyNewton
+from chuteflow.steady.state import resample, state_of
 
 _FLOWS = [(16.0, 0.08), (14.0, 0.3), (18.0, 0.03)]
 
@@ -25,7 +27,7 @@ def flows():
 
 def _off_solution(flow, n):
     """The flow on n + 1 nodes, moved off the solution (Newton's iterates are)."""
-    st = _resample(state_of(flow), n)
+    st = resample(state_of(flow), n)
     st.u = st.u * (1 + 1e-3 * np.sin(np.arange(n + 1)))
     st.T = st.T * (1 + 1e-3 * np.cos(np.arange(n + 1)))
     return st

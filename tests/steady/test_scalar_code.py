@@ -21,7 +21,7 @@ from chuteflow.closures.model import FUNCTIONS, SCALAR_ORDERS
 from chuteflow.equations import BASE, arguments, compiled_equations
 from chuteflow.errors import ParameterError
 from chuteflow.steady import _scalar_ode
-from chuteflow.steady.existence import SteadyODE, _term_index
+from chuteflow.steady.shooting.ode import SteadyODE, _term_index
 
 X, Y = sp.symbols("x y", positive=True)
 

@@ -15,7 +15,8 @@ import pytest
 from chuteflow.closures import ChuteModel
 from chuteflow.errors import ConvergenceError, NoSteadyFlowError, ParameterError
 from chuteflow.steady import solve_steady, steady_tangent
-from chuteflow.steady.api import state_of, state_tangent_vectors, tangent_from, tangent_vectors
+from chuteflow.steady.state import state_of
+from chuteflow.steady.tangent import state_tangent_vectors, tangent_from, tangent_vectors
 
 from .shooting import Material, solve_by_shooting
 
@@ -179,13 +180,14 @@ def test_newton_tangent_matches_a_fresh_factorisation():
     2.2e-9 relative (max norm) over 127 flows of θ = 12 … 18°, ν0(0) = 0.01 … 0.25 (and
     at most 2.6e-8 in dQ0/dρ̄0): 1e-8 leaves a margin of four. A state converged from
     itself (min_iter = 1: the LU is taken at the solution) agrees to round-off."""
-    from chuteflow.steady import api
-    from chuteflow.steady.family import Options, continue_row
-    from chuteflow.steady.solver import solve_state
+    from chuteflow.steady import tangent
+    from chuteflow.steady.one_grid import solve_state
+    from chuteflow.steady.options import Options
+    from chuteflow.steady.rows import continue_row
 
     pts = continue_row(16.0, np.geomspace(0.03, 0.2, 10), ChuteModel(), Options(tangent=False))
     flows = [p.flow for p in pts if p.flow is not None]
-    stored = [(f, dX) for f in flows if (dX := api._BETA_TANGENTS.get(f)) is not None]
+    stored = [(f, dX) for f in flows if (dX := tangent._BETA_TANGENTS.get(f)) is not None]
     assert len(flows) == 10
     assert len(stored) >= 5
     for f, dX in stored:
@@ -202,19 +204,19 @@ def test_newton_tangent_matches_a_fresh_factorisation():
 
 
 def _counting_lu():
-    """A patch of the chord Newton's LU (steady.solver._lu_factor) that counts its calls."""
+    """A patch of the chord Newton's LU (steady.linear._lu_factor) that counts its calls."""
     from unittest import mock
 
-    from chuteflow.steady import solver
+    from chuteflow.steady import linear
 
     calls = [0]
-    factor = solver._lu_factor
+    factor = linear._lu_factor
 
     def counted(A):
         calls[0] += 1
         return factor(A)
 
-    return mock.patch.object(solver, "_lu_factor", counted), calls
+    return mock.patch.object(linear, "_lu_factor", counted), calls
 
 
 @pytest.mark.parametrize(("theta", "nu0"), [(16.0, 0.05), (17.0, 0.12), (14.5, 0.1)])
@@ -225,10 +227,11 @@ def test_chord_newton_matches_full_newton(theta, nu0):
     round-off: measured 4.4e-11, 2.2e-11, 2.2e-11 relative (max norm; both end at scaled
     residuals of 5e-12 … 7e-11, the floor at n = 96), so 1e-9 leaves a margin of twenty;
     with fewer LUs than full Newton's steps."""
-    from chuteflow.steady.solver import _resample, solve_state
+    from chuteflow.steady.one_grid import solve_state
+    from chuteflow.steady.state import resample
 
     model = ChuteModel()
-    g = _resample(state_of(solve_steady(theta, nu0 - 0.002)), 96)
+    g = resample(state_of(solve_steady(theta, nu0 - 0.002)), 96)
     a, steps, _ = solve_state(theta, nu0, model, 1e-9, 96, guess=g, grid_map=g.grid_map)
     patch, lus = _counting_lu()
     with patch:
@@ -245,13 +248,14 @@ def test_map_rows_reuse_the_neighbours_lu():
     solve, so a row takes fewer factorisations (θ = 16°, 12 flows: measured 33 instead of 41)
     and gives the same flows to round-off (Q0: measured 3.6e-11 relative; 1e-9 leaves a
     margin of thirty, far below rtol = 1e-8)."""
-    from chuteflow.steady.family import Options, continue_row
+    from chuteflow.steady.options import Options
+    from chuteflow.steady.rows import continue_row
 
     nus = np.geomspace(0.03, 0.2, 12)
     rows, counts = [], []
     for exact in (True, False):
         patch, lus = _counting_lu()
-        with patch, np.errstate(all="ignore"):
+        with patch:
             rows.append(continue_row(16.0, nus, ChuteModel(), Options(tangent=False, beta_tangents=exact)))
         counts.append(lus[0])
     exact_row, map_row = rows
@@ -269,17 +273,17 @@ def test_equal_flows_keep_their_own_newton_tangent():
     value-keyed store dropped the entry with the first flow: tests/sweep/test_dask.py)."""
     import gc
 
-    from chuteflow.steady import api
+    from chuteflow.steady import tangent
 
     f1, f2 = solve_steady(16.0, 0.05), solve_steady(16.0, 0.05)
     assert f1 == f2
     assert f1 is not f2
-    assert api._BETA_TANGENTS.get(f1) is not None
-    assert api._BETA_TANGENTS.get(f2) is not None
-    expected = tangent_from(f2, api._BETA_TANGENTS.get(f2))["dQ_drho"]
+    assert tangent._BETA_TANGENTS.get(f1) is not None
+    assert tangent._BETA_TANGENTS.get(f2) is not None
+    expected = tangent_from(f2, tangent._BETA_TANGENTS.get(f2))["dQ_drho"]
     del f1
     gc.collect()
-    assert api._BETA_TANGENTS.get(f2) is not None
+    assert tangent._BETA_TANGENTS.get(f2) is not None
     assert steady_tangent(f2)["dQ_drho"] == expected
 
 
@@ -471,7 +475,7 @@ def test_failed_cold_start_leaves_no_reference_cycle():
     cyclic garbage collector's next run (stop 36: 8.7 MiB of a diagram row's flows)."""
     import gc
 
-    from chuteflow.steady.solver import solve_state
+    from chuteflow.steady.one_grid import solve_state
 
     gc.collect()
     gc.disable()

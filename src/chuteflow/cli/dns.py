@@ -65,7 +65,6 @@ def dns(
     periodic in x (docs/dns.md): growth rate and phase velocity of the k = 2π/L wave against
     the linear eigenvalue, mass drift, and the nonlinear waves."""
     import json
-    import warnings
 
     from rich.console import Console
 
@@ -77,28 +76,26 @@ def dns(
     if init not in ("mode", "noise"):
         raise ParameterError(f"init = {init!r}: choose mode or noise")
     con = Console(stderr=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
-            ds = simulate(
-                theta,
-                nu0,
-                length,
-                model=model,
-                time=time,
-                n=ny,
-                modes=None if nx is None else (nx - 1) // 2,
-                dt=dt,
-                init=init,
-                amplitude=amplitude,
-                seed=seed,
-                frame_speed=frame_speed,
-                top=top,
-                snapshots=snapshots,
-                record_every=record_every,
-                out=out,
-                progress=progress,
-            )
+    with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
+        ds = simulate(
+            theta,
+            nu0,
+            length,
+            model=model,
+            time=time,
+            n=ny,
+            modes=None if nx is None else (nx - 1) // 2,
+            dt=dt,
+            init=init,
+            amplitude=amplitude,
+            seed=seed,
+            frame_speed=frame_speed,
+            top=top,
+            snapshots=snapshots,
+            record_every=record_every,
+            out=out,
+            progress=progress,
+        )
     if plot is not None:
         from chuteflow.figures.dns import plot_dns, save
 

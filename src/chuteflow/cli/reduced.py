@@ -67,19 +67,16 @@ def reduced(
     """The 1D model at θ: F, T̄, a, U along the steady family, the criterion
     (ρ̄U')² > (ρ̄T̄)' and the long-wave coefficients (§5.1.2)."""
     import json
-    import warnings
 
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced.model import SEEDS
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        # the family is started at the user's density first: it has a flow wherever one exists
-        seeds = SEEDS if nu0 is None else (nu0, *SEEDS)
-        rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max, seeds=seeds)
-        state = None
-        if nu0 is not None:
-            state = rm.coefficients(rm.rho_at_nu0(nu0))
+    # the family is started at the user's density first: it has a flow wherever one exists
+    seeds = SEEDS if nu0 is None else (nu0, *SEEDS)
+    rm = reduced_model(theta, model, tol=tol, nu0_min=nu0_min, nu0_max=nu0_max, seeds=seeds)
+    state = None
+    if nu0 is not None:
+        state = rm.coefficients(rm.rho_at_nu0(nu0))
     points = [_point(c) for c in rm.coefficients_at_knots]
     if plot is not None:
         from chuteflow.figures.reduced import plot_functions, save
@@ -175,7 +172,6 @@ def simulate(
 ) -> None:
     """Nonlinear density waves of the 1D model on a periodic slope (§5.2)."""
     import json
-    import warnings
 
     from rich.console import Console
 
@@ -187,33 +183,31 @@ def simulate(
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")
     con = Console(stderr=True)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        with con.status("building the 1D model from the steady family…"):
-            rm = reduced_model(theta, model, tol=1e-4, nu0_min=nu0_min, nu0_max=nu0_max, seeds=(nu0, *SEEDS))
-        coef = rm.coefficients(rm.rho_at_nu0(nu0))
-        if coef.short_wave_unstable:
-            con.print(
-                "warning: (ρ0 T̄)' < 0 here: the 1D model is unstable at every "
-                "wavelength, down to the grid; the waves depend on the grid",
-                style="yellow",
-                highlight=False,
-            )
-        with time_progress("simulating", con, disable=as_json and not con.is_terminal, digits=4) as progress:
-            ds = run(
-                rm,
-                length,
-                nu0=nu0,
-                n_cells=cells,
-                t_end=time,
-                mode=mode,
-                amplitude=amplitude,
-                seed=seed,
-                rtol=rtol,
-                n_out=snapshots,
-                progress=progress,
-                on_exit="stop",
-            )
+    with con.status("building the 1D model from the steady family…"):
+        rm = reduced_model(theta, model, tol=1e-4, nu0_min=nu0_min, nu0_max=nu0_max, seeds=(nu0, *SEEDS))
+    coef = rm.coefficients(rm.rho_at_nu0(nu0))
+    if coef.short_wave_unstable:
+        con.print(
+            "warning: (ρ0 T̄)' < 0 here: the 1D model is unstable at every "
+            "wavelength, down to the grid; the waves depend on the grid",
+            style="yellow",
+            highlight=False,
+        )
+    with time_progress("simulating", con, disable=as_json and not con.is_terminal, digits=4) as progress:
+        ds = run(
+            rm,
+            length,
+            nu0=nu0,
+            n_cells=cells,
+            t_end=time,
+            mode=mode,
+            amplitude=amplitude,
+            seed=seed,
+            rtol=rtol,
+            n_out=snapshots,
+            progress=progress,
+            on_exit="stop",
+        )
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         ds.to_netcdf(out, engine="h5netcdf")

@@ -135,14 +135,12 @@ def _console():
 
 
 def _steady(console, theta, nu0, model, nu_top):
-    import warnings
 
     from chuteflow._threads import limit_blas_threads
     from chuteflow.steady import solve_steady
 
     limit_blas_threads(1)
-    with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
+    with console.status(f"steady flow at θ = {theta:g}°, ν0(0) = {nu0:g}"):
         flow = solve_steady(theta, nu0, model, nu_top=nu_top, strict=False)
     if not flow.converged:
         _warn(flow.note)

@@ -81,7 +81,8 @@ def plot_flux_density(families, ax=None, *, minima: dict | None = None):
     families : sequence of xarray.Dataset
         From :func:`chuteflow.steady.steady_family`; the line style cycles solid, dashed, ….
     minima : dict, optional
-        θ → result of :func:`chuteflow.steady.flux_minimum` (or None), marked with a dot.
+        θ → :class:`~chuteflow.steady.FluxMinimum` of :func:`chuteflow.steady.flux_minimum`
+        (or None), marked with a dot.
     """
     import matplotlib.pyplot as plt
 
@@ -99,7 +100,7 @@ def plot_flux_density(families, ax=None, *, minima: dict | None = None):
         )
         mn = (minima or {}).get(th)
         if mn:
-            ax.plot([mn["rho_bar"]], [mn["Q"]], "ko", ms=4)
+            ax.plot([mn.rho_bar], [mn.Q], "ko", ms=4)
     ax.set_xlabel("one-dimensional density ρ̄0 (σ)")
     ax.set_ylabel("flux Q0")
     ax.legend(fontsize=8, frameon=False)

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..equations import Term, arguments, compiled_equations
 from ..errors import ParameterError
-from ..spectral import ChebyshevGrid, MappedChebyshevGrid
+from ..spectral import ChebyshevGrid, MappedChebyshevGrid, layer_edge_map
 from ..steady import SteadyFlow
 from ..steady.result import cached_per_flow
 from ._assembly import BULK, FLOOR, scatter_kernel, term_plan
@@ -58,16 +58,13 @@ _ROWS_OF = (tuple(sorted(BULK_OF.items())), tuple(sorted(FLOOR_OF.items())))
 
 N_RANGE = (8, 1000)
 
-#: Width of the sinh map's clustered region in units of the density scale height
-#: T0(h)/cos θ at the layer's edge y = h (see :func:`layer_map`).
-MAP_WIDTH = 2.0
 #: Weight β of the sinh part of the map, y = (1 − β) y_linear + β y_sinh.
 MAP_BLEND = 1.0
 
 
 @cached_per_flow  # every operator of a flow asks for it
-def layer_map(flow: SteadyFlow) -> tuple[float, float]:
-    """Centre y_c and width ε of the sinh map of the stability grid.
+def layer_map(flow: SteadyFlow) -> tuple[float, float] | None:
+    """Centre y_c and width ε of the sinh map of the stability grid, or None (plain grid).
 
     The large resolutions the plain Chebyshev grid needs (N ~ 200–480 for the paper's 1e-7)
     come from an interior layer at the edge of the dense flow, y ≈ h (where ν0 has fallen
@@ -76,9 +73,11 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
     T0/cos θ of the dilute top (ν0 ∝ exp(−y cos θ/T0) there). The map
     y = y_c + ε sinh(s), s linear in the Chebyshev variable, clusters the nodes there with
 
-        y_c = h,    ε = :data:`MAP_WIDTH` × T0(h)/cos θ    (MAP_WIDTH = 2),
+        y_c = h,    ε = :data:`~chuteflow.spectral.LAYER_MAP_WIDTH` × T0(h)/cos θ    (= 2 T0(h)/cos θ),
 
-    and still reaches the floor and the top with Chebyshev clustering. The factor 2 is chosen
+    the map of :func:`chuteflow.spectral.layer_edge_map`, which the steady grid uses too
+    (:func:`chuteflow.steady.grid.layer_grid_map`, centred there at its sampled edge), and
+    still reaches the floor and the top with Chebyshev clustering. The factor 2 is chosen
     from the resolution N at which the least-stable mode passes the paper's tests (drift and
     tail < 1e-7; ``benchmarks/probes/map_width.py``), N on the ladder 32, 40, 48, 56, 64, 80,
     100, 125, … for the plain grid and factors 0.45, 1, 2:
@@ -97,26 +96,22 @@ def layer_map(flow: SteadyFlow) -> tuple[float, float]:
 
     A narrow map (0.45, the optimum for a 1e-9 branch eigenvalue at small k) starves the
     dense layer of nodes at k ≳ 0.5; the factor 2 gains at small k and loses little beyond.
-    ε is capped at y_max (the map is then nearly linear).
+    The fallback rule is the shared one: None (the plain grid) where ε exceeds half of y_max
+    (a broad layer without a sharp edge; at the paper's eight points ε/y_max = 0.085–0.11)
+    or h is not inside (0, y_max).
     """
-    th = math.radians(flow.theta)
-    y_max = float(flow.y_max)
-    h = float(flow.h)
-    if not (0.0 < h < y_max):
-        h = 0.5 * y_max
-    T_h = float(flow.grid.interpolate(flow.T, np.array([h]))[0])
-    width = MAP_WIDTH * abs(T_h) / math.cos(th)
-    if not (math.isfinite(width) and width > 0):
-        width = y_max
-    return h, float(min(width, y_max))
+    T_h = float(flow.grid.interpolate(flow.T, np.array([float(flow.h)]))[0])
+    return layer_edge_map(float(flow.h), T_h, flow.theta, float(flow.y_max))
 
 
 def stability_grid(flow: SteadyFlow, n: int, mapped: bool = True) -> ChebyshevGrid:
     """The collocation grid of the stability problem of ``flow`` with N = ``n`` intervals on
     [0, y_max]: sinh-mapped around the layer's edge (:func:`layer_map`, default) or the
-    plain Chebyshev grid (``mapped=False``, the paper's discretisation, kept for checks)."""
-    if mapped:
-        yc, eps = layer_map(flow)
+    plain Chebyshev grid (``mapped=False``, the paper's discretisation, kept for checks;
+    also where :func:`layer_map` gives no map)."""
+    edge_map = layer_map(flow) if mapped else None
+    if edge_map is not None:
+        yc, eps = edge_map
         return MappedChebyshevGrid(n, 0.0, flow.y_max, yc, eps, MAP_BLEND)
     return ChebyshevGrid(n, 0.0, flow.y_max)
 

@@ -1,13 +1,14 @@
 """Compiled rows of the steady Newton system: scaled residual and Jacobian coefficients.
 
-At every Newton iterate :class:`~chuteflow.steady.solver.SteadyNewton` needs, at the nodes,
-the scaled residual of each equation of its layout and the coefficients of its exact
-Jacobian: for the unknowns s = ln ν0, u0, T0 and each derivative order c, the factor of
-d^c/dy^c in the row (diag(d) + diag(e1) D1 + diag(e2) D2 per field). The numpy road
-(:meth:`SteadyNewton._residual`, :meth:`SteadyNewton._jacobian`) evaluates the compiled
-equations term by term and applies the row scaling and the chain rule of ν = e^s in
-Python: ~30 small numpy operations per row block and iterate, which at n = 64 cost four
-times the LU factorisation itself.
+At every Newton iterate :class:`~chuteflow.steady.newton.SteadyNewton` needs, at the nodes, the
+scaled residual of each equation of its layout and the coefficients of its exact Jacobian: for
+the unknowns s = ln ν0, u0, T0 and each derivative order c, the factor of d^c/dy^c in the row
+(diag(d) + diag(e1) D1 + diag(e2) D2 per field). The numpy road
+(:meth:`~chuteflow.steady.newton.SteadyNewton._residual`,
+:meth:`~chuteflow.steady.newton.SteadyNewton._jacobian`) evaluates the compiled equations term
+by term and applies the row scaling and the chain rule of ν = e^s in Python: ~30 small numpy
+operations per row block and iterate, which at n = 64 cost four times the LU factorisation
+itself.
 
 Here the same quantities are stated symbolically, once, from the expressions that
 :func:`chuteflow.equations.compiled_equations` evaluates (the residual R of an equation and
@@ -40,7 +41,7 @@ from ..equations import BASE, _derive_compiled
 
 sp = lazy_module("sympy")
 
-#: Row scales of the layout (:class:`~chuteflow.steady.solver.SteadyNewton`): ν-rows by
+#: Row scales of the layout (:class:`~chuteflow.steady.newton.SteadyNewton`): ν-rows by
 #: 1/ν0, T-rows by 1/κ, x-momentum rows by the constant 1/ν0(0), the top condition by 1.
 SCALES = ("nu", "T", "u", "one")
 #: The outputs per equation, in order: the scaled residual, the y_max sum, then

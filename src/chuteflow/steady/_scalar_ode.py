@@ -1,6 +1,6 @@
 """Generated scalar code of the steady equations as an ODE in y (for the shooting scan).
 
-The shooting scan of :mod:`chuteflow.steady.existence` evaluates the right-hand side of
+The shooting scan of :mod:`chuteflow.steady.shooting` evaluates the right-hand side of
 the steady equations ~10⁴ times per point, one point at a time. Here the right-hand side is
 derived symbolically, once, from the same statements as everything else: the y-momentum and
 energy residuals of :func:`chuteflow.equations._derive_compiled` (eqs 3.5, 3.6; both affine in
@@ -100,12 +100,12 @@ def compiled_kernel(transport, radial, wall):
 
     * ``cf_rhs(par, z, f)``: f = d/dy of z = (ln ν0, u0, T0, T0'), with par = (e_p, ν_m, φ, Φ,
       sin θ, cos θ); a non-finite value becomes ±1e300 (all four 1e300 if one is NaN), as
-      :meth:`~chuteflow.steady.existence.SteadyODE.rhs_bounded` does;
+      :meth:`~chuteflow.steady.shooting.SteadyODE.rhs_bounded` does;
     * ``cf_integrate(...)``: Dormand–Prince 5(4) with the step-size control, error norm,
       initial step and stiffness test of Hairer's DOPRI5 (what scipy's ``dopri5`` runs,
       with its default settings), stopping at the first accepted step across which one of
       the events z[k] − c changes sign in its direction (the test of
-      :func:`~chuteflow.steady.existence.integrate`'s ``solout``); it records the accepted
+      :func:`~chuteflow.steady.shooting.integrate`'s ``solout``); it records the accepted
       steps and the derivatives there (the first stage of the next step).
     """
     from .._ccode import cached_library

@@ -1,6 +1,6 @@
 """Maps of steady flows over a (θ, ν0(0)) grid and their image in the (h, ν̄) plane (§3.2).
 
-Each θ row is solved by continuation along ν0 (:func:`~chuteflow.steady.family.continue_row`);
+Each θ row is solved by continuation along ν0 (:func:`~chuteflow.steady.rows.continue_row`);
 a row also starts from the converged points of the row before it (continuation in θ), which
 reaches the non-monotonic branches that a cold start misses. Rows are swept in chains
 outwards from start rows (solved on their own): from one middle row in two directions, or,
@@ -32,9 +32,11 @@ from .._memory import keep_freed_memory
 from .._threads import limit_blas_threads
 from ..closures import ChuteModel
 from ..errors import ParameterError
-from .api import follow
-from .family import SCALARS, Options, check_nu0, continue_row, dataset_attrs, row_arrays, variable_attrs
-from .solver import validate_point
+from .follow import follow
+from .inputs import check_nu0, validate_point
+from .options import Options
+from .rows import continue_row
+from .schema import SCALARS, dataset_attrs, row_arrays, variable_attrs
 
 
 def _sweep(thetas, nus, model, opts, seed_row=None, proofs=None):
@@ -238,7 +240,7 @@ def steady_map(
         65 %, 35 %, 80 %, 20 % of the range.
     decide : bool
         Decide every point that continuation does not reach by the shooting scan (or a
-        scan's verdict that covers it: :func:`~chuteflow.steady.family.continue_row`).
+        scan's verdict that covers it: :func:`~chuteflow.steady.rows.continue_row`).
         False: leave them 'unreached' (continuation only; for comparison).
 
     Returns
@@ -361,7 +363,7 @@ def existence_limit(
 
     From the map's extreme converged points (in the ``columns`` ν0 columns that reach
     furthest, and in the densest / most dilute column with a flow), the branch is followed
-    beyond the map (:func:`~chuteflow.steady.api.follow`): in θ at fixed ν0(0) until it
+    beyond the map (:func:`~chuteflow.steady.follow.follow`): in θ at fixed ν0(0) until it
     ends, then in ν0(0) towards the grid's extreme floor density, and in θ again (up to
     three times). Thin layers count. Only the angle where the branch ends is sought (to
     ~2·``min_step``), so the flows on the way are converged to ``rtol`` = 1e-6 with at most

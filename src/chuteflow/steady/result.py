@@ -314,7 +314,7 @@ def _series(c: np.ndarray):
 @functools.lru_cache(maxsize=4)
 def fine_sampling(n: int) -> tuple[np.ndarray, np.ndarray]:
     """The fine sampling of :func:`derived_quantities` and of
-    :func:`~chuteflow.steady.solver.layer_grid_map` for a series of degree n: the points
+    :func:`~chuteflow.steady.grid.layer_grid_map` for a series of degree n: the points
     x = linspace(−1, 1, 8n + 1) and the matrix of T_0 … T_n there (one product per series
     instead of a Clenshaw recurrence over n vector operations); cached, read-only. 12 MiB
     at n = 432: the last four degrees are kept (a ladder's two rungs and the next

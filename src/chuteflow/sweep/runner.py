@@ -10,7 +10,6 @@ from __future__ import annotations
 import resource
 import time
 import traceback
-import warnings
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -154,73 +153,70 @@ def run_task(config, task, *, limit_threads: bool = True, keep_flows: bool = Fal
     kw = dict(
         nu_top=config.nu_top, rtol=config.steady_rtol, n_max=config.n_max, min_thickness=config.min_thickness
     )
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        # overflow in trial Newton steps is expected and handled by the solvers
-        warnings.simplefilter("ignore", RuntimeWarning)
-        t0 = time.perf_counter()
-        if marker:
-            # marked points are unrelated: each from the cold start
-            pts = [(config.markers[j][1], config.markers[j][2]) for j in range(task.j0, task.j1)]
-            steady: list[tuple[SteadyFlow | None, str, str]] = []
-            for th, nu in pts:
-                try:
-                    steady.append((solve_steady(th, nu, model, **kw), "ok", ""))
-                except NoSteadyFlowError as exc:
-                    steady.append((None, "no_steady_flow", str(exc)))
-                except ConvergenceError as exc:
-                    steady.append((None, "not_converged", f"steady: {exc}"))
-                except Exception as exc:
-                    steady.append((None, "error", f"steady: {type(exc).__name__}: {exc}"))
-        else:
-            th = config.theta[task.i]
-            pts = [(th, config.nu0[j]) for j in range(task.j0, task.j1)]
+    t0 = time.perf_counter()
+    if marker:
+        # marked points are unrelated: each from the cold start
+        pts = [(config.markers[j][1], config.markers[j][2]) for j in range(task.j0, task.j1)]
+        steady: list[tuple[SteadyFlow | None, str, str]] = []
+        for th, nu in pts:
             try:
-                steady = _steady_chunk(config, th, [p[1] for p in pts], model)
-            except Exception as exc:  # the whole chunk failed
-                steady = [(None, "error", f"steady: {type(exc).__name__}: {exc}")] * len(pts)
-        msec["steady"] += time.perf_counter() - t0
-        # the steady solves of a chunk are shared: spread their time evenly
-        pt_seconds[:] = (time.perf_counter() - t0) / max(m, 1)
-        for k, j in enumerate(range(task.j0, task.j1)):
-            theta, nu0 = pts[k]
-            flow, st_name, msg = steady[k]
-            point = Point(task.i, j, theta, nu0)
-            if flow is None:
-                status[k], messages[k] = STATUS[st_name], _clip(msg)
-                continue
-            t0 = time.perf_counter()
-            for f in fns:
-                tm = time.perf_counter()
-                try:
-                    out = dict(f.compute(flow, point))
-                    bad = [n for n in out if n not in byname or owner[n] != f.name]
-                    if bad:
-                        raise ValueError(f"point function {f.name!r} returned undeclared variable(s) {bad}")
-                    # all values of a metric or none: coerce first, then store
-                    coerced = {n: _coerce(byname[n], v) for n, v in out.items()}
-                    for name, val in coerced.items():
-                        values[name][k] = val
-                        point.values[name] = val
-                except Exception as exc:  # recorded for this point
-                    code = STATUS["not_converged"] if isinstance(exc, ConvergenceError) else STATUS["error"]
-                    text = f"{f.name}: {exc}"
-                    if not isinstance(exc, ChuteflowError):
-                        tb = traceback.extract_tb(exc.__traceback__)[-1]
-                        text = (
-                            f"{f.name}: {type(exc).__name__}: {exc} "
-                            f"({tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})"
-                        )
-                    messages[k] = _clip("; ".join(x for x in (messages[k], text) if x))
-                    if f.critical:
-                        status[k] = code
-                        break
-                    # a non-critical metric (a cross-check) leaves its variables missing and
-                    # the point's status as it is; its message says why
-                finally:
-                    msec[f.name] = msec.get(f.name, 0.0) + time.perf_counter() - tm
-            if point.notes:
-                messages[k] = _clip("; ".join([x for x in [messages[k]] if x] + point.notes))
-            pt_seconds[k] += time.perf_counter() - t0
+                steady.append((solve_steady(th, nu, model, **kw), "ok", ""))
+            except NoSteadyFlowError as exc:
+                steady.append((None, "no_steady_flow", str(exc)))
+            except ConvergenceError as exc:
+                steady.append((None, "not_converged", f"steady: {exc}"))
+            except Exception as exc:
+                steady.append((None, "error", f"steady: {type(exc).__name__}: {exc}"))
+    else:
+        th = config.theta[task.i]
+        pts = [(th, config.nu0[j]) for j in range(task.j0, task.j1)]
+        try:
+            steady = _steady_chunk(config, th, [p[1] for p in pts], model)
+        except Exception as exc:  # the whole chunk failed
+            steady = [(None, "error", f"steady: {type(exc).__name__}: {exc}")] * len(pts)
+    msec["steady"] += time.perf_counter() - t0
+    # the steady solves of a chunk are shared: spread their time evenly
+    pt_seconds[:] = (time.perf_counter() - t0) / max(m, 1)
+    for k, j in enumerate(range(task.j0, task.j1)):
+        theta, nu0 = pts[k]
+        flow, st_name, msg = steady[k]
+        point = Point(task.i, j, theta, nu0)
+        if flow is None:
+            status[k], messages[k] = STATUS[st_name], _clip(msg)
+            continue
+        t0 = time.perf_counter()
+        for f in fns:
+            tm = time.perf_counter()
+            try:
+                out = dict(f.compute(flow, point))
+                bad = [n for n in out if n not in byname or owner[n] != f.name]
+                if bad:
+                    raise ValueError(f"point function {f.name!r} returned undeclared variable(s) {bad}")
+                # all values of a metric or none: coerce first, then store
+                coerced = {n: _coerce(byname[n], v) for n, v in out.items()}
+                for name, val in coerced.items():
+                    values[name][k] = val
+                    point.values[name] = val
+            except Exception as exc:  # recorded for this point
+                code = STATUS["not_converged"] if isinstance(exc, ConvergenceError) else STATUS["error"]
+                text = f"{f.name}: {exc}"
+                if not isinstance(exc, ChuteflowError):
+                    tb = traceback.extract_tb(exc.__traceback__)[-1]
+                    text = (
+                        f"{f.name}: {type(exc).__name__}: {exc} "
+                        f"({tb.filename.rsplit('/', 1)[-1]}:{tb.lineno})"
+                    )
+                messages[k] = _clip("; ".join(x for x in (messages[k], text) if x))
+                if f.critical:
+                    status[k] = code
+                    break
+                # a non-critical metric (a cross-check) leaves its variables missing and
+                # the point's status as it is; its message says why
+            finally:
+                msec[f.name] = msec.get(f.name, 0.0) + time.perf_counter() - tm
+        if point.notes:
+            messages[k] = _clip("; ".join([x for x in [messages[k]] if x] + point.notes))
+        pt_seconds[k] += time.perf_counter() - t0
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     # the task's dense problems are freed: their pages go back now, so that the next task's
     # peak does not stack on what this one left in the heap (after every point instead, the

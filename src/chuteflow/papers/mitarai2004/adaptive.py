@@ -23,7 +23,6 @@ then filled contours of this gridded field on the fine grid.
 from __future__ import annotations
 
 import math
-import warnings
 from typing import Any
 
 import numpy as np
@@ -86,14 +85,12 @@ def _coarse(n: int, s: int) -> list[int]:
 def _fine_point(args) -> tuple[int, int, dict | None, str]:
     i, j, theta, nu0, model, kw, options, flow = args
     limit_blas_threads(1)
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore", RuntimeWarning)
-        try:
-            if flow is None:
-                flow = solve_steady(theta, nu0, model, **kw)
-            return i, j, dict(LongWaveMetric(**options).compute(flow, Point(i, j, theta, nu0))), ""
-        except (ChuteflowError, ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
-            return i, j, None, f"{type(exc).__name__}: {exc}"
+    try:
+        if flow is None:
+            flow = solve_steady(theta, nu0, model, **kw)
+        return i, j, dict(LongWaveMetric(**options).compute(flow, Point(i, j, theta, nu0))), ""
+    except (ChuteflowError, ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
+        return i, j, None, f"{type(exc).__name__}: {exc}"
 
 
 def refine_longwave(ds, config, *, workers: int = 2, progress=None, flows=None) -> tuple[Any, dict]:

@@ -9,7 +9,6 @@ density waves from small noise at P1 with L = 1000.
 from __future__ import annotations
 
 import math
-import warnings
 
 from ....report.registry import StageContext, register_stage
 from ..points import POINTS
@@ -33,11 +32,9 @@ WAVE_RUN = (1000.0, 28000.0, 4.0, 32, 1e-3)
 )
 def dns(ctx: StageContext) -> None:
     """Linear-phase checks against the eigenvalue; the wave-formation run when not quick."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _linear(ctx)
-        if not ctx.quick:
-            _waves(ctx)
+    _linear(ctx)
+    if not ctx.quick:
+        _waves(ctx)
 
 
 def _linear(ctx: StageContext) -> None:

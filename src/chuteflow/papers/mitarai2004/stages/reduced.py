@@ -4,7 +4,6 @@ the full model's (its nonlinear density waves, §5.2, are stage ``waves``)."""
 from __future__ import annotations
 
 import math
-import warnings
 from pathlib import Path
 
 from ....report.registry import StageContext, register_stage
@@ -30,9 +29,7 @@ def _full_diagram(ctx: StageContext, phi: float):
 @register_stage("reduced", order=50, title="Reduced 1D model: stability diagrams (§5.1.2, figure 15)")
 def reduced(ctx: StageContext) -> None:
     """The 1D model's stability diagrams beside the full model's."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _diagrams(ctx)
+    _diagrams(ctx)
 
 
 def _diagrams(ctx: StageContext) -> None:

@@ -61,12 +61,8 @@ def _k_grid(k_max: float, quick: bool):
 )
 def stability(ctx: StageContext) -> None:
     """Dispersion relations, long-wave coefficients and eigenfunctions at P1–P5, Q1–Q3."""
-    import warnings
 
-    with warnings.catch_warnings():
-        # trial Newton steps of the steady solver outside the closures' domain
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _run(ctx)
+    _run(ctx)
 
 
 class _Results:

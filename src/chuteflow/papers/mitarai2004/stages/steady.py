@@ -56,12 +56,8 @@ def _existence(ds, physical: bool):
 @register_stage("steady", order=10, title="Steady flows (§3, figures 2–5)")
 def steady(ctx: StageContext) -> None:
     """Steady flows uniform along the slope: existence, profiles, Q0(ρ̄0), (h, ν̄) maps."""
-    import warnings
 
-    with warnings.catch_warnings():
-        # trial Newton steps outside the closures' domain are handled by the solver
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _run(ctx)
+    _run(ctx)
 
 
 def _run(ctx: StageContext) -> None:
@@ -70,8 +66,7 @@ def _run(ctx: StageContext) -> None:
     from ...._threads import limit_blas_threads
     from ....closures import ChuteModel
     from ....figures.steady import profiles_figure, steady_phase_figure
-    from ....steady import flux_minimum, solve_steady, steady_map
-    from ....steady.family import separatrix
+    from ....steady import flux_minimum, separatrix, solve_steady, steady_map
     from ....steady.maps import existence_limit
 
     limit_blas_threads(1)
@@ -95,7 +90,7 @@ def _run(ctx: StageContext) -> None:
 
                 fam = steady_family(th, fam_nu, model)
             else:
-                fam = r.pop("family")
+                fam = r.family
             minima[th] = r
             families.append(fam)
             fam.to_netcdf(ctx.path(f"steady_family_phi{phi:g}_theta{th:g}.nc"))
@@ -173,8 +168,8 @@ def _run(ctx: StageContext) -> None:
             statement=f"φ = {phi:g}: Q0(ρ̄0) has a minimum at finite ρ̄0 at θ = "
             f"{th_min:g}°" + (" (Q0 decreases for ρ̄0 ≲ 0.2)" if phi == 0.05 else ""),
             computed=(
-                f"dQ0/dρ̄0 = 0 at ν0(0) = {mn['nu0']:.6g}: ρ̄0 = {mn['rho_bar']:.6g}, "
-                f"Q0 = {mn['Q']:.6g}, h = {mn['h']:.4g} (Brent on the exact "
+                f"dQ0/dρ̄0 = 0 at ν0(0) = {mn.nu0:.6g}: ρ̄0 = {mn.rho_bar:.6g}, "
+                f"Q0 = {mn.Q:.6g}, h = {mn.h:.4g} (Brent on the exact "
                 "tangent); negative below, positive above"
             )
             if mn
@@ -235,13 +230,13 @@ def _run(ctx: StageContext) -> None:
     model = ChuteModel(roughness=0.05)
     try:
         sp = separatrix(model, theta_range=(14.0, 15.0), xtol=0.1 if q else 0.01)
-        ok = 14.0 <= sp["theta"] <= 15.5 and abs(sp["h"] - 7.0) <= 0.3 * 7.0
+        ok = 14.0 <= sp.theta <= 15.5 and abs(sp.h - 7.0) <= 0.3 * 7.0
         computed = (
-            f"θ* = {sp['theta']:.3g}° (bracket {sp['bracket'][0]:.4g}–"
-            f"{sp['bracket'][1]:.4g}°): families with θ ≤ {sp['bracket'][0]:.4g}° "
-            f"turn towards h → 0 as ν̄ decreases (last h {sp['h_lo_side']:.3g}), those "
-            f"with θ ≥ {sp['bracket'][1]:.4g}° keep growing; at the separatrix h ≈ "
-            f"{sp['h']:.3g} (ν̄ = {sp['nu_mean']:.2g}). Tolerance: θ* in [14, 15.5]°, "
+            f"θ* = {sp.theta:.3g}° (bracket {sp.bracket[0]:.4g}–"
+            f"{sp.bracket[1]:.4g}°): families with θ ≤ {sp.bracket[0]:.4g}° "
+            f"turn towards h → 0 as ν̄ decreases (last h {sp.h_lo_side:.3g}), those "
+            f"with θ ≥ {sp.bracket[1]:.4g}° keep growing; at the separatrix h ≈ "
+            f"{sp.h:.3g} (ν̄ = {sp.nu_mean:.2g}). Tolerance: θ* in [14, 15.5]°, "
             "h within 30 % of 7 (read off the paper's figure)"
         )
     except Exception as exc:

@@ -67,11 +67,8 @@ A2Z_RTOL = 3e-4
 )
 def transverse_stage(ctx: StageContext) -> None:
     """Verification of the 3D operator, α2z, the transverse band and which instability wins."""
-    import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _run(ctx)
+    _run(ctx)
 
 
 def _run(ctx: StageContext) -> None:

@@ -10,7 +10,6 @@ core while the other waited.
 from __future__ import annotations
 
 import math
-import warnings
 
 from ....report.registry import StageContext, register_stage
 
@@ -24,9 +23,7 @@ WAVE_RUN = {True: (100.0, 1024), False: (400.0, 4096)}
 @register_stage("waves", order=55, title="Reduced 1D model: density waves (§5.1.2, §5.2)", independent=True)
 def waves(ctx: StageContext) -> None:
     """The 1D model's linear growth, nonlinear density waves and critical length."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)
-        _waves(ctx)
+    _waves(ctx)
 
 
 def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
