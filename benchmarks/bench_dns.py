@@ -44,7 +44,7 @@ def run(quick: bool = False) -> list[dict]:
     model = ChuteModel(roughness=0.05)
     solve_steady(16.0, 0.05, model)  # warm-up: compiled code loaded, not timed
     L = 2 * math.pi / 0.003
-    ds, t_lin = _timed(lambda: simulate(16.0, 0.05, L, model=model))
+    ds, t_lin = _timed(lambda: simulate(solve_steady(16.0, 0.05, model), L))
     s = summary(ds)
     steps_growth = 1.0 / s["alpha_re"] / s["dt"]
     rows = [
@@ -61,8 +61,8 @@ def run(quick: bool = False) -> list[dict]:
     ]
     if not quick:
         flow = solve_steady(16.0, 0.05, model)
-        kw = dict(model=model, flow=flow, time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
-        a, t_a = _timed(lambda: simulate(16.0, 0.05, 1000.0, **kw))
+        kw = dict(time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
+        a, t_a = _timed(lambda: simulate(flow, 1000.0, **kw))
         rows.append(
             {
                 "name": "dns_step_L1000",
@@ -73,8 +73,8 @@ def run(quick: bool = False) -> list[dict]:
                 f"(Newton {a.attrs['newton_mean']:.2f}/step); no baseline",
             }
         )
-        kw = dict(model=model, flow=flow, time=200.0, dt=4.0, modes=32, init="mode", amplitude=0.2, n=80)
-        b, t_b = _timed(lambda: simulate(16.0, 0.05, 1000.0, frame_speed=7.8, **kw))
+        kw = dict(time=200.0, dt=4.0, modes=32, init="mode", amplitude=0.2, n=80)
+        b, t_b = _timed(lambda: simulate(flow, 1000.0, frame_speed=7.8, **kw))
         rows.append(
             {
                 "name": "dns_step_L1000_nonlinear",

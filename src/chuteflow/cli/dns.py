@@ -53,6 +53,16 @@ def dns(
     record_every: int = typer.Option(
         1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
     ),
+    saturation_tol: float | None = typer.Option(
+        None,
+        "--saturation-tol",
+        help="Stop once the wave's amplitude has settled to this relative change (--time: the longest run).",
+    ),
+    resolution_tol: float = typer.Option(
+        1e-4,
+        "--resolution-tol",
+        help="Warn when the highest x or y modes carry more than this of the largest.",
+    ),
     out: Path | None = typer.Option(
         None,
         "--out",
@@ -63,7 +73,8 @@ def dns(
 ) -> None:
     """Time-dependent simulation of eqs (2.1)–(2.3) with the Johnson–Jackson floor on a slope
     periodic in x (docs/dns.md): growth rate and phase velocity of the k = 2π/L wave against
-    the linear eigenvalue, mass drift, and the nonlinear waves."""
+    the linear eigenvalue, mass drift, and the nonlinear waves: their amplitude, speed,
+    wavelength, time to saturate and verdict, and the resolution of the highest modes."""
     import json
     import warnings
 
@@ -71,6 +82,8 @@ def dns(
 
     from chuteflow.dns import simulate, summary
     from chuteflow.errors import ParameterError
+    from chuteflow.steady import solve_steady
+    from chuteflow.tracking import ResolutionWarning
 
     if nx is not None and (nx < 1 or nx % 2 == 0):
         raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
@@ -79,12 +92,13 @@ def dns(
     con = Console(stderr=True)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
+        warnings.simplefilter("ignore", ResolutionWarning)  # reported below, in one line
+        with con.status("solving the steady flow…"):
+            flow = solve_steady(theta, nu0, model)
         with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
             ds = simulate(
-                theta,
-                nu0,
+                flow,
                 length,
-                model=model,
                 time=time,
                 n=ny,
                 modes=None if nx is None else (nx - 1) // 2,
@@ -96,6 +110,8 @@ def dns(
                 top=top,
                 snapshots=snapshots,
                 record_every=record_every,
+                saturation_tol=saturation_tol,
+                resolution_tol=resolution_tol,
                 out=out,
                 progress=progress,
             )
@@ -110,6 +126,11 @@ def dns(
     else:
         for k, v in s.items():
             typer.echo(f"{k:22s} {v}")
+    if ds.attrs.get("resolution_warnings"):
+        con.print(f"warning: {ds.attrs['resolution_warnings']}", style="yellow", highlight=False)
+    if str(ds.attrs["status"]).startswith("stopped"):
+        kept = f"; the run so far is in {out} and its checkpoint" if out is not None else ""
+        con.print(f"warning: {ds.attrs['status']}{kept}", style="yellow", highlight=False)
     if out is not None:
         con.print(f"wrote {out}", highlight=False)
     if plot is not None:

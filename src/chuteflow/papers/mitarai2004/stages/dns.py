@@ -51,7 +51,7 @@ def _linear(ctx: StageContext) -> None:
         p = POINTS[name]
         ctx.progress(f"DNS linear phase at {name}")
         flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
-        ds = simulate(p.theta, p.nu0, L, model=flow.model, flow=flow)
+        ds = simulate(flow, L)
         s = summary(ds)
         ds.to_netcdf(ctx.path(f"linear_{name}.nc"), engine="h5netcdf")
         ok = s["status"] == "ok" and s["growth_rate_error"] < 0.01 and s["phase_velocity_error"] < 0.01
@@ -79,11 +79,7 @@ def _linear(ctx: StageContext) -> None:
                 source="§4.1, eq. (4.4)",
             )
             ctx.progress("DNS: unperturbed flow")
-            st = summary(
-                simulate(
-                    p.theta, p.nu0, L, model=flow.model, flow=flow, amplitude=0.0, time=ds.attrs["time_end"]
-                )
-            )
+            st = summary(simulate(flow, L, amplitude=0.0, time=ds.attrs["time_end"]))
             ctx.report.check(
                 "dns.steady_and_mass",
                 source="eqs (2.1)–(2.3) at a steady flow; eq. (2.1) integrated over the domain",
@@ -105,15 +101,14 @@ def _waves(ctx: StageContext) -> None:
     from ....closures import ChuteModel
     from ....dns import simulate, summary
     from ....figures.dns import plot_dns, save
+    from ....steady import solve_steady
 
     p = POINTS["P1"]
     L, T, dt, M, amp = WAVE_RUN
     ctx.progress(f"DNS density waves at P1, L = {L:g}")
     ds = simulate(
-        p.theta,
-        p.nu0,
+        solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness)),
         L,
-        model=ChuteModel(roughness=p.roughness),
         time=T,
         dt=dt,
         modes=M,
