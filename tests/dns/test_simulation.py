@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.dns import DnsSimulation, DnsState, Discretisation, resolution_tails, simulate, summary
+from chuteflow.dns import Discretisation, DnsSimulation, DnsState, resolution_tails, simulate, summary
 from chuteflow.errors import ParameterError
 from chuteflow.steady import solve_steady
 from chuteflow.tracking import (
@@ -106,9 +106,11 @@ def test_driver_is_what_simulate_returns(p1):
     snaps, seen = SnapshotTracker(count=5), []
     state = sim.run([snaps, ProgressTracker(lambda t, te: seen.append((t, te)))])
     ds = sim.dataset(state)
-    assert state.status == "ok" and state.t == pytest.approx(40.0)
+    assert state.status == "ok"
+    assert state.t == pytest.approx(40.0)
     assert np.array_equal(ds["rho_bar"].values, ref["rho_bar"].values)
-    assert len(seen) == state.step == 10 and {te for _, te in seen} == {40.0}
+    assert len(seen) == state.step == 10
+    assert {te for _, te in seen} == {40.0}
     assert np.allclose(snaps.times, [0, 10, 20, 30, 40])
     assert np.array_equal(snaps.states[-1], state.C)
 
@@ -118,7 +120,8 @@ def test_driver_is_what_simulate_returns(p1):
             return "enough" if step.t >= 20 else None
 
     st = DnsSimulation(p1, 1000.0, **SMALL).run([Stop()])
-    assert st.status == "enough" and st.t == pytest.approx(20.0)
+    assert st.status == "enough"
+    assert st.t == pytest.approx(20.0)
 
 
 def test_saturation_stop_and_resolution_monitor(p1):
@@ -145,8 +148,11 @@ def test_state_saves_and_loads_itself(tmp_path, p1):
     st.save(tmp_path / "s.npz", sim.key(), [snaps])
     other = SnapshotTracker(count=3)
     back = DnsState.load(tmp_path / "s.npz", sim.key(), [other])
-    assert back is not None and np.array_equal(back.C, st.C) and back.amplitude == st.amplitude
-    assert len(other.states) == 1 and np.array_equal(other.states[0], st.C)
+    assert back is not None
+    assert np.array_equal(back.C, st.C)
+    assert back.amplitude == st.amplitude
+    assert len(other.states) == 1
+    assert np.array_equal(other.states[0], st.C)
     assert DnsState.load(tmp_path / "s.npz", "another-run") is None
     assert DnsState.load(tmp_path / "absent.npz", sim.key()) is None
 
@@ -196,7 +202,7 @@ def test_bad_input(p1):
     with pytest.raises(ParameterError, match="length"):
         DnsSimulation(p1, float("nan"))
     with pytest.raises(ParameterError, match="snapshots"):
-        DnsSimulation(p1, 1000.0, snapshots=0, **{k: v for k, v in SMALL.items()})
+        DnsSimulation(p1, 1000.0, snapshots=0, **SMALL)
     # a mode whose amplitude takes ν past ν_m at the floor
     with pytest.raises(ParameterError, match="amplitude"):
         DnsSimulation(p1, 1000.0, time=8.0, dt=4.0, amplitude=0.45, n=24).initial_state()
