@@ -214,3 +214,44 @@ def test_summary_has_the_wave_keys(p1):
         assert key in s
     assert s["verdict"] in ("growing", "decaying")  # a wave of 1e-4: the linear phase
     assert s["resolved"] is (max(s["x_tail"], s["y_tail"]) <= 1e-4)
+
+
+def test_cli_dns_and_waves_json_keys_are_documented(tmp_path):
+    """``chuteflow dns --json`` has the wave keys; every key of it and of ``chuteflow waves
+    --json`` is in docs/cli.md; a map run again reads its finished runs back (same numbers)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+    from tests.cli.test_cli_reference import documented, undocumented
+
+    runner = CliRunner()
+    flow = ["--theta", "16", "--nu0", "0.05", "--roughness", "0.05", "--length", "1000"]
+    grid = ["--time", "40", "--dt", "4", "--nx", "5", "--ny", "24", "--amplitude", "1e-4"]
+    r = runner.invoke(app, ["dns", *flow, *grid, "--init", "noise", "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in (
+        "verdict",
+        "rho_min_rel",
+        "rho_max_rel",
+        "wave_speed",
+        "wavelength",
+        "t_saturation",
+        "mass_drift",
+    ):
+        assert key in d
+    docs = documented()
+    assert not undocumented("dns", d, docs)
+    args = ["waves", *flow, *grid, "--out-dir", str(tmp_path), "--json"]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    w = json.loads(r.stdout.strip().splitlines()[-1])
+    assert not undocumented("waves", w, docs)
+    assert w["points"][0]["verdict"] in ("growing", "decaying")
+    again = json.loads(runner.invoke(app, args).stdout.strip().splitlines()[-1])
+    assert again["points"] == w["points"]  # read back: even the wall time is the first run's
+    r = runner.invoke(app, ["waves", "--points", "P1", "--theta", "16", "--json"])
+    assert r.exit_code == 2
+    assert "points" in r.output

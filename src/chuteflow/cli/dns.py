@@ -135,3 +135,113 @@ def dns(
         con.print(f"wrote {out}", highlight=False)
     if plot is not None:
         con.print(f"figure: {plot}", highlight=False)
+
+
+def _floats(text: str, name: str) -> list[float]:
+    from chuteflow.errors import ParameterError
+
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ParameterError(f"{name} = {text!r}: numbers separated by commas") from None
+
+
+@app.command("waves")
+@with_model_options
+def waves(
+    theta: str | None = typer.Option(None, "--theta", help="Inclinations θ (degrees), comma-separated."),
+    nu0: str | None = typer.Option(
+        None, "--nu0", help="Floor densities ν0(0), comma-separated (a row per θ)."
+    ),
+    points: str | None = typer.Option(
+        None, "--points", help="The paper's points instead, e.g. P1,P4,P5 (their roughness is used)."
+    ),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    length: float = typer.Option(1000.0, "--length", help="Period L along the slope (diameters)."),
+    time: float = typer.Option(30000.0, "--time", help="Longest simulated time (stops once saturated)."),
+    dt: float = typer.Option(4.0, "--dt", help="Time step."),
+    nx: int = typer.Option(65, "--nx", help="Fourier unknowns per node, nx = 2M + 1."),
+    ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
+    amplitude: float = typer.Option(1e-3, "--amplitude", help="Size of the initial noise in ln ν."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
+    saturation_tol: float = typer.Option(
+        0.02, "--saturation-tol", help="Relative change that counts as settled."
+    ),
+    workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
+    out_dir: Path | None = typer.Option(
+        None, "--out-dir", help="One NetCDF file per flow (a killed map continues from there)."
+    ),
+    out: Path | None = typer.Option(None, "--out", help="The map as one NetCDF file."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """The saturated density waves from noise at a list of flows (docs/dns.md): per flow the
+    verdict, min/max of ρ̄ relative to its mean, wave speed, wavelength, time to saturate,
+    next to the linear growth rate and phase velocity at k = 2π/L."""
+    import json
+    import warnings
+
+    from rich.console import Console
+
+    from chuteflow.dns import WaveMapSettings, map_waves
+    from chuteflow.dns.waves import WAVE_KEYS
+    from chuteflow.errors import ParameterError
+
+    if nx < 1 or nx % 2 == 0:
+        raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
+    if points is not None:
+        if theta is not None or nu0 is not None:
+            raise ParameterError("points: give either --points or --theta with --nu0, not both")
+        from chuteflow.papers.mitarai2004.points import point
+
+        named = [point(p.strip()) for p in points.split(",") if p.strip()]
+        rough = {p.roughness for p in named}
+        if len(rough) > 1:
+            raise ParameterError(f"points = {points!r}: the points have different roughness {sorted(rough)}")
+        model = ChuteModel(**{**model.to_dict(), "roughness": rough.pop()})
+        pts = [(p.theta, p.nu0) for p in named]
+    else:
+        if theta is None or nu0 is None:
+            raise ParameterError("theta, nu0: give --theta and --nu0 (comma-separated), or --points")
+        pts = [(t, n) for t in _floats(theta, "theta") for n in _floats(nu0, "nu0")]
+    settings = WaveMapSettings(
+        length=length,
+        time=time,
+        dt=dt,
+        modes=(nx - 1) // 2,
+        n=ny,
+        amplitude=amplitude,
+        seed=seed,
+        saturation_tol=saturation_tol,
+    )
+    con = Console(stderr=True)
+
+    def progress(done, total, row):
+        con.print(
+            f"[{done}/{total}] θ = {row['theta']:g}, ν0 = {row['nu0']:g}: {row['verdict']}, ρ̄ "
+            f"{row['rho_min_rel']:+.3f} … {row['rho_max_rel']:+.3f}",
+            highlight=False,
+        )
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        ds = map_waves(pts, settings, model=model, out_dir=out_dir, workers=workers, progress=progress)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(out, engine="h5netcdf")
+    rows = []
+    for i in range(ds.sizes["point"]):
+        r: dict[str, object] = {"theta": float(ds["theta"][i]), "nu0": float(ds["nu0"][i])}
+        for k in WAVE_KEYS:
+            v = ds[k].values[i]
+            r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
+        rows.append(r)
+    if as_json:
+        typer.echo(json.dumps({"length": length, **model.to_dict(), "points": rows}))
+        return
+    for r in rows:
+        typer.echo(
+            f"θ = {r['theta']:g}, ν0 = {r['nu0']:g}: {r['verdict']}; "
+            f"ρ̄ {r['rho_min_rel']} … {r['rho_max_rel']}; "
+            f"c = {r['wave_speed']}, λ = {r['wavelength']}, t_sat = {r['t_saturation']}; linear Re α = "
+            f"{r['growth_rate_linear']}, c = {r['phase_velocity_linear']}"
+        )

@@ -24,12 +24,15 @@ from .residual import compiled_residuals, evaluate_residuals
 from .setup import INITS, DnsSetup, relax_steady
 from .simulation import DnsSimulation, DnsState, DnsStep
 from .stepper import NewtonSettings, StepInfo, Stepper
+from .waves import WaveMapSettings, map_waves
 
 __all__ = [
     "INITS",
     "ColumnPreconditioner",
     "DnsSetup",
     "DnsSimulation",
+    "WaveMapSettings",
+    "map_waves",
     "DnsState",
     "DnsStep",
     "VERDICTS",
