@@ -301,7 +301,8 @@ class WavePolicy:
     Attributes
     ----------
     window : float
-        Fraction of the run at its end over which the amplitude's change is judged.
+        Fraction of the run at its end over which the amplitude's change is judged (a tenth:
+        the window of :class:`SaturationStop`, so that a run it stopped is judged settled).
     tol : float
         Relative change of the amplitude (max − min of ρ̄ over its mean) over the window
         below which the wave counts as settled; also the band that defines the time to
@@ -310,7 +311,7 @@ class WavePolicy:
         Amplitudes below this are the linear phase ("growing" or "decaying").
     """
 
-    window: float = 0.2
+    window: float = 0.1
     tol: float = 0.02
     linear: float = 1e-3
 
@@ -331,7 +332,9 @@ def wave_measures(
     dominant Fourier mode of ρ̄ at the end), ``wave_speed`` (lab speed of that mode's phase
     over the last window of the run), ``t_saturation`` (the first time after which the
     amplitude stays within ``tol`` of its end value; NaN unless settled) and ``verdict``:
-    ``saturated`` (amplitude settled and the dominant mode unchanged over the window),
+    ``saturated`` (amplitude settled — changed by less than ``tol`` over the window, or the
+    run was ended by :class:`SaturationStop`, ``status="saturated"`` — and the dominant mode
+    unchanged over the window),
     ``coarsening`` (the dominant mode changed over the window: waves merging),
     ``growing`` / ``decaying`` (amplitude still changing, or in the linear phase),
     ``left_validity`` (the run stopped where the state left the model's range: the 1D
@@ -381,7 +384,8 @@ def wave_measures(
         out["verdict"] = "growing" if trend > 0 else "decaying"
         return out
     coarsening = bool(np.any(dominant[win] != m))
-    if change < p.tol:
+    # a run that SaturationStop ended is settled by its criterion (sampled at its own times)
+    if change < p.tol or status == "saturated":
         out["verdict"] = "coarsening" if coarsening else "saturated"
         far = np.nonzero(np.abs(amp - a_end) > p.tol * a_end)[0]
         out["t_saturation"] = float(t[far[-1] + 1]) if far.size else float(t[0])

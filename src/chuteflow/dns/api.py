@@ -13,7 +13,14 @@ import numpy as np
 import xarray as xr
 
 from ..steady import SteadyFlow
-from ..tracking import ProgressTracker, ResolutionMonitor, ResolutionWarning, SaturationStop, Tracker
+from ..tracking import (
+    ProgressTracker,
+    ResolutionMonitor,
+    ResolutionWarning,
+    SaturationStop,
+    Tracker,
+    WavePolicy,
+)
 from .diagnostics import bdf2_eigenvalue, measure_mode
 from .setup import INITS, DnsSetup, relax_steady
 from .simulation import DnsSimulation
@@ -89,7 +96,8 @@ def simulate(
     saturation_tol : float, optional
         Stop once the wave's amplitude (max − min of ρ̄ over its mean) has grown tenfold and
         changed by less than this, relative, over the last tenth of the run (sampled every
-        ``time``/200); ``time`` is then the longest run.
+        ``time``/200); ``time`` is then the longest run. Also the tolerance of the verdict
+        (:class:`~chuteflow.tracking.WavePolicy`; default 0.02).
     resolution_tol : float
         Tolerance of the spectra's tails (``x_tail``, ``y_tail``; a
         :class:`~chuteflow.tracking.ResolutionWarning` above it).
@@ -126,6 +134,7 @@ def simulate(
         record_every=record_every,
         settings=settings,
         min_dt_fraction=min_dt_fraction,
+        wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []
     if progress is not None:

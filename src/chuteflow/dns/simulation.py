@@ -26,6 +26,7 @@ from .._files import atomic_write
 from ..errors import ConvergenceError, ParameterError
 from ..stability import OperatorCache, least_stable
 from ..steady import SteadyFlow, steady_tangent
+from ..tracking import WavePolicy
 from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
 from .setup import INITS, DnsSetup, check_setup, history_coefficients, initial_coefficients
@@ -203,6 +204,8 @@ class DnsSimulation:
         Newton–Krylov tolerances and preconditioner.
     min_dt_fraction : float
         Stop (status ``"stopped: ..."``) when Newton fails at Δt below this fraction of ``dt``.
+    wave_policy : WavePolicy, optional
+        How the wave at the end is judged (:func:`~chuteflow.tracking.wave_measures`).
     """
 
     def __init__(
@@ -224,6 +227,7 @@ class DnsSimulation:
         record_every: int = 1,
         settings: NewtonSettings | None = None,
         min_dt_fraction: float = 1e-3,
+        wave_policy: WavePolicy | None = None,
     ):
         if not isinstance(flow, SteadyFlow):
             raise ParameterError(
@@ -279,6 +283,7 @@ class DnsSimulation:
         )
         self.stepper = Stepper(self.disc, settings)
         self.min_dt_fraction = float(min_dt_fraction)
+        self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
         #: whether :class:`~chuteflow.tracking.SaturationStop` waits for growth or decay).
         self.max_growth_rate = float(self.mode.alpha.real)
@@ -487,7 +492,7 @@ class DnsSimulation:
         mass_drift = float(np.max(np.abs(mass - mass[0])) / mass[0]) if mass.size else math.nan
         change = float(np.max(np.abs(state.C[:, :, 0] - state.C_init[:, :, 0])))
         sn = np.asarray(r["snaps"]) if r["snaps"] else np.zeros((0, 4, disc.n + 1, disc.nxp))
-        waves = wave_measures(t, rho, setup.length, setup.frame, status=state.status)
+        waves = wave_measures(t, rho, setup.length, setup.frame, status=state.status, policy=self.wave_policy)
         x_tail = np.asarray(r["x_tail"], dtype=float)
         y_tail = np.asarray(r["y_tail"], dtype=float)
         attrs = {
