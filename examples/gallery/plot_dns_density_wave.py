@@ -6,10 +6,10 @@ A density wave of the full equations, from noise to saturation
 a slope periodic in x, starting from a :class:`~chuteflow.steady.SteadyFlow`. At P1
 (θ = 16°, ν0(0) = 0.05, roughness φ = 0.05) the uniform flow is unstable for L = 1000
 (L_c ≈ 882): small noise in the density grows into one density wave that travels down the
-slope and saturates. The trackers of :mod:`chuteflow.tracking` — the same as those of the 1D
+slope and saturates. The trackers of :mod:`chuteflow.trackers` — the same as those of the 1D
 model's :class:`~chuteflow.reduced.WaveSimulation` — watch the run: here a
-:class:`~chuteflow.tracking.SaturationStop` ends it once the amplitude has settled and a
-:class:`~chuteflow.tracking.ResolutionMonitor` records how much the highest modes carry.
+:class:`~chuteflow.trackers.SaturationStop` ends it once the amplitude has settled and a
+:class:`~chuteflow.trackers.ResolutionMonitor` records how much the highest modes carry.
 
 The grid is deliberately coarse (nx = 7 Fourier unknowns, N = 24, Δt = 25) so that this
 page builds in seconds: the wave's crest is steeper than nx = 7 resolves (the monitor says
@@ -25,7 +25,7 @@ import numpy as np
 from chuteflow import ChuteModel
 from chuteflow.dns import DnsSimulation
 from chuteflow.steady import solve_steady
-from chuteflow.tracking import ResolutionMonitor, ResolutionWarning, SaturationStop
+from chuteflow.trackers import ResolutionMonitor, ResolutionWarning, SaturationStop
 
 flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
 sim = DnsSimulation(

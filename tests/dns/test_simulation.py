@@ -24,7 +24,7 @@ from chuteflow.closures import ChuteModel
 from chuteflow.dns import Discretisation, DnsSimulation, DnsState, resolution_tails, simulate, summary
 from chuteflow.errors import ParameterError
 from chuteflow.steady import solve_steady
-from chuteflow.tracking import (
+from chuteflow.trackers import (
     ProgressTracker,
     ResolutionMonitor,
     ResolutionWarning,
@@ -100,7 +100,7 @@ def test_resolution_tails_of_a_known_spectrum(p1):
 
 def test_driver_is_what_simulate_returns(p1):
     """DnsSimulation(flow, L).run(trackers) and simulate(flow, L) are one run: bit for bit;
-    the shared trackers (chuteflow.tracking) see every step."""
+    the shared trackers (chuteflow.trackers) see every step."""
     ref = simulate(p1, 1000.0, **SMALL)
     sim = DnsSimulation(p1, 1000.0, **SMALL)
     snaps, seen = SnapshotTracker(count=5), []

@@ -83,7 +83,7 @@ def dns(
     from chuteflow.dns import simulate, summary
     from chuteflow.errors import ParameterError
     from chuteflow.steady import solve_steady
-    from chuteflow.tracking import ResolutionWarning
+    from chuteflow.trackers import ResolutionWarning
 
     if nx is not None and (nx < 1 or nx % 2 == 0):
         raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")

@@ -188,7 +188,7 @@ def simulate(
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
     from chuteflow.reduced.model import SEEDS
-    from chuteflow.tracking import wave_measures
+    from chuteflow.trackers import wave_measures
 
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")
@@ -250,7 +250,7 @@ def simulate(
     }
     summary["amplitude_end"] = float(ds["amplitude"].values[-1])
     # the keys of ``chuteflow dns`` for the same things: the time reached, the wall time and
-    # the wave at the end (chuteflow.tracking.wave_measures, the same measure for both models)
+    # the wave at the end (chuteflow.trackers.wave_measures, the same measure for both models)
     summary["time_end"] = summary["t_end"]
     summary["wall_time"] = summary["wall_time_s"]
     summary["frame_speed"] = _num(a["frame_speed"])

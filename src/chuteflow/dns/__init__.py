@@ -9,7 +9,7 @@ the Jacobian of each x-column at the local state (:mod:`.columns`) at large ampl
 linearisation are derived from :mod:`chuteflow.equations` (:mod:`.residual`).
 
 ``DnsSimulation(flow, length, ...).run(trackers)`` → a :class:`DnsState` (saves and loads
-itself; trackers from :mod:`chuteflow.tracking`, shared with the 1D model);
+itself; trackers from :mod:`chuteflow.trackers`, shared with the 1D model);
 ``simulate(flow, length, ...)`` → :class:`xarray.Dataset` (ρ̄(x, t), Q(x, t), field snapshots,
 measured growth rate and phase velocity against the eigenvalue of
 :func:`chuteflow.stability.least_stable`, the wave at the end and its verdict, resolution

@@ -13,7 +13,7 @@ import numpy as np
 import xarray as xr
 
 from ..steady import SteadyFlow
-from ..tracking import (
+from ..trackers import (
     ProgressTracker,
     ResolutionMonitor,
     ResolutionWarning,
@@ -66,9 +66,9 @@ def simulate(
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
     A :class:`DnsSimulation` of ``flow`` run with a
-    :class:`~chuteflow.tracking.ProgressTracker` for ``progress``, a
-    :class:`~chuteflow.tracking.SaturationStop` for ``saturation_tol``, a
-    :class:`~chuteflow.tracking.ResolutionMonitor` (warns when the highest modes carry more
+    :class:`~chuteflow.trackers.ProgressTracker` for ``progress``, a
+    :class:`~chuteflow.trackers.SaturationStop` for ``saturation_tol``, a
+    :class:`~chuteflow.trackers.ResolutionMonitor` (warns when the highest modes carry more
     than ``resolution_tol``) and the caller's ``trackers``: the same names as the 1D model's
     :func:`chuteflow.reduced.simulate` (``time``, ``snapshots``, ``frame_speed``, ``progress``,
     ``trackers``).
@@ -97,12 +97,12 @@ def simulate(
         Stop once the wave's amplitude (max − min of ρ̄ over its mean) has grown tenfold and
         changed by less than this, relative, over the last tenth of the run (sampled every
         ``time``/200); ``time`` is then the longest run. Also the tolerance of the verdict
-        (:class:`~chuteflow.tracking.WavePolicy`; default 0.02).
+        (:class:`~chuteflow.trackers.WavePolicy`; default 0.02).
     resolution_tol : float
         Tolerance of the spectra's tails (``x_tail``, ``y_tail``; a
-        :class:`~chuteflow.tracking.ResolutionWarning` above it).
+        :class:`~chuteflow.trackers.ResolutionWarning` above it).
     trackers : sequence of Tracker
-        More trackers (:mod:`chuteflow.tracking`).
+        More trackers (:mod:`chuteflow.trackers`).
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Measurements on a run: the linear mode's eigenvalue and the resolution of the highest
 modes; the saturated wave (amplitude, speed, wavelength, time to saturate, verdict) is
-measured by :func:`chuteflow.tracking.wave_measures`, shared with the 1D model."""
+measured by :func:`chuteflow.trackers.wave_measures`, shared with the 1D model."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from ..spectral import coefficients as chebyshev_coefficients
-from ..tracking import VERDICTS, WavePolicy, wave_measures
+from ..trackers import VERDICTS, WavePolicy, wave_measures
 from .discretisation import Discretisation
 
 __all__ = [

@@ -3,12 +3,12 @@
 ``DnsSimulation(flow, length, ...)`` fixes the grid, the frame, the time step and the initial
 state from a :class:`~chuteflow.steady.SteadyFlow` (as every stability function takes one);
 ``run(trackers)`` steps BDF2 (:class:`~chuteflow.dns.stepper.Stepper`) with the trackers of
-:mod:`chuteflow.tracking` (the same as the 1D model's :class:`~chuteflow.reduced.WaveSimulation`)
+:mod:`chuteflow.trackers` (the same as the 1D model's :class:`~chuteflow.reduced.WaveSimulation`)
 watching every step, recording ρ̄(ξ, t), Q(ξ, t), the resolution of the highest modes and
 full-field snapshots in the state; ``dataset(state)`` is the xarray result. The state saves
 and loads itself (:meth:`DnsState.save`, :meth:`DnsState.load`, atomic writes): a run killed
 at any moment (SIGKILL included) continues from its last checkpoint exactly as if never
-interrupted, trackers included (:meth:`chuteflow.tracking.Tracker.checkpoint`).
+interrupted, trackers included (:meth:`chuteflow.trackers.Tracker.checkpoint`).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from .._files import atomic_write
 from ..errors import ConvergenceError, ParameterError
 from ..stability import OperatorCache, least_stable
 from ..steady import SteadyFlow, steady_tangent
-from ..tracking import WavePolicy
+from ..trackers import WavePolicy
 from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
 from .setup import INITS, DnsSetup, check_setup, history_coefficients, initial_coefficients
@@ -54,7 +54,7 @@ class DnsState:
     C_init : ndarray
         Coefficients at t = 0.
     amplitude : float
-        Size of the initial wave (max − min of ρ̄ over its mean; :class:`~chuteflow.tracking.SaturationStop`).
+        Size of the initial wave (max − min of ρ̄ over its mean; :class:`~chuteflow.trackers.SaturationStop`).
     status : str
         ``"running"``, ``"ok"`` (reached the end), a tracker's stop (``"saturated"``, …) or
         ``"stopped at t = …: why"``.
@@ -86,11 +86,11 @@ class DnsState:
 
     @property
     def y(self) -> np.ndarray:
-        """The state trackers see (:mod:`chuteflow.tracking`): the coefficients."""
+        """The state trackers see (:mod:`chuteflow.trackers`): the coefficients."""
         return self.C
 
     def save(self, path: str | os.PathLike, key: str, trackers=()) -> None:
-        """Write the state (and the trackers' :meth:`~chuteflow.tracking.Tracker.checkpoint`)
+        """Write the state (and the trackers' :meth:`~chuteflow.trackers.Tracker.checkpoint`)
         atomically to ``path`` (.npz) under the run's ``key``."""
         payload: dict = {
             "key": np.array(key),
@@ -150,7 +150,7 @@ class DnsState:
 
 
 class DnsStep:
-    """One accepted step (t_prev, t] as trackers see it (:mod:`chuteflow.tracking`)."""
+    """One accepted step (t_prev, t] as trackers see it (:mod:`chuteflow.trackers`)."""
 
     def __init__(self, C_old: np.ndarray, C_new: np.ndarray, t_prev: float, t: float, number: int):
         self._old, self.y = C_old, C_new
@@ -205,7 +205,7 @@ class DnsSimulation:
     min_dt_fraction : float
         Stop (status ``"stopped: ..."``) when Newton fails at Δt below this fraction of ``dt``.
     wave_policy : WavePolicy, optional
-        How the wave at the end is judged (:func:`~chuteflow.tracking.wave_measures`).
+        How the wave at the end is judged (:func:`~chuteflow.trackers.wave_measures`).
     """
 
     def __init__(
@@ -285,7 +285,7 @@ class DnsSimulation:
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
-        #: whether :class:`~chuteflow.tracking.SaturationStop` waits for growth or decay).
+        #: whether :class:`~chuteflow.trackers.SaturationStop` waits for growth or decay).
         self.max_growth_rate = float(self.mode.alpha.real)
         self.relax_change = 0.0
 

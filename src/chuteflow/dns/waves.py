@@ -1,11 +1,11 @@
 """The saturated density waves mapped over flows: one run from noise to saturation per flow.
 
 :func:`map_waves` runs :func:`chuteflow.dns.simulate` from small noise at each (θ, ν0(0)) of a
-list until the wave's amplitude settles (:class:`~chuteflow.tracking.SaturationStop`) or the
+list until the wave's amplitude settles (:class:`~chuteflow.trackers.SaturationStop`) or the
 time runs out, in parallel over the flows (a process pool), each run written to its own
 NetCDF file in ``out_dir`` with its checkpoint beside it: a killed map continues where every
 run stood, and a finished run is read back instead of re-run. The result has, per flow, the
-wave at the end (:func:`~chuteflow.tracking.wave_measures`: verdict, min/max of ρ̄ relative to
+wave at the end (:func:`~chuteflow.trackers.wave_measures`: verdict, min/max of ρ̄ relative to
 its mean, wave speed, wavelength that won, time to saturate), its shape ρ̄(ξ)/⟨ρ̄⟩ − 1 in the
 co-moving frame (crest at L/2), next to the linear growth rate and phase velocity of the
 fundamental k = 2π/L, the mass drift and the resolution tails.
@@ -67,7 +67,7 @@ class WaveMapSettings:
     amplitude, seed : float, int
         The initial noise.
     saturation_tol : float
-        :class:`~chuteflow.tracking.SaturationStop`'s tolerance.
+        :class:`~chuteflow.trackers.SaturationStop`'s tolerance.
     resolution_tol : float
         Tolerance of the resolution tails.
     """

@@ -30,9 +30,9 @@ Structure: :class:`WaveSolver` is the semi-discrete system (right-hand side, Jac
 linear modes); :class:`WaveSimulation` checks the input, fixes the grid and the frame and
 steps the integrator; trackers watch the steps and may stop the run (in the style of
 py-pde's ``solve(..., tracker=[...])``), the same trackers as the full model's simulation
-(:mod:`chuteflow.tracking`): :class:`SnapshotTracker`, :class:`SaturationStop`,
-:class:`ProgressTracker`, :class:`LeaveFamilyStop` (:class:`~chuteflow.tracking.ValidityStop`),
-:class:`~chuteflow.tracking.ResolutionMonitor`, or a subclass of :class:`Tracker`.
+(:mod:`chuteflow.trackers`): :class:`SnapshotTracker`, :class:`SaturationStop`,
+:class:`ProgressTracker`, :class:`LeaveFamilyStop` (:class:`~chuteflow.trackers.ValidityStop`),
+:class:`~chuteflow.trackers.ResolutionMonitor`, or a subclass of :class:`Tracker`.
 :func:`simulate` is the convenience wrapper returning an xarray Dataset.
 """
 
@@ -48,7 +48,7 @@ import scipy.sparse as sp
 from scipy.integrate import BDF, Radau
 
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
-from ..tracking import (
+from ..trackers import (
     ProgressTracker,
     SaturationStop,
     SnapshotTracker,
@@ -75,7 +75,7 @@ __all__ = [
     "wave_diagnostics",
 ]
 
-#: The 1D model's name of :class:`chuteflow.tracking.ValidityStop`: its validity is the range
+#: The 1D model's name of :class:`chuteflow.trackers.ValidityStop`: its validity is the range
 #: of the steady family.
 LeaveFamilyStop = ValidityStop
 
@@ -592,7 +592,7 @@ class WaveSimulation:
     def resolution(self, y: np.ndarray) -> dict[str, float]:
         """Amplitude of the highest eighth of the density's Fourier modes relative to the
         largest (``x_tail``; ``y_tail`` = 0: the model has no y), as
-        :class:`~chuteflow.tracking.ResolutionMonitor` asks."""
+        :class:`~chuteflow.trackers.ResolutionMonitor` asks."""
         c = np.abs(np.fft.rfft(y[: self.solver.N] - self.rho0))[1:]
         top = c.max() if c.size else 0.0
         m = max(1, len(c) // 8)
@@ -601,7 +601,7 @@ class WaveSimulation:
     def run(self, initial: InitialState, time: float | None = None, trackers=()) -> RunInfo:
         """Integrate from ``initial`` to ``time`` (default :meth:`default_t_end`).
 
-        Trackers (:mod:`chuteflow.tracking`: :class:`SnapshotTracker`, :class:`SaturationStop`,
+        Trackers (:mod:`chuteflow.trackers`: :class:`SnapshotTracker`, :class:`SaturationStop`,
         :class:`ProgressTracker`, :class:`LeaveFamilyStop`, …) watch every accepted step and
         may stop the run.
 
@@ -846,7 +846,7 @@ def simulate(
         there): raise :class:`NoSteadyFlowError`, or stop and return the run so far with
         ``status = "left_family"`` (the last snapshot is the last accepted state).
     trackers : sequence of Tracker
-        More trackers (:mod:`chuteflow.tracking`), after the wrapper's own.
+        More trackers (:mod:`chuteflow.trackers`), after the wrapper's own.
 
     Returns
     -------
