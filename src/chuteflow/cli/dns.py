@@ -126,6 +126,13 @@ def dns(
     else:
         for k, v in s.items():
             typer.echo(f"{k:22s} {v}")
+    if float(ds.attrs["alpha_re"]) < 0:
+        con.print(
+            f"warning: length = {length:g} is below the critical length of this flow (Re α = "
+            f"{float(ds.attrs['alpha_re']):.3g} < 0 at k = 2π/L): no wave grows",
+            style="yellow",
+            highlight=False,
+        )
     if ds.attrs.get("resolution_warnings"):
         con.print(f"warning: {ds.attrs['resolution_warnings']}", style="yellow", highlight=False)
     if str(ds.attrs["status"]).startswith("stopped"):
@@ -168,6 +175,9 @@ def waves(
         0.02, "--saturation-tol", help="Relative change that counts as settled."
     ),
     workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
+    reduced: bool = typer.Option(
+        False, "--reduced", help="Also run the 1D model (§5.1.2) at each flow and print its wave beside."
+    ),
     out_dir: Path | None = typer.Option(
         None, "--out-dir", help="One NetCDF file per flow (a killed map continues from there)."
     ),
@@ -235,6 +245,8 @@ def waves(
             v = ds[k].values[i]
             r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
         rows.append(r)
+    if reduced:
+        _reduced_waves(rows, model, length, amplitude, seed, con)
     if as_json:
         typer.echo(json.dumps({"length": length, **model.to_dict(), "points": rows}))
         return
@@ -245,3 +257,40 @@ def waves(
             f"c = {r['wave_speed']}, λ = {r['wavelength']}, t_sat = {r['t_saturation']}; linear Re α = "
             f"{r['growth_rate_linear']}, c = {r['phase_velocity_linear']}"
         )
+
+
+#: The 1D model's keys of ``chuteflow waves --reduced`` (prefixed ``reduced_``).
+REDUCED_KEYS = ("verdict", "rho_min_rel", "rho_max_rel", "wave_speed", "wavelength", "t_saturation")
+
+
+def _reduced_waves(rows: list, model: ChuteModel, length: float, amplitude: float, seed: int, con) -> None:
+    """The 1D model's wave from noise at each row's flow (one model per θ), into the rows."""
+    import warnings
+
+    from chuteflow.errors import ChuteflowError
+    from chuteflow.reduced import reduced_model
+    from chuteflow.reduced import simulate as run
+    from chuteflow.reduced.model import SEEDS
+    from chuteflow.trackers import wave_measures
+
+    models: dict = {}
+    for r in rows:
+        th, nu = float(r["theta"]), float(r["nu0"])
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                if th not in models:
+                    nus = tuple(float(q["nu0"]) for q in rows if float(q["theta"]) == th)
+                    models[th] = reduced_model(th, model, tol=1e-4, seeds=(*nus, *SEEDS))
+                ds = run(models[th], length, nu0=nu, amplitude=amplitude, seed=seed, on_exit="stop")
+            a = ds.attrs
+            w = wave_measures(
+                ds["t"].values, ds["rho"].values, length, float(a["frame_speed"]), status=str(a["status"])
+            )
+        except ChuteflowError as exc:
+            con.print(f"1D model at θ = {th:g}, ν0 = {nu:g}: {exc}", style="yellow", highlight=False)
+            w = dict.fromkeys(REDUCED_KEYS, "nan")
+            w["verdict"] = "failed"
+        for k in REDUCED_KEYS:
+            v = w[k]
+            r[f"reduced_{k}"] = v if isinstance(v, str) else _num(float(v))

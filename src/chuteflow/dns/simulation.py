@@ -549,8 +549,16 @@ class DnsSimulation:
                 "mass": (("time",), mass, {"long_name": "∫∫ν dy dx"}),
                 "amplitude_re": (("time",), A.real, {"long_name": "Re of the k = 2π/L coefficient of ρ̄"}),
                 "amplitude_im": (("time",), A.imag, {"long_name": "Im of the k = 2π/L coefficient of ρ̄"}),
-                "x_tail": (("time",), x_tail, {"long_name": "highest x modes / largest (amplitude)"}),
-                "y_tail": (("time",), y_tail, {"long_name": "highest Chebyshev coefficients / largest"}),
+                "x_tail": (
+                    ("time",),
+                    x_tail,
+                    {"long_name": "highest x modes / largest (amplitude)", "units": "1"},
+                ),
+                "y_tail": (
+                    ("time",),
+                    y_tail,
+                    {"long_name": "highest Chebyshev coefficients / largest", "units": "1"},
+                ),
                 "nu": (("snapshot_time", "y", "x"), sn[:, 0] if len(sn) else empty),
                 "u": (("snapshot_time", "y", "x"), sn[:, 1] if len(sn) else empty),
                 "v": (("snapshot_time", "y", "x"), sn[:, 2] if len(sn) else empty),
