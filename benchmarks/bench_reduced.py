@@ -104,7 +104,7 @@ def run(quick: bool = False) -> list[dict]:
     kw = dict(nu0=0.12, n_cells=N, on_exit="stop", amplitude=1e-3, seed=0)
     ds, t_w, c_w = _timed(lambda: simulate(rm, L, **kw))
     t_stop = float(ds["t"].values[-1])
-    lab, t_l, c_l = _timed(lambda: simulate(rm, L, frame="lab", t_end=t_stop, **kw))
+    lab, t_l, c_l = _timed(lambda: simulate(rm, L, frame_speed="lab", time=t_stop, **kw))
     rows.append(
         {
             "name": f"simulate_L{L:g}",

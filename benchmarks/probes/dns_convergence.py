@@ -49,20 +49,18 @@ def main():
         m = least_stable(flow, 2 * math.pi / L)
         period = 2 * math.pi / abs(m.alpha.imag)
         print(f"{name}: α = {m.alpha:.8e} (N = {m.n}), period {period:.2f}")
-        kw = dict(model=flow.model, flow=flow, time=2 * period)
+        kw = dict(time=2 * period)
         for div in (25, 50, 100, 200):
-            row(f"{name} dt=T/{div}", summary(simulate(th, nu0, L, n=m.n, dt=period / div, **kw)))
+            row(f"{name} dt=T/{div}", summary(simulate(flow, L, n=m.n, dt=period / div, **kw)))
         for n in (m.n - 20, m.n + 20):
             mn = least_stable(flow, 2 * math.pi / L, n=n)
-            s = summary(simulate(th, nu0, L, n=n, dt=period / 100, **kw))
+            s = summary(simulate(flow, L, n=n, dt=period / 100, **kw))
             row(f"{name} ny={n}", s)
             print(f"{'':<22} eigenvalue at N={n}: {mn.alpha:.8e}")
         for M in (1, 4):
-            row(
-                f"{name} nx={2 * M + 1}", summary(simulate(th, nu0, L, n=m.n, modes=M, dt=period / 100, **kw))
-            )
+            row(f"{name} nx={2 * M + 1}", summary(simulate(flow, L, n=m.n, modes=M, dt=period / 100, **kw)))
         if a.steady:
-            s = summary(simulate(th, nu0, L, n=m.n, dt=period / 100, amplitude=0.0, **kw))
+            s = summary(simulate(flow, L, n=m.n, dt=period / 100, amplitude=0.0, **kw))
             print(
                 f"{name} steady (amplitude 0): mean-flow change {s['mean_flow_change']:.2e}, "
                 f"mass {s['mass_drift']:.1e}"

@@ -41,7 +41,7 @@ def main() -> None:
         for n in (40, 60, 80, 100):
             seen.clear()
             ds = simulate(
-                16.0, 0.05, 1000.0, model=model, flow=flow, time=40.0, dt=4.0, modes=4, n=n,
+                flow, 1000.0, time=40.0, dt=4.0, modes=4, n=n,
                 init="noise", amplitude=0.1, frame_speed=7.8,
             )  # fmt: skip
             rho = ds["rho_bar"].values[-1]

@@ -1,13 +1,14 @@
 """Cost of a step at a large-amplitude state with each preconditioner (docs/dns.md, *Solver*).
 
-Continues a checkpoint of ``chuteflow dns`` at P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05, N = 80,
-Δt = 4, transport top row) for a few steps, exactly as the run would (the BDF2 history and
-Newton's extrapolated guess from the checkpoint), once per preconditioner, and prints seconds,
-Newton and GMRES iterations per step, the peak memory, and how far the fields of the two runs
-differ at the end. The checkpoint's run is recognised by its key: L = 1000 from the eigenmode
-(amplitude 0.02, frame 7.802854, nx = 65) or L = 2000 from noise (amplitude 1e-3, seed 0,
-frame the eigenmode's phase velocity, nx = 97) — the runs of docs/dns.md. Run:
-``python benchmarks/probes/dns_preconditioner.py CHECKPOINT.npz --steps 5``.
+Continues a checkpoint (:class:`chuteflow.dns.DnsState`) of ``chuteflow dns`` at P1 (θ = 16°,
+ν0(0) = 0.05, φ = 0.05, transport top row) for a few steps, exactly as the run would (the BDF2
+history and Newton's extrapolated guess from the checkpoint), once per preconditioner, and
+prints seconds, Newton and GMRES iterations per step, the peak memory, and how far the fields
+of the two runs differ at the end. The run's parameters are given as options (the checkpoint
+is only accepted under its run's key); defaults: L = 1000 from the eigenmode at amplitude
+0.02, frame 7.802854, nx = 65, N = 80, Δt = 4 — the run of docs/dns.md. Run:
+``python benchmarks/probes/dns_preconditioner.py CHECKPOINT.npz --steps 5``. For a
+large-amplitude state without a checkpoint, see ``dns_large_step.py``.
 """
 
 from __future__ import annotations
@@ -26,35 +27,18 @@ if __package__ in (None, ""):
 import numpy as np
 
 from chuteflow.closures import ChuteModel
-from chuteflow.dns import Discretisation, NewtonSettings, Stepper
-from chuteflow.dns.api import DnsSetup, _coefficients
-from chuteflow.stability import OperatorCache, least_stable
+from chuteflow.dns import DnsSimulation, DnsState, NewtonSettings, Stepper
+from chuteflow.dns.setup import history_coefficients
 from chuteflow.steady import solve_steady
-
-
-def setup_of(ck, model, flow) -> tuple[DnsSetup, float]:
-    C = ck["C"]
-    M, N = C.shape[2] - 1, C.shape[1] - 1
-    candidates = []
-    for L, init, amp in ((1000.0, "mode", 0.02), (2000.0, "noise", 1e-3)):
-        mode = least_stable(flow, 2 * math.pi / L, n=N, cache=OperatorCache(mapped=False))
-        candidates.extend(
-            DnsSetup(16.0, 0.05, L, 1.0, N, M, 4.0, init, amp, 0, model, True, frame)
-            for frame in (7.802854, float(mode.wave_speed))
-        )
-    for s in candidates:
-        if s.key() == str(ck["key"]):
-            return s, s.length
-    raise SystemExit("checkpoint of an unknown run")
 
 
 def run(ck, disc, name, steps):
     st = Stepper(disc, NewtonSettings(preconditioner=name))
-    C, prev, h_prev, dt = ck["C"], tuple(ck["prev"]), float(ck["h_prev"]), float(ck["dt"])
+    C, prev, h_prev, dt = ck.C, tuple(ck.prev), ck.h_prev, ck.dt
     rows = []
     for _ in range(steps):
         now = st.physical(C)
-        guess = C + (dt / h_prev) * (C - _coefficients(disc, prev))
+        guess = C + (dt / h_prev) * (C - history_coefficients(disc, prev))
         t0 = time.perf_counter()
         C_new, info = st.step(C, (now, prev), dt, guess=guess, ratio=dt / h_prev)
         rows.append((time.perf_counter() - t0, info.newton, info.krylov))
@@ -76,16 +60,36 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("checkpoint")
     ap.add_argument("--steps", type=int, default=5)
+    ap.add_argument("--length", type=float, default=1000.0)
+    ap.add_argument("--init", default="mode")
+    ap.add_argument("--amplitude", type=float, default=0.02)
+    ap.add_argument("--frame-speed", type=float, default=7.802854)
+    ap.add_argument("--nx", type=int, default=65)
+    ap.add_argument("--ny", type=int, default=80)
+    ap.add_argument("--dt", type=float, default=4.0)
+    ap.add_argument("--snapshots", type=int, default=6)
+    ap.add_argument("--record-every", type=int, default=1)
     args = ap.parse_args(argv)
-    model = ChuteModel(roughness=0.05)
-    flow = solve_steady(16.0, 0.05, model)
-    with np.load(args.checkpoint) as ck:
-        ck = dict(ck)
-    setup, L = setup_of(ck, model, flow)
-    disc = Discretisation(16.0, model, L, flow.y_max, setup.n, setup.modes, frame=setup.frame)
-    rho = disc.depth_integrals(ck["C"])[0]
+    flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+    sim = DnsSimulation(
+        flow,
+        args.length,
+        dt=args.dt,
+        n=args.ny,
+        modes=(args.nx - 1) // 2,
+        init=args.init,
+        amplitude=args.amplitude,
+        frame_speed=args.frame_speed,
+        snapshots=args.snapshots,
+        record_every=args.record_every,
+    )
+    ck = DnsState.load(args.checkpoint, sim.key())
+    if ck is None:
+        raise SystemExit("the checkpoint is not this run's: give the run's parameters (see --help)")
+    disc = sim.disc
+    rho = disc.depth_integrals(ck.C)[0]
     lo, hi = rho.min() / rho.mean() - 1, rho.max() / rho.mean() - 1
-    print(f"L = {L:g}, t = {float(ck['t']):g}, ρ̄ {lo:+.3f} … {hi:+.3f}")
+    print(f"L = {args.length:g}, t = {ck.t:g}, ρ̄ {lo:+.3f} … {hi:+.3f}")
     ends = {}
     for name in ("mean", "columns"):
         out, ends[name] = run(ck, disc, name, args.steps)

@@ -8,6 +8,7 @@ ORDER = (
     "plot_flux_density.py",
     "plot_stability_diagram.py",
     "plot_reduced_waves.py",
+    "plot_dns_density_wave.py",
     "plot_custom_closure.py",
     "plot_read_sweep.py",
     "plot_dask_sweep.py",

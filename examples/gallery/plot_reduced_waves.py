@@ -24,7 +24,7 @@ print("largest relative interpolation error:", errors)
 # %%
 # The uniform state at ν0(0) = 0.12 is unstable in the 1D model: waves longer than
 # L_c = 2π/k_c grow. A slope of length 40 (about 3 L_c) carries a few unstable modes.
-ds = simulate(rm, 40.0, nu0=0.12, n_cells=128, t_end=300.0, amplitude=1e-3, n_out=100, on_exit="stop")
+ds = simulate(rm, 40.0, nu0=0.12, n_cells=128, time=300.0, amplitude=1e-3, snapshots=100, on_exit="stop")
 print(f"status: {ds.attrs['status']}, L_c = {ds.attrs['L_c']:.2f}, mass drift {ds.attrs['mass_drift']:.1e}")
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 3.8), layout="constrained")

@@ -133,7 +133,7 @@ def test_bdf2_inversion_and_fit():
 
 def test_steady_flow_stays_steady_and_mass(p1):
     """The relaxed steady state stays steady to the solver tolerance; mass to round-off."""
-    ds = simulate(16.0, 0.05, L1, model=MODEL, flow=p1, amplitude=0.0, time=100.0, dt=5.0)
+    ds = simulate(p1, L1, amplitude=0.0, time=100.0, dt=5.0)
     assert ds.attrs["status"] == "ok"
     assert ds.attrs["mean_flow_change"] < 1e-10
     assert ds.attrs["mass_drift"] < 1e-13
@@ -144,7 +144,7 @@ def test_steady_flow_stays_steady_and_mass(p1):
 def test_linear_phase_short(p1, p1_mode):
     """Half a wave period from the eigenmode: eq. (4.4)'s eigenvalue is the discrete one."""
     period = 2 * math.pi / abs(p1_mode.alpha.imag)
-    ds = simulate(16.0, 0.05, L1, model=MODEL, flow=p1, time=period / 2, dt=period / 100)
+    ds = simulate(p1, L1, time=period / 2, dt=period / 100)
     s = summary(ds)
     assert s["status"] == "ok"
     assert s["phase_velocity_error"] < 3e-3
@@ -157,8 +157,8 @@ def test_comoving_frame(p1):
     """In the frame moving at the wave speed the same eigenvalue comes out at a 4× larger Δt:
     the frame changes ∂_t into ∂_t − c∂_ξ only (measured at L = 1000, Δt = 4 ≈ period/32:
     growth error 2e-3 in the frame against 0.31 in the lab frame, BDF2's phase damping)."""
-    kw = dict(model=MODEL, flow=p1, time=300.0, dt=4.0)
-    s = summary(simulate(16.0, 0.05, 1000.0, frame_speed=7.66, **kw))
+    kw = dict(time=300.0, dt=4.0)
+    s = summary(simulate(p1, 1000.0, frame_speed=7.66, **kw))
     assert s["frame_speed"] == 7.66
     assert s["growth_rate_error"] < 0.01
     assert s["phase_velocity_error"] < 1e-3
@@ -172,16 +172,16 @@ def test_top_rows_agree_in_linear_phase(p1, p1_mode):
     period from the mode at k = 0.003, their BDF2-inverted eigenvalues differ by 1.3e-5 |α|
     (measured; each is within 5e-5 |α| of :func:`chuteflow.stability.least_stable`)."""
     period = 2 * math.pi / abs(p1_mode.alpha.imag)
-    kw = dict(model=MODEL, flow=p1, time=period / 2, dt=period / 100)
+    kw = dict(time=period / 2, dt=period / 100)
     a = {}
     for top in ("transport", "isothermal"):
-        s = summary(simulate(16.0, 0.05, L1, top=top, **kw))
+        s = summary(simulate(p1, L1, top=top, **kw))
         assert s["status"] == "ok"
         a[top] = complex(s["alpha_dns_re"], s["alpha_dns_im"])
         assert abs(a[top] - p1_mode.alpha) < 2e-4 * abs(p1_mode.alpha)
     assert abs(a["transport"] - a["isothermal"]) < 5e-5 * abs(p1_mode.alpha)
     with pytest.raises(ParameterError, match="top"):
-        simulate(16.0, 0.05, L1, top="lid", **kw)
+        simulate(p1, L1, top="lid", **kw)
 
 
 @pytest.mark.slow
@@ -190,7 +190,7 @@ def test_linear_phase_p1_p3(nu0, sign):
     """Issue 11 item 2: two periods from the least-stable mode at k = 0.003 (P1 grows, P3
     decays) reproduce Re α and c = −Im α/k of chuteflow.stability to 1 %."""
     flow = solve_steady(16.0, nu0, MODEL)
-    s = summary(simulate(16.0, nu0, L1, model=MODEL, flow=flow))
+    s = summary(simulate(flow, L1))
     assert np.sign(s["growth_rate"]) == sign
     assert s["growth_rate_error"] < 0.01
     assert s["phase_velocity_error"] < 0.003
@@ -200,8 +200,8 @@ def test_linear_phase_p1_p3(nu0, sign):
 
 def test_checkpoint_resume(tmp_path, p1):
     """A run interrupted after a checkpoint continues with the same call to the same end."""
-    kw = dict(model=MODEL, flow=p1, time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
-    ref = simulate(16.0, 0.05, 1000.0, **kw)
+    kw = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
+    ref = simulate(p1, 1000.0, **kw)
     ck = tmp_path / "run.ck.npz"
 
     class Stop(Exception):
@@ -212,9 +212,9 @@ def test_checkpoint_resume(tmp_path, p1):
             raise Stop
 
     with pytest.raises(Stop):
-        simulate(16.0, 0.05, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **kw)
+        simulate(p1, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **kw)
     assert ck.exists()
-    ds = simulate(16.0, 0.05, 1000.0, checkpoint=ck, **kw)
+    ds = simulate(p1, 1000.0, checkpoint=ck, **kw)
     assert not ck.exists()
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
     assert np.array_equal(ds["time"].values, ref["time"].values)
@@ -233,9 +233,9 @@ def test_relax_conserves_mass(p1):
     assert d.depth_integrals(out)[0][0] == pytest.approx(d.depth_integrals(C)[0][0], rel=1e-9)
 
 
-def test_bad_input():
+def test_bad_input(p1):
     with pytest.raises(ParameterError, match="length"):
-        simulate(16.0, 0.05, -5.0, model=MODEL)
+        simulate(p1, -5.0)
     res = CliRunner().invoke(app, ["dns", "--theta", "16", "--nu0", "0.05", "--length", "1000", "--nx", "4"])
     assert res.exit_code == 2
     assert "nx = 4" in res.output
@@ -273,9 +273,7 @@ def test_cli_json(tmp_path):
 def test_figure(tmp_path, p1):
     from chuteflow.figures.dns import plot_dns, save
 
-    ds = simulate(
-        16.0, 0.05, 1000.0, model=MODEL, flow=p1, time=24.0, dt=4.0, modes=3, init="noise", amplitude=1e-4
-    )
+    ds = simulate(p1, 1000.0, time=24.0, dt=4.0, modes=3, init="noise", amplitude=1e-4)
     assert ds.attrs["frame_speed"] > 0  # from noise: the wave's frame
     png = save(plot_dns(ds), tmp_path / "dns.png")
     assert png.stat().st_size > 1000
@@ -293,7 +291,7 @@ def test_mass_conserved_at_finite_amplitude(p1):
     projected unscaled (docs/dns.md), this run (noise of 10 % in ln ν, ρ̄ within ±5 %)
     drifted by 1.4e-7 at N = 80, nx = 17 over 80 time units; now 4e-15."""
     ds = simulate(
-        16.0, 0.05, 1000.0, model=MODEL, flow=p1, time=40.0, dt=4.0, modes=4, n=40,
+        p1, 1000.0, time=40.0, dt=4.0, modes=4, n=40,
         init="noise", amplitude=0.1, frame_speed=7.8,
     )  # fmt: skip
     assert ds.attrs["status"] == "ok"
@@ -307,7 +305,7 @@ def test_kinematic_wave_speed_is_dq0_drho(p1, p1_mode):
     long-wave expansion, 4.15236 at P1 from ``chuteflow longwave``), not the eigenmode's
     phase velocity at k = 2π/L (7.6626 at L = 2π/0.003), which is ``mode_phase_velocity``.
     (It held the phase velocity until the L = 2000 / P4 / P5 runs of docs/dns.md.)"""
-    s = summary(simulate(16.0, 0.05, L1, model=MODEL, flow=p1, time=8.0, dt=4.0))
+    s = summary(simulate(p1, L1, time=8.0, dt=4.0))
     assert s["kinematic_wave_speed"] == pytest.approx(4.152359745, rel=1e-6)
     # the DNS solves its mode on the plain Chebyshev grid, the fixture on the default one: 2e-8 apart
     assert s["mode_phase_velocity"] == pytest.approx(p1_mode.wave_speed, rel=1e-6)

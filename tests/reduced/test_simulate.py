@@ -87,7 +87,15 @@ def mode_runs(rm16, state16):
     out = {}
     for n in (1, 2, 3):
         out[n] = simulate(
-            rm16, L, rho0=state16.rho0, n_cells=512, mode=n, amplitude=1e-5, t_end=60.0, n_out=61, rtol=1e-8
+            rm16,
+            L,
+            rho0=state16.rho0,
+            n_cells=512,
+            mode=n,
+            amplitude=1e-5,
+            time=60.0,
+            snapshots=61,
+            rtol=1e-8,
         )
     return out
 
@@ -131,7 +139,15 @@ def test_mass_is_conserved_to_round_off(mode_runs, rm16, state16):
     for ds in mode_runs.values():
         assert ds.attrs["mass_drift"] < 1e-14
     ds = simulate(
-        rm16, L, rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05, t_end=40.0, n_out=11, frame="lab"
+        rm16,
+        L,
+        rho0=state16.rho0,
+        n_cells=128,
+        mode=1,
+        amplitude=0.05,
+        time=40.0,
+        snapshots=11,
+        frame_speed="lab",
     )
     m = ds["mass"].values
     assert np.abs(m - m[0]).max() / m[0] < 1e-14
@@ -156,10 +172,10 @@ def test_second_order_convergence_in_space_nonlinear(rm16, state16):
             n_cells=N,
             mode=1,
             amplitude=0.05,
-            t_end=25.0,
-            n_out=2,
+            time=25.0,
+            snapshots=2,
             rtol=1e-10,
-            frame=9.16,
+            frame_speed=9.16,
         )
         sols[N] = ds["rho"].values[-1]
     assert np.abs(sols[2048] - state16.rho0).max() > 0.15 * state16.rho0  # grew 3×
@@ -173,7 +189,7 @@ def test_second_order_convergence_in_space_nonlinear(rm16, state16):
 
 
 def test_convergence_in_time(rm16, state16):
-    kw = dict(rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05, t_end=25.0, n_out=2)
+    kw = dict(rho0=state16.rho0, n_cells=128, mode=1, amplitude=0.05, time=25.0, snapshots=2)
     ref = simulate(rm16, L, rtol=1e-11, **kw)["rho"].values[-1]
     errs = [np.abs(simulate(rm16, L, rtol=r, **kw)["rho"].values[-1] - ref).max() for r in (1e-4, 1e-6, 1e-8)]
     assert errs[0] > errs[1] > errs[2]
@@ -183,7 +199,7 @@ def test_convergence_in_time(rm16, state16):
 
 def test_wave_leaves_the_family(rm16, state16):
     # a large perturbation grows into a cluster denser than any steady flow of the family
-    kw = dict(rho0=state16.rho0, n_cells=256, amplitude=0.2, mode=1, t_end=2000.0, n_out=50)
+    kw = dict(rho0=state16.rho0, n_cells=256, amplitude=0.2, mode=1, time=2000.0, snapshots=50)
     with pytest.raises(NoSteadyFlowError, match="left the steady family"):
         simulate(rm16, L, **kw)
     ds = simulate(rm16, L, on_exit="stop", **kw)
@@ -200,7 +216,7 @@ def test_stable_state_decays(rm16):
     rho0 = rm16.rho_at_nu0(0.09)
     c = rm16.coefficients(rho0)
     assert 0 < c.k_c < 2 * np.pi / 20
-    ds = simulate(rm16, 20.0, rho0=rho0, n_cells=128, amplitude=1e-3, n_out=40)
+    ds = simulate(rm16, 20.0, rho0=rho0, n_cells=128, amplitude=1e-3, snapshots=40)
     assert ds.attrs["status"] == "decayed"
     assert float(ds["amplitude"][-1]) < 1e-4 * float(ds["amplitude"][0])
     assert ds.attrs["max_growth_rate"] < 0
@@ -213,8 +229,8 @@ def test_stable_state_decays(rm16):
         ({"rho0": 5.0}, "rho0"),
         ({"rho0": 0.5, "amplitude": 0.9}, "amplitude"),
         ({"rho0": 0.5, "rtol": 1.0}, "rtol"),
-        ({"rho0": 0.5, "t_end": -1.0}, "time"),
-        ({"rho0": 0.5, "frame": "nowhere"}, "frame"),
+        ({"rho0": 0.5, "time": -1.0}, "time"),
+        ({"rho0": 0.5, "frame_speed": "nowhere"}, "frame"),
         ({"rho0": 0.5, "n_cells": 4}, "n_cells"),
     ],
 )
@@ -230,7 +246,7 @@ def test_stepper_with_trackers_is_what_simulate_returns(rm16, state16):
     from chuteflow.reduced import ProgressTracker, SnapshotTracker, WaveSimulation
 
     kw = dict(rho0=state16.rho0, n_cells=128, mode=1, amplitude=1e-3)
-    ref = simulate(rm16, L, t_end=30.0, n_out=31, **kw)
+    ref = simulate(rm16, L, time=30.0, snapshots=31, **kw)
     sim = WaveSimulation(rm16, L, rho0=state16.rho0, n_cells=128)
     snaps, seen = SnapshotTracker(count=31), []
     info = sim.run(
@@ -310,7 +326,7 @@ def test_saturation_stop_and_leave_family_stop(rm16, state16):
 @pytest.mark.parametrize(
     ("cls", "kw", "match"),
     [
-        ("SnapshotTracker", {"count": 1}, "n_out"),
+        ("SnapshotTracker", {"count": 1}, "snapshots"),
         ("SnapshotTracker", {}, "exactly one"),
         ("SnapshotTracker", {"interval": -1.0}, "interval"),
         ("SaturationStop", {"tol": 2.0, "count": 5}, "saturation_tol"),

@@ -53,6 +53,16 @@ def dns(
     record_every: int = typer.Option(
         1, "--record-every", help="Store ρ̄(x, t), Q(x, t) every this many steps."
     ),
+    saturation_tol: float | None = typer.Option(
+        None,
+        "--saturation-tol",
+        help="Stop once the wave's amplitude has settled to this relative change (--time: the longest run).",
+    ),
+    resolution_tol: float = typer.Option(
+        1e-4,
+        "--resolution-tol",
+        help="Warn when the highest x or y modes carry more than this of the largest.",
+    ),
     out: Path | None = typer.Option(
         None,
         "--out",
@@ -63,39 +73,47 @@ def dns(
 ) -> None:
     """Time-dependent simulation of eqs (2.1)–(2.3) with the Johnson–Jackson floor on a slope
     periodic in x (docs/dns.md): growth rate and phase velocity of the k = 2π/L wave against
-    the linear eigenvalue, mass drift, and the nonlinear waves."""
+    the linear eigenvalue, mass drift, and the nonlinear waves: their amplitude, speed,
+    wavelength, time to saturate and verdict, and the resolution of the highest modes."""
     import json
+    import warnings
 
     from rich.console import Console
 
     from chuteflow.dns import simulate, summary
     from chuteflow.errors import ParameterError
+    from chuteflow.steady import solve_steady
+    from chuteflow.trackers import ResolutionWarning
 
     if nx is not None and (nx < 1 or nx % 2 == 0):
         raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
     if init not in ("mode", "noise"):
         raise ParameterError(f"init = {init!r}: choose mode or noise")
     con = Console(stderr=True)
-    with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
-        ds = simulate(
-            theta,
-            nu0,
-            length,
-            model=model,
-            time=time,
-            n=ny,
-            modes=None if nx is None else (nx - 1) // 2,
-            dt=dt,
-            init=init,
-            amplitude=amplitude,
-            seed=seed,
-            frame_speed=frame_speed,
-            top=top,
-            snapshots=snapshots,
-            record_every=record_every,
-            out=out,
-            progress=progress,
-        )
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ResolutionWarning)  # reported below, in one line
+        with con.status("solving the steady flow…"):
+            flow = solve_steady(theta, nu0, model)
+        with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
+            ds = simulate(
+                flow,
+                length,
+                time=time,
+                n=ny,
+                modes=None if nx is None else (nx - 1) // 2,
+                dt=dt,
+                init=init,
+                amplitude=amplitude,
+                seed=seed,
+                frame_speed=frame_speed,
+                top=top,
+                snapshots=snapshots,
+                record_every=record_every,
+                saturation_tol=saturation_tol,
+                resolution_tol=resolution_tol,
+                out=out,
+                progress=progress,
+            )
     if plot is not None:
         from chuteflow.figures.dns import plot_dns, save
 
@@ -107,7 +125,165 @@ def dns(
     else:
         for k, v in s.items():
             typer.echo(f"{k:22s} {v}")
+    if float(ds.attrs["alpha_re"]) < 0:
+        con.print(
+            f"warning: length = {length:g} is below the critical length of this flow (Re α = "
+            f"{float(ds.attrs['alpha_re']):.3g} < 0 at k = 2π/L): no wave grows",
+            style="yellow",
+            highlight=False,
+        )
+    if ds.attrs.get("resolution_warnings"):
+        con.print(f"warning: {ds.attrs['resolution_warnings']}", style="yellow", highlight=False)
+    if str(ds.attrs["status"]).startswith("stopped"):
+        kept = f"; the run so far is in {out} and its checkpoint" if out is not None else ""
+        con.print(f"warning: {ds.attrs['status']}{kept}", style="yellow", highlight=False)
     if out is not None:
         con.print(f"wrote {out}", highlight=False)
     if plot is not None:
         con.print(f"figure: {plot}", highlight=False)
+
+
+def _floats(text: str, name: str) -> list[float]:
+    from chuteflow.errors import ParameterError
+
+    try:
+        return [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise ParameterError(f"{name} = {text!r}: numbers separated by commas") from None
+
+
+@app.command("waves")
+@with_model_options
+def waves(
+    theta: str | None = typer.Option(None, "--theta", help="Inclinations θ (degrees), comma-separated."),
+    nu0: str | None = typer.Option(
+        None, "--nu0", help="Floor densities ν0(0), comma-separated (a row per θ)."
+    ),
+    points: str | None = typer.Option(
+        None, "--points", help="The paper's points instead, e.g. P1,P4,P5 (their roughness is used)."
+    ),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    length: float = typer.Option(1000.0, "--length", help="Period L along the slope (diameters)."),
+    time: float = typer.Option(30000.0, "--time", help="Longest simulated time (stops once saturated)."),
+    dt: float = typer.Option(4.0, "--dt", help="Time step."),
+    nx: int = typer.Option(65, "--nx", help="Fourier unknowns per node, nx = 2M + 1."),
+    ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
+    amplitude: float = typer.Option(1e-3, "--amplitude", help="Size of the initial noise in ln ν."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
+    saturation_tol: float = typer.Option(
+        0.02, "--saturation-tol", help="Relative change that counts as settled."
+    ),
+    workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
+    reduced: bool = typer.Option(
+        False, "--reduced", help="Also run the 1D model (§5.1.2) at each flow and print its wave beside."
+    ),
+    out_dir: Path | None = typer.Option(
+        None, "--out-dir", help="One NetCDF file per flow (a killed map continues from there)."
+    ),
+    out: Path | None = typer.Option(None, "--out", help="The map as one NetCDF file."),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """The saturated density waves from noise at a list of flows (docs/dns.md): per flow the
+    verdict, min/max of ρ̄ relative to its mean, wave speed, wavelength, time to saturate,
+    next to the linear growth rate and phase velocity at k = 2π/L."""
+    import json
+
+    from rich.console import Console
+
+    from chuteflow.dns import WaveMapSettings, map_waves
+    from chuteflow.dns.waves import WAVE_KEYS
+    from chuteflow.errors import ParameterError
+
+    if nx < 1 or nx % 2 == 0:
+        raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
+    if points is not None:
+        if theta is not None or nu0 is not None:
+            raise ParameterError("points: give either --points or --theta with --nu0, not both")
+        from chuteflow.papers.mitarai2004.points import point
+
+        named = [point(p.strip()) for p in points.split(",") if p.strip()]
+        rough = {p.roughness for p in named}
+        if len(rough) > 1:
+            raise ParameterError(f"points = {points!r}: the points have different roughness {sorted(rough)}")
+        model = ChuteModel(**{**model.to_dict(), "roughness": rough.pop()})
+        pts = [(p.theta, p.nu0) for p in named]
+    else:
+        if theta is None or nu0 is None:
+            raise ParameterError("theta, nu0: give --theta and --nu0 (comma-separated), or --points")
+        pts = [(t, n) for t in _floats(theta, "theta") for n in _floats(nu0, "nu0")]
+    settings = WaveMapSettings(
+        length=length,
+        time=time,
+        dt=dt,
+        modes=(nx - 1) // 2,
+        n=ny,
+        amplitude=amplitude,
+        seed=seed,
+        saturation_tol=saturation_tol,
+    )
+    con = Console(stderr=True)
+
+    def progress(done, total, row):
+        con.print(
+            f"[{done}/{total}] θ = {row['theta']:g}, ν0 = {row['nu0']:g}: {row['verdict']}, ρ̄ "
+            f"{row['rho_min_rel']:+.3f} … {row['rho_max_rel']:+.3f}",
+            highlight=False,
+        )
+
+    ds = map_waves(pts, settings, model=model, out_dir=out_dir, workers=workers, progress=progress)
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        ds.to_netcdf(out, engine="h5netcdf")
+    rows = []
+    for i in range(ds.sizes["point"]):
+        r: dict[str, object] = {"theta": float(ds["theta"][i]), "nu0": float(ds["nu0"][i])}
+        for k in WAVE_KEYS:
+            v = ds[k].values[i]
+            r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
+        rows.append(r)
+    if reduced:
+        _reduced_waves(rows, model, length, amplitude, seed, con)
+    if as_json:
+        typer.echo(json.dumps({"length": length, **model.to_dict(), "points": rows}))
+        return
+    for r in rows:
+        typer.echo(
+            f"θ = {r['theta']:g}, ν0 = {r['nu0']:g}: {r['verdict']}; "
+            f"ρ̄ {r['rho_min_rel']} … {r['rho_max_rel']}; "
+            f"c = {r['wave_speed']}, λ = {r['wavelength']}, t_sat = {r['t_saturation']}; linear Re α = "
+            f"{r['growth_rate_linear']}, c = {r['phase_velocity_linear']}"
+        )
+
+
+#: The 1D model's keys of ``chuteflow waves --reduced`` (prefixed ``reduced_``).
+REDUCED_KEYS = ("verdict", "rho_min_rel", "rho_max_rel", "wave_speed", "wavelength", "t_saturation")
+
+
+def _reduced_waves(rows: list, model: ChuteModel, length: float, amplitude: float, seed: int, con) -> None:
+    """The 1D model's wave from noise at each row's flow (one model per θ), into the rows."""
+
+    from chuteflow.errors import ChuteflowError
+    from chuteflow.reduced import reduced_model
+    from chuteflow.reduced import simulate as run
+    from chuteflow.reduced.model import SEEDS
+    from chuteflow.trackers import wave_measures
+
+    models: dict = {}
+    for r in rows:
+        th, nu = float(r["theta"]), float(r["nu0"])
+        try:
+            if th not in models:
+                nus = tuple(float(q["nu0"]) for q in rows if float(q["theta"]) == th)
+                models[th] = reduced_model(th, model, tol=1e-4, seeds=(*nus, *SEEDS))
+            ds = run(models[th], length, nu0=nu, amplitude=amplitude, seed=seed, on_exit="stop")
+            a = ds.attrs
+            w = wave_measures(
+                ds["t"].values, ds["rho"].values, length, float(a["frame_speed"]), status=str(a["status"])
+            )
+        except ChuteflowError as exc:
+            con.print(f"1D model at θ = {th:g}, ν0 = {nu:g}: {exc}", style="yellow", highlight=False)
+            w = dict.fromkeys(REDUCED_KEYS, "nan")
+            w["verdict"] = "failed"
+        for k in REDUCED_KEYS:
+            v = w[k]
+            r[f"reduced_{k}"] = v if isinstance(v, str) else _num(float(v))

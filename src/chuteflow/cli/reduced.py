@@ -164,6 +164,11 @@ def simulate(
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
     rtol: float = typer.Option(1e-6, "--rtol", help="Time integrator tolerance."),
     snapshots: int = typer.Option(200, "--snapshots", help="Stored snapshots."),
+    frame_speed: float | None = typer.Option(
+        None,
+        "--frame-speed",
+        help="Speed of the frame ξ = x − ct of the run (default: the fastest-growing mode's phase velocity).",
+    ),
     nu0_min: float = typer.Option(5e-3, "--nu0-min", help="Lowest floor density of the steady family."),
     nu0_max: float | None = typer.Option(None, "--nu0-max", help="Highest floor density (default 0.75 ν_m)."),
     out: Path | None = typer.Option(None, "--out", help="Write the run to this NetCDF file."),
@@ -179,6 +184,7 @@ def simulate(
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
     from chuteflow.reduced.model import SEEDS
+    from chuteflow.trackers import wave_measures
 
     if not (math.isfinite(length) and length > 0):  # before the family is built
         raise ParameterError(f"length = {length!r} must be a positive number of diameters")
@@ -199,14 +205,15 @@ def simulate(
             length,
             nu0=nu0,
             n_cells=cells,
-            t_end=time,
+            time=time,
             mode=mode,
             amplitude=amplitude,
             seed=seed,
             rtol=rtol,
-            n_out=snapshots,
+            snapshots=snapshots,
             progress=progress,
             on_exit="stop",
+            frame_speed="wave" if frame_speed is None else frame_speed,
         )
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -236,6 +243,15 @@ def simulate(
         )
     }
     summary["amplitude_end"] = float(ds["amplitude"].values[-1])
+    # the keys of ``chuteflow dns`` for the same things: the time reached, the wall time and
+    # the wave at the end (chuteflow.trackers.wave_measures, the same measure for both models)
+    summary["time_end"] = summary["t_end"]
+    summary["wall_time"] = summary["wall_time_s"]
+    summary["frame_speed"] = _num(a["frame_speed"])
+    waves = wave_measures(
+        ds["t"].values, ds["rho"].values, float(a["length"]), float(a["frame_speed"]), status=str(a["status"])
+    )
+    summary.update({k: (v if isinstance(v, str) else _num(v)) for k, v in waves.items()})
     summary.update({k: v for k, v in model.to_dict().items() if k not in summary})
     if a.get("left_family"):
         summary["left_family"] = a["left_family"]

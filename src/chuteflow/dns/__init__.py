@@ -8,22 +8,37 @@ the per-Fourier-mode linearisation about the x-averaged state in the linear phas
 the Jacobian of each x-column at the local state (:mod:`.columns`) at large amplitude. The residual and the
 linearisation are derived from :mod:`chuteflow.equations` (:mod:`.residual`).
 
-``simulate(theta, nu0, length, ...)`` → :class:`xarray.Dataset` (ρ̄(x, t), Q(x, t), field
-snapshots, measured growth rate and phase velocity against the eigenvalue of
-:func:`chuteflow.stability.least_stable`, mass drift, status); ``summary(ds)`` → the
-JSON scalars of ``chuteflow dns --json``.
+``DnsSimulation(flow, length, ...).run(trackers)`` → a :class:`DnsState` (saves and loads
+itself; trackers from :mod:`chuteflow.trackers`, shared with the 1D model);
+``simulate(flow, length, ...)`` → :class:`xarray.Dataset` (ρ̄(x, t), Q(x, t), field snapshots,
+measured growth rate and phase velocity against the eigenvalue of
+:func:`chuteflow.stability.least_stable`, the wave at the end and its verdict, resolution
+tails, mass drift, status); ``summary(ds)`` → the JSON scalars of ``chuteflow dns --json``.
 """
 
-from .api import INITS, DnsSetup, bdf2_eigenvalue, measure_mode, relax_steady, simulate, summary
+from .api import simulate, summary
 from .columns import ColumnPreconditioner
+from .diagnostics import VERDICTS, WavePolicy, bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
 from .residual import compiled_residuals, evaluate_residuals
+from .setup import INITS, DnsSetup, relax_steady
+from .simulation import DnsSimulation, DnsState, DnsStep
 from .stepper import NewtonSettings, StepInfo, Stepper
+from .waves import WaveMapSettings, map_waves
 
 __all__ = [
     "INITS",
     "ColumnPreconditioner",
     "DnsSetup",
+    "DnsSimulation",
+    "WaveMapSettings",
+    "map_waves",
+    "DnsState",
+    "DnsStep",
+    "VERDICTS",
+    "WavePolicy",
+    "resolution_tails",
+    "wave_measures",
     "Discretisation",
     "NewtonSettings",
     "StepInfo",

@@ -43,6 +43,15 @@ PRIMITIVE_JETS = tuple(
 )
 #: Central differences on a periodic grid of spacing h: order b → ((offset, weight × h^b), …).
 _STENCIL = {0: ((0, 1.0),), 1: ((-1, -0.5), (1, 0.5)), 2: ((-1, 1.0), (0, -2.0), (1, 1.0))}
+#: Fourth-order central differences (``order=4``): the symbol of ∂_x is (8 sin kh − sin 2kh)/6h,
+#: closer to k over the middle third of the modes (docs/dns.md, *Solver*).
+_STENCIL4 = {
+    0: ((0, 1.0),),
+    1: ((-2, 1 / 12), (-1, -8 / 12), (1, 8 / 12), (2, -1 / 12)),
+    2: ((-2, -1 / 12), (-1, 16 / 12), (0, -30 / 12), (1, 16 / 12), (2, -1 / 12)),
+}
+#: Orders of the x-differences of the column preconditioner.
+ORDERS = (2, 4)
 
 
 def _at_points(disc: Discretisation, values: np.ndarray) -> np.ndarray:
@@ -78,7 +87,9 @@ def column_coefficients(
     return out
 
 
-def column_matrix(disc: Discretisation, coefficients: dict[str, np.ndarray]) -> sps.csc_matrix:
+def column_matrix(
+    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2
+) -> sps.csc_matrix:
     """The sparse matrix of the preconditioner, unknowns ordered (x_i, field, y_j).
 
     ``coefficients`` as from :func:`column_coefficients`. Rows of the top node of u, v, T are
@@ -88,14 +99,18 @@ def column_matrix(disc: Discretisation, coefficients: dict[str, np.ndarray]) -> 
     hx = disc.length / nx
     g = disc.grid
     dy = (np.eye(m), g.D, g.D2)
-    blocks = {o: np.zeros((nx, 4 * m, 4 * m)) for o in (-1, 0, 1)}
+    stencil = _STENCIL if order == 2 else _STENCIL4
+    reach = 1 if order == 2 or nx < 5 else 2
+    if reach == 1:
+        stencil = _STENCIL
+    blocks = {o: np.zeros((nx, 4 * m, 4 * m)) for o in range(-reach, reach + 1)}
     for name, f, b, c in PRIMITIVE_JETS:
         A = coefficients[name].copy()  # (4, m, nx)
         A[1:, -1] = 0.0  # the top rows of u, v, T are the per-mode conditions below
         if not np.any(A):
             continue
         fc = UNKNOWNS.index(f)
-        for o, w in _STENCIL[b]:
+        for o, w in stencil[b]:
             W = A * (w / hx**b)  # (4, m, nx)
             # block[i][(r, j), (fc, j')] += W[r, j, i] · dy[c][j, j']
             blk = W.transpose(2, 0, 1)[..., None] * dy[c][None, None]  # (nx, 4, m, m)
@@ -151,10 +166,11 @@ class ColumnPreconditioner:
 
     @classmethod
     def build(
-        cls, disc: Discretisation, C: np.ndarray, history: tuple, dt: float, bdf=BDF2
+        cls, disc: Discretisation, C: np.ndarray, history: tuple, dt: float, bdf=BDF2, order: int = 2
     ) -> ColumnPreconditioner:
-        """Coefficients at the state ``C`` (:func:`column_coefficients`), matrix, factorisation."""
-        return cls(disc, column_matrix(disc, column_coefficients(disc, C, history, dt, bdf)))
+        """Coefficients at the state ``C`` (:func:`column_coefficients`), matrix (x-differences
+        of ``order`` 2 or 4), factorisation."""
+        return cls(disc, column_matrix(disc, column_coefficients(disc, C, history, dt, bdf), order))
 
     @property
     def nbytes(self) -> int:

@@ -62,6 +62,9 @@ class NewtonSettings:
         one GMRES solve needs more than ``switch_krylov`` iterations, ``"columns"`` from then on.
     switch_krylov : int
         GMRES iterations of one solve that make ``"auto"`` switch to ``"columns"``.
+    column_order : {2, 4}
+        Order of the x-differences of the column preconditioner
+        (:func:`~chuteflow.dns.columns.column_matrix`).
     """
 
     atol: float = 1e-10
@@ -75,12 +78,15 @@ class NewtonSettings:
     chord_ratio: float = 0.2
     preconditioner: str = "auto"
     switch_krylov: int = 60
+    column_order: int = 2
 
     def __post_init__(self):
         if self.preconditioner not in PRECONDITIONERS:
             raise ParameterError(
                 f"preconditioner = {self.preconditioner!r}: choose one of {', '.join(PRECONDITIONERS)}"
             )
+        if self.column_order not in (2, 4):
+            raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
 
 
 @dataclass(frozen=True)
@@ -139,7 +145,7 @@ class Stepper:
 
     def _factor(self, C, dt, bdf, history):
         if self.columns:
-            self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf)
+            self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf, self.settings.column_order)
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
         self._lu_key = (dt, bdf[0])

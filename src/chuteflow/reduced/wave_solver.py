@@ -29,8 +29,10 @@ symbol of the linearised scheme (:meth:`WaveSolver.symbol`).
 Structure: :class:`WaveSolver` is the semi-discrete system (right-hand side, Jacobian,
 linear modes); :class:`WaveSimulation` checks the input, fixes the grid and the frame and
 steps the integrator; trackers watch the steps and may stop the run (in the style of
-py-pde's ``solve(..., tracker=[...])``): :class:`SnapshotTracker`, :class:`SaturationStop`,
-:class:`ProgressTracker`, :class:`LeaveFamilyStop`, or a subclass of :class:`Tracker`.
+py-pde's ``solve(..., tracker=[...])``), the same trackers as the full model's simulation
+(:mod:`chuteflow.trackers`): :class:`SnapshotTracker`, :class:`SaturationStop`,
+:class:`ProgressTracker`, :class:`LeaveFamilyStop` (:class:`~chuteflow.trackers.ValidityStop`),
+:class:`~chuteflow.trackers.ResolutionMonitor`, or a subclass of :class:`Tracker`.
 :func:`simulate` is the convenience wrapper returning an xarray Dataset.
 """
 
@@ -46,6 +48,13 @@ import scipy.sparse as sp
 from scipy.integrate import BDF, Radau
 
 from ..errors import ConvergenceError, NoSteadyFlowError, ParameterError
+from ..trackers import (
+    ProgressTracker,
+    SaturationStop,
+    SnapshotTracker,
+    Tracker,
+    ValidityStop,
+)
 from . import equations as eq
 from .model import LocalCoefficients, ReducedModel
 
@@ -65,6 +74,10 @@ __all__ = [
     "growth_rate_fit",
     "wave_diagnostics",
 ]
+
+#: The 1D model's name of :class:`chuteflow.trackers.ValidityStop`: its validity is the range
+#: of the steady family.
+LeaveFamilyStop = ValidityStop
 
 
 def _closures(rm: ReducedModel, rho_c: np.ndarray, rho_f: np.ndarray, deriv: bool) -> tuple:
@@ -436,160 +449,6 @@ class RunInfo:
     left_family: str = ""
 
 
-class Tracker:
-    """Base class of what watches a run (in the style of py-pde's trackers).
-
-    :meth:`WaveSimulation.run` calls :meth:`initialize` before the first step, :meth:`handle`
-    after every accepted step (a returned string stops the run with that status, after every
-    tracker has seen the step), :meth:`left_family` when the density leaves the steady
-    family (return True to stop the run there instead of raising) and :meth:`finalize` at
-    the end.
-    """
-
-    def initialize(self, sim: WaveSimulation, initial: InitialState, t_end: float) -> None:
-        """Called once before the first step."""
-
-    def handle(self, sim: WaveSimulation, step: Step) -> str | None:
-        """Called after each accepted step; return a status to stop the run."""
-        return None
-
-    def left_family(self, sim: WaveSimulation, message: str) -> bool:
-        """Called when the density left the family; True stops the run instead of raising."""
-        return False
-
-    def finalize(self, sim: WaveSimulation, info: RunInfo) -> None:
-        """Called once at the end of the run."""
-
-
-class _Sampler(Tracker):
-    """A tracker acting at fixed times: ``count`` uniform times on [0, t_end] (both ends
-    included) or every ``interval`` (and at t_end)."""
-
-    def __init__(self, count: int | None = None, interval: float | None = None):
-        if (count is None) == (interval is None):
-            raise ParameterError("give exactly one of count and interval")
-        if count is not None and (int(count) != count or count < 2):
-            raise ParameterError(f"n_out = {count!r} must be at least 2")
-        if interval is not None and not (math.isfinite(interval) and interval > 0):
-            raise ParameterError(f"interval = {interval!r} must be a positive time")
-        self.count, self.interval = count, interval
-
-    def initialize(self, sim, initial, t_end):
-        if self.count is not None:
-            self.sample_times = np.linspace(0.0, t_end, int(self.count))
-        else:
-            self.sample_times = np.unique(np.r_[np.arange(0.0, t_end, self.interval), t_end])
-        self._next = 1
-        self.sample(sim, 0.0, initial.y)
-
-    def handle(self, sim, step):
-        ts, took = self.sample_times, False
-        while self._next < len(ts) and ts[self._next] <= step.t * (1 + 1e-14):
-            t = float(ts[self._next])
-            self.sample(sim, t, step.state(t))
-            self._next += 1
-            took = True
-        return self.check(sim) if took else None
-
-    def sample(self, sim, t: float, y: np.ndarray) -> None:
-        """Record the state ``y`` at time ``t``."""
-
-    def check(self, sim) -> str | None:
-        """After the samples of a step: a status to stop the run, or None."""
-        return None
-
-
-class SnapshotTracker(_Sampler):
-    """Store the state at ``count`` uniform times (or every ``interval``).
-
-    A run stopped by :class:`LeaveFamilyStop` also stores its last accepted state, at its own
-    time. ``times`` and ``states`` hold the snapshots.
-    """
-
-    def initialize(self, sim, initial, t_end):
-        self.times, self.states = [], []
-        super().initialize(sim, initial, t_end)
-
-    def sample(self, sim, t, y):
-        self.times.append(t)
-        self.states.append(np.array(y, copy=True))
-
-    def finalize(self, sim, info):
-        if info.status == "left_family":
-            self.sample(sim, info.t, info.y)
-
-
-class SaturationStop(_Sampler):
-    """Stop when the wave amplitude max|ρ̄ − ρ0| has settled.
-
-    The amplitude is sampled like the snapshots (``count`` or ``interval``). From the
-    ``min_samples``-th sample on, an unstable state (largest discrete growth rate σ > 0)
-    stops with status "saturated" once the amplitude exceeds 10× its start and changed by
-    less than ``tol`` relative over the last tenth of the samples; a stable one stops with
-    "decayed" once it fell below e⁻¹⁰ of its start.
-    """
-
-    def __init__(
-        self,
-        tol: float = 0.02,
-        count: int | None = None,
-        interval: float | None = None,
-        min_samples: int = 10,
-    ):
-        super().__init__(count, interval)
-        if not 0.0 < tol < 1.0:
-            raise ParameterError(f"saturation_tol = {tol!r} must be in (0, 1)")
-        self.tol, self.min_samples = float(tol), int(min_samples)
-
-    def initialize(self, sim, initial, t_end):
-        self.amplitudes, self._a0 = [], initial.amplitude
-        super().initialize(sim, initial, t_end)
-
-    def sample(self, sim, t, y):
-        self.amplitudes.append(wave_diagnostics(sim.solver, sim.rho0, y, 1)[0])
-
-    def check(self, sim):
-        if len(self.amplitudes) >= self.min_samples and _saturated(
-            np.array(self.amplitudes), self._a0, self.tol, sim.max_growth_rate
-        ):
-            return "saturated" if sim.max_growth_rate > 0 else "decayed"
-        return None
-
-
-class ProgressTracker(Tracker):
-    """Call ``callback(t, t_end)`` after every step."""
-
-    def __init__(self, callback: Callable[[float, float], None]):
-        self.callback = callback
-
-    def initialize(self, sim, initial, t_end):
-        self._t_end = float(t_end)
-
-    def handle(self, sim, step):
-        self.callback(step.t, self._t_end)
-
-
-class LeaveFamilyStop(Tracker):
-    """Stop (status "left_family", data kept) instead of raising when the density leaves the
-    range of the steady family, where the 1D model is undefined."""
-
-    def left_family(self, sim, message):
-        return True
-
-
-def _saturated(amps: np.ndarray, a0: float, tol: float, sigma: float) -> bool:
-    """Amplitude settled: grew (or decayed) well past its start and changed by less than
-    ``tol`` relative over the last tenth of the snapshots."""
-    n = len(amps)
-    w = max(n // 10, 3)
-    recent = amps[-w:]
-    if sigma > 0 and amps[-1] < 10 * a0:
-        return False
-    if sigma <= 0:
-        return amps[-1] < a0 * math.exp(-10.0)
-    return float(np.ptp(recent)) < tol * float(recent.max())
-
-
 class WaveSimulation:
     """Time stepper of the 1D model on a periodic slope, from a uniform state ρ0.
 
@@ -726,22 +585,37 @@ class WaveSimulation:
         return min((40.0 if sigma > 0 else 10.0) / max(rate, 1e-6), 1e6)
 
     # -- the stepper --------------------------------------------------------------------------
-    def run(self, initial: InitialState, t_end: float | None = None, trackers=()) -> RunInfo:
-        """Integrate from ``initial`` to ``t_end`` (default :meth:`default_t_end`).
+    def wave_amplitude(self, y: np.ndarray) -> float:
+        """max |ρ̄ − ρ0| of the state ``y``: the size of the wave (:class:`SaturationStop`)."""
+        return wave_diagnostics(self.solver, self.rho0, y, 1)[0]
 
-        Trackers (:class:`SnapshotTracker`, :class:`SaturationStop`, :class:`ProgressTracker`,
-        :class:`LeaveFamilyStop`, …) watch every accepted step and may stop the run.
+    def resolution(self, y: np.ndarray) -> dict[str, float]:
+        """Amplitude of the highest eighth of the density's Fourier modes relative to the
+        largest (``x_tail``; ``y_tail`` = 0: the model has no y), as
+        :class:`~chuteflow.trackers.ResolutionMonitor` asks."""
+        c = np.abs(np.fft.rfft(y[: self.solver.N] - self.rho0))[1:]
+        top = c.max() if c.size else 0.0
+        m = max(1, len(c) // 8)
+        return {"x_tail": float(c[-m:].max() / top) if top > 0 else 0.0, "y_tail": 0.0}
+
+    def run(self, initial: InitialState, time: float | None = None, trackers=()) -> RunInfo:
+        """Integrate from ``initial`` to ``time`` (default :meth:`default_t_end`).
+
+        Trackers (:mod:`chuteflow.trackers`: :class:`SnapshotTracker`, :class:`SaturationStop`,
+        :class:`ProgressTracker`, :class:`LeaveFamilyStop`, …) watch every accepted step and
+        may stop the run.
 
         Raises
         ------
         ParameterError
-            Bad ``t_end``.
+            Bad ``time``.
         NoSteadyFlowError
             The density left the range of the steady family and no tracker stops the run
             there.
         ConvergenceError
             The time integrator failed or needed more than ``max_steps`` steps.
         """
+        t_end = time
         auto = t_end is None
         if t_end is None:
             t_end = self.default_t_end()
@@ -783,7 +657,7 @@ class WaveSimulation:
                 if solver.out_of_range is None:
                     raise ConvergenceError(f"time integration failed at t = {ode.t:.6g}: {msg}")
                 left = self._left_message(ode.t)
-                stops = [tr.left_family(self, left) for tr in trackers]  # every tracker is told
+                stops = [tr.left_validity(self, left) for tr in trackers]  # every tracker is told
                 if not any(stops):
                     raise NoSteadyFlowError(left)
                 status = "left_family"
@@ -926,38 +800,42 @@ def simulate(
     rho0: float | None = None,
     nu0: float | None = None,
     n_cells: int | None = None,
-    t_end: float | None = None,
+    time: float | None = None,
     mode: int | None = None,
     amplitude: float = 1e-3,
     seed: int = 0,
     rtol: float = 1e-6,
-    n_out: int = 200,
+    snapshots: int = 200,
     saturation_tol: float = 0.02,
     progress: Callable[[float, float], None] | None = None,
     max_steps: int = 200000,
     method: str = "Radau",
     on_exit: str = "raise",
-    frame="wave",
+    frame_speed="wave",
+    trackers=(),
 ):
     """Integrate the 1D model in time from a perturbed uniform state; returns an xarray Dataset.
 
     A convenience wrapper of :class:`WaveSimulation` with a :class:`SnapshotTracker` of
-    ``n_out`` snapshots, a :class:`SaturationStop` when ``t_end`` is not given, a
+    ``snapshots`` snapshots, a :class:`SaturationStop` when ``time`` is not given, a
     :class:`ProgressTracker` for ``progress`` and a :class:`LeaveFamilyStop` for
-    ``on_exit="stop"``.
+    ``on_exit="stop"``. The names are those of :func:`chuteflow.dns.simulate` (``time``,
+    ``snapshots``, ``frame_speed``, ``progress``, ``trackers``).
 
     Parameters
     ----------
-    reduced, length, rho0, nu0, n_cells, rtol, max_steps, method, frame
+    reduced, length, rho0, nu0, n_cells, rtol, max_steps, method
         See :class:`WaveSimulation`.
-    t_end : float, optional
+    frame_speed : {"wave", "lab"} or float
+        The frame of the run (``frame`` of :class:`WaveSimulation`).
+    time : float, optional
         Final time (units √(σ/g)). Default: run until the wave amplitude saturates (changes
         by less than ``saturation_tol`` relative over the last 10 % of the run) or, for a
         stable state, until the perturbation has decayed by e⁻¹⁰; capped at 40 e-foldings
         of the fastest discrete mode.
     mode, amplitude, seed
         The initial perturbation, see :meth:`WaveSimulation.perturbed`.
-    n_out : int
+    snapshots : int
         Snapshots stored (uniform in time).
     saturation_tol : float
         Relative amplitude change that counts as saturated.
@@ -967,6 +845,8 @@ def simulate(
         What to do when the density leaves the steady family's range (the model is undefined
         there): raise :class:`NoSteadyFlowError`, or stop and return the run so far with
         ``status = "left_family"`` (the last snapshot is the last accepted state).
+    trackers : sequence of Tracker
+        More trackers (:mod:`chuteflow.trackers`), after the wrapper's own.
 
     Returns
     -------
@@ -989,29 +869,30 @@ def simulate(
     """
     if on_exit not in ("raise", "stop"):
         raise ParameterError(f"on_exit = {on_exit!r}: choose 'raise' or 'stop'")
-    if t_end is not None and not (math.isfinite(t_end) and t_end > 0):
-        raise ParameterError(f"time = {t_end!r} must be a positive number")
-    snapshots = SnapshotTracker(count=n_out)
-    trackers: list[Tracker] = [snapshots]
-    if t_end is None:
-        trackers.append(SaturationStop(saturation_tol, count=n_out))
+    if time is not None and not (math.isfinite(time) and time > 0):
+        raise ParameterError(f"time = {time!r} must be a positive number")
+    snaps = SnapshotTracker(count=snapshots)
+    tracking: list[Tracker] = [snaps]
+    if time is None:
+        tracking.append(SaturationStop(saturation_tol, count=snapshots))
     if progress is not None:
-        trackers.append(ProgressTracker(progress))
+        tracking.append(ProgressTracker(progress))
     if on_exit == "stop":
-        trackers.append(LeaveFamilyStop())
+        tracking.append(LeaveFamilyStop())
+    tracking.extend(trackers)
     sim = WaveSimulation(
         reduced,
         length,
         rho0=rho0,
         nu0=nu0,
         n_cells=n_cells,
-        frame=frame,
+        frame=frame_speed,
         rtol=rtol,
         method=method,
         max_steps=max_steps,
     )
-    info = sim.run(sim.perturbed(mode, amplitude, seed), t_end, trackers)
-    return sim.dataset(snapshots, info)
+    info = sim.run(sim.perturbed(mode, amplitude, seed), time, tracking)
+    return sim.dataset(snaps, info)
 
 
 def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 10.0) -> tuple[float, float]:
@@ -1034,7 +915,7 @@ def growth_rate_fit(ds, mode: int, t_max: float | None = None, factor: float = 1
     if stop < 3:
         raise ConvergenceError(
             f"growth_rate_fit: only {stop + 1} snapshots in the linear "
-            "window; store more snapshots (n_out) or shorten t_end"
+            "window; store more snapshots or shorten the time"
         )
     p = np.polyfit(t[sel], lnA[sel], 1)
     res = lnA[sel] - np.polyval(p, t[sel])

@@ -28,7 +28,9 @@ def waves(ctx: StageContext) -> None:
 
 def _growth_check(ctx, rm, coef, simulate, growth_rate_fit, WaveSolver):
     L, N, n = 40.0, 512, 1
-    ds = simulate(rm, L, rho0=coef.rho0, n_cells=N, mode=n, amplitude=1e-5, t_end=60.0, n_out=61, rtol=1e-8)
+    ds = simulate(
+        rm, L, rho0=coef.rho0, n_cells=N, mode=n, amplitude=1e-5, time=60.0, snapshots=61, rtol=1e-8
+    )
     rate, resid = growth_rate_fit(ds, n)
     k = 2 * math.pi * n / L
     disc = float(ds["growth_discrete"].sel(mode=n))
@@ -86,7 +88,7 @@ def _waves(ctx: StageContext) -> None:
         rho0=coef.rho0,
         n_cells=N,
         amplitude=1e-3,
-        n_out=200,
+        snapshots=200,
         on_exit="stop",
         progress=lambda t, te: ctx.progress(f"density waves, t = {t:.0f} / {te:.0f}"),
     )
@@ -132,7 +134,7 @@ def _waves(ctx: StageContext) -> None:
     # a stable state decays
     rm14 = reduced_model(14.0, ChuteModel(), nu0_min=0.06, nu0_max=0.16)
     c14 = rm14.coefficients(rm14.rho_at_nu0(0.1))
-    st = simulate(rm14, 100.0, rho0=c14.rho0, n_cells=256, amplitude=1e-3, n_out=60)
+    st = simulate(rm14, 100.0, rho0=c14.rho0, n_cells=256, amplitude=1e-3, snapshots=60)
     a14 = st["amplitude"].values
     ctx.report.check(
         "waves.stable_decays",
@@ -152,7 +154,7 @@ def _lc_check(ctx: StageContext, rm, coef, simulate) -> None:
     out = {}
     for f in (0.8, 1.25):
         L = f * coef.L_c
-        ds = simulate(rm, L, rho0=coef.rho0, n_cells=128, mode=1, amplitude=1e-3, t_end=400.0, n_out=41)
+        ds = simulate(rm, L, rho0=coef.rho0, n_cells=128, mode=1, amplitude=1e-3, time=400.0, snapshots=41)
         a = ds["amplitude"].values
         out[f] = (L, a[-1] / a[0], float(ds["growth_discrete"].values[0]))
     ok = out[0.8][1] < 1e-2 and out[1.25][1] > 1e2

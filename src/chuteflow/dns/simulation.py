@@ -1,0 +1,574 @@
+"""The simulation driver: :class:`DnsSimulation` steps a :class:`DnsState` under trackers.
+
+``DnsSimulation(flow, length, ...)`` fixes the grid, the frame, the time step and the initial
+state from a :class:`~chuteflow.steady.SteadyFlow` (as every stability function takes one);
+``run(trackers)`` steps BDF2 (:class:`~chuteflow.dns.stepper.Stepper`) with the trackers of
+:mod:`chuteflow.trackers` (the same as the 1D model's :class:`~chuteflow.reduced.WaveSimulation`)
+watching every step, recording ρ̄(ξ, t), Q(ξ, t), the resolution of the highest modes and
+full-field snapshots in the state; ``dataset(state)`` is the xarray result. The state saves
+and loads itself (:meth:`DnsState.save`, :meth:`DnsState.load`, atomic writes): a run killed
+at any moment (SIGKILL included) continues from its last checkpoint exactly as if never
+interrupted, trackers included (:meth:`chuteflow.trackers.Tracker.checkpoint`).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from .._files import atomic_write
+from ..errors import ConvergenceError, ParameterError
+from ..stability import OperatorCache, least_stable
+from ..steady import SteadyFlow, steady_tangent
+from ..trackers import WavePolicy
+from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
+from .discretisation import Discretisation
+from .setup import INITS, DnsSetup, check_setup, history_coefficients, initial_coefficients
+from .stepper import NewtonSettings, Stepper
+
+__all__ = ["DnsSimulation", "DnsState", "DnsStep"]
+
+
+@dataclass
+class DnsState:
+    """Where a run stands: the fields, the BDF2 history and everything recorded so far.
+
+    Attributes
+    ----------
+    C : ndarray
+        Coefficients (4, N + 1, M + 1) of s = ln ν, u, v, T at time ``t``.
+    prev : ndarray or None
+        The previous time level (ν, u, v, T) on the padded grid (BDF2's history).
+    t, step : float, int
+        Time reached and steps taken.
+    dt, h_prev : float
+        Next step's Δt (halved where Newton failed) and the last step's.
+    restart : bool
+        The next step is a BDF1 step (no usable history).
+    C_init : ndarray
+        Coefficients at t = 0.
+    amplitude : float
+        Size of the initial wave (max − min of ρ̄ over its mean; :class:`~chuteflow.trackers.SaturationStop`).
+    status : str
+        ``"running"``, ``"ok"`` (reached the end), a tracker's stop (``"saturated"``, …) or
+        ``"stopped at t = …: why"``.
+    wall : float
+        Wall-clock seconds spent so far (over every resumed part).
+    records : dict of lists
+        ``t``, ``rho``, ``Q``, ``x_tail``, ``y_tail`` every ``record_every`` steps;
+        ``snap_t``, ``snaps`` the full fields; ``newton``, ``krylov`` per step.
+    """
+
+    C: np.ndarray = field(repr=False)
+    prev: np.ndarray | None = field(repr=False)
+    t: float
+    step: int
+    dt: float
+    h_prev: float
+    restart: bool
+    C_init: np.ndarray = field(repr=False)
+    status: str = "running"
+    wall: float = 0.0
+    amplitude: float = 0.0
+    records: dict = field(default_factory=dict, repr=False)
+
+    RECORDS = ("t", "rho", "Q", "x_tail", "y_tail", "snap_t", "snaps", "newton", "krylov")
+
+    def __post_init__(self):
+        for k in self.RECORDS:
+            self.records.setdefault(k, [])
+
+    @property
+    def y(self) -> np.ndarray:
+        """The state trackers see (:mod:`chuteflow.trackers`): the coefficients."""
+        return self.C
+
+    def save(self, path: str | os.PathLike, key: str, trackers=()) -> None:
+        """Write the state (and the trackers' :meth:`~chuteflow.trackers.Tracker.checkpoint`)
+        atomically to ``path`` (.npz) under the run's ``key``."""
+        payload: dict = {
+            "key": np.array(key),
+            "C": self.C,
+            "C_init": self.C_init,
+            "prev": self.prev if self.prev is not None else np.zeros(0),
+            "scalars": np.array(
+                [self.t, self.step, self.dt, self.h_prev, float(self.restart), self.wall, self.amplitude]
+            ),
+            "status": np.array(self.status),
+            "trackers": np.array([type(tr).__name__ for tr in trackers]),
+        }
+        for k, v in self.records.items():
+            payload[f"rec_{k}"] = np.array(v)
+        for i, tr in enumerate(trackers):
+            for k, v in tr.checkpoint().items():
+                payload[f"tracker{i}_{k}"] = np.asarray(v)
+
+        def write(fh):
+            np.savez(fh, **payload)
+
+        atomic_write(Path(path), write)
+
+    @classmethod
+    def load(cls, path: str | os.PathLike, key: str, trackers=()) -> DnsState | None:
+        """The state saved at ``path`` under ``key`` (None if absent, unreadable or another
+        run's); the trackers get their saved data back when they are the same classes."""
+        try:
+            with np.load(Path(path), allow_pickle=False) as ck:
+                if str(ck["key"]) != key:
+                    return None
+                t, step, dt, h_prev, restart, wall, amp = (float(v) for v in ck["scalars"])
+                st = cls(
+                    C=ck["C"],
+                    prev=ck["prev"] if ck["prev"].size else None,
+                    t=t,
+                    step=int(step),
+                    dt=dt,
+                    h_prev=h_prev,
+                    restart=bool(restart),
+                    C_init=ck["C_init"],
+                    status=str(ck["status"]),
+                    wall=wall,
+                    amplitude=amp,
+                    records={k: list(ck[f"rec_{k}"]) for k in cls.RECORDS},
+                )
+                names = [str(n) for n in ck["trackers"]]
+                if names == [type(tr).__name__ for tr in trackers]:
+                    for i, tr in enumerate(trackers):
+                        pre = f"tracker{i}_"
+                        saved = {k[len(pre) :]: ck[k] for k in ck.files if k.startswith(pre)}
+                        if saved:
+                            tr.restore(saved)
+                return st
+        except (OSError, KeyError, ValueError):
+            return None
+
+
+class DnsStep:
+    """One accepted step (t_prev, t] as trackers see it (:mod:`chuteflow.trackers`)."""
+
+    def __init__(self, C_old: np.ndarray, C_new: np.ndarray, t_prev: float, t: float, number: int):
+        self._old, self.y = C_old, C_new
+        self.t_prev, self.t, self.number = float(t_prev), float(t), int(number)
+
+    def state(self, t: float) -> np.ndarray:
+        """Coefficients at ``t`` in [t_prev, t] (linear interpolation in time)."""
+        if self.t <= self.t_prev:
+            return self.y
+        w = (float(t) - self.t_prev) / (self.t - self.t_prev)
+        return (1.0 - w) * self._old + w * self.y
+
+
+class DnsSimulation:
+    """The time-dependent equations on a slope periodic in x, from a steady flow (docs/dns.md).
+
+    Parameters
+    ----------
+    flow : SteadyFlow
+        The steady flow (θ, ν0(0) and the closures are its).
+    length : float
+        Period L along the slope; the fundamental wavenumber is k = 2π/L.
+    time : float, optional
+        Simulated time; default two wave periods 2 × 2π/|Im α| of the least-stable mode.
+    n : int, optional
+        Chebyshev intervals N; default the resolution at which
+        :func:`chuteflow.stability.least_stable` converged at k = 2π/L.
+    modes : int, optional
+        Highest Fourier mode M; default 2 for ``init="mode"``, max(8, L/30) for noise.
+    dt : float, optional
+        Time step; default a hundredth of the wave period.
+    init : {"mode", "noise"}
+        Least-stable eigenmode at k = 2π/L, or random noise in the density (ŝ = δ ln ν
+        uniform in y) in modes 1 … M/2.
+    amplitude : float
+        Largest component of the initial perturbation.
+    seed : int
+        Random seed of the noise.
+    frame_speed : float, optional
+        Speed c of the frame ξ = x − ct of the run; default 0 from a mode, the eigenmode's
+        phase velocity from noise.
+    top : {"transport", "isothermal"}
+        Row of s = ln ν at the top node (:class:`~chuteflow.dns.Discretisation`).
+    relax : bool
+        Start from this grid's discrete steady state (:func:`~chuteflow.dns.relax_steady`).
+    snapshots : int
+        Full-field snapshots (equally spaced in time, both ends included).
+    record_every : int
+        Record ρ̄(x, t), Q(x, t) and the resolution every this many steps.
+    settings : NewtonSettings, optional
+        Newton–Krylov tolerances and preconditioner.
+    min_dt_fraction : float
+        Stop (status ``"stopped: ..."``) when Newton fails at Δt below this fraction of ``dt``.
+    wave_policy : WavePolicy, optional
+        How the wave at the end is judged (:func:`~chuteflow.trackers.wave_measures`).
+    """
+
+    def __init__(
+        self,
+        flow: SteadyFlow,
+        length: float,
+        *,
+        time: float | None = None,
+        n: int | None = None,
+        modes: int | None = None,
+        dt: float | None = None,
+        init: str = "mode",
+        amplitude: float = 1e-6,
+        seed: int = 0,
+        frame_speed: float | None = None,
+        top: str = "transport",
+        relax: bool = True,
+        snapshots: int = 6,
+        record_every: int = 1,
+        settings: NewtonSettings | None = None,
+        min_dt_fraction: float = 1e-3,
+        wave_policy: WavePolicy | None = None,
+    ):
+        if not isinstance(flow, SteadyFlow):
+            raise ParameterError(
+                f"flow = {type(flow).__name__}: a SteadyFlow (chuteflow.steady.solve_steady(theta, nu0))"
+            )
+        try:
+            length = float(length)
+        except (TypeError, ValueError):
+            raise ParameterError(f"length = {length!r}: a positive number of diameters") from None
+        if not (math.isfinite(length) and length > 0):
+            raise ParameterError(f"length = {length!r}: the period L must be a positive number of diameters")
+        if init not in INITS:
+            raise ParameterError(f"init = {init!r}: choose one of {INITS}")
+        if n is not None and not 8 <= int(n) <= 400:
+            raise ParameterError(f"ny = {n} is outside [8, 400]: Chebyshev intervals that resolve the layer")
+        if not (math.isfinite(min_dt_fraction) and 0 < min_dt_fraction <= 1):
+            raise ParameterError(f"min_dt_fraction = {min_dt_fraction!r} must be in (0, 1]")
+        self.flow = flow
+        k = 2.0 * math.pi / length
+        # the plain Chebyshev grid of the stability operator: the DNS grid is the same, so the
+        # linear phase compares discretisation with discretisation
+        plain = OperatorCache(mapped=False)
+        self.mode = (
+            least_stable(flow, k, cache=plain) if n is None else least_stable(flow, k, n=int(n), cache=plain)
+        )
+        period = 2.0 * math.pi / max(abs(self.mode.alpha.imag), 1e-12)
+        modes = (2 if init == "mode" else max(8, int(length / 30))) if modes is None else int(modes)
+        self.setup = DnsSetup(
+            theta=float(flow.theta),
+            nu0=float(flow.nu0),
+            length=length,
+            time=float(time) if time is not None else 2.0 * period,
+            n=int(n) if n is not None else int(self.mode.n),
+            modes=modes,
+            dt=float(dt) if dt is not None else period / 100.0,
+            init=str(init),
+            amplitude=float(amplitude),
+            seed=int(seed),
+            model=flow.model,
+            relax=bool(relax),
+            frame=float(frame_speed)
+            if frame_speed is not None
+            else (0.0 if init == "mode" else float(self.mode.wave_speed)),
+            top=str(top),
+            y_max=float(flow.y_max),
+            snapshots=int(snapshots),
+            record_every=int(record_every),
+        )
+        check_setup(self.setup)
+        s = self.setup
+        self.disc = Discretisation(
+            s.theta, s.model, s.length, flow.y_max, s.n, s.modes, frame=s.frame, top=s.top
+        )
+        self.stepper = Stepper(self.disc, settings)
+        self.min_dt_fraction = float(min_dt_fraction)
+        self.wave_policy = wave_policy or WavePolicy()
+        #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
+        #: whether :class:`~chuteflow.trackers.SaturationStop` waits for growth or decay).
+        self.max_growth_rate = float(self.mode.alpha.real)
+        self.relax_change = 0.0
+
+    # -- what trackers ask ----------------------------------------------------------------
+    def wave_amplitude(self, C: np.ndarray) -> float:
+        """(max − min of ρ̄) over its mean: the size of the wave."""
+        rho = self.disc.depth_integrals(C)[0]
+        return float((rho.max() - rho.min()) / rho.mean())
+
+    def resolution(self, C: np.ndarray) -> dict[str, float]:
+        """Tails of the x and y spectra (:func:`~chuteflow.dns.diagnostics.resolution_tails`)."""
+        return resolution_tails(self.disc, C)
+
+    def key(self) -> str:
+        """The run's key: a checkpoint is continued only by the run that wrote it."""
+        return self.setup.key()
+
+    # -- the state ---------------------------------------------------------------------------
+    def initial_state(self) -> DnsState:
+        """The state at t = 0 (the relaxed steady flow plus the perturbation)."""
+        s = self.setup
+        C, Cm, self.relax_change = initial_coefficients(self.disc, self.flow, self.mode, s, s.dt, s.relax)
+        prev = None if Cm is None else np.array(self.stepper.physical(Cm))
+        st = DnsState(
+            C=C,
+            prev=prev,
+            t=0.0,
+            step=0,
+            dt=s.dt,
+            h_prev=s.dt,
+            restart=prev is None,
+            C_init=C.copy(),
+            amplitude=self.wave_amplitude(C),
+        )
+        self._record(st)
+        self._snapshot(st)
+        return st
+
+    def _record(self, st: DnsState) -> None:
+        rho, Q = self.disc.depth_integrals(st.C)
+        tails = self.resolution(st.C)
+        r = st.records
+        r["t"].append(st.t)
+        r["rho"].append(rho)
+        r["Q"].append(Q)
+        r["x_tail"].append(tails["x_tail"])
+        r["y_tail"].append(tails["y_tail"])
+
+    def _snapshot(self, st: DnsState) -> None:
+        s = np.stack([self.disc.to_physical(st.C[i]) for i in range(4)])
+        s[0] = np.exp(s[0])
+        st.records["snap_t"].append(st.t)
+        st.records["snaps"].append(s)
+
+    # -- the time loop ---------------------------------------------------------------------------
+    def run(
+        self,
+        trackers=(),
+        *,
+        state: DnsState | None = None,
+        checkpoint: str | os.PathLike | None = None,
+        checkpoint_every: float = 30.0,
+    ) -> DnsState:
+        """Step to ``time`` (or until a tracker stops the run); returns the final state.
+
+        ``state``: continue from it (default: the checkpoint at ``checkpoint`` if it holds
+        this run, else :meth:`initial_state`). With ``checkpoint`` the state is saved every
+        ``checkpoint_every`` seconds of wall time and at the end (also when the run stops
+        early: the partial result is kept); it is removed once the run has finished.
+        A Newton failure halves Δt (BDF1 restart) down to ``min_dt_fraction`` × ``dt``, then
+        the run stops with status ``"stopped at t = …: why"`` and the data so far.
+        """
+        s, disc, stepper = self.setup, self.disc, self.stepper
+        trackers = list(trackers)
+        key = self.key()
+        if state is None and checkpoint is not None and Path(checkpoint).exists():
+            # the trackers are initialised first and then given their saved data back
+            probe = self.initial_state()
+            for tr in trackers:
+                tr.initialize(self, probe, s.time)
+            state = DnsState.load(checkpoint, key, trackers) or probe
+        elif state is None:
+            state = self.initial_state()
+            for tr in trackers:
+                tr.initialize(self, state, s.time)
+        else:
+            for tr in trackers:
+                tr.initialize(self, state, s.time)
+        state.status = "running"
+        n_steps = int(math.ceil(s.time / s.dt - 1e-9))
+        snap_steps = sorted(
+            {int(round(i * n_steps / max(s.snapshots - 1, 1))) for i in range(max(s.snapshots, 1))}
+        )
+        start = _time.perf_counter()
+        wall0 = state.wall
+        last_ck = start
+        ok_since_change = 0
+        stop: str | None = None
+        while state.t < s.time * (1 - 1e-12):
+            h = min(state.dt, s.time - state.t)
+            C = state.C
+            now_phys = stepper.physical(C)
+            first = state.restart or state.prev is None
+            prev = tuple(state.prev) if state.prev is not None else now_phys
+            guess = None
+            if not first and state.prev is not None:
+                # (from the stored level, so that a resumed run takes the same steps)
+                C_prev = history_coefficients(disc, tuple(state.prev))
+                # linear extrapolation in time: Newton's starting point
+                guess = C + (h / state.h_prev) * (C - C_prev)
+            try:
+                C_new, info = stepper.step(
+                    C, (now_phys, prev), h, first=first, guess=guess, ratio=h / state.h_prev
+                )
+            except ConvergenceError as exc:
+                state.dt *= 0.5
+                state.restart = True
+                stepper.reset()
+                if state.dt < self.min_dt_fraction * s.dt:
+                    stop = f"stopped at t = {state.t:.6g}: {exc}"
+                    break
+                continue
+            if not np.all(np.isfinite(C_new)):
+                stop = f"stopped at t = {state.t:.6g}: non-finite fields (the flow left the closures' range)"
+                break
+            t_prev = state.t
+            state.prev, state.C = np.array(now_phys), C_new
+            state.h_prev = h
+            state.restart = False
+            state.t += h
+            state.step += 1
+            state.records["newton"].append(info.newton)
+            state.records["krylov"].append(info.krylov)
+            ok_since_change += 1
+            if state.dt < s.dt and ok_since_change >= 20:
+                state.dt, ok_since_change = min(2 * state.dt, s.dt), 0
+            if state.step % s.record_every == 0 or state.t >= s.time * (1 - 1e-12):
+                self._record(state)
+            snaps_t = state.records["snap_t"]
+            if any(abs(state.t - k * s.dt) < 0.5 * s.dt for k in snap_steps[1:]) and (
+                not snaps_t or state.t - snaps_t[-1] > 0.5 * s.dt
+            ):
+                self._snapshot(state)
+            step = DnsStep(C, C_new, t_prev, state.t, state.step)
+            stops = [r for r in [tr.handle(self, step) for tr in trackers] if r]
+            if checkpoint is not None and _time.perf_counter() - last_ck > checkpoint_every:
+                last_ck = _time.perf_counter()
+                state.wall = wall0 + last_ck - start
+                state.save(checkpoint, key, trackers)
+            if stops:
+                stop = stops[0]
+                break
+        state.wall = wall0 + _time.perf_counter() - start
+        state.status = stop or "ok"
+        if state.records["t"][-1] < state.t:
+            self._record(state)
+        snaps_t = state.records["snap_t"]
+        if snaps_t and snaps_t[-1] < state.t - 0.5 * s.dt:
+            self._snapshot(state)
+        for tr in trackers:
+            tr.finalize(self, state)
+        if checkpoint is not None:
+            if state.status.startswith("stopped"):
+                state.save(checkpoint, key, trackers)  # the partial run is kept
+            elif Path(checkpoint).exists():
+                Path(checkpoint).unlink()
+        return state
+
+    # -- the result -----------------------------------------------------------------------------
+    def dataset(self, state: DnsState) -> xr.Dataset:
+        """The run as an :class:`xarray.Dataset` (see :func:`chuteflow.dns.simulate`)."""
+        disc, setup, flow, mode = self.disc, self.setup, self.flow, self.mode
+        r = state.records
+        t = np.asarray(r["t"], dtype=float)
+        rho = np.asarray(r["rho"])
+        Q = np.asarray(r["Q"])
+        newton = r["newton"]
+        x = disc.x
+        # mode-1 coefficient of ρ̄(x): amplitude of the wave e^{ikx}
+        A = (
+            np.fft.rfft(rho, axis=-1)[:, 1] / disc.nxp
+            if disc.nxp > 2 and rho.size
+            else np.zeros(len(t), complex)
+        )
+        mass = rho.mean(axis=-1) * setup.length if rho.size else np.zeros(0)
+        k = 2.0 * math.pi / setup.length
+        # linear phase: the records while the wave is below 1e-3 of the mean ρ̄ (all, from a mode)
+        if setup.init == "mode":
+            lin = np.arange(len(t)) >= 1
+        else:
+            rel = np.abs(A) / (rho.mean(axis=-1) + 1e-300)
+            lin = (t >= 0.2 * t[-1] if len(t) else np.zeros(0, bool)) & (rel < 1e-3)
+        meas = measure_mode(t[lin], A[lin], k)
+        # back to the lab frame: a phase e^{ik(ξ − c' t)} with ξ = x − c t travels at c + c'
+        meas["phase_velocity"] += setup.frame
+        alpha_dns = complex(math.nan, math.nan)
+        if setup.init == "mode" and lin.sum() > 2 and np.all(np.abs(A[lin]) > 0):
+            dts = np.diff(t[lin])
+            G = A[lin][1:] / A[lin][:-1]
+            same = np.abs(dts - setup.dt) < 1e-9 * setup.dt
+            if same.any():
+                gm = np.exp(np.mean(np.log(G[same])))
+                alpha_dns = bdf2_eigenvalue(gm, setup.dt) - 1j * k * setup.frame
+        mass_drift = float(np.max(np.abs(mass - mass[0])) / mass[0]) if mass.size else math.nan
+        change = float(np.max(np.abs(state.C[:, :, 0] - state.C_init[:, :, 0])))
+        sn = np.asarray(r["snaps"]) if r["snaps"] else np.zeros((0, 4, disc.n + 1, disc.nxp))
+        waves = wave_measures(t, rho, setup.length, setup.frame, status=state.status, policy=self.wave_policy)
+        x_tail = np.asarray(r["x_tail"], dtype=float)
+        y_tail = np.asarray(r["y_tail"], dtype=float)
+        attrs = {
+            "theta": setup.theta,
+            "nu0": setup.nu0,
+            "length": setup.length,
+            "k": k,
+            "ny": setup.n,
+            "nx": 2 * setup.modes + 1,
+            "modes": setup.modes,
+            "nx_padded": disc.nxp,
+            "dt": setup.dt,
+            "time_end": float(t[-1]) if len(t) else 0.0,
+            "init": setup.init,
+            "amplitude": setup.amplitude,
+            "seed": setup.seed,
+            "frame_speed": setup.frame,
+            "top": setup.top,
+            "y_max": flow.y_max,
+            "growth_rate": meas["growth_rate"],
+            "phase_velocity": meas["phase_velocity"],
+            "alpha_re": float(mode.alpha.real),
+            "alpha_im": float(mode.alpha.imag),
+            "alpha_n": int(mode.n),
+            "alpha_dns_re": float(alpha_dns.real),
+            "alpha_dns_im": float(alpha_dns.imag),
+            "mass_drift": mass_drift,
+            "mean_flow_change": change,
+            "status": state.status,
+            "steps": len(newton),
+            "newton_mean": float(np.mean(newton)) if newton else 0.0,
+            "krylov_mean": float(np.mean(r["krylov"])) if r["krylov"] else 0.0,
+            "wall_time": float(state.wall),
+            "time_per_step": float(state.wall / max(len(newton), 1)),
+            # dQ0/dρ̄0 of the steady family at fixed θ (eq. (B 6), the k → 0 limit of the phase
+            # velocity) — not the eigenmode's phase velocity at k = 2π/L, which is stored apart
+            "kinematic_wave_speed": float(steady_tangent(flow)["dQ_drho"]),
+            "mode_phase_velocity": float(mode.wave_speed),
+            "rho_bar0": flow.rho_bar,
+            "Q0": flow.Q,
+            "x_tail": float(x_tail.max()) if x_tail.size else 0.0,
+            "y_tail": float(y_tail.max()) if y_tail.size else 0.0,
+            "x_tail_end": float(x_tail[-1]) if x_tail.size else 0.0,
+            "y_tail_end": float(y_tail[-1]) if y_tail.size else 0.0,
+            "steady_relaxation": self.relax_change,
+            **waves,
+            **{f"model_{k_}": v for k_, v in setup.model.attrs().items()},
+        }
+        empty = np.zeros((0, disc.n + 1, disc.nxp))
+        return xr.Dataset(
+            {
+                "rho_bar": (("time", "x"), rho, {"long_name": "ρ̄ = ∫ν dy (with the isothermal tail)"}),
+                "Q": (("time", "x"), Q, {"long_name": "Q = ∫νu dy"}),
+                "mass": (("time",), mass, {"long_name": "∫∫ν dy dx"}),
+                "amplitude_re": (("time",), A.real, {"long_name": "Re of the k = 2π/L coefficient of ρ̄"}),
+                "amplitude_im": (("time",), A.imag, {"long_name": "Im of the k = 2π/L coefficient of ρ̄"}),
+                "x_tail": (
+                    ("time",),
+                    x_tail,
+                    {"long_name": "highest x modes / largest (amplitude)", "units": "1"},
+                ),
+                "y_tail": (
+                    ("time",),
+                    y_tail,
+                    {"long_name": "highest Chebyshev coefficients / largest", "units": "1"},
+                ),
+                "nu": (("snapshot_time", "y", "x"), sn[:, 0] if len(sn) else empty),
+                "u": (("snapshot_time", "y", "x"), sn[:, 1] if len(sn) else empty),
+                "v": (("snapshot_time", "y", "x"), sn[:, 2] if len(sn) else empty),
+                "T": (("snapshot_time", "y", "x"), sn[:, 3] if len(sn) else empty),
+            },
+            coords={
+                "time": t,
+                "x": ("x", x, {"long_name": f"ξ = x − {setup.frame:g} t (the frame of the run)"}),
+                "y": disc.grid.y,
+                "snapshot_time": np.asarray(r["snap_t"], dtype=float),
+            },
+            attrs=attrs,
+        )

@@ -1,0 +1,226 @@
+"""The saturated density waves mapped over flows: one run from noise to saturation per flow.
+
+:func:`map_waves` runs :func:`chuteflow.dns.simulate` from small noise at each (θ, ν0(0)) of a
+list until the wave's amplitude settles (:class:`~chuteflow.trackers.SaturationStop`) or the
+time runs out, in parallel over the flows (a process pool), each run written to its own
+NetCDF file in ``out_dir`` with its checkpoint beside it: a killed map continues where every
+run stood, and a finished run is read back instead of re-run. The result has, per flow, the
+wave at the end (:func:`~chuteflow.trackers.wave_measures`: verdict, min/max of ρ̄ relative to
+its mean, wave speed, wavelength that won, time to saturate), its shape ρ̄(ξ)/⟨ρ̄⟩ − 1 in the
+co-moving frame (crest at L/2), next to the linear growth rate and phase velocity of the
+fundamental k = 2π/L, the mass drift and the resolution tails.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import xarray as xr
+
+from ..closures import ChuteModel
+from ..errors import ParameterError
+
+__all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
+
+#: Per-flow scalars of :func:`map_waves` (and of ``chuteflow waves --json``).
+WAVE_KEYS = (
+    "verdict",
+    "rho_min_rel",
+    "rho_max_rel",
+    "wave_speed",
+    "wavelength",
+    "t_saturation",
+    "time_end",
+    "growth_rate_linear",
+    "phase_velocity_linear",
+    "kinematic_wave_speed",
+    "mass_drift",
+    "x_tail",
+    "y_tail",
+    "status",
+    "steps",
+    "wall_time",
+)
+
+
+@dataclass(frozen=True)
+class WaveMapSettings:
+    """One run per flow: the grid, the time and the stop (all runs alike).
+
+    Attributes
+    ----------
+    length : float
+        Period L.
+    time : float
+        Longest simulated time (the run stops earlier once saturated).
+    dt : float
+        Time step.
+    modes, n : int
+        Highest Fourier mode M and Chebyshev intervals N.
+    amplitude, seed : float, int
+        The initial noise.
+    saturation_tol : float
+        :class:`~chuteflow.trackers.SaturationStop`'s tolerance.
+    resolution_tol : float
+        Tolerance of the resolution tails.
+    """
+
+    length: float = 1000.0
+    time: float = 30000.0
+    dt: float = 4.0
+    modes: int = 32
+    n: int = 80
+    amplitude: float = 1e-3
+    seed: int = 0
+    saturation_tol: float = 0.02
+    resolution_tol: float = 1e-4
+
+    def __post_init__(self):
+        for name in ("length", "time", "dt"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v > 0):
+                raise ParameterError(f"{name} = {v!r} must be a positive number")
+        if not 0 < self.saturation_tol < 1:
+            raise ParameterError(f"saturation_tol = {self.saturation_tol!r} must be in (0, 1)")
+
+
+def _name(theta: float, nu0: float) -> str:
+    return f"theta{theta:g}_nu0{nu0:g}"
+
+
+def _one(theta: float, nu0: float, model_dict: dict, s: WaveMapSettings, out_dir: str | None) -> dict:
+    """Run (or read back) the wave at one flow; returns its scalars and shape."""
+    from ..steady import solve_steady
+    from .api import simulate, summary
+
+    model = ChuteModel(**model_dict)
+    out = None if out_dir is None else Path(out_dir) / f"{_name(theta, nu0)}.nc"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        flow = solve_steady(theta, nu0, model)
+        if out is not None and out.exists() and not Path(str(out) + ".checkpoint.npz").exists():
+            ds: xr.Dataset | None = xr.load_dataset(out, engine="h5netcdf")
+            assert ds is not None
+            done = ds.attrs.get("map_settings") == repr(s) and not str(ds.attrs["status"]).startswith(
+                "stopped"
+            )
+            if not done:
+                ds = None
+        else:
+            ds = None
+        if ds is None:
+            ds = simulate(
+                flow,
+                s.length,
+                time=s.time,
+                dt=s.dt,
+                modes=s.modes,
+                n=s.n,
+                init="noise",
+                amplitude=s.amplitude,
+                seed=s.seed,
+                snapshots=11,
+                record_every=max(1, int(round(s.time / s.dt / 2000))),
+                saturation_tol=s.saturation_tol,
+                resolution_tol=s.resolution_tol,
+            )
+            ds.attrs["map_settings"] = repr(s)
+            if out is not None:
+                out.parent.mkdir(parents=True, exist_ok=True)
+                ds.to_netcdf(out, engine="h5netcdf")
+    sm = summary(ds)
+    rho = ds["rho_bar"].values[-1]
+    shape = rho / rho.mean() - 1.0
+    shape = np.roll(shape, len(shape) // 2 - int(np.argmax(shape)))  # crest at L/2
+    row = {k: sm.get(k) for k in WAVE_KEYS}
+    row["growth_rate_linear"] = sm["alpha_re"]
+    row["phase_velocity_linear"] = sm["mode_phase_velocity"]
+    return {"theta": theta, "nu0": nu0, **row, "shape": shape, "xi": ds["x"].values}
+
+
+def map_waves(
+    points: Sequence[tuple[float, float]],
+    settings: WaveMapSettings | None = None,
+    *,
+    model: ChuteModel | None = None,
+    out_dir: str | os.PathLike | None = None,
+    workers: int = 1,
+    progress: Callable[[int, int, dict], None] | None = None,
+) -> xr.Dataset:
+    """The saturated waves at the flows ``points`` = [(θ, ν0(0)), …] (see the module notes).
+
+    Parameters
+    ----------
+    points : sequence of (float, float)
+        Inclination (degrees) and floor density of each steady flow.
+    settings : WaveMapSettings
+        The runs' grid, time and stop.
+    model : ChuteModel, optional
+        Closures (the paper's defaults).
+    out_dir : path, optional
+        One NetCDF file per flow (and its checkpoint while it runs): a map run again continues.
+    workers : int
+        Processes running flows at once (1: in this process).
+    progress : callable, optional
+        ``progress(done, total, row)`` after each flow.
+
+    Returns
+    -------
+    xarray.Dataset
+        Dimension ``point`` (and ``xi`` for the shapes): ``theta``, ``nu0`` and the scalars of
+        :data:`WAVE_KEYS` per flow, ``shape(point, xi)`` = ρ̄/⟨ρ̄⟩ − 1 at the end, crest at L/2;
+        the settings and the model as attributes.
+    """
+    s = settings or WaveMapSettings()
+    model = model or ChuteModel()
+    pts = [(float(a), float(b)) for a, b in points]
+    if not pts:
+        raise ParameterError("points: give at least one (theta, nu0)")
+    if int(workers) != workers or workers < 1:
+        raise ParameterError(f"workers = {workers!r} must be a positive integer")
+    md = model.to_dict()
+    od = None if out_dir is None else str(out_dir)
+    rows: dict[int, dict] = {}
+    if workers == 1 or len(pts) == 1:
+        for i, (th, nu) in enumerate(pts):
+            rows[i] = _one(th, nu, md, s, od)
+            if progress is not None:
+                progress(len(rows), len(pts), rows[i])
+    else:
+        with ProcessPoolExecutor(max_workers=int(workers)) as ex:
+            futs = {ex.submit(_one, th, nu, md, s, od): i for i, (th, nu) in enumerate(pts)}
+            for f in as_completed(futs):
+                rows[futs[f]] = f.result()
+                if progress is not None:
+                    progress(len(rows), len(pts), rows[futs[f]])
+    ordered = [rows[i] for i in range(len(pts))]
+    data: dict[str, tuple] = {
+        k: (
+            ("point",),
+            np.array([r[k] for r in ordered], dtype=object if k in ("verdict", "status") else float),
+        )
+        for k in WAVE_KEYS
+    }
+    for k in ("verdict", "status"):
+        data[k] = (("point",), np.array([str(r[k]) for r in ordered]))
+    data["shape"] = (("point", "xi"), np.array([r["shape"] for r in ordered]), {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
+    return xr.Dataset(
+        data,
+        coords={
+            "theta": ("point", [p[0] for p in pts], {"units": "degree"}),
+            "nu0": ("point", [p[1] for p in pts]),
+            "xi": ("xi", ordered[0]["xi"], {"long_name": "ξ, crest at L/2", "units": "sigma"}),
+        },
+        attrs={
+            "title": "saturated density waves of the full equations (chuteflow.dns.map_waves)",
+            **{f"setting_{k}": v for k, v in s.__dict__.items()},
+            **{f"model_{k}": v for k, v in model.attrs().items()},
+        },
+    )

@@ -1,0 +1,396 @@
+"""What watches a time-dependent run, shared by both models' steppers.
+
+The simulation of the full equations (:class:`chuteflow.dns.DnsSimulation`) and that of the
+1D model (:class:`chuteflow.reduced.WaveSimulation`) step in time the same way (in the style
+of py-pde's ``solve(..., tracker=[...])``): before the first step every tracker's
+:meth:`Tracker.initialize` is called, after every accepted step its :meth:`Tracker.handle`
+(a returned string stops the run with that status, after every tracker has seen the step),
+:meth:`Tracker.left_validity` when the state leaves the range where the model is defined
+(return True to stop there with the data kept instead of raising), and :meth:`Tracker.finalize`
+at the end. A resumable run (the DNS) stores :meth:`Tracker.checkpoint` with its state and
+gives it back through :meth:`Tracker.restore`, so a tracker resumed after SIGKILL continues
+as if never interrupted.
+
+This module is layer-neutral: it imports nothing of the pipeline. What a tracker asks of a
+simulation ``sim`` is duck-typed:
+
+* ``sim.wave_amplitude(y)`` → float, the size of the wave in the state ``y``
+  (:class:`SaturationStop`);
+* ``sim.max_growth_rate`` → float, the largest linear growth rate of the run's modes
+  (:class:`SaturationStop`);
+* ``sim.resolution(y)`` → dict with ``x_tail`` and ``y_tail``, the amplitude of the highest
+  modes relative to the largest (:class:`ResolutionMonitor`).
+
+and of a step ``step``: ``step.t_prev``, ``step.t``, ``step.number``, ``step.y`` (the state at
+its end) and ``step.state(t)`` (the state at ``t`` in [t_prev, t]).
+
+:func:`wave_measures` judges a run's end from its records of ρ̄(t, ξ) the same way for both
+models: the saturated amplitude, wave speed, wavelength, time to saturate and the verdict.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .errors import ParameterError
+
+__all__ = [
+    "Tracker",
+    "Sampler",
+    "SnapshotTracker",
+    "SaturationStop",
+    "ProgressTracker",
+    "ValidityStop",
+    "ResolutionMonitor",
+    "ResolutionWarning",
+    "saturated",
+    "VERDICTS",
+    "WavePolicy",
+    "wave_measures",
+]
+
+#: What became of a wave (``verdict`` of :func:`wave_measures`).
+VERDICTS = ("saturated", "coarsening", "growing", "decaying", "left_validity", "stopped")
+
+
+class ResolutionWarning(UserWarning):
+    """The highest resolved modes of a run carry more than the tolerance."""
+
+
+class Tracker:
+    """Base class of what watches a run (see the module's notes)."""
+
+    def initialize(self, sim: Any, initial: Any, t_end: float) -> None:
+        """Called once before the first step (``initial.y`` the state, ``initial.t`` its time)."""
+
+    def handle(self, sim: Any, step: Any) -> str | None:
+        """Called after each accepted step; return a status to stop the run."""
+        return None
+
+    def left_validity(self, sim: Any, message: str) -> bool:
+        """Called when the state left the model's validity; True stops the run instead of raising."""
+        return False
+
+    def finalize(self, sim: Any, info: Any) -> None:
+        """Called once at the end of the run."""
+
+    def checkpoint(self) -> dict[str, np.ndarray]:
+        """What the tracker has gathered, as arrays (saved with a resumable run's state)."""
+        return {}
+
+    def restore(self, saved: dict[str, np.ndarray]) -> None:
+        """Take back what :meth:`checkpoint` returned (after :meth:`initialize`)."""
+
+
+class Sampler(Tracker):
+    """A tracker acting at fixed times: ``count`` uniform times on [0, t_end] (both ends
+    included) or every ``interval`` (and at t_end)."""
+
+    def __init__(self, count: int | None = None, interval: float | None = None):
+        if (count is None) == (interval is None):
+            raise ParameterError("give exactly one of count and interval")
+        if count is not None and (int(count) != count or count < 2):
+            raise ParameterError(f"snapshots = {count!r} must be at least 2 (both ends of the run)")
+        if interval is not None and not (math.isfinite(interval) and interval > 0):
+            raise ParameterError(f"interval = {interval!r} must be a positive time")
+        self.count, self.interval = count, interval
+
+    def initialize(self, sim, initial, t_end):
+        if self.count is not None:
+            self.sample_times = np.linspace(0.0, t_end, int(self.count))
+        else:
+            self.sample_times = np.unique(np.r_[np.arange(0.0, t_end, self.interval), t_end])
+        self._next = 1
+        self.sample(sim, 0.0, initial.y)
+
+    def handle(self, sim, step):
+        ts, took = self.sample_times, False
+        while self._next < len(ts) and ts[self._next] <= step.t * (1 + 1e-14):
+            t = float(ts[self._next])
+            self.sample(sim, t, step.state(t))
+            self._next += 1
+            took = True
+        return self.check(sim) if took else None
+
+    def sample(self, sim, t: float, y: np.ndarray) -> None:
+        """Record the state ``y`` at time ``t``."""
+
+    def check(self, sim) -> str | None:
+        """After the samples of a step: a status to stop the run, or None."""
+        return None
+
+    def checkpoint(self):
+        return {"next": np.array(self._next)}
+
+    def restore(self, saved):
+        self._next = int(saved["next"])
+
+
+class SnapshotTracker(Sampler):
+    """Store the state at ``count`` uniform times (or every ``interval``).
+
+    A run stopped by :class:`ValidityStop` also stores its last accepted state, at its own
+    time. ``times`` and ``states`` hold the snapshots.
+    """
+
+    def initialize(self, sim, initial, t_end):
+        self.times, self.states = [], []
+        super().initialize(sim, initial, t_end)
+
+    def sample(self, sim, t, y):
+        self.times.append(t)
+        self.states.append(np.array(y, copy=True))
+
+    def finalize(self, sim, info):
+        if info.status in ("left_validity", "left_family"):
+            self.sample(sim, info.t, info.y)
+
+    def checkpoint(self):
+        return {**super().checkpoint(), "times": np.array(self.times), "states": np.array(self.states)}
+
+    def restore(self, saved):
+        super().restore(saved)
+        self.times, self.states = list(saved["times"]), list(saved["states"])
+
+
+def saturated(amps: np.ndarray, a0: float, tol: float, sigma: float) -> bool:
+    """Amplitude settled: grew (or decayed) well past its start and changed by less than
+    ``tol`` relative over the last tenth of the samples (at least 3)."""
+    n = len(amps)
+    w = max(n // 10, 3)
+    recent = amps[-w:]
+    if sigma > 0 and amps[-1] < 10 * a0:
+        return False
+    if sigma <= 0:
+        return bool(amps[-1] < a0 * math.exp(-10.0))
+    return float(np.ptp(recent)) < tol * float(recent.max())
+
+
+class SaturationStop(Sampler):
+    """Stop when the wave amplitude ``sim.wave_amplitude(y)`` has settled.
+
+    The amplitude is sampled like the snapshots (``count`` or ``interval``). From the
+    ``min_samples``-th sample on, an unstable state (``sim.max_growth_rate`` > 0) stops with
+    status "saturated" once the amplitude exceeds 10× its start (``initial.amplitude``) and
+    changed by less than ``tol`` relative over the last tenth of the samples; a stable one
+    stops with "decayed" once it fell below e⁻¹⁰ of its start.
+    """
+
+    def __init__(
+        self,
+        tol: float = 0.02,
+        count: int | None = None,
+        interval: float | None = None,
+        min_samples: int = 10,
+    ):
+        super().__init__(count, interval)
+        if not 0.0 < tol < 1.0:
+            raise ParameterError(f"saturation_tol = {tol!r} must be in (0, 1)")
+        self.tol, self.min_samples = float(tol), int(min_samples)
+
+    def initialize(self, sim, initial, t_end):
+        self.amplitudes: list[float] = []
+        self._a0 = float(initial.amplitude)
+        super().initialize(sim, initial, t_end)
+
+    def sample(self, sim, t, y):
+        self.amplitudes.append(float(sim.wave_amplitude(y)))
+
+    def check(self, sim):
+        if len(self.amplitudes) >= self.min_samples and saturated(
+            np.array(self.amplitudes), self._a0, self.tol, sim.max_growth_rate
+        ):
+            return "saturated" if sim.max_growth_rate > 0 else "decayed"
+        return None
+
+    def checkpoint(self):
+        return {**super().checkpoint(), "amplitudes": np.array(self.amplitudes)}
+
+    def restore(self, saved):
+        super().restore(saved)
+        self.amplitudes = [float(a) for a in saved["amplitudes"]]
+
+
+class ProgressTracker(Tracker):
+    """Call ``callback(t, t_end)`` after every step (e.g. a progress bar's update)."""
+
+    def __init__(self, callback: Callable[[float, float], None]):
+        self.callback = callback
+
+    def initialize(self, sim, initial, t_end):
+        self._t_end = float(t_end)
+
+    def handle(self, sim, step):
+        self.callback(step.t, self._t_end)
+
+
+class ValidityStop(Tracker):
+    """Stop (status "left_validity", data kept) instead of raising when the state leaves the
+    range where the model is defined (the 1D model: the steady family's densities)."""
+
+    def left_validity(self, sim, message):
+        return True
+
+
+class ResolutionMonitor(Tracker):
+    """Watch the amplitude of the highest resolved modes, ``sim.resolution(y)``.
+
+    Every ``every`` steps the largest ``x_tail`` and ``y_tail`` (amplitude of the highest
+    modes relative to the largest, see the simulation's ``resolution``) are updated in
+    :attr:`x_tail` and :attr:`y_tail`. When one of them rises above ``tol``: with
+    ``action="warn"`` a :class:`ResolutionWarning` (once per direction), with ``"stop"`` the
+    run stops with status ``"under-resolved"`` (its data kept: rerun finer).
+    """
+
+    def __init__(self, tol: float = 1e-4, *, every: int = 10, action: str = "warn"):
+        if not (math.isfinite(tol) and 0 < tol < 1):
+            raise ParameterError(f"resolution_tol = {tol!r} must be in (0, 1): a relative amplitude")
+        if int(every) != every or every < 1:
+            raise ParameterError(f"every = {every!r} must be a positive number of steps")
+        if action not in ("warn", "stop"):
+            raise ParameterError(f"action = {action!r}: choose 'warn' or 'stop'")
+        self.tol, self.every, self.action = float(tol), int(every), action
+        self.x_tail, self.y_tail = 0.0, 0.0
+        self._warned: set[str] = set()
+
+    def initialize(self, sim, initial, t_end):
+        self._measure(sim, initial.y)
+
+    def handle(self, sim, step):
+        if step.number % self.every:
+            return None
+        return self._measure(sim, step.y)
+
+    def finalize(self, sim, info):
+        self._measure(sim, info.y)
+
+    def _measure(self, sim, y) -> str | None:
+        r = sim.resolution(y)
+        self.x_tail = max(self.x_tail, float(r["x_tail"]))
+        self.y_tail = max(self.y_tail, float(r["y_tail"]))
+        for d, v in (("x", self.x_tail), ("y", self.y_tail)):
+            if v > self.tol and d not in self._warned:
+                self._warned.add(d)
+                if self.action == "stop":
+                    return "under-resolved"
+                warnings.warn(
+                    f"the highest {d} modes carry {v:.1e} of the largest (tolerance {self.tol:g}): "
+                    f"the run is not resolved in {d}; rerun with a finer {'nx' if d == 'x' else 'ny'}",
+                    ResolutionWarning,
+                    stacklevel=2,
+                )
+        return None
+
+    def checkpoint(self):
+        return {"tails": np.array([self.x_tail, self.y_tail])}
+
+    def restore(self, saved):
+        self.x_tail, self.y_tail = (float(v) for v in saved["tails"])
+
+
+@dataclass(frozen=True)
+class WavePolicy:
+    """How a run's end is judged (:func:`wave_measures`).
+
+    Attributes
+    ----------
+    window : float
+        Fraction of the run at its end over which the amplitude's change is judged (a tenth:
+        the window of :class:`SaturationStop`, so that a run it stopped is judged settled).
+    tol : float
+        Relative change of the amplitude (max − min of ρ̄ over its mean) over the window
+        below which the wave counts as settled; also the band that defines the time to
+        saturate.
+    linear : float
+        Amplitudes below this are the linear phase ("growing" or "decaying").
+    """
+
+    window: float = 0.1
+    tol: float = 0.02
+    linear: float = 1e-3
+
+
+def wave_measures(
+    t: np.ndarray,
+    rho: np.ndarray,
+    length: float,
+    frame: float,
+    *,
+    status: str = "ok",
+    policy: WavePolicy | None = None,
+) -> dict:
+    """The wave at the end of a run from its records ρ̄(t, ξ) (frame speed ``frame``).
+
+    Returns ``rho_min_rel``, ``rho_max_rel`` (min and max of ρ̄ over its mean, minus 1, at the
+    end), ``amplitude_rel`` (their difference), ``wavelength`` (L over the number of the
+    dominant Fourier mode of ρ̄ at the end), ``wave_speed`` (lab speed of that mode's phase
+    over the last window of the run), ``t_saturation`` (the first time after which the
+    amplitude stays within ``tol`` of its end value; NaN unless settled) and ``verdict``:
+    ``saturated`` (amplitude settled — changed by less than ``tol`` over the window, or the
+    run was ended by :class:`SaturationStop`, ``status="saturated"`` — and the dominant mode
+    unchanged over the window),
+    ``coarsening`` (the dominant mode changed over the window: waves merging),
+    ``growing`` / ``decaying`` (amplitude still changing, or in the linear phase),
+    ``left_validity`` (the run stopped where the state left the model's range: the 1D
+    model's ``left_family``, non-finite fields of the DNS) or ``stopped`` (the solver failed;
+    ``status`` says where). ``rho`` is the depth-integrated density of either model.
+    """
+    p = policy or WavePolicy()
+    t = np.asarray(t, dtype=float)
+    rho = np.asarray(rho, dtype=float)
+    nan = math.nan
+    out = {
+        "verdict": "stopped",
+        "rho_min_rel": nan,
+        "rho_max_rel": nan,
+        "amplitude_rel": nan,
+        "wave_speed": nan,
+        "wavelength": nan,
+        "t_saturation": nan,
+    }
+    if rho.ndim != 2 or len(t) == 0 or rho.shape[1] < 3:
+        return out
+    mean = rho.mean(axis=1)
+    amp = (rho.max(axis=1) - rho.min(axis=1)) / mean
+    out["rho_min_rel"] = float(rho[-1].min() / mean[-1] - 1.0)
+    out["rho_max_rel"] = float(rho[-1].max() / mean[-1] - 1.0)
+    out["amplitude_rel"] = float(amp[-1])
+    spec = np.fft.rfft(rho, axis=1)
+    dominant = 1 + np.argmax(np.abs(spec[:, 1:]), axis=1)
+    m = int(dominant[-1])
+    out["wavelength"] = float(length / m)
+    win = t >= t[-1] - p.window * (t[-1] - t[0])
+    if win.sum() >= 3:
+        k = 2.0 * math.pi * m / length
+        phase = np.unwrap(np.angle(spec[win, m]))
+        omega = np.polyfit(t[win], phase, 1)[0]
+        out["wave_speed"] = float(frame - omega / k)
+    if status in ("left_family", "left_validity") or "non-finite" in status:
+        out["verdict"] = "left_validity"
+        return out
+    if status.startswith("stopped"):
+        return out
+    a_end = amp[-1]
+    a_win = amp[win]
+    change = float((a_win.max() - a_win.min()) / a_end) if a_end > 0 else 0.0
+    trend = float(a_win[-1] - a_win[0])
+    if a_end < p.linear or win.sum() < 3:
+        out["verdict"] = "growing" if trend > 0 else "decaying"
+        return out
+    coarsening = bool(np.any(dominant[win] != m))
+    # a run that SaturationStop ended is settled by its criterion (sampled at its own times)
+    if change < p.tol or status == "saturated":
+        out["verdict"] = "coarsening" if coarsening else "saturated"
+        far = np.nonzero(np.abs(amp - a_end) > p.tol * a_end)[0]
+        out["t_saturation"] = float(t[far[-1] + 1]) if far.size else float(t[0])
+    elif coarsening:
+        out["verdict"] = "coarsening"
+    else:
+        out["verdict"] = "growing" if trend > 0 else "decaying"
+    return out

@@ -1,0 +1,257 @@
+"""The simulation driver (DnsSimulation, DnsState), the shared trackers and the wave measures.
+
+Reference numbers: synthetic waves whose amplitude, speed and wavelength are known in closed
+form (wave_measures, resolution_tails); the driver against :func:`chuteflow.dns.simulate`
+(the same run must give the same numbers bit for bit); resume after SIGKILL against the
+uninterrupted run (to 1e-13, the tolerance of the existing checkpoint test).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from chuteflow.closures import ChuteModel
+from chuteflow.dns import Discretisation, DnsSimulation, DnsState, resolution_tails, simulate, summary
+from chuteflow.errors import ParameterError
+from chuteflow.steady import solve_steady
+from chuteflow.trackers import (
+    ProgressTracker,
+    ResolutionMonitor,
+    ResolutionWarning,
+    SaturationStop,
+    SnapshotTracker,
+    Tracker,
+    wave_measures,
+)
+
+MODEL = ChuteModel(roughness=0.05)
+SMALL = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4, n=24)
+
+
+@pytest.fixture(scope="module")
+def p1():
+    return solve_steady(16.0, 0.05, MODEL)
+
+
+def _wave(t, x, L, c, amp, m=1):
+    return 1.0 + amp[:, None] * np.cos(2 * math.pi * m * (x[None, :] - c * t[:, None]) / L)
+
+
+def test_wave_measures_of_a_travelling_wave():
+    """A wave ρ̄ = 1 + a(t) cos(2π(x − ct)/L) whose amplitude settles at t = 60: every measure
+    in closed form (speed c exactly, min/max −a/+a, wavelength L)."""
+    L, c = 500.0, 3.7
+    t = np.linspace(0.0, 200.0, 401)
+    x = np.arange(64) * L / 64
+    a = 0.25 * np.minimum(t / 60.0, 1.0) + 1e-6
+    rho = _wave(t, x, L, c, a)
+    w = wave_measures(t, rho, L, 1.5)  # in a frame moving at 1.5: the lab speed is c + 1.5
+    assert w["verdict"] == "saturated"
+    assert w["wave_speed"] == pytest.approx(c + 1.5, rel=1e-9)
+    assert w["wavelength"] == pytest.approx(L)
+    assert w["rho_min_rel"] == pytest.approx(-0.25, abs=1e-3)
+    assert w["rho_max_rel"] == pytest.approx(0.25, abs=1e-3)
+    assert w["t_saturation"] == pytest.approx(59.5, abs=1.0)
+    # still growing, linear, decaying
+    assert wave_measures(t, _wave(t, x, L, c, 1e-3 * np.exp(t / 50)), L, 0.0)["verdict"] == "growing"
+    assert wave_measures(t, _wave(t, x, L, c, 1e-5 * np.exp(t / 50)), L, 0.0)["verdict"] == "growing"
+    assert wave_measures(t, _wave(t, x, L, c, 1e-4 * np.exp(-t / 50)), L, 0.0)["verdict"] == "decaying"
+    assert math.isnan(wave_measures(t, _wave(t, x, L, c, 0.1 * np.exp(t / 50)), L, 0.0)["t_saturation"])
+    # two waves merging into one: the dominant mode changes at the end
+    two = _wave(t, x, L, c, np.full_like(t, 0.2), m=2)
+    one = _wave(t, x, L, c, np.full_like(t, 0.2), m=1)
+    merge = np.where((t > 180)[:, None], one, two)
+    w = wave_measures(t, merge, L, 0.0)
+    assert w["verdict"] == "coarsening"
+    assert w["wavelength"] == pytest.approx(L)
+    # the run's status decides first
+    assert wave_measures(t, rho, L, 0.0, status="left_family")["verdict"] == "left_validity"
+    bad = "stopped at t = 3: non-finite fields (the flow left the closures' range)"
+    assert wave_measures(t, rho, L, 0.0, status=bad)["verdict"] == "left_validity"
+    assert wave_measures(t, rho, L, 0.0, status="stopped at t = 3: Newton")["verdict"] == "stopped"
+
+
+def test_resolution_tails_of_a_known_spectrum(p1):
+    """Modes m of amplitude 10^−m: the x tail is 10^−M / 10^−1 (the top eighth is mode M
+    alone at M ≤ 15); no wave: 0."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6)
+    C = np.zeros(d.shape, complex)
+    C[0, :, 0] = np.log(p1.profiles(d.grid.y)["nu"])
+    C[3, :, 0] = 1.0
+    assert resolution_tails(d, C)["x_tail"] == 0.0
+    for m in range(1, 7):
+        C[0, :, m] = 10.0**-m
+    assert resolution_tails(d, C)["x_tail"] == pytest.approx(1e-5, rel=1e-12)
+    # y: a profile with a Chebyshev coefficient 1e-3 of the largest in the top tenth
+    C2 = np.zeros(d.shape, complex)
+    C2[3, :, 0] = 1.0 + 1e-3 * np.cos(24 * np.arccos(-(2 * d.grid.y / p1.y_max - 1)))
+    assert resolution_tails(d, C2)["y_tail"] == pytest.approx(1e-3, rel=1e-9)
+
+
+def test_driver_is_what_simulate_returns(p1):
+    """DnsSimulation(flow, L).run(trackers) and simulate(flow, L) are one run: bit for bit;
+    the shared trackers (chuteflow.trackers) see every step."""
+    ref = simulate(p1, 1000.0, **SMALL)
+    sim = DnsSimulation(p1, 1000.0, **SMALL)
+    snaps, seen = SnapshotTracker(count=5), []
+    state = sim.run([snaps, ProgressTracker(lambda t, te: seen.append((t, te)))])
+    ds = sim.dataset(state)
+    assert state.status == "ok"
+    assert state.t == pytest.approx(40.0)
+    assert np.array_equal(ds["rho_bar"].values, ref["rho_bar"].values)
+    assert len(seen) == state.step == 10
+    assert {te for _, te in seen} == {40.0}
+    assert np.allclose(snaps.times, [0, 10, 20, 30, 40])
+    assert np.array_equal(snaps.states[-1], state.C)
+
+    # a user tracker may stop the run; the data so far is the result
+    class Stop(Tracker):
+        def handle(self, sim, step):
+            return "enough" if step.t >= 20 else None
+
+    st = DnsSimulation(p1, 1000.0, **SMALL).run([Stop()])
+    assert st.status == "enough"
+    assert st.t == pytest.approx(20.0)
+
+
+def test_saturation_stop_and_resolution_monitor(p1):
+    """SaturationStop samples sim.wave_amplitude at its times (the run, 40 time units of a
+    wave of 1e-4 at P1, is far too short to settle, so it ends at its time); the monitor
+    warns, or stops the run, when the tails exceed its (here absurdly tight) tolerance."""
+    sim = DnsSimulation(p1, 1000.0, **SMALL)
+    stop = SaturationStop(count=11)
+    mon = ResolutionMonitor(1e-12, every=1)
+    with pytest.warns(ResolutionWarning, match="highest x modes"):
+        state = sim.run([stop, mon])
+    assert len(stop.amplitudes) == 11
+    assert stop.amplitudes[-1] == pytest.approx(sim.wave_amplitude(state.C), rel=1e-12)
+    assert mon.x_tail > 1e-12
+    st = DnsSimulation(p1, 1000.0, **SMALL).run([ResolutionMonitor(1e-12, action="stop", every=1)])
+    assert st.status == "under-resolved"
+
+
+def test_state_saves_and_loads_itself(tmp_path, p1):
+    sim = DnsSimulation(p1, 1000.0, **SMALL)
+    st = sim.initial_state()
+    snaps = SnapshotTracker(count=3)
+    snaps.initialize(sim, st, 40.0)
+    st.save(tmp_path / "s.npz", sim.key(), [snaps])
+    other = SnapshotTracker(count=3)
+    back = DnsState.load(tmp_path / "s.npz", sim.key(), [other])
+    assert back is not None
+    assert np.array_equal(back.C, st.C)
+    assert back.amplitude == st.amplitude
+    assert len(other.states) == 1
+    assert np.array_equal(other.states[0], st.C)
+    assert DnsState.load(tmp_path / "s.npz", "another-run") is None
+    assert DnsState.load(tmp_path / "absent.npz", sim.key()) is None
+
+
+_CHILD = """
+import os, sys
+sys.path.insert(0, {src!r})
+os.environ["OMP_NUM_THREADS"] = "1"
+from chuteflow.closures import ChuteModel
+from chuteflow.dns import simulate
+from chuteflow.steady import solve_steady
+flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+simulate(flow, 1000.0, checkpoint={ck!r}, checkpoint_every=0.0, **{kw!r})
+"""
+
+
+def test_resume_after_sigkill_is_exact(tmp_path, p1):
+    """A run killed with SIGKILL after a checkpoint continues, with the same call, to the
+    uninterrupted run's result (to 1e-13: the stepper's preconditioner is rebuilt)."""
+    kw = dict(SMALL, time=400.0)
+    ref = simulate(p1, 1000.0, **kw)
+    ck = tmp_path / "run.ck.npz"
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    code = textwrap.dedent(_CHILD.format(src=src, ck=str(ck), kw=kw))
+    proc = subprocess.Popen([sys.executable, "-c", code], start_new_session=True)
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and proc.poll() is None:
+        if ck.exists():
+            with np.load(ck) as z:
+                if z["scalars"][1] >= 20:  # some steps done, far from the 100 of the run
+                    break
+        time.sleep(0.05)
+    if proc.poll() is not None:
+        pytest.skip("the child finished before it could be killed (machine too fast)")
+    os.killpg(proc.pid, signal.SIGKILL)
+    proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    ds = simulate(p1, 1000.0, checkpoint=ck, **kw)
+    assert not ck.exists()
+    assert np.array_equal(ds["time"].values, ref["time"].values)
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+
+
+def test_bad_input(p1):
+    with pytest.raises(ParameterError, match="flow"):
+        DnsSimulation((16.0, 0.05), 1000.0)  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match="length"):
+        DnsSimulation(p1, float("nan"))
+    with pytest.raises(ParameterError, match="snapshots"):
+        DnsSimulation(p1, 1000.0, snapshots=0, **SMALL)
+    # a mode whose amplitude takes ν past ν_m at the floor
+    with pytest.raises(ParameterError, match="amplitude"):
+        DnsSimulation(p1, 1000.0, time=8.0, dt=4.0, amplitude=0.45, n=24).initial_state()
+
+
+def test_summary_has_the_wave_keys(p1):
+    s = summary(simulate(p1, 1000.0, **SMALL))
+    for key in ("verdict", "rho_min_rel", "rho_max_rel", "wave_speed", "wavelength", "t_saturation"):
+        assert key in s
+    assert s["verdict"] in ("growing", "decaying")  # a wave of 1e-4: the linear phase
+    assert s["resolved"] is (max(s["x_tail"], s["y_tail"]) <= 1e-4)
+
+
+def test_cli_dns_and_waves_json_keys_are_documented(tmp_path):
+    """``chuteflow dns --json`` has the wave keys; every key of it and of ``chuteflow waves
+    --json`` is in docs/cli.md; a map run again reads its finished runs back (same numbers)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+    from tests.cli.test_cli_reference import documented, undocumented
+
+    runner = CliRunner()
+    flow = ["--theta", "16", "--nu0", "0.05", "--roughness", "0.05", "--length", "1000"]
+    grid = ["--time", "40", "--dt", "4", "--nx", "5", "--ny", "24", "--amplitude", "1e-4"]
+    r = runner.invoke(app, ["dns", *flow, *grid, "--init", "noise", "--json"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout.strip().splitlines()[-1])
+    for key in (
+        "verdict",
+        "rho_min_rel",
+        "rho_max_rel",
+        "wave_speed",
+        "wavelength",
+        "t_saturation",
+        "mass_drift",
+    ):
+        assert key in d
+    docs = documented()
+    assert not undocumented("dns", d, docs)
+    args = ["waves", *flow, *grid, "--out-dir", str(tmp_path), "--json"]
+    r = runner.invoke(app, args)
+    assert r.exit_code == 0, r.output
+    w = json.loads(r.stdout.strip().splitlines()[-1])
+    assert not undocumented("waves", w, docs)
+    assert w["points"][0]["verdict"] in ("growing", "decaying")
+    again = json.loads(runner.invoke(app, args).stdout.strip().splitlines()[-1])
+    assert again["points"] == w["points"]  # read back: even the wall time is the first run's
+    r = runner.invoke(app, ["waves", "--points", "P1", "--theta", "16", "--json"])
+    assert r.exit_code == 2
+    assert "points" in r.output
