@@ -1,0 +1,7 @@
+"""Spatial stability of the chute flow: inlet forcing, the signalling problem, absolute versus
+convective instability (the temporal analysis of the paper, §4, continued to complex k)."""
+
+from ._core import DEFAULT_SPATIAL_POLICY, SpatialPolicy
+from .branches import SpatialPoint, spatial_dispersion, spatial_point
+
+__all__ = ["DEFAULT_SPATIAL_POLICY", "SpatialPolicy", "SpatialPoint", "spatial_dispersion", "spatial_point"]

@@ -1,0 +1,402 @@
+"""Absolute or convective: the Briggs–Bers saddle points of α(k) and the edges of the wave packet.
+
+An impulse at x = 0 grows, along the ray x = V t, at the rate σ(V) = Re[α(k*) + i k* V] with
+k* the saddle point of α(k) + ikV in the complex k plane (the frame moving at V sees
+exp((α + ikV) t + ikx')):
+
+    α'(k*) = −iV                                                    (steepest descent)
+
+provided the saddle is a pinch of two spatial branches k⁺, k⁻ coming from opposite
+half-planes (Briggs' collapse criterion). The flow is **absolutely** unstable when the lab
+frame's σ(0) = Re α(k*₀) > 0 (a disturbance grows in place), **convectively** unstable when
+σ(0) < 0 while σ(V) > 0 for some V (the packet grows but is swept away), and **stable** when
+the temporal growth Re α(k) is negative for every real k. The packet's edges V₋ < V₊ are the
+zeros of σ(V).
+
+Limitation. The far-field decay rate κ = √(k²) has its branch cut on Re k = 0
+(:mod:`chuteflow.stability.complex_k`). At the paper's points the saddle family continued from
+the temporal peak reaches that cut at |k*| ~ 1e-3 before σ(V) changes sign on at least one
+side (P1: on both sides, at V ≈ 7.6 and ≈ 9.0, with σ > 0 there); the verdict is then
+``"undetermined"`` and flagged, with the growing range found so far in :attr:`rays`.
+Continuing across the cut (the next sheet, where the top condition no longer decays, or the
+cut's own contribution to the impulse response) is not implemented.
+
+Method. At V_peak = c_g(k_peak), the group velocity at the temporal peak k_peak, the saddle is
+k_peak itself (Re α'(k_peak) = 0) and σ(V_peak) = Re α(k_peak), the largest temporal growth.
+The saddle is continued in V from there (Newton on α'(k) + iV = 0 with α'' exact, from the
+predictor k* − i ΔV/α''(k*)) down through V = 0 until σ < 0 and up until σ < 0; V₋, V₊ are
+refined by Newton on σ(V) with dσ/dV = −Im k* (the envelope theorem). The family continued
+from the real axis is the one that pinches at V_peak (the two branches k(ω) on either side of
+the real axis meet there). That pinch is checked (Briggs' collapse criterion) by following the
+two roots of α(k) + ikV_peak = α_V(k*) + s from k* ± √(2s/α''(k*)) as s grows to
+(1 + pinch_margin) × the largest temporal growth, above which no real k solves it: a pinch
+when they end in opposite half-planes. Where the family reaches V = 0, the lab-frame
+saddle's Re α(k*₀) is the absolute growth rate.
+
+The branch point. At the paper's points the family ends, on one side, at k* → 0 with σ → 0:
+the branch point k = 0 of κ = √(k²), where α(0) = 0 (mass conservation). The ray there is
+the kinematic-wave speed c0 = dQ0/dρ̄0 (Appendix B; −Im α'(0) = −Im α1 of
+:mod:`chuteflow.longwave`), the edge of the packet on that side (long waves, whose growth
+α2 k² vanishes as k → 0, travel at c0).
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..closures import ChuteModel
+from ..conventions import RATE_UNITS, VELOCITY_UNITS, WAVENUMBER_UNITS
+from ..errors import ChuteflowError, ConvergenceError
+from ..stability import branch_scan
+from ..steady import SteadyFlow
+from ._core import DEFAULT_SPATIAL_POLICY, Branch, SpatialPolicy, check_flow, newton_k, newton_saddle
+
+__all__ = ["AbsoluteResult", "absolute_instability", "VERDICTS"]
+
+#: The verdicts of :func:`absolute_instability`.
+VERDICTS = ("absolute", "convective", "stable", "undetermined")
+
+
+@dataclass(frozen=True, eq=False)
+class AbsoluteResult:
+    """The Briggs–Bers analysis of one flow (module docstring).
+
+    Attributes
+    ----------
+    k_saddle : complex
+        The lab-frame saddle point k*₀ (α'(k*₀) = 0), 1/σ.
+    alpha_saddle : complex
+        α(k*₀); :attr:`absolute_growth` = Re α(k*₀).
+    verdict : str
+        ``"absolute"``, ``"convective"``, ``"stable"`` (Re α < 0 at every real k), or
+        ``"undetermined"`` (flagged: the saddle family left the principal sheet through the
+        branch cut Re k = 0 before deciding; the note says where).
+    v_minus, v_plus : float
+        The edges of the growing packet (σ(V) = 0), √(gσ); NaN for a stable flow.
+    v_peak, growth_peak, k_peak : float
+        The ray of fastest growth (the group velocity at the temporal peak), its growth rate
+        (the largest temporal Re α) and the peak's k.
+    pinch : bool or None
+        The saddle of the ray :attr:`pinch_v` passes Briggs' collapse check (None: not
+        decided or not checked).
+    pinch_v : float
+        The ray checked: V_peak, where the family's saddle is the real temporal peak.
+    kinematic_speed : float
+        c0, where the family ends at the branch point k = 0 (NaN if it does not).
+    rays : tuple of ndarray
+        (V, σ(V), Re k*, Im k*) along the continuation.
+    n : int
+        Resolution N of the operator.
+    drift, tail : float
+        The temporal tests at the lab-frame saddle.
+    converged : bool
+        Every step settled, the saddle passes the drift/tail tests and pinches.
+    note : str
+        Why it is flagged.
+    """
+
+    k_saddle: complex
+    alpha_saddle: complex
+    verdict: str
+    v_minus: float
+    v_plus: float
+    v_peak: float
+    growth_peak: float
+    k_peak: float
+    pinch: bool | None
+    pinch_v: float
+    kinematic_speed: float
+    rays: tuple = field(repr=False)
+    n: int
+    drift: float
+    tail: float
+    converged: bool
+    note: str = ""
+    theta: float = math.nan
+    nu0: float = math.nan
+    model: ChuteModel | None = field(default=None, repr=False)
+
+    @property
+    def absolute_growth(self) -> float:
+        return float(self.alpha_saddle.real)
+
+    def to_dict(self) -> dict:
+        """JSON-ready scalars (the keys of ``chuteflow absolute --json``)."""
+        return {
+            "theta": self.theta,
+            "nu0": self.nu0,
+            **(self.model.to_dict() if self.model is not None else {}),
+            "k_saddle_re": float(self.k_saddle.real),
+            "k_saddle_im": float(self.k_saddle.imag),
+            "absolute_growth": self.absolute_growth,
+            "absolute_frequency": float(-self.alpha_saddle.imag),
+            "verdict": self.verdict,
+            "v_minus": self.v_minus,
+            "v_plus": self.v_plus,
+            "v_peak": self.v_peak,
+            "growth_peak": self.growth_peak,
+            "k_peak": self.k_peak,
+            "pinch": self.pinch,
+            "pinch_v": self.pinch_v,
+            "kinematic_speed": self.kinematic_speed,
+            "n": int(self.n),
+            "drift": self.drift,
+            "tail": self.tail,
+            "converged": bool(self.converged),
+            "note": self.note,
+        }
+
+    def to_xarray(self):
+        """σ(V) and the saddle k*(V) along the rays, as an :class:`xarray.Dataset` over V."""
+        import xarray as xr
+
+        V, s, kr, ki = self.rays
+        ds = xr.Dataset(
+            {
+                "growth": ("V", s, {"units": RATE_UNITS, "long_name": "growth rate along the ray x = V t"}),
+                "k_saddle_re": ("V", kr, {"units": WAVENUMBER_UNITS}),
+                "k_saddle_im": ("V", ki, {"units": WAVENUMBER_UNITS}),
+            },
+            coords={"V": ("V", V, {"units": VELOCITY_UNITS, "long_name": "ray speed"})},
+        )
+        d = self.to_dict()
+        ds.attrs.update({k: (str(v) if isinstance(v, bool) or v is None else v) for k, v in d.items()})
+        if self.model is not None:
+            ds.attrs.update(self.model.attrs())
+        return ds
+
+
+def _ray_growth(e, V: float) -> float:
+    return float((e.alpha + 1j * e.k * V).real)
+
+
+def _continue(branch: Branch, e0, V0: float, direction: float, dV0: float, policy, k_small: float):
+    """Continue the saddle from (e0, V0) in V along ``direction`` until σ(V) changes sign
+    (downwards also until V = 0 is passed, to land on the lab frame). Returns
+    (samples [(V, e)], edge V where σ = 0 or NaN, end), ``end`` one of ``"done"``,
+    ``"branch point"`` (|k*| < ``k_small``: the family ends at k = 0, where α(0) = 0), ``"cut"``
+    (it reaches Re k = 0 at finite |k|, where the continuation is not analytic)."""
+    out = [(V0, e0)]
+    V, e, dV = V0, e0, dV0
+    edge = math.nan
+    passed_zero = direction > 0 or V0 <= 0
+    for _ in range(400):
+        V_new = V + direction * dV
+        if not passed_zero and V_new * V < 0:
+            V_new = 0.0  # land on the lab frame exactly
+        pred = e.k - 1j * (V_new - V) / e.d2alpha
+        try:
+            if pred.real <= 0:
+                raise ConvergenceError("the predictor crosses the branch cut")
+            e_new = newton_saddle(branch, pred, V_new, policy, start=e)
+        except ChuteflowError:
+            dV *= 0.5
+            if dV < 1e-4 * dV0:
+                near_zero = abs(e.k) < k_small and abs(_ray_growth(e, V)) < 1e-2 * abs(_ray_growth(e0, V0))
+                return out, edge, ("branch point" if near_zero else "cut")
+            continue
+        s_old, s_new = _ray_growth(e, V), _ray_growth(e_new, V_new)
+        out.append((V_new, e_new))
+        if V_new == 0.0:
+            passed_zero = True
+        if s_old > 0 >= s_new and math.isnan(edge):
+            edge = _edge(branch, V, e, V_new, e_new, policy)
+        V, e = V_new, e_new
+        if abs(e.k) < k_small and abs(s_new) < 1e-2 * abs(_ray_growth(e0, V0)):
+            return out, edge, "branch point"
+        if passed_zero and (not math.isnan(edge) or _ray_growth(e0, V0) <= 0):
+            break
+        dV = min(dV * 1.5, 4 * dV0)
+    return out, edge, "done"
+
+
+def _edge(branch, Va, ea, Vb, eb, policy) -> float:
+    """σ(V) = 0 between Va (σ > 0) and Vb (σ ≤ 0): Newton with dσ/dV = −Im k*, kept in the
+    bracket by bisection."""
+    lo, hi = Va, Vb
+    V, e = Vb, eb
+    for _ in range(60):
+        s = _ray_growth(e, V)
+        ds = -e.k.imag
+        V_new = V - s / ds if ds != 0 else 0.5 * (lo + hi)
+        if not (min(lo, hi) < V_new < max(lo, hi)):
+            V_new = 0.5 * (lo + hi)
+        e_new = newton_saddle(branch, e.k - 1j * (V_new - V) / e.d2alpha, V_new, policy, start=e)
+        if abs(V_new - V) <= 1e-10 * max(abs(V_new), 1.0):
+            return float(V_new)
+        if _ray_growth(e_new, V_new) > 0:
+            lo = V_new
+        else:
+            hi = V_new
+        V, e = V_new, e_new
+    return float(V)
+
+
+def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolicy) -> tuple[bool | None, str]:
+    """Briggs' collapse check at the saddle ``e`` of the frame V (module docstring): the two
+    roots of α(k) + ikV = α_V* + s, from k* ± √(2s/α''), followed as s grows until Re of the
+    target exceeds (1 + pinch_margin) × the largest temporal growth (above which no real k
+    solves it), end in opposite half-planes."""
+    a_v = e.alpha + 1j * e.k * V
+    s_end = (1.0 + policy.pinch_margin) * max(growth_peak, 0.0) - a_v.real
+    if s_end <= 0:
+        s_end = abs(a_v.real) + max(growth_peak, 0.0) + 1e-6
+    s = 1e-3 * s_end
+    root = cmath.sqrt(2.0 * s / e.d2alpha)
+    pairs: list = []
+    try:
+        pairs.extend(newton_k(branch, k0, a_v + s, policy, start=e, V=V) for k0 in (e.k + root, e.k - root))
+        while s < s_end:
+            s_new = min(s_end, 1.5 * s)
+            nxt = []
+            for p in pairs:
+                dk = (s_new - s) / (p.dalpha + 1j * V)
+                nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+            pairs, s = nxt, s_new
+    except ChuteflowError as exc:
+        return None, f"the pinch was not decided ({exc})"
+    im = [p.k.imag for p in pairs]
+    if im[0] * im[1] < 0:
+        return True, ""
+    return False, (
+        f"the saddle of the ray V = {V:.4g} does not pinch: at growth {a_v.real + s_end:.3g} both spatial "
+        f"branches lie in one half-plane (Im k = {im[0]:.3g}, {im[1]:.3g})"
+    )
+
+
+def absolute_instability(
+    flow: SteadyFlow,
+    *,
+    policy: SpatialPolicy | None = None,
+    cache=None,
+    strict: bool = False,
+    check_pinch: bool = True,
+) -> AbsoluteResult:
+    """Absolute or convective instability of ``flow`` by the Briggs–Bers saddle points of its
+    α(0) = 0 branch continued to complex k (module docstring).
+
+    Returns an :class:`AbsoluteResult`; flagged (``converged=False``, ``note``) when a
+    continuation step does not settle, an edge is not decided, the saddle misses the temporal
+    tests or does not pinch (``strict=True``: :class:`~chuteflow.errors.ConvergenceError`
+    instead).
+    """
+    flow = check_flow(flow)
+    policy = DEFAULT_SPATIAL_POLICY if policy is None else policy
+    scan = branch_scan(flow, policy=policy.rejection, cache=cache)
+    peak = scan.peak()
+    if not (math.isfinite(peak.k) and peak.k > 0):
+        raise ConvergenceError("absolute instability: the temporal branch scan reached no point")
+    branch = Branch(flow, float(peak.k), policy, cache)
+    e_peak = branch.last
+    notes = []
+    if not scan.converged:
+        notes.append("the temporal branch scan is not converged")
+    V_peak = float((1j * e_peak.dalpha).real)
+    growth_peak = float(e_peak.alpha.real)
+    # the saddle at V_peak: on the real axis up to the refinement of the peak
+    e_sad = newton_saddle(branch, e_peak.k, V_peak, policy, start=e_peak)
+    dV0 = policy.ray_step * max(abs(V_peak), 1e-3)
+    # |k*| below which the family is at the branch point k = 0 (with σ < 1 % of the peak's)
+    k_small = 0.02 * float(peak.k)
+    down, edge_down, end_down = _continue(branch, e_sad, V_peak, -1.0, dV0, policy, k_small)
+    up, edge_up, end_up = _continue(branch, e_sad, V_peak, +1.0, dV0, policy, k_small)
+    samples = sorted(down + up[1:], key=lambda t: t[0])
+    c0 = math.nan
+    edges = {}
+    for name, edge, end, side in (("down", edge_down, end_down, down), ("up", edge_up, end_up, up)):
+        V_last, e_last = side[-1]
+        if not math.isnan(edge):
+            edges[name] = edge
+        elif end == "branch point":
+            # k* → 0 with σ → 0: the family ends at the branch point k = 0 of √(k²), where
+            # α(0) = 0 (mass conservation); the ray there is the kinematic-wave speed c0
+            e_bp = branch.at(complex(1e-3 * k_small, 0.0), start=e_last)
+            c0 = float(-e_bp.dalpha.imag)
+            edges[name] = c0
+            notes.append(
+                f"one edge is the branch point k = 0 (alpha(0) = 0): V = c0 = {c0:.6g}, the "
+                f"kinematic-wave speed (growth {_ray_growth(e_last, V_last):.2g} "
+                f"at |k*| = {abs(e_last.k):.2g})"
+            )
+        elif growth_peak > 0:
+            notes.append(
+                f"the saddle family reaches the branch cut Re k = 0 at V = {V_last:.4g} "
+                f"(k* = {e_last.k:.3g}, growth {_ray_growth(e_last, V_last):.3g}) "
+                f"before the growth changes sign: that edge "
+                "is not determined"
+            )
+    lab = [e for V, e in down if V == 0.0]
+    e0 = lab[0] if lab else None
+    if growth_peak <= 0:
+        verdict, v_minus, v_plus = "stable", math.nan, math.nan
+    else:
+        v_minus = min(edges.values()) if len(edges) == 2 else math.nan
+        v_plus = max(edges.values()) if len(edges) == 2 else math.nan
+        if e0 is not None:
+            verdict = "absolute" if e0.alpha.real > 0 else "convective"
+        elif len(edges) == 2:
+            verdict = "absolute" if v_minus < 0 < v_plus else "convective"
+        else:
+            verdict = "undetermined"
+    if e0 is not None:
+        k0, a0 = complex(e0.k), complex(e0.alpha)
+    else:
+        k0, a0 = complex(math.nan, math.nan), complex(math.nan, math.nan)
+        if growth_peak > 0:
+            notes.append("no saddle of the family at V = 0 (the lab frame lies outside the continuation)")
+    # Briggs' check on the family at the ray of fastest growth V_peak, where its saddle is the
+    # real temporal peak; the continuation in V carries that pinch along the family
+    pinch: bool | None = None
+    pinch_V = math.nan
+    if check_pinch and growth_peak > 0:
+        pinch_V = V_peak
+        pinch, why = _pinch(branch, e_sad, V_peak, growth_peak, policy)
+        if why:
+            notes.append(why)
+    e_conv = e0 if e0 is not None else e_sad
+    drift, tl, _ = branch.convergence(e_conv)
+    if not policy.rejection.accepts(drift, tl):
+        notes.append(f"the saddle misses the temporal tests (drift {drift:.1e}, tail {tl:.1e})")
+    ok = (
+        policy.rejection.accepts(drift, tl)
+        and (pinch is True or not check_pinch or growth_peak <= 0)
+        and scan.converged
+        and verdict != "undetermined"
+    )
+    V = np.array([v for v, _ in samples])
+    res = AbsoluteResult(
+        k_saddle=k0,
+        alpha_saddle=a0,
+        verdict=verdict,
+        v_minus=float(v_minus),
+        v_plus=float(v_plus),
+        v_peak=V_peak,
+        growth_peak=growth_peak,
+        k_peak=float(peak.k),
+        pinch=pinch,
+        pinch_v=float(pinch_V),
+        kinematic_speed=c0,
+        rays=(
+            V,
+            np.array([_ray_growth(e, v) for v, e in samples]),
+            np.array([e.k.real for _, e in samples]),
+            np.array([e.k.imag for _, e in samples]),
+        ),
+        n=branch.n,
+        drift=drift,
+        tail=tl,
+        converged=bool(ok),
+        note="; ".join(notes),
+        theta=flow.theta,
+        nu0=flow.nu0,
+        model=flow.model,
+    )
+    if strict and not res.converged:
+        raise ConvergenceError(
+            f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}"
+        )
+    return res
