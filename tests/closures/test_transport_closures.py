@@ -236,3 +236,14 @@ def test_presets_and_unknown_names():
     assert {"lun", "lun_full", "lun_mfix", "garzo_dufty"} <= set(TRANSPORTS.names())
     m = ChuteModel.preset("mfix-lun")
     assert ChuteModel.from_dict(m.to_dict()) == m
+
+
+def test_vanishing_functions():
+    """κ_h ≡ 0 for the paper's closure (and MFiX's Lun): the compiled steady rows leave its
+    terms out, so the paper's numbers are bit for bit those before κ_h existed."""
+    from chuteflow.closures.model import vanishing_functions
+
+    assert vanishing_functions(*ChuteModel().closures) == ("kappa_h",)
+    assert vanishing_functions(*ChuteModel.preset("mfix-lun").closures) == ("kappa_h",)
+    assert vanishing_functions(*ChuteModel(transport="lun_full").closures) == ()
+    assert vanishing_functions(*ChuteModel.preset("mfix-gd").closures) == ()

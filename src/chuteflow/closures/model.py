@@ -104,6 +104,30 @@ def _derive(transport, radial, wall):
     return spec, tuple(sorted(fs))
 
 
+@functools.cache
+def vanishing_functions(
+    transport: TransportClosure, radial: RadialDistribution, wall: WallCondition
+) -> tuple[str, ...]:
+    """Names of :data:`TRANSPORT` functions that are identically zero for these closures
+    (e.g. ``("kappa_h",)`` for the paper's ``lun``): their partials are exactly 0.0 at
+    every point of a (ν, T, e_p) grid (the closures' sympy statement gives a literal zero
+    there). Compiled kernels may leave their terms out, so that the paper's closure runs
+    bit for bit the code it ran before the density-gradient heat flux was added."""
+    nu = np.array([0.013, 0.1, 0.27, 0.41])
+    T = np.array([0.37, 1.0, 2.3, 5.1])
+    fun = _compiled(transport, radial, wall)[0]
+    out = []
+    for e in (0.53, 0.7, 0.91):
+        with np.errstate(all="ignore"):
+            flat = fun(nu, T, e, 0.6, 0.05, 0.39)
+        for k, name in enumerate(FUNCTIONS):
+            if name in TRANSPORT and all(
+                np.all(np.asarray(flat[k * len(ORDERS) + j]) == 0.0) for j in range(len(ORDERS))
+            ):
+                out.append(name)
+    return tuple(n for n in TRANSPORT if out.count(n) == 3)
+
+
 #: Partial-derivative orders of the scalar evaluator (:meth:`ChuteModel.scalar_evaluator`):
 #: the first-order jet, all that the steady equations integrated as an ODE in y need.
 SCALAR_ORDERS = ((0, 0), (1, 0), (0, 1))
