@@ -140,7 +140,8 @@ class _Continuum:
 
 @functools.cache
 def _continuum() -> _Continuum:
-    """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T (eq. 2.7) and gravity, in jet space."""
+    """Σ = (p − ζ∇·u)I − 2μS, q = −κ∇T − κ_h∇ν (eq. 2.7 with the paper's footnoted
+    density-gradient term) and gravity, in jet space."""
     nu, T = jet("nu"), jet("T")
     vel = [jet("u"), jet("v"), jet("w")]
     F = {name: sp.Function(name)(nu, T) for name in FUNCTIONS}
@@ -155,7 +156,10 @@ def _continuum() -> _Continuum:
         [(F["p"] - F["zeta"] * div if i == j else 0) - 2 * F["mu"] * S[i][j] for j in range(3)]
         for i in range(3)
     ]
-    q = [-F["kappa"] * D(T, a) for a in sp_axes]
+    # q = −κ∇T − κ_h∇ν: Lun et al. (1984) and Garzó & Dufty (1999) both have the
+    # density-gradient term; the paper (footnote to eq. 2.7) drops it (κ_h = 0 for the
+    # ``lun`` closure, which leaves every equation as the paper states it)
+    q = [-F["kappa"] * D(T, a) - F["kappa_h"] * D(nu, a) for a in sp_axes]
     sin_theta, cos_theta = _gravity_symbols()
     g = (sin_theta, -cos_theta, sp.S.Zero)
     return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)), tuple(q), g)
@@ -166,7 +170,12 @@ def governing_equations() -> dict[str, sp.Expr]:
     """Residuals of eqs (2.1), (2.2) (x, y, z), eq. (2.3) and the floor conditions, in jet space.
 
     Dimensionless (σ, ρ_p σ³, √(σ/g)); gravity g = (sin θ, −cos θ, 0); Σ = (p − ζ∇·u)I − 2μS,
-    q = −κ∇T (eq. 2.7). Floor normal n = e_y.
+    q = −κ∇T − κ_h∇ν (eq. 2.7; the paper's footnote to it: Lun et al.'s κ_h term, which the
+    paper drops — the ``lun`` closure has κ_h = 0). Floor normal n = e_y.
+
+    The floor energy condition (2.10) is the paper's, q·n + u·Σ·n + Γ* = 0 (sign as below),
+    with q the whole heat flux: the energy the flow loses through the floor is the normal
+    flux whatever its constitutive form, so a closure with κ_h ≠ 0 has −κ_h ν_y in it too.
     """
     c = _continuum()
     nu, T = jet("nu"), jet("T")

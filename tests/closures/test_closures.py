@@ -79,6 +79,7 @@ def transport(model: ChuteModel, nu, T):
         "zeta": f["f3"] * sq,
         "kappa": f["f4"] * sq,
         "Gamma": (1.0 - e**2) * f["f5"] * T * sq,
+        "kappa_h": 0.0 * T,  # the paper drops the κ_h∇ν heat flux (footnote to eq. 2.7)
         "eta_star": phi * f["f7"] * f["f2"] * sq,
         "Gamma_star": 0.5 * Phi * f["f6"] * f["f4"] * T * sq,
     }

@@ -1,13 +1,16 @@
-"""Closures: constitutive relations (Lun et al.), g0(ν) and floor conditions (Johnson–Jackson).
+"""Closures: constitutive relations (Lun et al.; Garzó & Dufty), g0(ν) and floor conditions (Johnson–Jackson).
 
 Each kind of closure has a registry (:class:`Registry`): :data:`RADIALS` (g0),
 :data:`WALLS` (floor conditions) and :data:`TRANSPORTS` (kinetic-theory transport closures).
 :class:`ChuteModel` carries one of each with the material and floor parameters.
 """
 
+from .garzo_dufty import GarzoDuftyClosure, garzo_dufty_reduced
 from .kinetic import (
     TRANSPORTS,
     LunClosure,
+    LunFullClosure,
+    MfixLunClosure,
     TransportClosure,
     lun_functions,
     register_transport,
@@ -19,6 +22,7 @@ from .model import (
     FUNCTIONS,
     ORDERS,
     PARAMETERS,
+    PRESETS,
     TRANSPORT,
     ChuteModel,
 )
@@ -26,6 +30,7 @@ from .radial import (
     RADIALS,
     CarnahanStarling,
     LunSavage,
+    MaAhmadi,
     RadialDistribution,
     register_radial,
 )
@@ -46,12 +51,18 @@ __all__ = [
     "CarnahanStarling",
     "ChuteModel",
     "JohnsonJackson",
+    "GarzoDuftyClosure",
     "LunClosure",
+    "LunFullClosure",
     "LunSavage",
+    "MaAhmadi",
+    "MfixLunClosure",
+    "PRESETS",
     "RadialDistribution",
     "Registry",
     "TransportClosure",
     "WallCondition",
+    "garzo_dufty_reduced",
     "lun_functions",
     "register_radial",
     "register_transport",

@@ -36,7 +36,9 @@ from .registry import Registry
 from .walls import WALLS, JohnsonJackson, WallCondition
 
 #: Names of the transport functions (§2.1) followed by the floor terms η*, Γ* (§2.2).
-TRANSPORT = ("p", "mu", "zeta", "kappa", "Gamma")
+#: ``kappa_h`` is the coefficient of ∇ν in the heat flux q = −κ∇T − κ_h∇ν (the paper's
+#: footnote to eq. 2.7; zero for the paper's ``lun`` closure).
+TRANSPORT = ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h")
 FLOOR = ("eta_star", "Gamma_star")
 FUNCTIONS = TRANSPORT + FLOOR
 #: Partial-derivative orders (i, j) meaning ∂^i/∂ν^i ∂^j/∂T^j, up to second order.
@@ -87,6 +89,7 @@ def _derive(transport, radial, wall):
     g0 = radial.expr(nu, num)
     fs = transport.functions(nu, e, num, g0)
     exprs = dict(transport.transport(fs, T, e))
+    exprs.setdefault("kappa_h", sp.S.Zero)  # a closure without a density-gradient heat flux
     exprs.update(wall.terms(fs, T, phi, phiw))
     flat = []
     for name in FUNCTIONS:
@@ -99,6 +102,30 @@ def _derive(transport, radial, wall):
         "g0": ((nu, num), [g0, sp.diff(g0, nu), sp.diff(g0, nu, 2)], False),
     }
     return spec, tuple(sorted(fs))
+
+
+@functools.cache
+def vanishing_functions(
+    transport: TransportClosure, radial: RadialDistribution, wall: WallCondition
+) -> tuple[str, ...]:
+    """Names of :data:`TRANSPORT` functions that are identically zero for these closures
+    (e.g. ``("kappa_h",)`` for the paper's ``lun``): their partials are exactly 0.0 at
+    every point of a (ν, T, e_p) grid (the closures' sympy statement gives a literal zero
+    there). Compiled kernels may leave their terms out, so that the paper's closure runs
+    bit for bit the code it ran before the density-gradient heat flux was added."""
+    nu = np.array([0.013, 0.1, 0.27, 0.41])
+    T = np.array([0.37, 1.0, 2.3, 5.1])
+    fun = _compiled(transport, radial, wall)[0]
+    out = []
+    for e in (0.53, 0.7, 0.91):
+        with np.errstate(all="ignore"):
+            flat = fun(nu, T, e, 0.6, 0.05, 0.39)
+        for k, name in enumerate(FUNCTIONS):
+            if name in TRANSPORT and all(
+                np.all(np.asarray(flat[k * len(ORDERS) + j]) == 0.0) for j in range(len(ORDERS))
+            ):
+                out.append(name)
+    return tuple(n for n in TRANSPORT if out.count(n) == 3)
 
 
 #: Partial-derivative orders of the scalar evaluator (:meth:`ChuteModel.scalar_evaluator`):
@@ -243,6 +270,21 @@ class ChuteModel:
     def _params(self):
         return (self.restitution, self.nu_max, self.roughness, self.wall_loss)
 
+    @classmethod
+    def preset(cls, name: str, **overrides: Any) -> ChuteModel:
+        """A model whose closures match another code's setting (:data:`PRESETS`).
+
+        ``ChuteModel.preset("mfix-lun")`` is MFiX's ``KT_TYPE = LUN_1984`` (viscosity factor
+        (2 + α)/3 with its default ``ALPHA = 1.6``, Carnahan–Starling g0),
+        ``preset("mfix-gd")`` its ``KT_TYPE = GD_1999`` and ``preset("paper")`` the
+        paper's closures (the defaults). ``overrides`` set any other field (e.g.
+        ``roughness=0.1``). An unknown name raises :class:`~chuteflow.errors.ParameterError`
+        listing the known ones.
+        """
+        if name not in PRESETS:
+            raise ParameterError(f"preset: unknown preset {name!r}; choose one of {sorted(PRESETS)}")
+        return cls(**{**PRESETS[name]["model"], **overrides})
+
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form: the parameters as floats, each closure as its registered name
@@ -373,6 +415,36 @@ _FIELD_BY_NAME = {f.name: f for f in dataclasses.fields(ChuteModel)}
 FIELDS: tuple[str, ...] = tuple(_FIELD_BY_NAME)
 #: The numeric parameters of ChuteModel (e_p, ν_m, φ, Φ).
 PARAMETERS: tuple[str, ...] = tuple(n for n in FIELDS if n not in CLOSURES)
+
+
+#: Closure sets that match other codes' settings (:meth:`ChuteModel.preset`): for each, the
+#: model fields it sets and the setting of the other code it reproduces.
+PRESETS: dict[str, dict[str, Any]] = {
+    "paper": {
+        "model": {"transport": "lun", "radial": "lun_savage", "wall": "johnson_jackson"},
+        "code": "Mitarai & Nakanishi (2005) §2.1: Lun et al. (1984) without κ_h, Lun–Savage g0",
+    },
+    "mfix-lun": {
+        "model": {
+            "transport": {"name": "lun_mfix", "alpha": 1.6},
+            "radial": "carnahan_starling",
+            "wall": "johnson_jackson",
+        },
+        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), RDF_TYPE = CARNAHAN_STARLING, BC_JJ_PS",
+    },
+    "mfix-gd": {
+        "model": {"transport": "garzo_dufty", "radial": "carnahan_starling", "wall": "johnson_jackson"},
+        "code": "MFiX KT_TYPE = GD_1999, RDF_TYPE = CARNAHAN_STARLING, BC_JJ_PS",
+    },
+    "mfix-lun-ma-ahmadi": {
+        "model": {
+            "transport": {"name": "lun_mfix", "alpha": 1.6},
+            "radial": "ma_ahmadi",
+            "wall": "johnson_jackson",
+        },
+        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), RDF_TYPE = MA_AHMADI, BC_JJ_PS",
+    },
+}
 
 
 def _call_scalar(fun, params, nu, T):

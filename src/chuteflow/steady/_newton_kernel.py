@@ -52,8 +52,13 @@ SLOT = {k: i for i, k in enumerate(OUTPUTS)}
 
 
 @functools.cache
-def row_kernel(layout: tuple[tuple[str, str], ...]) -> Pointwise | None:
+def row_kernel(layout: tuple[tuple[str, str], ...], vanishing: tuple[str, ...] = ()) -> Pointwise | None:
     """The compiled kernel of the rows ``layout`` = ((equation, scale kind), ...).
+
+    ``vanishing``: closure functions that are identically zero for the closures at hand
+    (:func:`chuteflow.closures.model.vanishing_functions`, e.g. ``"kappa_h"`` for the
+    paper's closure): their terms are left out of the kernel (their partials are still
+    arguments), so that the paper's closure runs the code it ran before κ_h existed.
 
     Called as ``kernel(*arrays, sin θ, cos θ, 1/ν0(0))`` with the 9 base jets
     (:data:`chuteflow.equations.BASE`) and the closures' partials (:data:`FUNCTIONS` ×
@@ -65,14 +70,14 @@ def row_kernel(layout: tuple[tuple[str, str], ...]) -> Pointwise | None:
             raise ValueError(f"scale kind {kind!r}: expected one of {SCALES}")
     return cached_pointwise(
         "steady_rows",
-        repr(layout),
-        lambda: _derive_rows(layout),
+        repr((layout, vanishing)) if vanishing else repr(layout),
+        lambda: _derive_rows(layout, vanishing),
         len(BASE) + len(FUNCTIONS) * len(ORDERS),
         sources=(__name__, "chuteflow.equations", "chuteflow.closures.model"),
     )
 
 
-def _derive_rows(layout):
+def _derive_rows(layout, vanishing=()):
     """(args, exprs) of :func:`row_kernel`."""
     spec, data = _derive_compiled()
     terms = dict(data)
@@ -80,6 +85,9 @@ def _derive_rows(layout):
     args = list(spec[layout[0][0]][0])
     b = dict(zip(BASE, args[:nb]))
     part = dict(zip(((f, o) for f in FUNCTIONS for o in ORDERS), args[nb : nb + npart]))
+    if vanishing:
+        zero = {part[(f, o)]: sp.S.Zero for f in vanishing for o in ORDERS}
+        spec = {name: (a, [e.xreplace(zero) for e in ex]) for name, (a, ex) in spec.items()}
     inv_nu0 = sp.Symbol("inv_nu_floor", positive=True)
     jets = {
         "nu": (b["nu"], b["nu_y"], b["nu_yy"]),

@@ -70,9 +70,20 @@ def _derive_rhs(transport, radial, wall):
     ).xreplace(sub)
     # energy (eq. (3.6), docs/errata.md, item 1), affine in T0''
     at = {b["nu_y"]: nu_y}
-    T_yy = -espec["energy"][1][0].xreplace(sub).xreplace(at) / coefficient("energy", "T", 2).xreplace(
-        sub
-    ).xreplace(at)
+    try:  # the coefficient of ν0'' (κ_h of the heat flux q = −κ∇T − κ_h∇ν)
+        c_nu2 = coefficient("energy", "nu", 2).xreplace(sub).xreplace(at)
+    except KeyError:
+        c_nu2 = sp.S.Zero
+    if c_nu2 == 0:  # no density-gradient heat flux (κ_h = 0, the paper's closure)
+        T_yy = -espec["energy"][1][0].xreplace(sub).xreplace(at) / coefficient("energy", "T", 2).xreplace(
+            sub
+        ).xreplace(at)
+    else:  # κ_h ν0'' with ν0'' = A + B T0'' (the y-derivative of ν0'(ν0, T0, T0') above)
+        Ty_s = sp.Symbol("T_yy_", real=True)
+        dnu = (nu_y.diff(nu) * nu_y + nu_y.diff(T) * T_y + nu_y.diff(T_y) * Ty_s).xreplace(sub)
+        R = espec["energy"][1][0].xreplace({b["nu_yy"]: dnu, b["T_yy"]: Ty_s}).xreplace(sub).xreplace(at)
+        R1 = R.diff(Ty_s)
+        T_yy = -R.xreplace({Ty_s: 0}) / R1.xreplace({Ty_s: 0})
     args = (nu, u, T, T_y, e, num, phi, phiw, sin_t, cos_t)
     return {"rhs": (args, [nu_y / nu, u_y, T_yy])}
 

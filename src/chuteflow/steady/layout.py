@@ -183,10 +183,10 @@ def _road_parts(n: int, integrated: bool, closures: tuple):
     """(closures' kernel, rows' kernel, plan) of the compiled road of
     :class:`~chuteflow.steady.newton.SteadyNewton`
     for the closure objects ``closures``, or None where compiled kernels are unavailable."""
-    from ..closures.model import _compiled_c
+    from ..closures.model import _compiled_c, vanishing_functions
 
     layout = _layout(n, integrated)[0]
-    rows = row_kernel(tuple((name, kind) for name, _r, _s, kind in layout))
+    rows = row_kernel(tuple((name, kind) for name, _r, _s, kind in layout), vanishing_functions(*closures))
     kernel = _compiled_c(*closures) if rows is not None else None
     if rows is None or kernel is None:
         return None

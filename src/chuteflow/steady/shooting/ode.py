@@ -56,6 +56,9 @@ class SteadyODE:
         self._floor_x, self._floor_energy = eqs["floor_x"], eqs["floor_energy"]
         self._i_floor_u = _term_index(self._floor_x, "u", 0)
         self._i_floor_T_y = _term_index(self._floor_energy, "T", 1)
+        # the coefficient of ν0' in the floor energy condition: κ_h of q = −κ∇T − κ_h∇ν
+        # (zero for the paper's closure, where the result below is that of −R(0)/R_T')
+        self._i_floor_nu_y = _term_index(self._floor_energy, "nu", 1)
         self._fast = model.scalar_evaluator(SCALAR_ORDERS)
         nb, no = len(BASE), len(ORDERS)
         self._pos = tuple(nb + k * no + ORDERS.index(o) for k in range(len(FUNCTIONS)) for o in SCALAR_ORDERS)
@@ -131,7 +134,15 @@ class SteadyODE:
                 break
         T0 = math.exp(x)
         try:
-            out = self._floor_energy._fun(*self._arguments(nu0, u0, T0, 0.0))
-            return T0, -float(out[0]) / float(out[1 + self._i_floor_T_y])
+            args = self._arguments(nu0, u0, T0, 0.0)
+            out = self._floor_energy._fun(*args)
+            # q_y has −κ_h ν0'(0), and ν0'(0) = a + b T0'(0) by eq. (3.5)
+            c_nu = float(out[1 + self._i_floor_nu_y])
+            if c_nu == 0.0:
+                return T0, -float(out[0]) / float(out[1 + self._i_floor_T_y])
+            flat = self._fast(nu0, T0)
+            p_nu, p_T = flat[self._i_p + 1], flat[self._i_p + 2]
+            a, b = -nu0 * self.cos / p_nu, -p_T / p_nu
+            return T0, -(float(out[0]) + c_nu * a) / (float(out[1 + self._i_floor_T_y]) + c_nu * b)
         except (ArithmeticError, ValueError, TypeError):
             return T0, math.nan

@@ -20,6 +20,7 @@ STAGE_MODULES: tuple[str, ...] = (
     "waves",
     "transverse",
     "dns",
+    "closures",
 )
 
 #: Module name -> exception raised while importing it.

@@ -1,0 +1,149 @@
+"""Garzó & Dufty (1999) inelastic Enskog transport coefficients, first Sonine approximation.
+
+V. Garzó & J. W. Dufty, "Dense fluid transport for inelastic hard spheres", Phys. Rev. E
+59, 5895 (1999), §VII (d = 3); the same forms are in V. Garzó, *Granular Gaseous Flows*
+(Springer 2019), ch. 5. With χ = g0(ν), ν the solid fraction (their φ), α = e_p, the
+reduced coefficients are
+
+    a2 = 16 (1 − α)(1 − 2α²) / (81 − 17α + 30α²(1 − α)),   c* = 2 a2  (Sonine coefficient),
+    p* = 1 + 2 (1 + α) ν χ,
+    ζ* = 5/12 χ (1 − α²)(1 + 3/16 a2)                                   (cooling rate),
+    ν_η* = χ (1 − ¼(1 − α)²)(1 − a2/32),
+    γ* = 128/(5π) ν² χ (1 + α)(1 − a2/16),
+    η_k* = (1 − 2/5 (1 + α)(1 − 3α) ν χ) / (ν_η* − ζ*/2),
+    η* = η_k* (1 + 4/5 ν χ (1 + α)) + 3/5 γ*                             (shear viscosity),
+    λ* = γ*                                                            (bulk viscosity),
+    ν_κ* = (1 + α)/3 χ (1 + 33/16 (1 − α) + (19 − 3α)/256 a2),
+    κ_k* = 2/3 (1 + c* + 3/5 ν χ (1 + α)² (2α − 1 + (1 + α) c*/2)) / (ν_κ* − 2ζ*),
+    κ* = κ_k* (1 + 6/5 ν χ (1 + α)) + 256/(25π) ν² χ (1 + α)(1 + 7/32 a2)  (conductivity),
+    μ_k* = (2ζ* κ_k* (1 + ν ∂_ν ln χ) + 2/3 c* (1 + ½ ν ∂_ν ln χ)
+            − 4/5 ν χ (1 + α)(1 + ½ ν ∂_ν ln χ)(α(1 − α) + c*/6 (16 − 3α + 3α²)))
+           / (2ν_κ* − 3ζ*),
+    μ* = μ_k* (1 + 6/5 ν χ (1 + α))                                     (coefficient of ∇n),
+
+in units of the dilute elastic coefficients η0 = (5/16σ²)√(mT/π), κ0 = 15η0/(4m),
+ν0 = nT/η0 (ζ^(0) = ζ* ν0) and Tκ0/n (μ). In chuteflow's units (σ, ρ_p σ³, √(σ/g);
+T the temperature per unit mass, m = π/6) this is, as for Table 1's Lun closure,
+
+    p = ν p* T,   μ = (5√π/96) η* √T,   ζ = (5√π/96) λ* √T,   κ = (25√π/128) κ* √T,
+    Γ = (3/2) ν T ζ^(0) = (144/(5√π)) ζ* ν² T^{3/2},   κ_h = (25√π/128) μ*/ν T^{3/2},
+
+(q = −κ∇T − μ∇n with n ∝ ν gives κ_h = Tκ0 μ*/ν). At α = 1 these are Table 1's Lun
+functions at e_p = 1 (the Enskog values of Chapman & Cowling, first approximation); as
+ν → 0 they are the Boltzmann (dilute) values of Brey, Dufty, Kim & Santos (1998).
+
+Only the zeroth-order cooling rate ζ^(0) is kept: GD99's first-order part ζ_U ∇·u (a
+correction to the bulk viscosity of the energy balance) is not included.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+from .._codegen import lazy_module
+from .kinetic import TransportClosure, register_transport
+
+sp = lazy_module("sympy")
+
+__all__ = ["GarzoDuftyClosure", "garzo_dufty_reduced"]
+
+
+def garzo_dufty_reduced(nu, e, g0, dg0=None) -> dict:
+    """The reduced coefficients of Garzó & Dufty (1999) (module docstring) as sympy
+    expressions of ν, α = e and χ = g0 (``dg0`` = dχ/dν; by default sympy's derivative
+    of ``g0`` in ``nu``): keys a2, c_star, p_star, zeta_star, nu_eta_star, gamma_star,
+    eta_k_star, eta_star, lambda_star, nu_kappa_star, kappa_k_star, kappa_star, mu_k_star,
+    mu_star."""
+    a, chi = e, g0
+    if dg0 is None:
+        dg0 = sp.diff(g0, nu)
+    pi = sp.pi
+    r = sp.Rational
+    a2 = 16 * (1 - a) * (1 - 2 * a**2) / (81 - 17 * a + 30 * a**2 * (1 - a))
+    c = 2 * a2
+    p_star = 1 + 2 * (1 + a) * nu * chi
+    zeta = r(5, 12) * chi * (1 - a**2) * (1 + r(3, 16) * a2)
+    nu_eta = chi * (1 - r(1, 4) * (1 - a) ** 2) * (1 - a2 / 32)
+    gamma = r(128, 5) / pi * nu**2 * chi * (1 + a) * (1 - a2 / 16)
+    eta_k = (1 - r(2, 5) * (1 + a) * (1 - 3 * a) * nu * chi) / (nu_eta - zeta / 2)
+    eta = eta_k * (1 + r(4, 5) * nu * chi * (1 + a)) + r(3, 5) * gamma
+    lam = gamma
+    nu_kappa = (1 + a) / 3 * chi * (1 + r(33, 16) * (1 - a) + (19 - 3 * a) / 256 * a2)
+    kappa_k = (
+        r(2, 3)
+        * (1 + c + r(3, 5) * nu * chi * (1 + a) ** 2 * (2 * a - 1 + (1 + a) * c / 2))
+        / (nu_kappa - 2 * zeta)
+    )
+    kappa = kappa_k * (1 + r(6, 5) * nu * chi * (1 + a)) + r(256, 25) / pi * nu**2 * chi * (1 + a) * (
+        1 + r(7, 32) * a2
+    )
+    dlnchi = nu * dg0 / chi
+    mu_k = (
+        2 * zeta * kappa_k * (1 + dlnchi)
+        + r(2, 3) * c * (1 + dlnchi / 2)
+        - r(4, 5) * nu * chi * (1 + a) * (1 + dlnchi / 2) * (a * (1 - a) + c / 6 * (16 - 3 * a + 3 * a**2))
+    ) / (2 * nu_kappa - 3 * zeta)
+    mu = mu_k * (1 + r(6, 5) * nu * chi * (1 + a))
+    return {
+        "a2": a2,
+        "c_star": c,
+        "p_star": p_star,
+        "zeta_star": zeta,
+        "nu_eta_star": nu_eta,
+        "gamma_star": gamma,
+        "eta_k_star": eta_k,
+        "eta_star": eta,
+        "lambda_star": lam,
+        "nu_kappa_star": nu_kappa,
+        "kappa_k_star": kappa_k,
+        "kappa_star": kappa,
+        "mu_k_star": mu_k,
+        "mu_star": mu,
+    }
+
+
+@register_transport
+@dataclass(frozen=True)
+class GarzoDuftyClosure(TransportClosure):
+    """Garzó & Dufty (1999) inelastic Enskog theory, first Sonine approximation (d = 3; the
+    forms and units in :mod:`chuteflow.closures.garzo_dufty`).
+
+    The functions f1 … f7 keep Table 1's meaning (p = f1 T, μ = f2 √T, ζ = f3 √T,
+    κ = f4 √T, f5 = 12/√π ν² g0; f6, f7 of the floor conditions from f4, f2), so the
+    Johnson–Jackson floor conditions take the same form with this closure's μ and κ;
+    Γ = (1 − e_p²)(1 + 3a2/16) f5 T^{3/2} (the cooling rate ζ* with its Sonine
+    correction) and κ_h = fh T^{3/2}, fh = (25√π/128) μ*/ν.
+    """
+
+    name: ClassVar[str] = "garzo_dufty"
+
+    def functions(self, nu, e, nu_max, g0):
+        """f1 … f7 and fh of Garzó & Dufty (1999) as sympy expressions in ν, given g0(ν)."""
+        c = garzo_dufty_reduced(nu, e, g0)
+        sqpi = sp.sqrt(sp.pi)
+        f2 = 5 * sqpi / 96 * c["eta_star"]
+        f4 = 25 * sqpi / 128 * c["kappa_star"]
+        return {
+            "f1": nu * c["p_star"],
+            "f2": f2,
+            "f3": 5 * sqpi / 96 * c["lambda_star"],
+            "f4": f4,
+            "f5": 12 / sqpi * nu**2 * g0,
+            "f6": sp.sqrt(3) * sp.pi * nu * g0 / (2 * nu_max * f4),
+            "f7": sp.pi * nu * g0 / (2 * sp.sqrt(3) * nu_max * f2),
+            "fh": 25 * sqpi / 128 * c["mu_star"] / nu,
+            "cool": 1 + sp.Rational(3, 16) * c["a2"],
+        }
+
+    def transport(self, f, T, e):
+        """p, μ, ζ, κ, Γ and κ_h (module docstring) from :meth:`functions`."""
+        sqT = sp.sqrt(T)
+        return {
+            "p": f["f1"] * T,
+            "mu": f["f2"] * sqT,
+            "zeta": f["f3"] * sqT,
+            "kappa": f["f4"] * sqT,
+            "Gamma": (1 - e**2) * f["cool"] * f["f5"] * T * sqT,
+            "kappa_h": f["fh"] * T * sqT,
+        }
