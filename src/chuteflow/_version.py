@@ -1,3 +1,3 @@
 """The version of chuteflow, stated once (``pyproject.toml`` reads it from here)."""
 
-__version__ = "0.2.0.dev0"
+__version__ = "0.3.0"

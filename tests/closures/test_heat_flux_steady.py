@@ -1,5 +1,5 @@
 """The steady equations with κ_h ≠ 0 as the shooting scan integrates them
-(chuteflow.steady.existence.SteadyODE): its right-hand side and floor values satisfy the
+(chuteflow.steady.shooting.ode.SteadyODE): its right-hand side and floor values satisfy the
 compiled energy balance (eq. (3.6) with −∇·q, q_y = −κT_y − κ_h ν_y) and floor energy
 condition (2.10), where ν0'' = d/dy ν0'(ν0, T0, T0') brings T0'' into the κ_h term.
 An independent check: the residuals of chuteflow.equations at the state the ODE gives.
@@ -14,7 +14,7 @@ import pytest
 
 from chuteflow import ChuteModel
 from chuteflow.equations import compiled_equations
-from chuteflow.steady.existence import SteadyODE
+from chuteflow.steady.shooting.ode import SteadyODE
 
 THETA = 16.0
 

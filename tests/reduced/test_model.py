@@ -219,7 +219,7 @@ def test_table_and_summary(rm16):
     ds = rm16.table(20)
     assert {"F", "Tbar", "a", "U", "criterion_margin", "k_c"} <= set(ds.data_vars)
     assert ds.attrs["theta"] == 16.0
-    s = rm16.summary()
+    s = rm16.to_dict()
     assert s["knots"] == len(rm16.rho)
     assert s["rho_range"][0] == rm16.rho_range[0]
 

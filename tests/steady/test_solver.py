@@ -429,14 +429,14 @@ def test_unresolved_flow_is_returned_flagged_without_strict():
     the change between the last two (n = 288 → 384) stays at 3.4e-8 > rtol = 1e-8 (a nearly
     packed band, Newton's round-off floor). ``strict=False`` returns that flow flagged
     (``converged`` False, ``convergence`` its estimate) instead of raising (the guide: a
-    result that misses the precision comes with its estimate); ``strict=True`` (default)
-    still raises. Its thickness agrees with the independent shooting scan of
+    result that misses the precision comes with its estimate; the default); ``strict=True``
+    raises. Its thickness agrees with the independent shooting scan of
     tests/steady/shooting.py (h = 9.137 there, read at 4 digits by the scan's message)
     and with the scan of :func:`steady_existence`."""
     from chuteflow.steady import steady_existence
 
     model = ChuteModel(roughness=0.05)
-    f = solve_steady(16.2712, 0.25, model, strict=False)
+    f = solve_steady(16.2712, 0.25, model)  # strict=False: the default
     if f.converged:  # resolved after all: then it must meet rtol
         assert f.convergence <= 1e-8
     else:
@@ -444,7 +444,7 @@ def test_unresolved_flow_is_returned_flagged_without_strict():
         assert "not converged to the requested tolerance" in f.note
         assert f.to_dict()["converged"] is False
         with pytest.raises(ConvergenceError):
-            solve_steady(16.2712, 0.25, model)
+            solve_steady(16.2712, 0.25, model, strict=True)
     v = steady_existence(16.2712, 0.25, model)
     assert f.h == pytest.approx(v.h, rel=1e-4)
     assert f.h == pytest.approx(9.137, rel=1e-3)

@@ -93,7 +93,7 @@ def dns(
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ResolutionWarning)  # reported below, in one line
         with con.status("solving the steady flow…"):
-            flow = solve_steady(theta, nu0, model)
+            flow = solve_steady(theta, nu0, model, strict=True)
         with time_progress("dns", con, disable=as_json and not con.is_terminal, digits=5) as progress:
             ds = simulate(
                 flow,

@@ -41,7 +41,7 @@ def _num(v):
 
 
 def _point(c, nu0=None):
-    d = c.summary()
+    d = c.to_dict()
     d["nu0"] = c.F if nu0 is None else nu0
     out = {}
     for k in POINT_KEYS:

@@ -104,7 +104,7 @@ def _one(theta: float, nu0: float, model_dict: dict, s: WaveMapSettings, out_dir
     out = None if out_dir is None else Path(out_dir) / f"{_name(theta, nu0)}.nc"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        flow = solve_steady(theta, nu0, model)
+        flow = solve_steady(theta, nu0, model, strict=True)
         if out is not None and out.exists() and not Path(str(out) + ".checkpoint.npz").exists():
             ds: xr.Dataset | None = xr.load_dataset(out, engine="h5netcdf")
             assert ds is not None

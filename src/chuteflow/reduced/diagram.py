@@ -240,8 +240,8 @@ def _solve_from(theta, nu0, model, guess):
     """Steady flow at (θ, ν0) from ``guess`` (a flow or None: cold start), or None."""
     try:
         if guess is None:
-            return solve_steady(theta, nu0, model, continuation=False)
-        return solve_steady(theta, nu0, model, guess=guess, continuation=False)
+            return solve_steady(theta, nu0, model, continuation=False, strict=True)
+        return solve_steady(theta, nu0, model, guess=guess, continuation=False, strict=True)
     except (NoSteadyFlowError, ConvergenceError, ArithmeticError, ValueError, np.linalg.LinAlgError):
         return None
 

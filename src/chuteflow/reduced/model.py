@@ -247,7 +247,7 @@ class LocalCoefficients:
         )
         return float(res.x * kc), float(-res.fun)
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         """JSON-ready dict of the coefficients and the linear theory."""
         kmax, smax = self.most_unstable()
         d = {
@@ -532,7 +532,7 @@ class ReducedModel:
         )
         return ds
 
-    def summary(self) -> dict:
+    def to_dict(self) -> dict:
         return {
             "theta": self.theta,
             "roughness": self.model.roughness,
@@ -546,12 +546,12 @@ class ReducedModel:
 
 def _solve(theta, nu0, model, guess, nu_top, cold_retry=True):
     try:
-        return solve_steady(theta, nu0, model, guess=guess, nu_top=nu_top)
+        return solve_steady(theta, nu0, model, guess=guess, nu_top=nu_top, strict=True)
     except (NoSteadyFlowError, ConvergenceError) as exc:
         if guess is None or not cold_retry:
             raise
         try:  # a continuation guess can mislead Newton near the ends of the family
-            return solve_steady(theta, nu0, model, nu_top=nu_top)
+            return solve_steady(theta, nu0, model, nu_top=nu_top, strict=True)
         except (NoSteadyFlowError, ConvergenceError):
             raise exc from None
 

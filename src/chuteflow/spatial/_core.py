@@ -9,9 +9,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ConvergenceError, ParameterError
-from ..stability import DEFAULT_POLICY, RejectionPolicy, least_stable, stability_operator, tail
+from ..stability import DEFAULT_POLICY, RejectionPolicy, least_stable, stability_operator
 from ..stability.complex_k import ComplexEigenpair, eigenpair_at
-from ..stability.modes import check_n, interp_vector
+from ..stability.modes import check_n, interp_vector, tail
 from ..steady import SteadyFlow
 
 

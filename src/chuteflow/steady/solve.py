@@ -29,7 +29,7 @@ def solve_steady(
     guess: SteadyFlow | None = None,
     min_thickness: float = 1.0,
     continuation: bool = True,
-    strict: bool = True,
+    strict: bool = False,
 ) -> SteadyFlow:
     """Steady flow at inclination ``theta`` (degrees) and floor density ``nu0`` (paper §3).
 
@@ -56,13 +56,14 @@ def solve_steady(
         If the cold start and the shooting start both fail, follow the branch in θ from an
         anchor angle (see Notes). False: fail after the shooting start.
     strict : bool
-        True (default): raise :class:`ConvergenceError` where no road reaches ``rtol``.
-        False: where Newton converged at every resolution but the change between the last
+        False (default, the package's convention, :mod:`chuteflow.results`): where Newton
+        converged at every resolution but the change between the last
         two stayed above ``rtol`` (at ``n_max``, or at Newton's round-off floor, e.g.
         nearly packed bands near the upper existence boundary), return the flow with the
         smallest such change instead, flagged: ``converged`` False and ``convergence`` the
         estimate (the guide's rule: a result that misses the precision comes with its
-        estimate). Where no road gives a flow at all, the error is raised either way.
+        estimate). True: raise :class:`ConvergenceError` where no road reaches ``rtol``.
+        Where no road gives a flow at all, the error is raised either way.
 
     Notes
     -----

@@ -160,7 +160,7 @@ def run_task(config, task, *, limit_threads: bool = True, keep_flows: bool = Fal
         steady: list[tuple[SteadyFlow | None, str, str]] = []
         for th, nu in pts:
             try:
-                steady.append((solve_steady(th, nu, model, **kw), "ok", ""))
+                steady.append((solve_steady(th, nu, model, **kw, strict=True), "ok", ""))
             except NoSteadyFlowError as exc:
                 steady.append((None, "no_steady_flow", str(exc)))
             except ConvergenceError as exc:

@@ -87,7 +87,7 @@ def _fine_point(args) -> tuple[int, int, dict | None, str]:
     limit_blas_threads(1)
     try:
         if flow is None:
-            flow = solve_steady(theta, nu0, model, **kw)
+            flow = solve_steady(theta, nu0, model, **kw, strict=True)
         return i, j, dict(LongWaveMetric(**options).compute(flow, Point(i, j, theta, nu0))), ""
     except (ChuteflowError, ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:
         return i, j, None, f"{type(exc).__name__}: {exc}"

@@ -121,14 +121,14 @@ def row_ends(ds, *, rows=None, bisections: int = 5, halvings: int = 5, flows=Non
         try:
             flow = (flows or {}).get((i, j))
             if flow is None:
-                flow = solve_steady(theta, float(nus[j]), model, **kw)
+                flow = solve_steady(theta, float(nus[j]), model, **kw, strict=True)
             how = "grid"
             if j > 0:
                 lo, hi = float(nus[j - 1]), float(nus[j])  # no flow at lo, flow at hi
                 for _ in range(bisections):
                     mid = 0.5 * (lo + hi)
                     try:
-                        flow = solve_steady(theta, mid, model, guess=flow, **kw)
+                        flow = solve_steady(theta, mid, model, guess=flow, **kw, strict=True)
                         hi = mid
                         how = "bisection"
                     except ChuteflowError:

@@ -61,7 +61,7 @@ def _point(spec, p) -> dict:
 
     rec: dict = {}
     try:
-        flow = solve_steady(theta=p.theta, nu0=p.nu0, model=_model(spec, p.roughness))
+        flow = solve_steady(theta=p.theta, nu0=p.nu0, model=_model(spec, p.roughness), strict=True)
     except ChuteflowError as exc:
         rec["error"] = str(exc).split(":")[0]
         return rec

@@ -50,7 +50,7 @@ def _linear(ctx: StageContext) -> None:
     for name in ("P1", "P3"):
         p = POINTS[name]
         ctx.progress(f"DNS linear phase at {name}")
-        flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
+        flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness), strict=True)
         ds = simulate(flow, L)
         s = summary(ds)
         ds.to_netcdf(ctx.path(f"linear_{name}.nc"), engine="h5netcdf")
@@ -107,7 +107,7 @@ def _wave_from_noise(ctx: StageContext) -> None:
     M, N, dt, T, amp = QUICK_WAVE
     L = 1000.0
     ctx.progress(f"DNS: a density wave from noise at P1, L = {L:g}")
-    flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness))
+    flow = solve_steady(p.theta, p.nu0, ChuteModel(roughness=p.roughness), strict=True)
     ds = simulate(
         flow,
         L,

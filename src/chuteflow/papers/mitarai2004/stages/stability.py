@@ -89,7 +89,7 @@ def _run(ctx: StageContext) -> None:
     R = _Results()
     ctx.progress("steady flows", total=len(POINTS), completed=0)
     for name, (th, nu0, phi, _) in POINTS.items():
-        R.flows[name] = solve_steady(th, nu0, ChuteModel(roughness=phi))
+        R.flows[name] = solve_steady(th, nu0, ChuteModel(roughness=phi), strict=True)
         ctx.progress(advance=1)
 
     # dispersion relations, their k_c (the branch scan's rule, chuteflow.stability.scan: the

@@ -183,7 +183,7 @@ def _run(ctx: StageContext) -> None:
         flows: list[SteadyFlow | None] = []
         for nu0 in nus_p:
             try:
-                flows.append(solve_steady(th_p, nu0, model))
+                flows.append(solve_steady(th_p, nu0, model, strict=True))
             except Exception as exc:  # reported, the figure shows the rest
                 rep.add_note(f"profile θ = {th_p:g}°, ν0(0) = {nu0:g}: {exc}")
                 flows.append(None)
@@ -256,9 +256,9 @@ def _run(ctx: StageContext) -> None:
     keys = ("u_floor", "T_floor", "h", "nu_mean", "rho_bar", "Q", "y_max")
     for phi, th, nu0 in ((0.05, 16.0, 0.05), (0.05, 16.0, 0.15), (0.10, 20.0, 0.10)):
         m = ChuteModel(roughness=phi)
-        a = solve_steady(th, nu0, m)
+        a = solve_steady(th, nu0, m, strict=True)
         for label, kw in (("rtol 1e-10", {"rtol": 1e-10}), ("n from 96", {"n": 96})):
-            b = solve_steady(th, nu0, m, **kw)
+            b = solve_steady(th, nu0, m, **kw, strict=True)
             d = max(abs(getattr(a, k) - getattr(b, k)) / abs(getattr(b, k)) for k in keys)
             worst = max(worst, d)
             lines.append(f"φ = {phi:g}, θ = {th:g}°, ν0(0) = {nu0:g}, {label}: {d:.1e}")
@@ -271,7 +271,7 @@ def _run(ctx: StageContext) -> None:
         passed=worst < 1e-8,
         detail="; ".join(lines),
     )
-    f = solve_steady(16.0, 0.05)
+    f = solve_steady(16.0, 0.05, strict=True)
     rep.add_note(
         f"Reference (φ = 0.05, θ = 16°, ν0(0) = 0.05): u0(0) = {f.u_floor:.9g}, T0(0) = "
         f"{f.T_floor:.9g}, h = {f.h:.7g}, ν̄ = {f.nu_mean:.6g}, ρ̄0 = {f.rho_bar:.9g}, Q0 = "

@@ -87,7 +87,7 @@ def _run(ctx: StageContext) -> None:
 
     rep = ctx.report
     th, nu0, phi = P1
-    flow = solve_steady(th, nu0, ChuteModel(roughness=phi))
+    flow = solve_steady(th, nu0, ChuteModel(roughness=phi), strict=True)
     ctx.progress("3D operator identities")
     n = 48 if ctx.quick else 80
     # both on the plain Chebyshev grid (3D operators always are; 2D ones default to the
