@@ -26,7 +26,7 @@ def test_linear_phase_is_the_eigenvalue_with_kappa_h():
     mode = least_stable(flow, K)
     period = 2 * math.pi / abs(mode.alpha.imag)
     s = summary(
-        simulate(16.0, 0.05, 2 * math.pi / K, model=model, flow=flow, time=period / 2, dt=period / 100)
+        simulate(flow, 2 * math.pi / K, time=period / 2, dt=period / 100)
     )
     assert s["status"] == "ok"
     alpha_dns = complex(s["alpha_dns_re"], s["alpha_dns_im"])
