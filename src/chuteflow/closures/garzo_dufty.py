@@ -3,7 +3,7 @@
 V. Garzó & J. W. Dufty, "Dense fluid transport for inelastic hard spheres", Phys. Rev. E
 59, 5895 (1999), §VII (d = 3); the same forms are in V. Garzó, *Granular Gaseous Flows*
 (Springer 2019), ch. 5. With χ = g0(ν), ν the solid fraction (their φ), α = e_p, the
-reduced coefficients are
+reduced coefficients are::
 
     a2 = 16 (1 − α)(1 − 2α²) / (81 − 17α + 30α²(1 − α)),   c* = 2 a2  (Sonine coefficient),
     p* = 1 + 2 (1 + α) ν χ,
@@ -23,7 +23,7 @@ reduced coefficients are
 
 in units of the dilute elastic coefficients η0 = (5/16σ²)√(mT/π), κ0 = 15η0/(4m),
 ν0 = nT/η0 (ζ^(0) = ζ* ν0) and Tκ0/n (μ). In chuteflow's units (σ, ρ_p σ³, √(σ/g);
-T the temperature per unit mass, m = π/6) this is, as for Table 1's Lun closure,
+T the temperature per unit mass, m = π/6) this is, as for Table 1's Lun closure::
 
     p = ν p* T,   μ = (5√π/96) η* √T,   ζ = (5√π/96) λ* √T,   κ = (25√π/128) κ* √T,
     Γ = (3/2) ν T ζ^(0) = (144/(5√π)) ζ* ν² T^{3/2},   κ_h = (25√π/128) μ*/ν T^{3/2},
