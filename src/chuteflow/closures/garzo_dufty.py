@@ -3,7 +3,7 @@
 V. Garzó & J. W. Dufty, "Dense fluid transport for inelastic hard spheres", Phys. Rev. E
 59, 5895 (1999), §VII (d = 3); the same forms are in V. Garzó, *Granular Gaseous Flows*
 (Springer 2019), ch. 5. With χ = g0(ν), ν the solid fraction (their φ), α = e_p, the
-reduced coefficients are
+reduced coefficients are::
 
     a2 = 16 (1 − α)(1 − 2α²) / (81 − 17α + 30α²(1 − α)),   c* = 2 a2  (Sonine coefficient),
     p* = 1 + 2 (1 + α) ν χ,
