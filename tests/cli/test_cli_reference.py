@@ -4,7 +4,8 @@ The page has one table per command (``## `chuteflow NAME` ``) and one of the key
 all; nested objects are written ``steady.h``, lists of objects ``points[].rho0``, and
 ``steady.*`` stands for the keys of ``chuteflow steady``. The commands run here at P1
 (θ = 16°, ν0(0) = 0.05, §4.2) with the cheapest options: ``steady``, ``eig`` (2D),
-``dispersion`` with three k and ``longwave`` (about 10 s together).
+``dispersion`` with three k, ``longwave`` and ``spatial`` (about 11 s together);
+``absolute`` (5–20 s) is checked against its key list, and run in a slow test.
 """
 
 from __future__ import annotations
@@ -85,6 +86,7 @@ def outputs() -> dict[str, dict]:
         "eig": ["eig", *P1, "--k", "0.002", "--json"],
         "dispersion": ["dispersion", *P1, "--k-max", "0.006", "--num", "3", "--json"],
         "longwave": ["longwave", *P1, "--rtol", "0.2", "--json"],
+        "spatial": ["spatial", *P1, "--omega", "0.02", "--json"],
     }
     res = {}
     with warnings.catch_warnings():
@@ -100,16 +102,16 @@ def test_the_page_has_a_table_for_every_json_command():
     docs = documented()
     for cmd in ("steady", "eig", "mode", "dispersion", "longwave", "transverse", "winner", "reduced"):
         assert docs.get(cmd), cmd
-    assert {"simulate", "dns", "eig3d"} <= set(docs)
+    assert {"simulate", "dns", "eig3d", "spatial", "absolute"} <= set(docs)
     assert {"theta", "nu0", "nu_top"} <= docs[COMMON]
 
 
-@pytest.mark.parametrize("command", ["steady", "eig", "dispersion", "longwave"])
+@pytest.mark.parametrize("command", ["steady", "eig", "dispersion", "longwave", "spatial"])
 def test_every_json_key_is_documented(command, outputs):
     assert not undocumented(command, outputs[command], documented()), command
 
 
-@pytest.mark.parametrize("command", ["steady", "eig", "dispersion", "longwave"])
+@pytest.mark.parametrize("command", ["steady", "eig", "dispersion", "longwave", "spatial"])
 def test_every_documented_key_is_printed(command, outputs):
     """No stale rows: the table's keys (other than ``only with …`` ones) are all printed."""
     keys = flat_keys(outputs[command])
@@ -137,3 +139,27 @@ def test_longwave_json_alpha2_is_the_dispersion_relations(outputs):
     assert out["alpha2_re"] == pytest.approx(12308.05, rel=1e-5)
     assert out["alpha2_convergence"] < 1e-5
     assert abs(out["alpha2_taylor_re"] - out["alpha2_re"]) > 1e-3 * out["alpha2_re"]
+
+
+@pytest.mark.parametrize("command", ["spatial", "absolute"])
+def test_the_spatial_key_lists_match_the_page(command):
+    """``SPATIAL_KEYS``/``ABSOLUTE_KEYS`` (what the commands print) are the page's rows."""
+    from chuteflow.cli.spatial import ABSOLUTE_KEYS, SPATIAL_KEYS
+
+    keys = set(SPATIAL_KEYS if command == "spatial" else ABSOLUTE_KEYS)
+    docs = documented()
+    assert keys - docs[COMMON] == docs[command]
+
+
+@pytest.mark.slow
+def test_absolute_json_keys_are_documented():
+    """``absolute --json`` at P1 (about 5 s here, up to 20 s) prints exactly the page's keys."""
+    from chuteflow.cli.spatial import ABSOLUTE_KEYS
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        r = runner.invoke(app, ["absolute", *P1, "--json"])
+    assert r.exit_code == 0, r.output
+    out = json.loads(r.stdout)
+    assert not undocumented("absolute", out, documented())
+    assert set(out) == set(ABSOLUTE_KEYS)

@@ -17,7 +17,18 @@ from chuteflow.closures import CLOSURES, FIELDS, ChuteModel
 from chuteflow.steady import solve_steady
 
 runner = CliRunner()
-MODEL_COMMANDS = ("steady", "eig", "dispersion", "longwave", "mode", "diagram", "reduced", "simulate")
+MODEL_COMMANDS = (
+    "steady",
+    "eig",
+    "dispersion",
+    "longwave",
+    "mode",
+    "diagram",
+    "reduced",
+    "simulate",
+    "spatial",
+    "absolute",
+)
 
 
 def test_options_cover_every_field_with_the_model_defaults():

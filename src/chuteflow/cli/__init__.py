@@ -28,6 +28,7 @@ COMMANDS = (
     "dns",
     "reduced",
     "reproduce",
+    "spatial",
     "stability",
     "steady",
     "transverse",

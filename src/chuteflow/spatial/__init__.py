@@ -2,6 +2,15 @@
 convective instability (the temporal analysis of the paper, §4, continued to complex k)."""
 
 from ._core import DEFAULT_SPATIAL_POLICY, SpatialPolicy
+from .absolute import AbsoluteResult, absolute_instability
 from .branches import SpatialPoint, spatial_dispersion, spatial_point
 
-__all__ = ["DEFAULT_SPATIAL_POLICY", "SpatialPolicy", "SpatialPoint", "spatial_dispersion", "spatial_point"]
+__all__ = [
+    "DEFAULT_SPATIAL_POLICY",
+    "AbsoluteResult",
+    "absolute_instability",
+    "SpatialPolicy",
+    "SpatialPoint",
+    "spatial_dispersion",
+    "spatial_point",
+]

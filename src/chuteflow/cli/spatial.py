@@ -1,0 +1,202 @@
+"""Spatial stability commands: ``spatial`` and ``absolute`` (:mod:`chuteflow.spatial`).
+
+Each solves the steady flow at (θ, ν0(0)) first, then:
+
+- ``chuteflow spatial --omega W``: one point k(ω) of the spatial branch, α(k) = −iω with
+  complex k (the wave forced at the inlet at angular frequency ω grows as exp(−Im k · x) down
+  the slope), beside Gaster's estimate from the temporal mode of the same frequency;
+- ``chuteflow absolute``: absolute or convective instability by the Briggs–Bers saddle
+  points along the rays x = V t: the packet's edges V−, V+ and the growth rate at V = 0.
+
+``--json`` prints one JSON object (non-finite numbers as null) and nothing else on standard
+output; progress goes to standard error.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from chuteflow.closures import ChuteModel
+
+from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from .stability import (
+    _NU_TOP_HELP,
+    _caption,
+    _console,
+    _echo_json,
+    _opt_nu0,
+    _opt_theta,
+    _params,
+    _steady,
+    _warn,
+)
+
+#: Keys of ``spatial --json`` (every key is documented in docs/cli.md).
+SPATIAL_KEYS = (
+    "theta",
+    "nu0",
+    "roughness",
+    "wall_loss",
+    "restitution",
+    "nu_max",
+    "radial",
+    "wall",
+    "transport",
+    "nu_top",
+    "omega",
+    "k_re",
+    "k_im",
+    "spatial_growth",
+    "group_velocity",
+    "k_real",
+    "gaster_growth",
+    "drift",
+    "tail",
+    "n",
+    "n_check",
+    "converged",
+    "note",
+)
+#: Keys of ``absolute --json``.
+ABSOLUTE_KEYS = (
+    "theta",
+    "nu0",
+    "roughness",
+    "wall_loss",
+    "restitution",
+    "nu_max",
+    "radial",
+    "wall",
+    "transport",
+    "nu_top",
+    "k_saddle_re",
+    "k_saddle_im",
+    "absolute_growth",
+    "absolute_frequency",
+    "verdict",
+    "v_minus",
+    "v_plus",
+    "v_peak",
+    "growth_peak",
+    "k_peak",
+    "pinch",
+    "pinch_v",
+    "kinematic_speed",
+    "n",
+    "drift",
+    "tail",
+    "converged",
+    "note",
+)
+
+
+def _summary(result, flow) -> dict:
+    out = _params(flow)
+    out.update(result.to_dict())
+    out["nu_top"] = flow.nu_top
+    return out
+
+
+def _table(title, caption, rows, summary):
+    from rich.table import Table
+
+    t = Table(title=title, caption=caption)
+    t.add_column("quantity")
+    t.add_column("value", justify="right")
+    for key, label, fmt in rows:
+        v = summary[key]
+        if fmt == "":
+            t.add_row(label, str(v) if not isinstance(v, bool) else ("yes" if v else "no"))
+        elif v is None:
+            t.add_row(label, "—")
+        else:
+            t.add_row(label, format(v, fmt))
+    return t
+
+
+@app.command("spatial")
+@with_model_options
+def spatial_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    omega: float = typer.Option(
+        ..., "--omega", help="Angular frequency ω > 0 of the inlet forcing exp(−iωt) (√(g/σ))."
+    ),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Spatial branch k(ω): the complex wavenumber of the wave forced at frequency ω."""
+    from chuteflow.spatial import spatial_point
+    from chuteflow.spatial.branches import check_omega
+
+    omega = check_omega(omega)
+    console = _console()
+    flow = _steady(console, theta, nu0, model, nu_top)
+    with console.status(f"spatial branch at ω = {omega:g}"):
+        pt = spatial_point(flow, omega, strict=False)
+    if not pt.converged:
+        _warn(f"ω = {omega:g}: not converged, the best estimate is shown ({pt.note})")
+    out = _summary(pt, flow)
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+
+    rows = (
+        ("omega", "angular frequency ω", ".6g"),
+        ("k_re", "Re k", ".10g"),
+        ("k_im", "Im k", ".10g"),
+        ("spatial_growth", "spatial growth −Im k", ".8g"),
+        ("group_velocity", "group velocity", ".8g"),
+        ("k_real", "temporal k of the same ω", ".8g"),
+        ("gaster_growth", "Gaster's estimate Re α/c_g", ".8g"),
+        ("drift", "|α(N) − α(N')| (convergence)", ".1e"),
+        ("tail", "Chebyshev tail (10 highest)", ".1e"),
+        ("n", "resolution N", "d"),
+        ("converged", "converged", ""),
+    )
+    Console().print(
+        _table(f"Spatial branch at θ = {theta:g}°, ν0(0) = {nu0:g}, ω = {omega:g}", _caption(flow), rows, out)
+    )
+
+
+@app.command("absolute")
+@with_model_options
+def absolute_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Absolute or convective instability (Briggs–Bers): the packet's edges and the V = 0 saddle."""
+    from chuteflow.spatial import absolute_instability
+
+    console = _console()
+    flow = _steady(console, theta, nu0, model, nu_top)
+    with console.status("saddle points along the rays x = V t (Briggs–Bers)"):
+        res = absolute_instability(flow, strict=False)
+    if not res.converged:
+        _warn(f"verdict {res.verdict!r} is not converged ({res.note})")
+    out = _summary(res, flow)
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+
+    rows = (
+        ("verdict", "verdict", ""),
+        ("absolute_growth", "absolute growth Re α(k*) at V = 0", ".8g"),
+        ("k_saddle_re", "Re k* (V = 0)", ".8g"),
+        ("k_saddle_im", "Im k* (V = 0)", ".8g"),
+        ("v_minus", "packet's lower edge V−", ".6g"),
+        ("v_plus", "packet's upper edge V+", ".6g"),
+        ("v_peak", "ray of fastest growth", ".6g"),
+        ("growth_peak", "its growth rate", ".6g"),
+        ("kinematic_speed", "kinematic-wave speed dQ0/dρ̄0", ".6g"),
+        ("converged", "converged", ""),
+    )
+    Console().print(
+        _table(f"Absolute instability at θ = {theta:g}°, ν0(0) = {nu0:g}", _caption(flow), rows, out)
+    )
