@@ -14,9 +14,12 @@ the temporal growth Re α(k) is negative for every real k. The packet's edges V�
 zeros of σ(V).
 
 Limitation. The far-field decay rate κ = √(k²) has its branch cut on Re k = 0
-(:mod:`chuteflow.stability.complex_k`). At the paper's points the saddle family continued from
-the temporal peak reaches that cut at |k*| ~ 1e-3 before σ(V) changes sign on at least one
-side (P1: on both sides, at V ≈ 7.6 and ≈ 9.0, with σ > 0 there); the verdict is then
+(:mod:`chuteflow.stability.complex_k`). Where the saddle family continued from the temporal
+peak reaches that cut (or k → 0, where α = 0 and the edge is the kinematic-wave speed
+dQ0/dρ̄0) before σ(V) changes sign on a side, the edge found is that limit; at the paper's
+points P1, P4, P5 the family never reaches V = 0, both edges are positive (P1: 4.1525 and
+9.0043) and the verdict is ``"convective"``, resting on V₋ > 0 (the lab-frame saddle itself
+is not computed: ``absolute_growth`` is NaN). Where neither edge is decided the verdict is
 ``"undetermined"`` and flagged, with the growing range found so far in :attr:`rays`.
 Continuing across the cut (the next sheet, where the top condition no longer decays, or the
 cut's own contribution to the impulse response) is not implemented.
