@@ -9,8 +9,8 @@ Transcribed for testing from MFiX as stored in the public repository CurtinIDS/m
   coefficient of ∇n in the heat flux), without the gas-phase terms (``SWITCH = 0``);
 * ``model/kintheory_mod.f``: the dissipation ``EDT_s_ip = 3/2 ρ_s ε_s nu0 zeta0_star``
   (times Θ in ``source_granular_energy.f``);
-* ``model/calc_mu_s.f``, subroutine ``GT_PDE_LUN`` (``KT_TYPE = 'LUN_1984'``): ``Mu_s_v``
-  with the factor (2 + ALPHA)/3, ``ALPHA = 1.6d0`` a PARAMETER in ``model/constant_mod.f``;
+* ``model/calc_mu_s.f``, subroutine ``GT_PDE_LUN`` (``KT_TYPE = 'LUN_1984'``): ``P_s_v``, ``Kth_s``,
+  ``Mu_s_v`` with the factor (2 + ALPHA)/3, ``ALPHA = 1.6d0`` a PARAMETER in ``model/constant_mod.f``;
 * ``model/rdf_mod.f``: for one solids phase g0 is Carnahan–Starling, ``DG_0DNU =
   (2.5 − ε)/(1 − ε)⁴``.
 
@@ -114,6 +114,16 @@ def mfix_lun_mu(ep, c_e, theta, alpha=1.6):
     )
 
 
+def mfix_lun_p_kappa(ep, c_e, theta):
+    """GT_PDE_LUN's P_s_v and Kth_s (SWITCH = 0, one solids phase), ρ_s = d_p = 1."""
+    eta = (1 + c_e) / 2
+    g0 = (1 - ep / 2) / (1 - ep) ** 3
+    kth = 75 * np.sqrt(PI * theta) / (48 * eta * (41 - 33 * eta))
+    a = (1 + 12 / 5 * eta * ep * g0) * (1 + 12 / 5 * eta**2 * (4 * eta - 3) * ep * g0)
+    kappa = kth / g0 * (a + 64 / (25 * PI) * (41 - 33 * eta) * (eta * ep * g0) ** 2)
+    return ep * (1 + 4 * eta * ep * g0) * theta, kappa
+
+
 @pytest.mark.parametrize("e", ES)
 def test_garzo_dufty_matches_mfix_gd_1999(e):
     T = np.linspace(0.5, 3.0, NUS.size)
@@ -132,4 +142,7 @@ def test_lun_mfix_viscosity_matches_mfix_lun_1984(e, alpha):
     )
     ev = model.evaluate(NUS, T)
     np.testing.assert_allclose(ev["mu"][(0, 0)], mfix_lun_mu(NUS, e, T, alpha), rtol=1e-10)
+    p, kappa = mfix_lun_p_kappa(NUS, e, T)
+    np.testing.assert_allclose(ev["p"][(0, 0)], p, rtol=1e-10)
+    np.testing.assert_allclose(ev["kappa"][(0, 0)], kappa, rtol=1e-10)
     assert np.all(np.asarray(ev["kappa_h"][(0, 0)]) == 0.0)  # MFiX: Kphi_s = 0 for LUN_1984
