@@ -25,9 +25,7 @@ def test_linear_phase_is_the_eigenvalue_with_kappa_h():
     flow = solve_steady(16.0, 0.05, model)
     mode = least_stable(flow, K)
     period = 2 * math.pi / abs(mode.alpha.imag)
-    s = summary(
-        simulate(flow, 2 * math.pi / K, time=period / 2, dt=period / 100)
-    )
+    s = summary(simulate(flow, 2 * math.pi / K, time=period / 2, dt=period / 100))
     assert s["status"] == "ok"
     alpha_dns = complex(s["alpha_dns_re"], s["alpha_dns_im"])
     assert abs(alpha_dns - mode.alpha) < 1e-2 * abs(mode.alpha)

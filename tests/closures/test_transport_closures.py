@@ -5,7 +5,8 @@ the package's sympy): Garzó & Dufty, Phys. Rev. E 59, 5895 (1999), §VII, d = 3
 in the docstring of chuteflow.closures.garzo_dufty); the elastic Enskog coefficients of
 Chapman & Cowling (first approximation, bρ = 4ν); the dilute (Boltzmann) inelastic values
 of Brey, Dufty, Kim & Santos, Phys. Rev. E 58, 4638 (1998); the paper's Table 1 (Lun et
-al. 1984); Ma & Ahmadi (1986) g0.
+al. 1984); Ma & Ahmadi (1986) g0. (The Garzó–Dufty reference was corrected on
+2026-12-04 to MFiX's GT_PDE_GD, see test_garzo_dufty_mfix.py: ν_κ*, κ_k*, κ*, μ_k*.)
 """
 
 from __future__ import annotations
@@ -39,17 +40,27 @@ def gd_reference(nu, a, g, dg):
     gamma = 128 / (5 * math.pi) * nu**2 * g * (1 + a) * (1 - a2 / 16)
     eta_k = (1 - 0.4 * (1 + a) * (1 - 3 * a) * nu * g) / (nu_eta - zeta / 2)
     eta = eta_k * (1 + 0.8 * nu * g * (1 + a)) + 0.6 * gamma
-    nu_k = (1 + a) / 3 * g * (1 + 33 / 16 * (1 - a) + (19 - 3 * a) / 256 * a2)
-    kap_k = 2 / 3 * (1 + c + 0.6 * nu * g * (1 + a) ** 2 * (2 * a - 1 + (1 + a) * c / 2)) / (nu_k - 2 * zeta)
-    kap = kap_k * (1 + 1.2 * nu * g * (1 + a)) + 256 / (25 * math.pi) * nu**2 * g * (1 + a) * (
-        1 + 7 / 32 * a2
+    nu_k = (1 + a) / 3 * g * (1 + 33 / 16 * (1 - a) + (19 - 3 * a) / 1024 * c)
+    p_star = 1 + 2 * (1 + a) * nu * g
+    ckk = (1 + a) / 2 - 5 / (3 * (1 + a))
+    kap_k = (
+        2
+        / 3
+        * (1 + (1 + p_star) * c / 2 + 0.6 * nu * g * (1 + a) ** 2 * (2 * a - 1 + ckk * c))
+        / (nu_k - 2 * zeta)
     )
+    kap = kap_k * (1 + 1.2 * nu * g * (1 + a)) + 256 / (25 * math.pi) * nu**2 * g * (1 + a) * (1 + 7 / 32 * c)
     dl = nu * dg / g
+    dlp = nu * 2 * (1 + a) * (g + nu * dg) / p_star
     mu_k = (
-        2 * zeta * kap_k * (1 + dl)
-        + 2 / 3 * c * (1 + dl / 2)
-        - 0.8 * nu * g * (1 + a) * (1 + dl / 2) * (a * (1 - a) + c / 6 * (16 - 3 * a + 3 * a**2))
-    ) / (2 * nu_k - 3 * zeta)
+        2
+        * (
+            zeta * kap_k * (1 + dl)
+            + p_star / 3 * (1 + dlp) * c
+            - 0.8 * nu * g * (1 + a) * (1 + dl / 2) * (a * (1 - a) + (4 / 3 + a * (1 - a)) * c / 4)
+        )
+        / (2 * nu_k - 3 * zeta)
+    )
     mu = mu_k * (1 + 1.2 * nu * g * (1 + a))
     return {"a2": a2, "zeta": zeta, "eta": eta, "lambda": gamma, "kappa": kap, "mu": mu}
 
@@ -152,12 +163,12 @@ def test_garzo_dufty_mu_vanishes_linearly_as_e_tends_to_one():
 def test_garzo_dufty_dilute_limit_is_boltzmann(e):
     """ν → 0: Brey, Dufty, Kim & Santos (1998): η* = 1/(ν_η* − ζ*/2), κ* = 2/3 (1 + c*)/(ν_κ* − 2ζ*),
     μ* = 2ζ*(κ* + c*/(3ζ*))/(2ν_κ* − 3ζ*) with ν_η* = (1 − ¼(1−α)²)(1 − c*/64),
-    ν_κ* = (1+α)/3 (1 + 33/16 (1−α) + (19 − 3α)/512 c*), ζ* = 5/12 (1 − α²)(1 + 3c*/32)."""
+    ν_κ* = (1+α)/3 (1 + 33/16 (1−α) + (19 − 3α)/1024 c*), ζ* = 5/12 (1 − α²)(1 + 3c*/32)."""
     a = e
     c = 32 * (1 - a) * (1 - 2 * a**2) / (81 - 17 * a + 30 * a**2 * (1 - a))
     zeta = 5 / 12 * (1 - a**2) * (1 + 3 * c / 32)
     eta = 1 / ((1 - 0.25 * (1 - a) ** 2) * (1 - c / 64) - zeta / 2)
-    nuk = (1 + a) / 3 * (1 + 33 / 16 * (1 - a) + (19 - 3 * a) / 512 * c)
+    nuk = (1 + a) / 3 * (1 + 33 / 16 * (1 - a) + (19 - 3 * a) / 1024 * c)
     kap = 2 / 3 * (1 + c) / (nuk - 2 * zeta)
     mu = 2 * zeta * (kap + c / (3 * zeta)) / (2 * nuk - 3 * zeta)
     nu = np.array([1e-9])

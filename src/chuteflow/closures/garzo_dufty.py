@@ -13,11 +13,12 @@ reduced coefficients are::
     η_k* = (1 − 2/5 (1 + α)(1 − 3α) ν χ) / (ν_η* − ζ*/2),
     η* = η_k* (1 + 4/5 ν χ (1 + α)) + 3/5 γ*                             (shear viscosity),
     λ* = γ*                                                            (bulk viscosity),
-    ν_κ* = (1 + α)/3 χ (1 + 33/16 (1 − α) + (19 − 3α)/256 a2),
-    κ_k* = 2/3 (1 + c* + 3/5 ν χ (1 + α)² (2α − 1 + (1 + α) c*/2)) / (ν_κ* − 2ζ*),
-    κ* = κ_k* (1 + 6/5 ν χ (1 + α)) + 256/(25π) ν² χ (1 + α)(1 + 7/32 a2)  (conductivity),
-    μ_k* = (2ζ* κ_k* (1 + ν ∂_ν ln χ) + 2/3 c* (1 + ½ ν ∂_ν ln χ)
-            − 4/5 ν χ (1 + α)(1 + ½ ν ∂_ν ln χ)(α(1 − α) + c*/6 (16 − 3α + 3α²)))
+    ν_κ* = (1 + α)/3 χ (1 + 33/16 (1 − α) + (19 − 3α)/1024 c*),
+    κ_k* = 2/3 (1 + ½(1 + p*) c* + 3/5 ν χ (1 + α)² (2α − 1 + ((1 + α)/2 − 5/(3(1 + α))) c*))
+           / (ν_κ* − 2ζ*),
+    κ* = κ_k* (1 + 6/5 ν χ (1 + α)) + 256/(25π) ν² χ (1 + α)(1 + 7/32 c*)  (conductivity),
+    μ_k* = 2 (ζ* κ_k* (1 + ν ∂_ν ln χ) + p*/3 (1 + ν ∂_ν ln p*) c*
+              − 4/5 ν χ (1 + α)(1 + ½ ν ∂_ν ln χ)(α(1 − α) + ¼(4/3 + α(1 − α)) c*))
            / (2ν_κ* − 3ζ*),
     μ* = μ_k* (1 + 6/5 ν χ (1 + α))                                     (coefficient of ∇n),
 
@@ -33,7 +34,25 @@ functions at e_p = 1 (the Enskog values of Chapman & Cowling, first approximatio
 ν → 0 they are the Boltzmann (dilute) values of Brey, Dufty, Kim & Santos (1998).
 
 Only the zeroth-order cooling rate ζ^(0) is kept: GD99's first-order part ζ_U ∇·u (a
-correction to the bulk viscosity of the energy balance) is not included.
+correction to the bulk viscosity of the energy balance) is not included (MFiX's
+``GD_1999`` does include it, as ``EDvel_sM_ip`` in ``source_granular_energy.f``).
+
+Verification (2026-12-04). The forms above were checked term by term against MFiX's
+Fortran implementation of ``KT_TYPE = 'GD_1999'`` (repository CurtinIDS/mfix, file
+``model/calc_mu_s.f``, subroutine ``GT_PDE_GD``: ``press_star``, ``c_star``,
+``zeta0_star``, ``nu_eta_star``, ``gamma_star``, ``eta_k_star``, ``eta_star``,
+``nu_kappa_star``, ``kappa_k_star``, ``kappa_star``, ``qmu_k_star``, ``qmu_star``; the
+cooling rate ``EDT_s_ip = 3/2 ρ_s ν ν0 ζ*`` in ``model/kintheory_mod.f``), by
+``tests/closures/test_garzo_dufty_mfix.py``. p*, ζ*, ν_η*, γ*, η_k*, η*, λ* = γ* (MFiX's
+``Mu_b_v``) and the prefactor 6/5 of μ* agreed as first written; the earlier version had
+(19 − 3α)/256 a2 = (19 − 3α)/512 c* in ν_κ* (MFiX: /1024 c*), 1 + c* and (1 + α)c*/2 in
+κ_k* (MFiX: ½(1 + p*) c* and ((1 + α)/2 − 5/(3(1 + α))) c*), 7/32 a2 in κ* (MFiX: 7/32
+c*) and wrong second and third terms (and a missing factor 2) in μ_k*; these are now
+MFiX's forms. One deliberate difference remains: MFiX writes the factors (1 + ν ∂_ν ln χ)
+and (1 + ½ ν ∂_ν ln χ) of μ_k* as (1 + ν χ') and (1 + ½ ν χ') (no division by χ); chuteflow
+keeps ln χ, which is what ∂(nχ)/∂n of the cooling rate ζ ∝ nχ gives (this choice is not
+verified against the paper itself). Carnahan–Starling is MFiX's only g0 for one solids
+phase.
 """
 
 from __future__ import annotations
@@ -69,21 +88,31 @@ def garzo_dufty_reduced(nu, e, g0, dg0=None) -> dict:
     eta_k = (1 - r(2, 5) * (1 + a) * (1 - 3 * a) * nu * chi) / (nu_eta - zeta / 2)
     eta = eta_k * (1 + r(4, 5) * nu * chi * (1 + a)) + r(3, 5) * gamma
     lam = gamma
-    nu_kappa = (1 + a) / 3 * chi * (1 + r(33, 16) * (1 - a) + (19 - 3 * a) / 256 * a2)
+    nu_kappa = (1 + a) / 3 * chi * (1 + r(33, 16) * (1 - a) + (19 - 3 * a) / 1024 * c)
     kappa_k = (
         r(2, 3)
-        * (1 + c + r(3, 5) * nu * chi * (1 + a) ** 2 * (2 * a - 1 + (1 + a) * c / 2))
+        * (
+            1
+            + (1 + p_star) * c / 2
+            + r(3, 5) * nu * chi * (1 + a) ** 2 * (2 * a - 1 + ((1 + a) / 2 - r(5, 3) / (1 + a)) * c)
+        )
         / (nu_kappa - 2 * zeta)
     )
     kappa = kappa_k * (1 + r(6, 5) * nu * chi * (1 + a)) + r(256, 25) / pi * nu**2 * chi * (1 + a) * (
-        1 + r(7, 32) * a2
+        1 + r(7, 32) * c
     )
     dlnchi = nu * dg0 / chi
+    # p*/3 (1 + ν ∂_ν ln p*) c*, written as MFiX does: p*/3 + 2/3 ν (1 + α)(χ + ν χ')
+    dp_term = p_star / 3 + r(2, 3) * nu * (1 + a) * (chi + nu * dg0)
     mu_k = (
-        2 * zeta * kappa_k * (1 + dlnchi)
-        + r(2, 3) * c * (1 + dlnchi / 2)
-        - r(4, 5) * nu * chi * (1 + a) * (1 + dlnchi / 2) * (a * (1 - a) + c / 6 * (16 - 3 * a + 3 * a**2))
-    ) / (2 * nu_kappa - 3 * zeta)
+        2
+        * (
+            zeta * kappa_k * (1 + dlnchi)
+            + dp_term * c
+            - r(4, 5) * nu * chi * (1 + a) * (1 + dlnchi / 2) * (a * (1 - a) + (r(4, 3) + a - a**2) * c / 4)
+        )
+        / (2 * nu_kappa - 3 * zeta)
+    )
     mu = mu_k * (1 + r(6, 5) * nu * chi * (1 + a))
     return {
         "a2": a2,

@@ -158,8 +158,12 @@ class LunFullClosure(LunClosure):
 class MfixLunClosure(LunClosure):
     """MFiX's ``KT_TYPE = LUN_1984`` (MFiX theory guide, Lun et al. 1984): Table 1's closures
     with the shear viscosity multiplied by (2 + α)/3, α = ``alpha`` (MFiX's ``ALPHA``,
-    default 1.6, the value MFiX uses; α = 1 gives the paper's f2). Every other function
+    1.6, the value MFiX uses; α = 1 gives the paper's f2). Every other function
     (p, ζ, κ, Γ; no κ_h) is the paper's. The floor conditions see the same f2 through η*.
+    Checked against MFiX's ``GT_PDE_LUN`` (CurtinIDS/mfix ``model/calc_mu_s.f``): the
+    factor multiplies the whole shear viscosity, kinetic and collisional, ``Kphi_s = 0``;
+    ``ALPHA = 1.6d0`` is a Fortran PARAMETER in ``model/constant_mod.f`` there (changed by
+    editing the source, not an input keyword) — tests/closures/test_garzo_dufty_mfix.py.
 
     Parameters
     ----------

@@ -430,11 +430,11 @@ PRESETS: dict[str, dict[str, Any]] = {
             "radial": "carnahan_starling",
             "wall": "johnson_jackson",
         },
-        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), RDF_TYPE = CARNAHAN_STARLING, BC_JJ_PS",
+        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), one solids phase (Carnahan-Starling), BC_JJ_PS",
     },
     "mfix-gd": {
         "model": {"transport": "garzo_dufty", "radial": "carnahan_starling", "wall": "johnson_jackson"},
-        "code": "MFiX KT_TYPE = GD_1999, RDF_TYPE = CARNAHAN_STARLING, BC_JJ_PS",
+        "code": "MFiX KT_TYPE = GD_1999, one solids phase (Carnahan-Starling g0), BC_JJ_PS",
     },
     "mfix-lun-ma-ahmadi": {
         "model": {
@@ -442,7 +442,7 @@ PRESETS: dict[str, dict[str, Any]] = {
             "radial": "ma_ahmadi",
             "wall": "johnson_jackson",
         },
-        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), RDF_TYPE = MA_AHMADI, BC_JJ_PS",
+        "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6) with a Ma-Ahmadi g0 (not an MFiX option)",
     },
 }
 

@@ -73,8 +73,10 @@ class CarnahanStarling(RadialDistribution):
 class MaAhmadi(RadialDistribution):
     """Ma & Ahmadi (1986): g0(ν) = (1 + 2.5ν + 4.5904ν² + 4.515439ν³) / (1 − (ν/ν_m)³)^0.67802.
 
-    MFiX's ``RDF_TYPE = MA_AHMADI``. Ma & Ahmadi fitted it with ν_m = 0.64356; here ν_m is
-    the model's ``nu_max`` (MFiX uses its maximum packing, 1 − ``EP_STAR``). It diverges at
+    (Not an MFiX option: the MFiX source checked, CurtinIDS/mfix ``model/rdf_mod.f`` and
+    ``check_data/check_solids_continuum.f``, has no ``RDF_TYPE = MA_AHMADI`` and allows only
+    Carnahan–Starling for one solids phase.) Ma & Ahmadi fitted it with ν_m = 0.64356; here
+    ν_m is the model's ``nu_max``. It diverges at
     ν_m like the paper's Lun–Savage g0 and tends to Carnahan–Starling's 1 + 5ν/2 + … as
     ν → 0.
     """
