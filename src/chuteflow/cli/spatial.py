@@ -19,6 +19,7 @@ import typer
 from chuteflow.closures import ChuteModel
 
 from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from ._keys import COMMON_KEYS
 from .stability import (
     _NU_TOP_HELP,
     _caption,
@@ -33,16 +34,7 @@ from .stability import (
 
 #: Keys of ``spatial --json`` (every key is documented in docs/cli.md).
 SPATIAL_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
-    "nu_top",
+    *COMMON_KEYS,
     "omega",
     "k_re",
     "k_im",
@@ -59,16 +51,7 @@ SPATIAL_KEYS = (
 )
 #: Keys of ``absolute --json``.
 ABSOLUTE_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
-    "nu_top",
+    *COMMON_KEYS,
     "k_saddle_re",
     "k_saddle_im",
     "absolute_growth",

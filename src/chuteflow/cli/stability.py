@@ -23,19 +23,11 @@ import typer
 from chuteflow.closures import ChuteModel
 
 from ._app import MODEL_OPTIONS_HERE, app, with_model_options
+from ._keys import COMMON_KEYS
 
 #: Keys of ``eig --json`` (and of ``mode --json``), besides the nested ``steady`` summary.
 EIG_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
-    "nu_top",
+    *COMMON_KEYS,
     "k",
     "kx",
     "kz",
@@ -58,16 +50,7 @@ EIG_KEYS = (
 #: documented in docs/cli.md). ``alpha2_*`` is the dispersion relation's k² coefficient (from
 #: the eigenvalue at k = 1e-5); the Taylor coefficient is the diagnostic ``alpha2_taylor_*``.
 LONGWAVE_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
-    "nu_top",
+    *COMMON_KEYS,
     "alpha1_re",
     "alpha1_im",
     "alpha2_re",
