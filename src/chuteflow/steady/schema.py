@@ -16,8 +16,8 @@ if TYPE_CHECKING:
     from .continuation_step import _Point
 
 
-#: Scalar variables of a family / map dataset (float, NaN where no steady flow).
-SCALARS = (
+#: Scalar variables of a family / map dataset that are attributes of the SteadyFlow.
+FLOW_SCALARS = (
     "h",
     "nu_mean",
     "rho_bar",
@@ -29,10 +29,10 @@ SCALARS = (
     "y_peak",
     "nu_peak",
     "convergence",
-    "dQ_drho",
-    "drho_dnu0",
-    "dQ_dnu0",
 )
+#: Scalar variables of a family / map dataset (float, NaN where no steady flow): the flow's
+#: and the family tangent's.
+SCALARS = (*FLOW_SCALARS, "dQ_drho", "drho_dnu0", "dQ_dnu0")
 
 
 _ATTRS = {
@@ -89,19 +89,7 @@ def row_arrays(points: list[_Point]) -> dict[str, np.ndarray]:
             continue
         f = p.flow
         assert f is not None  # status "ok" carries a flow
-        for k in (
-            "h",
-            "nu_mean",
-            "rho_bar",
-            "Q",
-            "T_mean",
-            "u_floor",
-            "T_floor",
-            "y_max",
-            "y_peak",
-            "nu_peak",
-            "convergence",
-        ):
+        for k in FLOW_SCALARS:
             out[k][i] = getattr(f, k)
         out["monotonic"][i] = 1.0 if f.monotonic else 0.0
         out["n"][i] = f.n
