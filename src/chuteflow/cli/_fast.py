@@ -24,6 +24,8 @@ from typing import Any
 from chuteflow.closures import CLOSURES, PARAMETERS, ChuteModel
 from chuteflow.errors import ChuteflowError
 
+from ._keys import COMMON_KEYS
+
 __all__ = ["JSON_KEYS", "REQUIRED", "STEADY_OPTIONS", "Option", "fast_main", "steady_command"]
 
 #: Default of a required option.
@@ -68,15 +70,7 @@ STEADY_OPTIONS: tuple[Option, ...] = (
 
 #: Keys of the JSON output, in order (the summary of :class:`~chuteflow.steady.SteadyFlow`).
 JSON_KEYS = (
-    "theta",
-    "nu0",
-    "roughness",
-    "wall_loss",
-    "restitution",
-    "nu_max",
-    "radial",
-    "wall",
-    "transport",
+    *COMMON_KEYS[:-1],  # the flow's parameters and the model's fields (nu_top comes later)
     "u_floor",
     "T_floor",
     "h",
