@@ -254,12 +254,22 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     pairs: list = []
     try:
         pairs.extend(newton_k(branch, k0, a_v + s, policy, start=e, V=V) for k0 in (e.k + root, e.k - root))
+        factor = 3.0
         while s < s_end:
-            s_new = min(s_end, 1.5 * s)
-            nxt = []
-            for p in pairs:
-                dk = (s_new - s) / (p.dalpha + 1j * V)
-                nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+            s_new = min(s_end, factor * s)
+            try:
+                nxt = []
+                for p in pairs:
+                    dk = (s_new - s) / (p.dalpha + 1j * V)
+                    nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+                if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
+                    raise ConvergenceError("the two roots fell onto one")
+            except ChuteflowError:
+                # a step too long for the predictor: shorter ones, down to the old fixed 1.5
+                if factor <= 1.5:
+                    raise
+                factor = max(1.5, factor**0.5)
+                continue
             pairs, s = nxt, s_new
     except ChuteflowError as exc:
         return None, f"the pinch was not decided ({exc})"

@@ -139,7 +139,9 @@ def real_k_of_frequency(branch: Branch, omega: float, k0: float, maxiter: int = 
             k_new = 0.5 * k
         k = k_new
         e = branch.at(k, start=e)
-        if abs(dk) <= 1e-12 * k:
+        # 1e-10: the round-off of Im α (~1e-13 at P4, where ω ~ 2e-3, k ~ 1e-3) makes steps of
+        # ~5e-11 k forever; k0 only starts the complex Newton, which has its own tolerance
+        if abs(dk) <= 1e-10 * k:
             return k, e
     return None
 
