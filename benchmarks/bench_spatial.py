@@ -64,14 +64,14 @@ def run(quick: bool = False) -> list[dict]:
         theta, nu0, w = POINTS[name]
         flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
         spatial_point(flow, w, cache=OperatorCache())  # warm-up (compilation)
-        t_sp, pt = _best(lambda: spatial_point(flow, w, cache=OperatorCache()), rep)
-        t_abs, res = _best(lambda: absolute_instability(flow, cache=OperatorCache()), max(1, rep - 1))
+        t_sp, pt = _best(lambda f=flow, w=w: spatial_point(f, w, cache=OperatorCache()), rep)
+        t_abs, res = _best(lambda f=flow: absolute_instability(f, cache=OperatorCache()), max(1, rep - 1))
         for row, t, n, k in (
             (f"spatial_point_{name}", t_sp, pt.n, pt.k_real),
             (f"absolute_{name}", t_abs, res.n, res.k_peak),
         ):
             A, B = stability_operator(flow, n, cache=OperatorCache()).pencil(k).equilibrated()
-            t_qz, _ = _best(lambda: sla.eig(A, B, right=False, check_finite=False), max(1, rep - 1))
+            t_qz, _ = _best(lambda A=A, B=B: sla.eig(A, B, right=False, check_finite=False), max(1, rep - 1))
             if row.startswith("spatial"):
                 note = (
                     f"omega = {w:g}: -Im k = {pt.spatial_growth:.6e}, N = {n}, converged "
@@ -96,5 +96,7 @@ def run(quick: bool = False) -> list[dict]:
 
 if __name__ == "__main__":
     for r in run(quick="--quick" in sys.argv):
-        print(f"{r['name']:24s} {r['seconds']:8.3f} s  baseline {r['baseline_seconds']:8.3f} s  "
-              f"ratio {r['ratio']:6.2f}  {r['note']}")
+        print(
+            f"{r['name']:24s} {r['seconds']:8.3f} s  baseline {r['baseline_seconds']:8.3f} s  "
+            f"ratio {r['ratio']:6.2f}  {r['note']}"
+        )

@@ -310,7 +310,9 @@ def _stable(flow: SteadyFlow, scan: BranchScan, peak, strict: bool) -> AbsoluteR
         model=flow.model,
     )
     if strict and not res.converged:
-        raise ConvergenceError(f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}")
+        raise ConvergenceError(
+            f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}"
+        )
     return res
 
 

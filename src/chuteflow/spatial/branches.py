@@ -34,7 +34,14 @@ from ..stability import branch_scan
 from ..steady import SteadyFlow
 from ._core import DEFAULT_SPATIAL_POLICY, Branch, SpatialPolicy, check_flow, newton_k
 
-__all__ = ["SpatialPoint", "spatial_point", "spatial_dispersion", "spatial_peak", "check_omega", "real_k_of_frequency"]
+__all__ = [
+    "SpatialPoint",
+    "spatial_point",
+    "spatial_dispersion",
+    "spatial_peak",
+    "check_omega",
+    "real_k_of_frequency",
+]
 
 
 def check_omega(omega) -> float:

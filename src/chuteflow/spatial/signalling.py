@@ -1,9 +1,9 @@
 """The signalling problem in a laboratory's units: does a wave forced at the inlet grow by a
 visible factor before the end of the chute?
 
-The paper scales lengths by the grain diameter σ and times by √(σ/g) (§2, after eq. (2.4):
-"the length unit σ, the mass unit ρp σ³, and the time unit √(σ/g)"). A dimensionless angular
-frequency ω̂ and spatial growth rate −Im k̂ (the spatial branch k̂(ω̂) of
+The paper scales lengths by the grain diameter σ and times by √(σ/g) (§2.1, after the
+constitutive relations: "the length unit σ, the mass unit ρp σ³, and the time unit √(σ/g)").
+A dimensionless angular frequency ω̂ and spatial growth rate −Im k̂ (the spatial branch k̂(ω̂) of
 :func:`~chuteflow.spatial.spatial_dispersion`) are therefore, for grains of diameter σ (m)
 under gravity g (m/s²),
 
@@ -205,7 +205,11 @@ class SignallingResult:
 
         ds = xr.Dataset(
             {
-                "omega": ("frequency", self.omega, {"units": "sqrt(g/sigma)", "long_name": "2 pi f sqrt(sigma/g)"}),
+                "omega": (
+                    "frequency",
+                    self.omega,
+                    {"units": "sqrt(g/sigma)", "long_name": "2 pi f sqrt(sigma/g)"},
+                ),
                 "spatial_growth": (
                     "frequency",
                     self.spatial_growth,
@@ -219,7 +223,9 @@ class SignallingResult:
                 "wavelength": ("frequency", self.wavelength, {"units": "m", "long_name": "2 pi / Re k"}),
                 "converged": ("frequency", self.point_converged),
             },
-            coords={"frequency": ("frequency", self.frequency, {"units": "Hz", "long_name": "forcing frequency"})},
+            coords={
+                "frequency": ("frequency", self.frequency, {"units": "Hz", "long_name": "forcing frequency"})
+            },
         )
         d = {k: v for k, v in self.to_dict().items() if k != "spectrum"}
         ds.attrs.update({k: (str(v) if isinstance(v, bool) or v is None else v) for k, v in d.items()})
@@ -249,7 +255,7 @@ def signalling(
     flow : SteadyFlow
         Base state (dimensionless, the paper's §3).
     grain_diameter : float
-        The grain diameter σ (m) > 0: the paper's length unit (§2).
+        The grain diameter σ (m) > 0: the paper's length unit (§2.1).
     chute_length : float
         X (m) > 0, measured down the slope along the floor from the inlet (module docstring).
     g : float
@@ -280,7 +286,9 @@ def signalling(
     if frequencies is not None:
         fs = np.atleast_1d(np.asarray(frequencies, dtype=float))
         if fs.size == 0:
-            raise ParameterError("frequencies: empty (give at least one frequency in Hz, or none for the default)")
+            raise ParameterError(
+                "frequencies: empty (give at least one frequency in Hz, or none for the default)"
+            )
         for f in fs:
             _positive("frequencies", f, "forcing frequencies in Hz")
         omegas = 2.0 * math.pi * fs * t_unit

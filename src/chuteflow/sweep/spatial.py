@@ -38,7 +38,13 @@ from .points import PointFunction, Variable, register_point_function
 __all__ = ["SpatialMetric", "VERDICT_CODES"]
 
 #: Codes of the ``spatial_verdict`` variable (−1: missing).
-VERDICT_CODES = {0: "stable", 1: "unstable (not classified)", 2: "convective", 3: "absolute", 4: "undetermined"}
+VERDICT_CODES = {
+    0: "stable",
+    1: "unstable (not classified)",
+    2: "convective",
+    3: "absolute",
+    4: "undetermined",
+}
 _CODE = {"stable": 0, "convective": 2, "absolute": 3, "undetermined": 4}
 
 
