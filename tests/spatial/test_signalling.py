@@ -100,7 +100,15 @@ def test_bad_input_names_the_parameter(p1, kw, name):
 
 
 def test_to_dict_and_xarray(res):
+    """The results convention (chuteflow.results.Result; strict=False by default)."""
+    import inspect
+
+    from chuteflow.results import Result
+
+    assert isinstance(res, Result)
+    assert inspect.signature(signalling).parameters["strict"].default is False
     d = res.to_dict()
+    json.dumps(d, allow_nan=True)
     assert len(d["spectrum"]) == len(F)
     assert d["spectrum"][0]["frequency"] == pytest.approx(F[0])
     assert d["visible"] is False
