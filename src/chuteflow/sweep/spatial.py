@@ -18,9 +18,10 @@ At each point:
    growth rate Re α(k*₀). ``absolute=False`` leaves them missing and the verdict at
    1 ("unstable, not classified") for an unstable flow.
 
-Measured on the shared 2-core machine (one process, φ = 0.05, after the steady flow):
-stable P2 0.3 s; P1 2.5 s + 5.1 s (scan and peak + Briggs–Bers), P4 1.3 + 7.8 s, P5
-0.5 + 3.7 s. The Briggs–Bers continuation is most of an unstable point's cost.
+Measured per point after the steady flow, on the shared 2-core machine at load ≈ 5 (about
+2.5× an idle core): stable P2, P3 0.6 s; without / with Briggs–Bers P1 1.9 / 8.8 s, P4
+2.4 / 10.0 s, P5 1.0 / 6.5 s. The Briggs–Bers continuation is most of an unstable point's
+cost (docs/spatial.md, "Speed").
 
 A non-critical metric: where a solver fails its variables stay missing and the point's
 message says why; the point keeps its classification.
