@@ -109,3 +109,23 @@ def test_diagram_cli_with_the_spatial_metric(tmp_path):
     assert v[0, 0] == 2
     assert v[1, 1] == 2
     assert out.with_suffix(".png").exists()
+
+
+def test_the_diagram_marks_the_verdicts():
+    """chuteflow.figures.diagram marks convective (2), absolute (3) and undetermined (4)
+    points, and neither stable (0) nor missing (−1) ones; one legend entry per verdict present."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from chuteflow.figures.diagram import SPATIAL_MARKS, _spatial_marks
+
+    fig, ax = plt.subplots()
+    try:
+        handles = _spatial_marks(ax, [1.0, 2.0, 3.0, 4.0], [0.1, 0.2, 0.3, 0.4], [0, 2, 2, -1])
+        assert [h.get_label() for h in handles] == [SPATIAL_MARKS[2][2]]
+        (line,) = ax.get_lines()
+        assert list(line.get_xdata()) == [2.0, 3.0]
+    finally:
+        plt.close(fig)
