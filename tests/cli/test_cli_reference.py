@@ -141,12 +141,17 @@ def test_longwave_json_alpha2_is_the_dispersion_relations(outputs):
     assert abs(out["alpha2_taylor_re"] - out["alpha2_re"]) > 1e-3 * out["alpha2_re"]
 
 
-@pytest.mark.parametrize("command", ["spatial", "absolute"])
+@pytest.mark.parametrize("command", ["spatial", "absolute", "signalling"])
 def test_the_spatial_key_lists_match_the_page(command):
-    """``SPATIAL_KEYS``/``ABSOLUTE_KEYS`` (what the commands print) are the page's rows."""
-    from chuteflow.cli.spatial import ABSOLUTE_KEYS, SPATIAL_KEYS
+    """``SPATIAL_KEYS``/``ABSOLUTE_KEYS``/``SIGNALLING_KEYS`` (what the commands print;
+    tests/spatial/test_signalling.py runs ``signalling``) are the page's rows."""
+    from chuteflow.cli.spatial import ABSOLUTE_KEYS, SIGNALLING_KEYS, SPATIAL_KEYS, SPECTRUM_KEYS
 
-    keys = set(SPATIAL_KEYS if command == "spatial" else ABSOLUTE_KEYS)
+    keys = {
+        "spatial": set(SPATIAL_KEYS),
+        "absolute": set(ABSOLUTE_KEYS),
+        "signalling": set(SIGNALLING_KEYS) | {f"spectrum[].{k}" for k in SPECTRUM_KEYS},
+    }[command]
     docs = documented()
     assert keys - docs[COMMON] == docs[command]
 

@@ -18,9 +18,10 @@ from chuteflow.steady import solve_steady
 
 @pytest.mark.slow
 def test_p1_lower_edge_is_the_kinematic_wave_speed():
-    """Measured: V− = 4.152547 against dQ0/dρ̄0 = 4.152360 (``longwave(flow).dQ_drho``; −Im α1
-    = 4.152360 too): 4.5e-5 relative, the saddle family stopping at |k*| ≈ 2e-5 short of k = 0
-    (its note). Tolerance 2e-4 relative (4×). The upper edge V+ = 9.00427 (measured; 1e-3)."""
+    """Measured: V− = 4.152490 against dQ0/dρ̄0 = 4.152360 (``longwave(flow).dQ_drho``; −Im α1
+    = 4.152360 too): 3.1e-5 relative, V− being −Im(α'(k) − k α''(k)) at k = 2e-5 k_peak (the
+    linear term 2 α2 k removed; 4.152547, 4.5e-5, with −Im α'(k) alone at the old k = 2e-5 k_peak).
+    Tolerance 2e-4 relative. The upper edge V+ = 9.00427 (measured; 1e-3)."""
     flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
     res = absolute_instability(flow)
     assert isinstance(res, AbsoluteResult)
@@ -40,8 +41,8 @@ def test_p1_lower_edge_is_the_kinematic_wave_speed():
     ids=["P4", "P5"],
 )
 def test_p4_p5_upper_edge_is_the_kinematic_wave_speed(theta, nu0, v_minus, v_plus):
-    """Measured: P4 V+ = 2.275087 against dQ0/dρ̄0 = 2.275099 (5e-6), P5 V+ = 18.139263
-    against 18.139275 (7e-7); both convective. Tolerance 2e-4 relative, as at P1."""
+    """Measured: P4 V+ = 2.2750979 against dQ0/dρ̄0 = 2.2750995 (7e-7), P5 V+ = 18.139269
+    against 18.139275 (3.5e-7); both convective. Tolerance 2e-4 relative, as at P1."""
     flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
     res = absolute_instability(flow)
     assert res.converged, res.note

@@ -6,7 +6,11 @@ Each solves the steady flow at (θ, ν0(0)) first, then:
   complex k (the wave forced at the inlet at angular frequency ω grows as exp(−Im k · x) down
   the slope), beside Gaster's estimate from the temporal mode of the same frequency;
 - ``chuteflow absolute``: absolute or convective instability by the Briggs–Bers saddle
-  points along the rays x = V t: the packet's edges V−, V+ and the growth rate at V = 0.
+  points along the rays x = V t: the packet's edges V−, V+ and the growth rate at V = 0;
+- ``chuteflow signalling --diameter D --chute-length X``: the signalling problem in a
+  laboratory's units (:func:`chuteflow.spatial.signalling`): the gain of each inlet
+  frequency (Hz) over X metres of chute, the most amplified frequency, the cut-off, and
+  whether a wave grows by ``--threshold`` before the end.
 
 ``--json`` prints one JSON object (non-finite numbers as null) and nothing else on standard
 output; progress goes to standard error.
@@ -71,6 +75,31 @@ ABSOLUTE_KEYS = (
     "converged",
     "note",
 )
+
+#: Keys of ``signalling --json`` (``spectrum`` is a list of objects with ``SPECTRUM_KEYS``).
+SIGNALLING_KEYS = (
+    *COMMON_KEYS,
+    "grain_diameter",
+    "chute_length",
+    "g",
+    "threshold",
+    "time_unit",
+    "depth",
+    "speed",
+    "frequency_max",
+    "spatial_growth_max",
+    "amplification_max",
+    "frequency_cutoff",
+    "length_to_threshold",
+    "visible",
+    "omega_max",
+    "omega_c",
+    "spectrum",
+    "converged",
+    "note",
+)
+#: Keys of each entry of ``spectrum`` in ``signalling --json``.
+SPECTRUM_KEYS = ("frequency", "omega", "spatial_growth", "amplification", "wavelength", "converged")
 
 
 def _summary(result, flow) -> dict:
@@ -182,4 +211,75 @@ def absolute_cmd(
     )
     Console().print(
         _table(f"Absolute instability at θ = {theta:g}°, ν0(0) = {nu0:g}", _caption(flow), rows, out)
+    )
+
+
+@app.command("signalling")
+@with_model_options
+def signalling_cmd(
+    theta: float = _opt_theta(),
+    nu0: float = _opt_nu0(),
+    diameter: float = typer.Option(..., "--diameter", help="Grain diameter σ in metres (> 0)."),
+    chute_length: float = typer.Option(
+        ..., "--chute-length", help="Distance from the inlet down the slope, in metres (> 0)."
+    ),
+    g: float = typer.Option(9.81, "--g", help="Gravitational acceleration in m/s² (> 0)."),
+    threshold: float = typer.Option(
+        10.0, "--threshold", help="Amplitude gain (> 1) that counts as visible at the end of the chute."
+    ),
+    frequency: list[float] | None = typer.Option(
+        None,
+        "--frequency",
+        "-f",
+        help="Forcing frequency in Hz (repeat for several; default: 24 up to 1.25 × the cut-off).",
+    ),
+    model: ChuteModel = MODEL_OPTIONS_HERE,
+    nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
+    as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
+) -> None:
+    """Would a chute show density waves? The gain of inlet forcing over the chute, in Hz and metres."""
+    from chuteflow.spatial import signalling
+    from chuteflow.spatial.signalling import _positive, check_units
+
+    # before any solve, named as the options are
+    check_units(diameter, chute_length, g, threshold, names=("diameter", "chute_length", "g", "threshold"))
+    for f in frequency or ():
+        _positive("frequency", f, "forcing frequencies in Hz")
+    console = _console()
+    flow = _steady(console, theta, nu0, model, nu_top)
+    with console.status("spatial branches k(ω) of the forcing frequencies"):
+        res = signalling(
+            flow,
+            grain_diameter=diameter,
+            chute_length=chute_length,
+            g=g,
+            frequencies=list(frequency) if frequency else None,
+            threshold=threshold,
+        )
+    if not res.converged:
+        _warn(f"not converged, the best estimates are shown ({res.note})")
+    out = _summary(res, flow)
+    if as_json:
+        _echo_json(out)
+        return
+    from rich.console import Console
+
+    rows = (
+        ("visible", f"grows by ≥ {threshold:g} within {chute_length:g} m", ""),
+        ("amplification_max", "largest gain over the chute", ".4g"),
+        ("frequency_max", "most amplified frequency (Hz)", ".4g"),
+        ("spatial_growth_max", "its spatial growth (1/m)", ".4g"),
+        ("length_to_threshold", f"length to grow by {threshold:g} (m)", ".4g"),
+        ("frequency_cutoff", "cut-off frequency (Hz)", ".4g"),
+        ("depth", "layer thickness h σ (m)", ".4g"),
+        ("speed", "mean velocity (m/s)", ".4g"),
+        ("converged", "converged", ""),
+    )
+    Console().print(
+        _table(
+            f"Signalling at θ = {theta:g}°, ν0(0) = {nu0:g}: σ = {diameter:g} m, X = {chute_length:g} m",
+            _caption(flow),
+            rows,
+            out,
+        )
     )

@@ -303,6 +303,8 @@ def plot_diagram(
             handles.append(
                 Line2D([], [], marker="x", color="crimson", ls="", label="dispersion sample disagrees")
             )
+    if "spatial_verdict" in ds:
+        handles += _spatial_marks(ax, h, nb, np.where(ok, ds["spatial_verdict"].values, -1))
     if "marker" in ds.dims:
         mh, mn = ds["marker_h"].values, ds["marker_nu_mean"].values
         mu = ds["marker_unstable"].values if "marker_unstable" in ds else np.full(len(mh), -1)
@@ -382,6 +384,9 @@ def _grid_panel(ax, ds):
         if bad.any():
             Ti, Nj = np.meshgrid(th, nu, indexing="ij")
             ax.plot(Nj[bad], Ti[bad], "x", color="crimson", ms=6)
+    if "spatial_verdict" in ds:
+        Ti, Nj = np.meshgrid(th, nu, indexing="ij")
+        _spatial_marks(ax, Nj, Ti, np.where(st == 0, ds["spatial_verdict"].values, -1))
     if "marker" in ds.dims:
         for name, t, n in zip(ds["marker"].values, ds["marker_theta"].values, ds["marker_nu0"].values):
             ax.plot(n, t, "ko", ms=4)
@@ -396,6 +401,29 @@ def _grid_panel(ax, ds):
     ax.set_xlabel("floor density ν₀(0)")
     ax.set_ylabel("inclination θ (degrees)")
     ax.set_title("classification on the (θ, ν₀(0)) grid")
+
+
+#: How the verdicts of the sweep metric ``spatial`` (chuteflow.sweep.spatial.VERDICT_CODES) are
+#: marked: code → (marker, colour, label). Stable points (0) and unclassified ones (1) are not.
+SPATIAL_MARKS = {
+    2: (">", "#08519c", "convective (swept down the slope)"),
+    3: ("*", "#cb181d", "absolute (grows in place)"),
+    4: ("$?$", "0.3", "convective/absolute undetermined"),
+}
+
+
+def _spatial_marks(ax, x, y, verdict) -> list:
+    """Mark the points of each spatial verdict (metric ``spatial``); legend handles of those present."""
+    from matplotlib.lines import Line2D
+
+    handles = []
+    x, y, v = np.asarray(x), np.asarray(y), np.asarray(verdict)
+    for code, (m, c, label) in SPATIAL_MARKS.items():
+        sel = v == code
+        if sel.any():
+            ax.plot(x[sel], y[sel], marker=m, color=c, ms=5, ls="", zorder=4)
+            handles.append(Line2D([], [], marker=m, color=c, ls="", label=label))
+    return handles
 
 
 def _edges(c):

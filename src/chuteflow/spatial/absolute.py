@@ -55,6 +55,7 @@ from ..closures import ChuteModel
 from ..conventions import RATE_UNITS, VELOCITY_UNITS, WAVENUMBER_UNITS
 from ..errors import ChuteflowError, ConvergenceError
 from ..stability import branch_scan
+from ..stability.scan import BranchScan
 from ..steady import SteadyFlow
 from ._core import DEFAULT_SPATIAL_POLICY, Branch, SpatialPolicy, check_flow, newton_k, newton_saddle
 
@@ -253,12 +254,22 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     pairs: list = []
     try:
         pairs.extend(newton_k(branch, k0, a_v + s, policy, start=e, V=V) for k0 in (e.k + root, e.k - root))
+        factor = 3.0
         while s < s_end:
-            s_new = min(s_end, 1.5 * s)
-            nxt = []
-            for p in pairs:
-                dk = (s_new - s) / (p.dalpha + 1j * V)
-                nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+            s_new = min(s_end, factor * s)
+            try:
+                nxt = []
+                for p in pairs:
+                    dk = (s_new - s) / (p.dalpha + 1j * V)
+                    nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+                if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
+                    raise ConvergenceError("the two roots fell onto one")
+            except ChuteflowError:
+                # a step too long for the predictor: shorter ones, down to the old fixed 1.5
+                if factor <= 1.5:
+                    raise
+                factor = max(1.5, factor**0.5)
+                continue
             pairs, s = nxt, s_new
     except ChuteflowError as exc:
         return None, f"the pinch was not decided ({exc})"
@@ -271,6 +282,40 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     )
 
 
+def _stable(flow: SteadyFlow, scan: BranchScan, peak, strict: bool) -> AbsoluteResult:
+    """The verdict ``"stable"`` of a flow whose temporal growth is ≤ 0 at every k of its scan:
+    no packet grows, nothing to continue."""
+    nan = math.nan
+    i = int(np.nanargmin(np.abs(scan.k - peak.k)))
+    res = AbsoluteResult(
+        k_saddle=complex(nan, nan),
+        alpha_saddle=complex(nan, nan),
+        verdict="stable",
+        v_minus=nan,
+        v_plus=nan,
+        v_peak=nan,
+        growth_peak=float(peak.growth),
+        k_peak=float(peak.k),
+        pinch=None,
+        pinch_v=nan,
+        kinematic_speed=nan,
+        rays=(np.empty(0), np.empty(0), np.empty(0), np.empty(0)),
+        n=int(scan.n[i]),
+        drift=float(scan.drift[i]),
+        tail=float(scan.tail[i]),
+        converged=bool(scan.converged),
+        note="" if scan.converged else f"the temporal branch scan is not converged ({scan.note})",
+        theta=flow.theta,
+        nu0=flow.nu0,
+        model=flow.model,
+    )
+    if strict and not res.converged:
+        raise ConvergenceError(
+            f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}"
+        )
+    return res
+
+
 def absolute_instability(
     flow: SteadyFlow,
     *,
@@ -278,9 +323,15 @@ def absolute_instability(
     cache=None,
     strict: bool = False,
     check_pinch: bool = True,
+    scan: BranchScan | None = None,
 ) -> AbsoluteResult:
     """Absolute or convective instability of ``flow`` by the Briggs–Bers saddle points of its
     α(0) = 0 branch continued to complex k (module docstring).
+
+    ``scan``: the temporal :func:`~chuteflow.stability.branch_scan` of ``flow`` when the
+    caller has it (the sweep metric ``spatial``); computed here otherwise. Where its largest
+    growth rate is ≤ 0 the flow is temporally stable: the verdict is ``"stable"`` at once,
+    nothing is continued (the edges and the saddle are NaN).
 
     Returns an :class:`AbsoluteResult`; flagged (``converged=False``, ``note``) when a
     continuation step does not settle, an edge is not decided, the saddle misses the temporal
@@ -289,10 +340,13 @@ def absolute_instability(
     """
     flow = check_flow(flow)
     policy = DEFAULT_SPATIAL_POLICY if policy is None else policy
-    scan = branch_scan(flow, policy=policy.rejection, cache=cache)
+    if scan is None:
+        scan = branch_scan(flow, policy=policy.rejection, cache=cache)
     peak = scan.peak()
     if not (math.isfinite(peak.k) and peak.k > 0):
         raise ConvergenceError("absolute instability: the temporal branch scan reached no point")
+    if not (peak.growth > 0):
+        return _stable(flow, scan, peak, strict)
     branch = Branch(flow, float(peak.k), policy, cache)
     e_peak = branch.last
     notes = []
@@ -304,7 +358,7 @@ def absolute_instability(
     e_sad = newton_saddle(branch, e_peak.k, V_peak, policy, start=e_peak)
     dV0 = policy.ray_step * max(abs(V_peak), 1e-3)
     # |k*| below which the family is at the branch point k = 0 (with σ < 1 % of the peak's)
-    k_small = 0.02 * float(peak.k)
+    k_small = 0.05 * float(peak.k)
     down, edge_down, end_down = _continue(branch, e_sad, V_peak, -1.0, dV0, policy, k_small)
     up, edge_up, end_up = _continue(branch, e_sad, V_peak, +1.0, dV0, policy, k_small)
     samples = sorted(down + up[1:], key=lambda t: t[0])
@@ -317,8 +371,10 @@ def absolute_instability(
         elif end == "branch point":
             # k* → 0 with σ → 0: the family ends at the branch point k = 0 of √(k²), where
             # α(0) = 0 (mass conservation); the ray there is the kinematic-wave speed c0
-            e_bp = branch.at(complex(1e-3 * k_small, 0.0), start=e_last)
-            c0 = float(-e_bp.dalpha.imag)
+            # α'(k) = −i c0 + 2 α2 k + …: the linear term removed with α''
+            k_bp = 2e-5 * float(peak.k)
+            e_bp = branch.at(complex(k_bp, 0.0), start=e_last)
+            c0 = float(-(e_bp.dalpha - e_bp.d2alpha * k_bp).imag)
             edges[name] = c0
             notes.append(
                 f"one edge is the branch point k = 0 (alpha(0) = 0): V = c0 = {c0:.6g}, the "

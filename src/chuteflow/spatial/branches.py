@@ -34,7 +34,14 @@ from ..stability import branch_scan
 from ..steady import SteadyFlow
 from ._core import DEFAULT_SPATIAL_POLICY, Branch, SpatialPolicy, check_flow, newton_k
 
-__all__ = ["SpatialPoint", "spatial_point", "spatial_dispersion", "check_omega", "real_k_of_frequency"]
+__all__ = [
+    "SpatialPoint",
+    "spatial_point",
+    "spatial_dispersion",
+    "spatial_peak",
+    "check_omega",
+    "real_k_of_frequency",
+]
 
 
 def check_omega(omega) -> float:
@@ -139,7 +146,9 @@ def real_k_of_frequency(branch: Branch, omega: float, k0: float, maxiter: int = 
             k_new = 0.5 * k
         k = k_new
         e = branch.at(k, start=e)
-        if abs(dk) <= 1e-12 * k:
+        # 1e-10: the round-off of Im α (~1e-13 at P4, where ω ~ 2e-3, k ~ 1e-3) makes steps of
+        # ~5e-11 k forever; k0 only starts the complex Newton, which has its own tolerance
+        if abs(dk) <= 1e-10 * k:
             return k, e
     return None
 
@@ -390,3 +399,41 @@ def _most_amplified(branch: Branch, omegas, pts, policy, flow) -> tuple[float, f
         if abs(b - a) <= 1e-8 * w or abs(fw) <= 1e-12:
             break
     return float(best.omega), float(best.spatial_growth)
+
+
+def spatial_peak(branch: Branch, k_peak: float, policy: SpatialPolicy | None = None):
+    """The most amplified frequency found directly: the complex k* on the spatial branch where
+    d(−Im k)/dω = 0, i.e. (along α(k(ω)) = −iω, dk/dω = −i/α') Re(1/α'(k*)) = 0, so
+
+        Re α(k*) = 0   and   Re α'(k*) = 0,
+
+    two real equations in (Re k, Im k), solved by Newton's method with the exact 2 × 2
+    Jacobian (α analytic: ∂/∂Re k = α', ∂/∂Im k = iα', and the same for α' with α'').
+    Started from the refined temporal peak ``k_peak`` (real, Re α' = 0 there), whose first
+    step is Gaster's −Im k = Re α/c_g. Returns the eigenpair at k* (ω_max = −Im α(k*),
+    spatial growth −Im k*); raises :class:`~chuteflow.errors.ConvergenceError` where Newton
+    does not settle or leaves Re k > 0. It replaces sampling ω (the dispersion curve,
+    :func:`spatial_dispersion`) where only the maximum is wanted (the sweep metric)."""
+    policy = DEFAULT_SPATIAL_POLICY if policy is None else policy
+    e = branch.at(complex(k_peak))
+    for _ in range(policy.maxiter):
+        F = np.array([e.alpha.real, e.dalpha.real])
+        J = np.array(
+            [[e.dalpha.real, -e.dalpha.imag], [e.d2alpha.real, -e.d2alpha.imag]],
+            dtype=float,
+        )
+        try:
+            da, db = np.linalg.solve(J, -F)
+        except np.linalg.LinAlgError:
+            break
+        if not (np.isfinite(da) and np.isfinite(db)):
+            break
+        k = e.k + complex(da, db)
+        e = branch.at(k, start=e)
+        # the step at the round-off of α' (~1e-10 |α'|, as for the saddle points: saddle_rtol)
+        if abs(complex(da, db)) <= policy.saddle_rtol * max(abs(k), 1e-12):
+            return e
+    raise ConvergenceError(
+        f"the most amplified frequency (Re alpha = Re alpha' = 0) did not settle from the temporal "
+        f"peak k = {k_peak:.6g} (last k = {e.k:.6g})"
+    )

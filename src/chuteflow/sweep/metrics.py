@@ -27,6 +27,7 @@ from ..stability import BranchTracker, OperatorCache, RejectionPolicy
 from ..stability.lost import after_lost_branch, relaxed_branch_modes
 from ..stability.modes import check_n, nearest_eigenpair, stability_operator
 from ..stability.scan import critical_index, linear_crossing, peak_index
+from . import spatial as _spatial  # noqa: F401  (registers the metric "spatial")
 from . import transverse as _transverse  # noqa: F401  (registers the metric "transverse")
 from .points import PointFunction, Variable, register_point_function
 
