@@ -17,9 +17,12 @@ Transcribed for testing from MFiX as stored in the public repository CurtinIDS/m
 Units: ρ_s = d_p = 1 and Θ = T (MFiX's Θ is per unit mass, as chuteflow's T), so
 m = π/6 and n = ν/m; chuteflow's κ_h multiplies ∇ν, i.e. κ_h = Kphi_s/m.
 
-One documented difference: MFiX writes μ_k*'s factors (1 + ν ∂_ν ln χ) and
-(1 + ½ ν ∂_ν ln χ) as (1 + ν χ') and (1 + ½ ν χ'); chuteflow keeps ln χ (the derivative of
-the cooling rate ∝ nχ), so the reference below divides χ' by χ there (``MFIX_LN_CHI``).
+μ_k*'s density factors: MFiX's GT_PDE_GD writes (1 + ν χ') and (1 + ½ ν χ') where GD99 has
+(1 + ν ∂_ν ln χ) and (1 + ½ ν ∂_ν ln χ) (n ∂_n ln ζ^(0), ζ^(0) ∝ nχ; MFiX's own GT_PDE_GTSH and
+GHD code use the ln χ form: chuteflow.closures.garzo_dufty's docstring). The reference
+below is GT_PDE_GD as written (``ln_chi=False``), checked against ``garzo_dufty_mfix`` (the
+``mfix-gd`` preset), and with χ' divided by χ in those two factors (``ln_chi=True``), checked
+against ``garzo_dufty``.
 """
 
 from __future__ import annotations
@@ -34,14 +37,14 @@ from chuteflow.closures import ChuteModel
 PI = math.pi
 NUS = np.linspace(0.01, 0.5, 12)
 ES = (0.6, 0.7, 0.8, 0.9, 0.95, 0.99)
-MFIX_LN_CHI = True  # see the module docstring
 
 
-def mfix_gd(ep, c_e, theta):
-    """GT_PDE_GD (and the GD_1999 dissipation) with ρ_s = d_p = 1, SWITCH = 0."""
+def mfix_gd(ep, c_e, theta, ln_chi=False):
+    """GT_PDE_GD (and the GD_1999 dissipation) with ρ_s = d_p = 1, SWITCH = 0; ``ln_chi``:
+    GD99's ∂ ln χ in μ_k*'s two density factors (module docstring)."""
     chi = (1 - ep / 2) / (1 - ep) ** 3
     dchi = (2.5 - ep) / (1 - ep) ** 4
-    dchi_mu = dchi / chi if MFIX_LN_CHI else dchi
+    dchi_mu = dchi / chi if ln_chi else dchi
     m_p = PI / 6
     n_p = ep / m_p
     press_star = 1 + 2 * (1 + c_e) * ep * chi
@@ -125,12 +128,26 @@ def mfix_lun_p_kappa(ep, c_e, theta):
 
 
 @pytest.mark.parametrize("e", ES)
-def test_garzo_dufty_matches_mfix_gd_1999(e):
+def test_garzo_dufty_mfix_matches_mfix_gd_1999(e):
+    """The mfix-gd preset is MFiX's GD_1999 as written, to round-off."""
     T = np.linspace(0.5, 3.0, NUS.size)
-    ev = ChuteModel(restitution=e, transport="garzo_dufty", radial="carnahan_starling").evaluate(NUS, T)
+    ev = ChuteModel.preset("mfix-gd", restitution=e).evaluate(NUS, T)
     ref = mfix_gd(NUS, e, T)
     for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h"):
         np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
+
+
+@pytest.mark.parametrize("e", ES)
+def test_garzo_dufty_matches_mfix_gd_1999_with_gd99_ln_chi(e):
+    """garzo_dufty is MFiX's GD_1999 with GD99's ∂ ln χ in μ_k*: every coefficient but κ_h
+    identical to garzo_dufty_mfix, κ_h different where χ differs from 1."""
+    T = np.linspace(0.5, 3.0, NUS.size)
+    ev = ChuteModel(restitution=e, transport="garzo_dufty", radial="carnahan_starling").evaluate(NUS, T)
+    ref = mfix_gd(NUS, e, T, ln_chi=True)
+    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h"):
+        np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
+    mf = mfix_gd(NUS, e, T)
+    assert abs(mf["kappa_h"][-1] / ref["kappa_h"][-1] - 1) > 0.1  # ν = 0.5: χ' ≠ χ'/χ
 
 
 @pytest.mark.parametrize("alpha", [1.0, 1.6])

@@ -236,15 +236,16 @@ def test_ma_ahmadi_g0():
 def test_presets_and_unknown_names():
     assert ChuteModel.preset("paper") == ChuteModel()
     assert ChuteModel.preset("mfix-gd", roughness=0.1) == ChuteModel(
-        transport="garzo_dufty", radial="carnahan_starling", roughness=0.1
+        transport="garzo_dufty_mfix", radial="carnahan_starling", roughness=0.1
     )
     with pytest.raises(ParameterError, match=r"unknown preset 'mfix'; choose one of \['mfix-gd', 'mfix-lun'"):
         ChuteModel.preset("mfix")
-    with pytest.raises(ParameterError, match=r"unknown closure 'gd'; choose one of \['garzo_dufty', 'lun'"):
+    known = r"\['garzo_dufty', 'garzo_dufty_mfix', 'lun'"
+    with pytest.raises(ParameterError, match=r"unknown closure 'gd'; choose one of " + known):
         ChuteModel(transport="gd")
     with pytest.raises(ParameterError, match=r"alpha = -1 is outside the allowed range \[0, 10\]"):
         ChuteModel(transport={"name": "lun_mfix", "alpha": -1})
-    assert {"lun", "lun_full", "lun_mfix", "garzo_dufty"} <= set(TRANSPORTS.names())
+    assert {"lun", "lun_full", "lun_mfix", "garzo_dufty", "garzo_dufty_mfix"} <= set(TRANSPORTS.names())
     m = ChuteModel.preset("mfix-lun")
     assert ChuteModel.from_dict(m.to_dict()) == m
 

@@ -48,11 +48,28 @@ cooling rate ``EDT_s_ip = 3/2 ρ_s ν ν0 ζ*`` in ``model/kintheory_mod.f``), b
 (19 − 3α)/256 a2 = (19 − 3α)/512 c* in ν_κ* (MFiX: /1024 c*), 1 + c* and (1 + α)c*/2 in
 κ_k* (MFiX: ½(1 + p*) c* and ((1 + α)/2 − 5/(3(1 + α))) c*), 7/32 a2 in κ* (MFiX: 7/32
 c*) and wrong second and third terms (and a missing factor 2) in μ_k*; these are now
-MFiX's forms. One deliberate difference remains: MFiX writes the factors (1 + ν ∂_ν ln χ)
-and (1 + ½ ν ∂_ν ln χ) of μ_k* as (1 + ν χ') and (1 + ½ ν χ') (no division by χ); chuteflow
-keeps ln χ, which is what ∂(nχ)/∂n of the cooling rate ζ ∝ nχ gives (this choice is not
-verified against the paper itself). Carnahan–Starling is MFiX's only g0 for one solids
-phase.
+MFiX's forms.
+
+The factors (1 + ν ∂_ν ln χ) and (1 + ½ ν ∂_ν ln χ) of μ_k* (decided 2026-12-05). The
+first is n ∂ ln ζ^(0)/∂n: in the Chapman–Enskog solution the integral equation for the
+∇ln n part of the first-order distribution has n ∂ζ^(0)/∂n times the ∇ln T part as an
+inhomogeneous term (GD99; written for d dimensions in V. Garzó, "Enskog kinetic theory
+for d-dimensional dense granular gases", arXiv:1204.5114, whose inhomogeneous term of that
+equation contains the density derivative of the zeroth-order cooling rate), and
+ζ^(0) ∝ n χ √T, so n ∂_n ln ζ^(0) = 1 + φ ∂_φ ln χ; the second is the density derivative
+of the collisional transfer ∝ n²χ, (1/2)(n/χ) ∂χ/∂n. MFiX's
+``GT_PDE_GD`` writes both with φχ' in place of φχ'/χ, but MFiX itself uses the ln χ form
+everywhere else it states the same coefficient: ``GT_PDE_GTSH`` (Garzó, Tenneti,
+Subramaniam & Hrenya, J. Fluid Mech. 712, 129 (2012), eq. (7.20), whose gas-free limit is
+GD99's μ_k), ``Muk = ... EDT_s_ip*(one+EP_SM/Chi*dChiOdphi) ... (one+0.5d0*EP_SM/Chi*
+dChiOdphi)``, and the polydisperse GHD theory (``model/GhdTheory/dufour_coeff.f``:
+``0.5d0*(ni(l)/chi(i,l)*dchi0il_dnj(i,l,j)*ni(l) ...)`` and n ∂ζ^(0)/∂n by differencing
+ζ^(0)). ``garzo_dufty`` therefore follows GD99 (ln χ); MFiX's ``GD_1999`` transcription is
+the separate closure ``garzo_dufty_mfix`` (:class:`GarzoDuftyMfixClosure`, the ``mfix-gd``
+preset), equal to MFiX's numbers to round-off. With Carnahan–Starling χ and e_p = 0.7 the
+MFiX form's κ_h is larger by 1.6 % at ν = 0.05, 33 % at ν = 0.2 and a factor 5.7 at
+ν = 0.5; they agree as ν → 0 (χ → 1).
+Carnahan–Starling is MFiX's only g0 for one solids phase.
 """
 
 from __future__ import annotations
@@ -65,15 +82,18 @@ from .kinetic import TransportClosure, register_transport
 
 sp = lazy_module("sympy")
 
-__all__ = ["GarzoDuftyClosure", "garzo_dufty_reduced"]
+__all__ = ["GarzoDuftyClosure", "GarzoDuftyMfixClosure", "garzo_dufty_reduced"]
 
 
-def garzo_dufty_reduced(nu, e, g0, dg0=None) -> dict:
+def garzo_dufty_reduced(nu, e, g0, dg0=None, *, mfix_dchi: bool = False) -> dict:
     """The reduced coefficients of Garzó & Dufty (1999) (module docstring) as sympy
     expressions of ν, α = e and χ = g0 (``dg0`` = dχ/dν; by default sympy's derivative
     of ``g0`` in ``nu``): keys a2, c_star, p_star, zeta_star, nu_eta_star, gamma_star,
     eta_k_star, eta_star, lambda_star, nu_kappa_star, kappa_k_star, kappa_star, mu_k_star,
-    mu_star."""
+    mu_star.
+
+    ``mfix_dchi``: μ_k*'s factors as MFiX's ``GT_PDE_GD`` writes them, (1 + ν χ') and
+    (1 + ½ ν χ'), instead of GD99's (1 + ν ∂_ν ln χ) and (1 + ½ ν ∂_ν ln χ)."""
     a, chi = e, g0
     if dg0 is None:
         dg0 = sp.diff(g0, nu)
@@ -101,7 +121,8 @@ def garzo_dufty_reduced(nu, e, g0, dg0=None) -> dict:
     kappa = kappa_k * (1 + r(6, 5) * nu * chi * (1 + a)) + r(256, 25) / pi * nu**2 * chi * (1 + a) * (
         1 + r(7, 32) * c
     )
-    dlnchi = nu * dg0 / chi
+    # n ∂_n ln ζ^(0) − 1 = ν ∂_ν ln χ (GD99); MFiX's GT_PDE_GD has ν χ' (module docstring)
+    dlnchi = nu * dg0 if mfix_dchi else nu * dg0 / chi
     # p*/3 (1 + ν ∂_ν ln p*) c*, written as MFiX does: p*/3 + 2/3 ν (1 + α)(χ + ν χ')
     dp_term = p_star / 3 + r(2, 3) * nu * (1 + a) * (chi + nu * dg0)
     mu_k = (
@@ -146,10 +167,12 @@ class GarzoDuftyClosure(TransportClosure):
     """
 
     name: ClassVar[str] = "garzo_dufty"
+    #: μ_k*'s density factors as MFiX's GT_PDE_GD writes them (:class:`GarzoDuftyMfixClosure`)
+    mfix_dchi: ClassVar[bool] = False
 
     def functions(self, nu, e, nu_max, g0):
         """f1 … f7 and fh of Garzó & Dufty (1999) as sympy expressions in ν, given g0(ν)."""
-        c = garzo_dufty_reduced(nu, e, g0)
+        c = garzo_dufty_reduced(nu, e, g0, mfix_dchi=self.mfix_dchi)
         sqpi = sp.sqrt(sp.pi)
         f2 = 5 * sqpi / 96 * c["eta_star"]
         f4 = 25 * sqpi / 128 * c["kappa_star"]
@@ -176,3 +199,18 @@ class GarzoDuftyClosure(TransportClosure):
             "Gamma": (1 - e**2) * f["cool"] * f["f5"] * T * sqT,
             "kappa_h": f["fh"] * T * sqT,
         }
+
+
+@register_transport
+@dataclass(frozen=True)
+class GarzoDuftyMfixClosure(GarzoDuftyClosure):
+    """MFiX's ``KT_TYPE = 'GD_1999'`` (``GT_PDE_GD`` in CurtinIDS/mfix ``model/calc_mu_s.f``):
+    :class:`GarzoDuftyClosure` with μ_k*'s factors (1 + ν ∂_ν ln χ) and (1 + ½ ν ∂_ν ln χ)
+    written, as MFiX writes them, (1 + ν χ') and (1 + ½ ν χ') (module docstring). Every
+    other coefficient is GD99's; only κ_h differs. The ``mfix-gd`` preset
+    (:meth:`~chuteflow.closures.ChuteModel.preset`); equal to MFiX's numbers to round-off
+    (tests/closures/test_garzo_dufty_mfix.py).
+    """
+
+    name: ClassVar[str] = "garzo_dufty_mfix"
+    mfix_dchi: ClassVar[bool] = True

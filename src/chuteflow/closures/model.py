@@ -276,8 +276,8 @@ class ChuteModel:
 
         ``ChuteModel.preset("mfix-lun")`` is MFiX's ``KT_TYPE = LUN_1984`` (viscosity factor
         (2 + α)/3 with its default ``ALPHA = 1.6``, Carnahan–Starling g0),
-        ``preset("mfix-gd")`` its ``KT_TYPE = GD_1999`` and ``preset("paper")`` the
-        paper's closures (the defaults). ``overrides`` set any other field (e.g.
+        ``preset("mfix-gd")`` its ``KT_TYPE = GD_1999`` (closure ``garzo_dufty_mfix``) and
+        ``preset("paper")`` the paper's closures (the defaults). ``overrides`` set any other field (e.g.
         ``roughness=0.1``). An unknown name raises :class:`~chuteflow.errors.ParameterError`
         listing the known ones.
         """
@@ -433,8 +433,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), one solids phase (Carnahan-Starling), BC_JJ_PS",
     },
     "mfix-gd": {
-        "model": {"transport": "garzo_dufty", "radial": "carnahan_starling", "wall": "johnson_jackson"},
-        "code": "MFiX KT_TYPE = GD_1999, one solids phase (Carnahan-Starling g0), BC_JJ_PS",
+        "model": {"transport": "garzo_dufty_mfix", "radial": "carnahan_starling", "wall": "johnson_jackson"},
+        "code": "MFiX KT_TYPE = GD_1999 (GT_PDE_GD as written), one solids phase (Carnahan-Starling)",
     },
     "mfix-lun-ma-ahmadi": {
         "model": {
