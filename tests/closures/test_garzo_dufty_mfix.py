@@ -8,7 +8,8 @@ Transcribed for testing from MFiX as stored in the public repository CurtinIDS/m
   viscosity), ``Kth_s = kappa0 kappa_star``, ``Kphi_s = Theta kappa0 qmu_star / n`` (the
   coefficient of ∇n in the heat flux), without the gas-phase terms (``SWITCH = 0``);
 * ``model/kintheory_mod.f``: the dissipation ``EDT_s_ip = 3/2 ρ_s ε_s nu0 zeta0_star``
-  (times Θ in ``source_granular_energy.f``);
+  (times Θ in ``source_granular_energy.f``) and the first-order cooling ``EDvel_sM_ip =
+  3/2 ρ_s ε_s zeta1`` (times Θ ∇·u there), subroutine ``CALC_GD_99_ENERGY_DISSIPATION_SS``;
 * ``model/calc_mu_s.f``, subroutine ``GT_PDE_LUN`` (``KT_TYPE = 'LUN_1984'``): ``P_s_v``, ``Kth_s``,
   ``Mu_s_v`` with the factor (2 + ALPHA)/3, ``ALPHA = 1.6d0`` a PARAMETER in ``model/constant_mod.f``;
 * ``model/rdf_mod.f``: for one solids phase g0 is Carnahan–Starling, ``DG_0DNU =
@@ -88,6 +89,18 @@ def mfix_gd(ep, c_e, theta, ln_chi=False):
     qmu_star = qmu_k_star * (1 + 6 / 5 * ep * chi * (1 + c_e))
     nu0 = 96 / 5 * ep * np.sqrt(theta / PI)
     kphi = theta * kappa0 / n_p * qmu_star
+    # CALC_GD_99_ENERGY_DISSIPATION_SS (model/kintheory_mod.f): zeta1 = ζ_U (the 1/nu0 of
+    # cD cancels against the nu0 of zeta1 = nu0 zeta1_star), EDvel_sM_ip = 3/2 rop_s zeta1,
+    # times Θ tr(D) in source_granular_energy.f (S12)
+    c3 = 15 * c_e**3 - 15 * c_e**2 + 498 * c_e - 434
+    nu_gamma_star = (1 + c_e) / 48 * chi * (128 - 96 * c_e + 15 * c_e**2 - 15 * c_e**3 + c_star / 64 * c3)
+    l3 = 159 * c_e + 3 * c_e**2 - 19 * c_e - 15 * c_e**3  # MFiX's lambda_num as written
+    lambda_num = 3 / 8 * ((1 - c_e) * (5 * c_e**2 + 4 * c_e - 1) + c_star / 12 * l3) * (1 + c_e)
+    cd_num = (4 / 15 * lambda_num * ep * chi + (press_star - 1) * (2 / 3 - c_e) * c_star) / (
+        0.5 * zeta0_star + nu_gamma_star + 5 * c_star / 64 * (1 + 3 * c_star / 64) * chi * (1 - c_e**2)
+    )
+    zeta1 = -(1 - c_e) * (press_star - 1) + 5 / 32 * (1 - c_e**2) * (1 + 3 * c_star / 64) * chi * cd_num
+    edvel = 1.5 * ep * zeta1
     return {
         "p": ep * theta * press_star,
         "mu": eta0 * eta_star,
@@ -95,6 +108,7 @@ def mfix_gd(ep, c_e, theta, ln_chi=False):
         "kappa": kappa0 * kappa_star,
         "Gamma": 1.5 * ep * nu0 * zeta0_star * theta,
         "kappa_h": kphi / m_p,
+        "Gamma_U": edvel * theta,
     }
 
 
@@ -133,7 +147,7 @@ def test_garzo_dufty_mfix_matches_mfix_gd_1999(e):
     T = np.linspace(0.5, 3.0, NUS.size)
     ev = ChuteModel.preset("mfix-gd", restitution=e).evaluate(NUS, T)
     ref = mfix_gd(NUS, e, T)
-    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h"):
+    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h", "Gamma_U"):
         np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
 
 
@@ -144,7 +158,7 @@ def test_garzo_dufty_matches_mfix_gd_1999_with_gd99_ln_chi(e):
     T = np.linspace(0.5, 3.0, NUS.size)
     ev = ChuteModel(restitution=e, transport="garzo_dufty", radial="carnahan_starling").evaluate(NUS, T)
     ref = mfix_gd(NUS, e, T, ln_chi=True)
-    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h"):
+    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h", "Gamma_U"):
         np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
     mf = mfix_gd(NUS, e, T)
     assert abs(mf["kappa_h"][-1] / ref["kappa_h"][-1] - 1) > 0.1  # ν = 0.5: χ' ≠ χ'/χ
@@ -163,3 +177,4 @@ def test_lun_mfix_viscosity_matches_mfix_lun_1984(e, alpha):
     np.testing.assert_allclose(ev["p"][(0, 0)], p, rtol=1e-10)
     np.testing.assert_allclose(ev["kappa"][(0, 0)], kappa, rtol=1e-10)
     assert np.all(np.asarray(ev["kappa_h"][(0, 0)]) == 0.0)  # MFiX: Kphi_s = 0 for LUN_1984
+    assert np.all(np.asarray(ev["Gamma_U"][(0, 0)]) == 0.0)  # and EDvel_sM_ip = 0

@@ -251,11 +251,13 @@ def test_presets_and_unknown_names():
 
 
 def test_vanishing_functions():
-    """κ_h ≡ 0 for the paper's closure (and MFiX's Lun): the compiled steady rows leave its
-    terms out, so the paper's numbers are bit for bit those before κ_h existed."""
+    """κ_h ≡ 0 and Γ_U ≡ 0 for the paper's closure (and MFiX's Lun; Γ_U also for lun_full):
+    the compiled steady rows leave their terms out, so the paper's numbers are bit for bit
+    those before κ_h and Γ_U existed."""
     from chuteflow.closures.model import vanishing_functions
 
-    assert vanishing_functions(*ChuteModel().closures) == ("kappa_h",)
-    assert vanishing_functions(*ChuteModel.preset("mfix-lun").closures) == ("kappa_h",)
-    assert vanishing_functions(*ChuteModel(transport="lun_full").closures) == ()
+    assert vanishing_functions(*ChuteModel().closures) == ("kappa_h", "Gamma_U")
+    assert vanishing_functions(*ChuteModel.preset("mfix-lun").closures) == ("kappa_h", "Gamma_U")
+    assert vanishing_functions(*ChuteModel(transport="lun_full").closures) == ("Gamma_U",)
     assert vanishing_functions(*ChuteModel.preset("mfix-gd").closures) == ()
+    assert vanishing_functions(*ChuteModel(transport="garzo_dufty").closures) == ()
