@@ -1,4 +1,4 @@
-"""garzo_dufty and lun_mfix against MFiX's Fortran (an independent implementation).
+"""garzo_dufty, garzo_dufty_mfix and lun_mfix against MFiX's Fortran (an independent implementation).
 
 Transcribed for testing from MFiX as stored in the public repository CurtinIDS/mfix
 (commit aa5da900933766e158dd4188220765689855bde7):
