@@ -136,6 +136,7 @@ class _Continuum:
     Sigma: tuple  # stress tensor Σ_ij
     q: tuple  # heat flux
     g: tuple  # gravity (sin θ, −cos θ, 0)
+    div: sp.Expr  # ∇·u
 
 
 @functools.cache
@@ -162,7 +163,7 @@ def _continuum() -> _Continuum:
     q = [-F["kappa"] * D(T, a) - F["kappa_h"] * D(nu, a) for a in sp_axes]
     sin_theta, cos_theta = _gravity_symbols()
     g = (sin_theta, -cos_theta, sp.S.Zero)
-    return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)), tuple(q), g)
+    return _Continuum(F, tuple(vel), tuple(map(tuple, grad)), tuple(map(tuple, Sigma)), tuple(q), g, div)
 
 
 @functools.cache
@@ -172,6 +173,11 @@ def governing_equations() -> dict[str, sp.Expr]:
     Dimensionless (σ, ρ_p σ³, √(σ/g)); gravity g = (sin θ, −cos θ, 0); Σ = (p − ζ∇·u)I − 2μS,
     q = −κ∇T − κ_h∇ν (eq. 2.7; the paper's footnote to it: Lun et al.'s κ_h term, which the
     paper drops — the ``lun`` closure has κ_h = 0). Floor normal n = e_y.
+
+    The collisional energy sink is Γ + Γ_U ∇·u: Γ = (3/2) ν T ζ^(0) of eq. (2.3) and the
+    first-order cooling rate of Garzó & Dufty (1999), (3/2) ν T ζ_U ∇·u (Γ_U = 0 for the
+    paper's ``lun`` and for ``lun_full``, which leaves eq. (2.3) as the paper states it). It
+    vanishes in the steady flows (∇·u = 0) but not in their perturbations.
 
     The floor energy condition (2.10) is the paper's, q·n + u·Σ·n + Γ* = 0 (sign as below),
     with q the whole heat flux: the energy the flow loses through the floor is the normal
@@ -192,6 +198,7 @@ def governing_equations() -> dict[str, sp.Expr]:
         -sum(D(q[j], sp_axes[j]) for j in range(3))
         - sum(Sigma[i][j] * grad[j][i] for i in range(3) for j in range(3))
         - F["Gamma"]
+        - F["Gamma_U"] * c.div
         - sp.Rational(3, 2) * nu * material(T)
     )
     # floor y = 0, n = e_y: impermeable; eq. (2.9) (tangential momentum); eq. (2.10) (energy)

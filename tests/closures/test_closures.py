@@ -80,6 +80,7 @@ def transport(model: ChuteModel, nu, T):
         "kappa": f["f4"] * sq,
         "Gamma": (1.0 - e**2) * f["f5"] * T * sq,
         "kappa_h": 0.0 * T,  # the paper drops the κ_h∇ν heat flux (footnote to eq. 2.7)
+        "Gamma_U": 0.0 * T,  # Lun et al.'s closure has no first-order cooling rate ζ_U∇·u
         "eta_star": phi * f["f7"] * f["f2"] * sq,
         "Gamma_star": 0.5 * Phi * f["f6"] * f["f4"] * T * sq,
     }

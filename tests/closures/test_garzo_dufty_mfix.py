@@ -1,4 +1,4 @@
-"""garzo_dufty and lun_mfix against MFiX's Fortran (an independent implementation).
+"""garzo_dufty, garzo_dufty_mfix and lun_mfix against MFiX's Fortran (an independent implementation).
 
 Transcribed for testing from MFiX as stored in the public repository CurtinIDS/mfix
 (commit aa5da900933766e158dd4188220765689855bde7):
@@ -8,7 +8,8 @@ Transcribed for testing from MFiX as stored in the public repository CurtinIDS/m
   viscosity), ``Kth_s = kappa0 kappa_star``, ``Kphi_s = Theta kappa0 qmu_star / n`` (the
   coefficient of ∇n in the heat flux), without the gas-phase terms (``SWITCH = 0``);
 * ``model/kintheory_mod.f``: the dissipation ``EDT_s_ip = 3/2 ρ_s ε_s nu0 zeta0_star``
-  (times Θ in ``source_granular_energy.f``);
+  (times Θ in ``source_granular_energy.f``) and the first-order cooling ``EDvel_sM_ip =
+  3/2 ρ_s ε_s zeta1`` (times Θ ∇·u there), subroutine ``CALC_GD_99_ENERGY_DISSIPATION_SS``;
 * ``model/calc_mu_s.f``, subroutine ``GT_PDE_LUN`` (``KT_TYPE = 'LUN_1984'``): ``P_s_v``, ``Kth_s``,
   ``Mu_s_v`` with the factor (2 + ALPHA)/3, ``ALPHA = 1.6d0`` a PARAMETER in ``model/constant_mod.f``;
 * ``model/rdf_mod.f``: for one solids phase g0 is Carnahan–Starling, ``DG_0DNU =
@@ -17,9 +18,12 @@ Transcribed for testing from MFiX as stored in the public repository CurtinIDS/m
 Units: ρ_s = d_p = 1 and Θ = T (MFiX's Θ is per unit mass, as chuteflow's T), so
 m = π/6 and n = ν/m; chuteflow's κ_h multiplies ∇ν, i.e. κ_h = Kphi_s/m.
 
-One documented difference: MFiX writes μ_k*'s factors (1 + ν ∂_ν ln χ) and
-(1 + ½ ν ∂_ν ln χ) as (1 + ν χ') and (1 + ½ ν χ'); chuteflow keeps ln χ (the derivative of
-the cooling rate ∝ nχ), so the reference below divides χ' by χ there (``MFIX_LN_CHI``).
+μ_k*'s density factors: MFiX's GT_PDE_GD writes (1 + ν χ') and (1 + ½ ν χ') where GD99 has
+(1 + ν ∂_ν ln χ) and (1 + ½ ν ∂_ν ln χ) (n ∂_n ln ζ^(0), ζ^(0) ∝ nχ; MFiX's own GT_PDE_GTSH and
+GHD code use the ln χ form: chuteflow.closures.garzo_dufty's docstring). The reference
+below is GT_PDE_GD as written (``ln_chi=False``), checked against ``garzo_dufty_mfix`` (the
+``mfix-gd`` preset), and with χ' divided by χ in those two factors (``ln_chi=True``), checked
+against ``garzo_dufty``.
 """
 
 from __future__ import annotations
@@ -34,14 +38,14 @@ from chuteflow.closures import ChuteModel
 PI = math.pi
 NUS = np.linspace(0.01, 0.5, 12)
 ES = (0.6, 0.7, 0.8, 0.9, 0.95, 0.99)
-MFIX_LN_CHI = True  # see the module docstring
 
 
-def mfix_gd(ep, c_e, theta):
-    """GT_PDE_GD (and the GD_1999 dissipation) with ρ_s = d_p = 1, SWITCH = 0."""
+def mfix_gd(ep, c_e, theta, ln_chi=False):
+    """GT_PDE_GD (and the GD_1999 dissipation) with ρ_s = d_p = 1, SWITCH = 0; ``ln_chi``:
+    GD99's ∂ ln χ in μ_k*'s two density factors (module docstring)."""
     chi = (1 - ep / 2) / (1 - ep) ** 3
     dchi = (2.5 - ep) / (1 - ep) ** 4
-    dchi_mu = dchi / chi if MFIX_LN_CHI else dchi
+    dchi_mu = dchi / chi if ln_chi else dchi
     m_p = PI / 6
     n_p = ep / m_p
     press_star = 1 + 2 * (1 + c_e) * ep * chi
@@ -85,6 +89,18 @@ def mfix_gd(ep, c_e, theta):
     qmu_star = qmu_k_star * (1 + 6 / 5 * ep * chi * (1 + c_e))
     nu0 = 96 / 5 * ep * np.sqrt(theta / PI)
     kphi = theta * kappa0 / n_p * qmu_star
+    # CALC_GD_99_ENERGY_DISSIPATION_SS (model/kintheory_mod.f): zeta1 = ζ_U (the 1/nu0 of
+    # cD cancels against the nu0 of zeta1 = nu0 zeta1_star), EDvel_sM_ip = 3/2 rop_s zeta1,
+    # times Θ tr(D) in source_granular_energy.f (S12)
+    c3 = 15 * c_e**3 - 15 * c_e**2 + 498 * c_e - 434
+    nu_gamma_star = (1 + c_e) / 48 * chi * (128 - 96 * c_e + 15 * c_e**2 - 15 * c_e**3 + c_star / 64 * c3)
+    l3 = 159 * c_e + 3 * c_e**2 - 19 * c_e - 15 * c_e**3  # MFiX's lambda_num as written
+    lambda_num = 3 / 8 * ((1 - c_e) * (5 * c_e**2 + 4 * c_e - 1) + c_star / 12 * l3) * (1 + c_e)
+    cd_num = (4 / 15 * lambda_num * ep * chi + (press_star - 1) * (2 / 3 - c_e) * c_star) / (
+        0.5 * zeta0_star + nu_gamma_star + 5 * c_star / 64 * (1 + 3 * c_star / 64) * chi * (1 - c_e**2)
+    )
+    zeta1 = -(1 - c_e) * (press_star - 1) + 5 / 32 * (1 - c_e**2) * (1 + 3 * c_star / 64) * chi * cd_num
+    edvel = 1.5 * ep * zeta1
     return {
         "p": ep * theta * press_star,
         "mu": eta0 * eta_star,
@@ -92,6 +108,7 @@ def mfix_gd(ep, c_e, theta):
         "kappa": kappa0 * kappa_star,
         "Gamma": 1.5 * ep * nu0 * zeta0_star * theta,
         "kappa_h": kphi / m_p,
+        "Gamma_U": edvel * theta,
     }
 
 
@@ -125,12 +142,26 @@ def mfix_lun_p_kappa(ep, c_e, theta):
 
 
 @pytest.mark.parametrize("e", ES)
-def test_garzo_dufty_matches_mfix_gd_1999(e):
+def test_garzo_dufty_mfix_matches_mfix_gd_1999(e):
+    """The mfix-gd preset is MFiX's GD_1999 as written, to round-off."""
+    T = np.linspace(0.5, 3.0, NUS.size)
+    ev = ChuteModel.preset("mfix-gd", restitution=e).evaluate(NUS, T)
+    ref = mfix_gd(NUS, e, T)
+    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h", "Gamma_U"):
+        np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
+
+
+@pytest.mark.parametrize("e", ES)
+def test_garzo_dufty_matches_mfix_gd_1999_with_gd99_ln_chi(e):
+    """garzo_dufty is MFiX's GD_1999 with GD99's ∂ ln χ in μ_k*: every coefficient but κ_h
+    identical to garzo_dufty_mfix, κ_h different where χ differs from 1."""
     T = np.linspace(0.5, 3.0, NUS.size)
     ev = ChuteModel(restitution=e, transport="garzo_dufty", radial="carnahan_starling").evaluate(NUS, T)
-    ref = mfix_gd(NUS, e, T)
-    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h"):
+    ref = mfix_gd(NUS, e, T, ln_chi=True)
+    for key in ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h", "Gamma_U"):
         np.testing.assert_allclose(ev[key][(0, 0)], ref[key], rtol=1e-10, err_msg=key)
+    mf = mfix_gd(NUS, e, T)
+    assert abs(mf["kappa_h"][-1] / ref["kappa_h"][-1] - 1) > 0.1  # ν = 0.5: χ' ≠ χ'/χ
 
 
 @pytest.mark.parametrize("alpha", [1.0, 1.6])
@@ -146,3 +177,4 @@ def test_lun_mfix_viscosity_matches_mfix_lun_1984(e, alpha):
     np.testing.assert_allclose(ev["p"][(0, 0)], p, rtol=1e-10)
     np.testing.assert_allclose(ev["kappa"][(0, 0)], kappa, rtol=1e-10)
     assert np.all(np.asarray(ev["kappa_h"][(0, 0)]) == 0.0)  # MFiX: Kphi_s = 0 for LUN_1984
+    assert np.all(np.asarray(ev["Gamma_U"][(0, 0)]) == 0.0)  # and EDvel_sM_ip = 0

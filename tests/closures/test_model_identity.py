@@ -52,7 +52,7 @@ def scaled():
 def test_registries_hold_the_builtin_closures():
     assert set(RADIALS.names()) >= {"lun_savage", "carnahan_starling"}
     assert WALLS.names() == ("johnson_jackson",)
-    assert TRANSPORTS.names() == ("garzo_dufty", "lun", "lun_full", "lun_mfix")
+    assert TRANSPORTS.names() == ("garzo_dufty", "garzo_dufty_mfix", "lun", "lun_full", "lun_mfix")
     assert CLOSURES == {"radial": RADIALS, "wall": WALLS, "transport": TRANSPORTS}
     assert isinstance(RADIALS.create("carnahan_starling"), CarnahanStarling)
     assert RADIALS.spec(CarnahanStarling()) == "carnahan_starling"

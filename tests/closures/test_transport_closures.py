@@ -236,25 +236,28 @@ def test_ma_ahmadi_g0():
 def test_presets_and_unknown_names():
     assert ChuteModel.preset("paper") == ChuteModel()
     assert ChuteModel.preset("mfix-gd", roughness=0.1) == ChuteModel(
-        transport="garzo_dufty", radial="carnahan_starling", roughness=0.1
+        transport="garzo_dufty_mfix", radial="carnahan_starling", roughness=0.1
     )
     with pytest.raises(ParameterError, match=r"unknown preset 'mfix'; choose one of \['mfix-gd', 'mfix-lun'"):
         ChuteModel.preset("mfix")
-    with pytest.raises(ParameterError, match=r"unknown closure 'gd'; choose one of \['garzo_dufty', 'lun'"):
+    known = r"\['garzo_dufty', 'garzo_dufty_mfix', 'lun'"
+    with pytest.raises(ParameterError, match=r"unknown closure 'gd'; choose one of " + known):
         ChuteModel(transport="gd")
     with pytest.raises(ParameterError, match=r"alpha = -1 is outside the allowed range \[0, 10\]"):
         ChuteModel(transport={"name": "lun_mfix", "alpha": -1})
-    assert {"lun", "lun_full", "lun_mfix", "garzo_dufty"} <= set(TRANSPORTS.names())
+    assert {"lun", "lun_full", "lun_mfix", "garzo_dufty", "garzo_dufty_mfix"} <= set(TRANSPORTS.names())
     m = ChuteModel.preset("mfix-lun")
     assert ChuteModel.from_dict(m.to_dict()) == m
 
 
 def test_vanishing_functions():
-    """κ_h ≡ 0 for the paper's closure (and MFiX's Lun): the compiled steady rows leave its
-    terms out, so the paper's numbers are bit for bit those before κ_h existed."""
+    """κ_h ≡ 0 and Γ_U ≡ 0 for the paper's closure (and MFiX's Lun; Γ_U also for lun_full):
+    the compiled steady rows leave their terms out, so the paper's numbers are bit for bit
+    those before κ_h and Γ_U existed."""
     from chuteflow.closures.model import vanishing_functions
 
-    assert vanishing_functions(*ChuteModel().closures) == ("kappa_h",)
-    assert vanishing_functions(*ChuteModel.preset("mfix-lun").closures) == ("kappa_h",)
-    assert vanishing_functions(*ChuteModel(transport="lun_full").closures) == ()
+    assert vanishing_functions(*ChuteModel().closures) == ("kappa_h", "Gamma_U")
+    assert vanishing_functions(*ChuteModel.preset("mfix-lun").closures) == ("kappa_h", "Gamma_U")
+    assert vanishing_functions(*ChuteModel(transport="lun_full").closures) == ("Gamma_U",)
     assert vanishing_functions(*ChuteModel.preset("mfix-gd").closures) == ()
+    assert vanishing_functions(*ChuteModel(transport="garzo_dufty").closures) == ()

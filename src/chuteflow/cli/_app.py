@@ -1,6 +1,7 @@
 """The typer application shared by the command modules, its error handling, and the model
 options: one option per :class:`~chuteflow.closures.ChuteModel` field, generated from the
-fields (defaults, help, and the registered closure names as choices), added to a command by
+fields (defaults, help, and the registered closure names as choices), and ``--preset`` (a
+closure set of :data:`~chuteflow.closures.PRESETS`), added to a command by
 :func:`with_model_options`. Generating them imports :mod:`chuteflow.closures` (and so sympy,
 ~0.3 s) at start-up; nothing is derived or compiled until a command runs."""
 
@@ -11,15 +12,15 @@ import enum
 import functools
 import inspect
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Collection, Iterator
 from contextlib import contextmanager
 from typing import Any
 
 import typer
 from typer.core import TyperGroup
 
-from chuteflow.closures import CLOSURES, PARAMETERS, ChuteModel
-from chuteflow.errors import ChuteflowError
+from chuteflow.closures import CLOSURES, PARAMETERS, PRESETS, ChuteModel
+from chuteflow.errors import ChuteflowError, ParameterError
 
 #: Exit code of a user error (bad parameter, no steady flow, no convergence).
 EXIT_USER_ERROR = 2
@@ -111,10 +112,36 @@ def model_option(name: str):
     return typer.Option(value, flag, help=text)
 
 
-def model_from_options(**values: Any) -> ChuteModel:
+#: Help of ``--preset`` (the rule for explicit closure options is documented in docs/cli.md).
+PRESET_HELP = (
+    "Closure set of another code (ChuteModel.preset): one of "
+    + ", ".join(sorted(PRESETS))
+    + ". It sets --transport, --radial and --wall; any of these given explicitly overrides the preset's."
+)
+
+
+def model_from_options(
+    preset: str | None = None, explicit: Collection[str] | None = None, **values: Any
+) -> ChuteModel:
     """The ChuteModel of parsed model options (``roughness=…, radial=…``; enum choices are
-    taken by value). Raises ParameterError (a one-line CLI error) for bad values."""
-    return ChuteModel(**{k: (v.value if isinstance(v, enum.Enum) else v) for k, v in values.items()})
+    taken by value). Raises ParameterError (a one-line CLI error) for bad values.
+
+    ``preset``: a name of :data:`~chuteflow.closures.PRESETS` (``--preset``). The preset
+    sets its fields (the closures); an option named in ``explicit`` (given on the command
+    line) overrides the preset's value, the others take the preset's. ``explicit=None``
+    counts as explicit the values that differ from ChuteModel()'s defaults. An unknown
+    preset is a one-line ParameterError listing the known ones.
+    """
+    vals = {k: (v.value if isinstance(v, enum.Enum) else v) for k, v in values.items()}
+    if preset is None:
+        return ChuteModel(**vals)
+    if preset not in PRESETS:
+        raise ParameterError(f"--preset: unknown preset {preset!r}; choose one of {sorted(PRESETS)}")
+    if explicit is None:
+        default = ChuteModel().to_dict()
+        explicit = {k for k, v in vals.items() if v != default.get(k)}
+    fixed = PRESETS[preset]["model"]
+    return ChuteModel.preset(preset, **{k: v for k, v in vals.items() if k in explicit or k not in fixed})
 
 
 #: Default of the ``model`` parameter of a command decorated with :func:`with_model_options`
@@ -122,11 +149,17 @@ def model_from_options(**values: Any) -> ChuteModel:
 MODEL_OPTIONS_HERE: Any = None
 
 
+#: Name of the typer.Context parameter :func:`with_model_options` adds to a command (to tell
+#: options given on the command line from defaults).
+_CONTEXT = "model_options_context__"
+
+
 def with_model_options(command: Callable[..., Any]) -> Callable[..., Any]:
     """Decorator of a command function with a parameter ``model``: the command gets one option
     per ChuteModel field instead (``--roughness --wall-loss --restitution --nu-max --radial
-    --wall --transport``, in place of ``model``), and is called with the ChuteModel built
-    from them by :func:`model_from_options`. Put it below ``@app.command(...)``.
+    --wall --transport``) and ``--preset``, in place of ``model``, and is called with the
+    ChuteModel built from them by :func:`model_from_options` (explicit closure options
+    override the preset's). Put it below ``@app.command(...)``.
     """
     sig = inspect.signature(command, eval_str=True)
     params = list(sig.parameters.values())
@@ -144,19 +177,35 @@ def with_model_options(command: Callable[..., Any]) -> Callable[..., Any]:
         )
         for name in ChuteModel.__dataclass_fields__
     ]
-    clash = set(names) & {p.name for p in options}
+    extra = [
+        inspect.Parameter(
+            "preset", kind, default=typer.Option(None, "--preset", help=PRESET_HELP), annotation=str | None
+        ),
+        inspect.Parameter(_CONTEXT, kind, annotation=typer.Context),
+    ]
+    clash = set(names) & {p.name for p in options + extra}
     if clash:
         raise TypeError(f"{command.__name__}: parameters {sorted(clash)} clash with the model options")
-    new = params[:i] + options + params[i + 1 :]
+    # the context parameter has no default: it goes first (typer fills it in)
+    new = [extra[1]] + params[:i] + options + [extra[0]] + params[i + 1 :]
 
     @functools.wraps(command)
     def wrapper(**kwargs: Any) -> Any:
+        ctx = kwargs.pop(_CONTEXT)
+        preset = kwargs.pop("preset")
         values = {p.name: kwargs.pop(p.name) for p in options}
-        return command(**kwargs, model=model_from_options(**values))
+        explicit = {n for n in values if _explicit(ctx, n)}
+        return command(**kwargs, model=model_from_options(preset, explicit, **values))
 
     wrapper.__signature__ = sig.replace(parameters=new)  # type: ignore[attr-defined]
     wrapper.__annotations__ = {p.name: p.annotation for p in new}
     return wrapper
+
+
+def _explicit(ctx: Any, name: str) -> bool:
+    """Whether the option ``name`` was given (command line or environment), not defaulted."""
+    source = ctx.get_parameter_source(name) if ctx is not None else None
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
 
 
 @contextmanager

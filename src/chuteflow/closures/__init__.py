@@ -5,7 +5,7 @@ Each kind of closure has a registry (:class:`Registry`): :data:`RADIALS` (g0),
 :class:`ChuteModel` carries one of each with the material and floor parameters.
 """
 
-from .garzo_dufty import GarzoDuftyClosure, garzo_dufty_reduced
+from .garzo_dufty import GarzoDuftyClosure, GarzoDuftyMfixClosure, garzo_dufty_reduced
 from .kinetic import (
     TRANSPORTS,
     LunClosure,
@@ -52,6 +52,7 @@ __all__ = [
     "ChuteModel",
     "JohnsonJackson",
     "GarzoDuftyClosure",
+    "GarzoDuftyMfixClosure",
     "LunClosure",
     "LunFullClosure",
     "LunSavage",

@@ -4,7 +4,8 @@ Dimensionless (σ, ρ_p σ³, √(σ/g)) transport functions of packing fraction
 granular temperature T:
 
     p = f1 T,   μ = f2 √T,   ζ = f3 √T,   κ = f4 √T,   Γ = (1 − e_p²) f5 T^{3/2},
-    κ_h = fh T^{3/2}  (heat flux q = −κ∇T − κ_h∇ν).
+    κ_h = fh T^{3/2}  (heat flux q = −κ∇T − κ_h∇ν),
+    Γ_U  (energy sink Γ + Γ_U ∇·u; zero for Lun et al.'s closures here).
 
 ``lun`` is the paper's closure: the heat-flux term κ_h ∇ν is dropped (κ_h = 0; the paper's
 footnote to eq. 2.7). ``lun_full`` keeps it; ``lun_mfix`` is MFiX's ``KT_TYPE = LUN_1984``
@@ -70,7 +71,8 @@ class TransportClosure:
     ``functions(nu, e, nu_max, g0)`` gives the functions f1 … f7 of ν (Table 1: the wall
     conditions use them too) and ``transport(f, T, e)`` the transport functions p, μ, ζ, κ,
     Γ and, optionally, κ_h (``"kappa_h"``, the coefficient of ∇ν in the heat flux; zero if
-    absent) from them, all as sympy expressions.
+    absent) and Γ_U (``"Gamma_U"``, the coefficient of ∇·u in the energy sink Γ + Γ_U ∇·u;
+    zero if absent) from them, all as sympy expressions.
     """
 
     name: ClassVar[str] = "base"

@@ -37,8 +37,10 @@ from .walls import WALLS, JohnsonJackson, WallCondition
 
 #: Names of the transport functions (§2.1) followed by the floor terms η*, Γ* (§2.2).
 #: ``kappa_h`` is the coefficient of ∇ν in the heat flux q = −κ∇T − κ_h∇ν (the paper's
-#: footnote to eq. 2.7; zero for the paper's ``lun`` closure).
-TRANSPORT = ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h")
+#: footnote to eq. 2.7; zero for the paper's ``lun`` closure). ``Gamma_U`` is the
+#: coefficient of ∇·u in the collisional energy sink Γ + Γ_U ∇·u (Garzó & Dufty 1999's
+#: first-order cooling rate ζ_U ∇·u, Γ_U = (3/2) ν T ζ_U; zero for ``lun`` and ``lun_full``).
+TRANSPORT = ("p", "mu", "zeta", "kappa", "Gamma", "kappa_h", "Gamma_U")
 FLOOR = ("eta_star", "Gamma_star")
 FUNCTIONS = TRANSPORT + FLOOR
 #: Partial-derivative orders (i, j) meaning ∂^i/∂ν^i ∂^j/∂T^j, up to second order.
@@ -90,6 +92,7 @@ def _derive(transport, radial, wall):
     fs = transport.functions(nu, e, num, g0)
     exprs = dict(transport.transport(fs, T, e))
     exprs.setdefault("kappa_h", sp.S.Zero)  # a closure without a density-gradient heat flux
+    exprs.setdefault("Gamma_U", sp.S.Zero)  # ... without a first-order (∇·u) cooling rate
     exprs.update(wall.terms(fs, T, phi, phiw))
     flat = []
     for name in FUNCTIONS:
@@ -276,8 +279,8 @@ class ChuteModel:
 
         ``ChuteModel.preset("mfix-lun")`` is MFiX's ``KT_TYPE = LUN_1984`` (viscosity factor
         (2 + α)/3 with its default ``ALPHA = 1.6``, Carnahan–Starling g0),
-        ``preset("mfix-gd")`` its ``KT_TYPE = GD_1999`` and ``preset("paper")`` the
-        paper's closures (the defaults). ``overrides`` set any other field (e.g.
+        ``preset("mfix-gd")`` its ``KT_TYPE = GD_1999`` (closure ``garzo_dufty_mfix``) and
+        ``preset("paper")`` the paper's closures (the defaults). ``overrides`` set any other field (e.g.
         ``roughness=0.1``). An unknown name raises :class:`~chuteflow.errors.ParameterError`
         listing the known ones.
         """
@@ -433,8 +436,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "code": "MFiX KT_TYPE = LUN_1984 (ALPHA = 1.6), one solids phase (Carnahan-Starling), BC_JJ_PS",
     },
     "mfix-gd": {
-        "model": {"transport": "garzo_dufty", "radial": "carnahan_starling", "wall": "johnson_jackson"},
-        "code": "MFiX KT_TYPE = GD_1999, one solids phase (Carnahan-Starling g0), BC_JJ_PS",
+        "model": {"transport": "garzo_dufty_mfix", "radial": "carnahan_starling", "wall": "johnson_jackson"},
+        "code": "MFiX KT_TYPE = GD_1999 (GT_PDE_GD as written), one solids phase (Carnahan-Starling)",
     },
     "mfix-lun-ma-ahmadi": {
         "model": {
