@@ -57,7 +57,9 @@ def main(argv=None) -> None:
         L, N, M, T, times = 60000.0, 48, 256, 6000.0, (3000.0, 6000.0)
     frame = 0.5 * (theory.v_minus + theory.v_plus)
     t0 = _time.perf_counter()
-    ds = simulate_pulse(flow, L, time=T, width=150.0, frame_speed=frame, n=N, modes=M, dt=20.0, record_every=5)
+    ds = simulate_pulse(
+        flow, L, time=T, width=150.0, frame_speed=frame, n=N, modes=M, dt=20.0, record_every=5
+    )
     rho = ds["rho_bar"].values
     print(
         f"DNS L = {L:g}, N = {N}, M = {M}, dt = 20, t = {T:g}: {_time.perf_counter() - t0:.0f} s, "

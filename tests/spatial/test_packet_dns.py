@@ -70,10 +70,12 @@ def test_growth_edges_and_analytic_signal():
     vm, vp, i = growth_edges(V, 1 - (V - 2) ** 2)
     assert (vm, vp, i) == (pytest.approx(1.0), pytest.approx(3.0), 4)
     vm, vp, _ = growth_edges(V, np.ones_like(V))
-    assert math.isnan(vm) and math.isnan(vp)
+    assert math.isnan(vm)
+    assert math.isnan(vp)
     x = np.arange(64) * 2 * math.pi / 64
     c = analytic_signal(np.cos(3 * x) + 5.0)
-    assert c[2] == pytest.approx(1.0) and np.allclose(np.delete(c, 2), 0, atol=1e-14)
+    assert c[2] == pytest.approx(1.0)
+    assert np.allclose(np.delete(c, 2), 0, atol=1e-14)
 
 
 def test_bad_input():
@@ -111,7 +113,15 @@ def test_p1_packet_edges_from_the_simulation():
         # above simulate's default resolution tolerance
         warnings.simplefilter("ignore")
         ds = simulate_pulse(
-            flow, 30000.0, time=3000.0, width=150.0, frame_speed=frame, n=48, modes=128, dt=20.0, record_every=5
+            flow,
+            30000.0,
+            time=3000.0,
+            width=150.0,
+            frame_speed=frame,
+            n=48,
+            modes=128,
+            dt=20.0,
+            record_every=5,
         )
     assert ds.attrs["init"] == "custom"
     assert ds.attrs["status"] == "ok"

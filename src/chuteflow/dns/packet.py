@@ -32,9 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..steady import SteadyFlow
 from ..conventions import RATE_UNITS, VELOCITY_UNITS
 from ..errors import ParameterError
+from ..steady import SteadyFlow
 
 __all__ = ["PacketGrowth", "analytic_signal", "ray_growth", "growth_edges", "simulate_pulse"]
 
@@ -109,7 +109,13 @@ class PacketGrowth:
         import xarray as xr
 
         return xr.Dataset(
-            {"growth": ("V", self.growth, {"units": RATE_UNITS, "long_name": "growth along the ray x = V t"})},
+            {
+                "growth": (
+                    "V",
+                    self.growth,
+                    {"units": RATE_UNITS, "long_name": "growth along the ray x = V t"},
+                )
+            },
             coords={"V": ("V", self.V, {"units": VELOCITY_UNITS, "long_name": "ray speed"})},
             attrs={k: (str(v) if isinstance(v, bool) else v) for k, v in self.to_dict().items()},
         )
@@ -145,6 +151,7 @@ def ray_growth(
     length: float | None = None,
     x0: float = 0.0,
     frame: float = 0.0,
+    mass_speed: float | None = None,
 ) -> PacketGrowth:
     """σ(V) of a packet released at (x0, t = 0), measured between ``t1`` and ``t2``.
 
@@ -165,6 +172,14 @@ def ray_growth(
         Where the pulse was at t = 0 (in the run's frame, which coincides with the lab's then).
     frame : float
         Speed of the run's frame: the ray x = x0 + V t is at ξ = x0 + (V − frame) t.
+    mass_speed : float, optional
+        The speed at which the pulse's net mass travels (the kinematic-wave speed dQ0/dρ̄0,
+        ``ds.attrs["kinematic_wave_speed"]``). A field with net mass m has an analytic signal
+        with a tail m/(π d) at a distance d from the mass (its k → 0 end): a floor under the
+        packet's edges. Given this speed, the analytic signal of the first record
+        (t = 0), carried rigidly at ``mass_speed``, is subtracted at each time: it has the same
+        tail, and elsewhere it is the initial pulse, negligible away from the ray
+        V = ``mass_speed`` (where the measurement is then not meaningful).
 
     Returns
     -------
@@ -184,9 +199,16 @@ def ray_growth(
     if not T1 < T2:
         raise ParameterError(f"t1 = {t1!r}, t2 = {t2!r}: the nearest records coincide (t = {T1:g})")
     logs = []
+    m = np.arange(1, (len(x) - 1) // 2 + 1)
+    # the grid may not start at 0: shift the phases so that c_m refer to ξ = 0
+    shift = np.exp(-2j * math.pi * m * x[0] / L)
+    i0 = int(np.argmin(np.abs(t)))
+    if mass_speed is not None and abs(t[i0]) > 1e-9 * max(abs(t[-1]), 1.0):
+        raise ParameterError("mass_speed: the record must start at t = 0 (the pulse's release)")
     for i, ti in ((i1, T1), (i2, T2)):
-        # the grid may not start at 0: shift the phases so that c_m refer to ξ = 0
-        c = analytic_signal(f[i]) * np.exp(-2j * math.pi * np.arange(1, (len(x) - 1) // 2 + 1) * x[0] / L)
+        c = analytic_signal(f[i]) * shift
+        if mass_speed is not None:
+            c = c - analytic_signal(f[i0]) * shift * np.exp(-2j * math.pi * m * (mass_speed - frame) * ti / L)
         xi = x0 + (V - frame) * ti
         logs.append(np.log(_envelope_on_rays(c, L, xi) + 1e-300))
     g = (logs[1] - logs[0]) / (T2 - T1) + 0.5 * math.log(T2 / T1) / (T2 - T1)

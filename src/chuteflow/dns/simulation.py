@@ -244,7 +244,7 @@ class DnsSimulation:
         if initial is not None:
             if not callable(initial):
                 raise ParameterError(
-                    f"initial = {type(initial).__name__}: a callable x -> δ ln ν(x) (the initial perturbation)"
+                    f"initial = {type(initial).__name__}: a callable x -> δ ln ν(x), the initial perturbation"
                 )
             init = "noise"
         if not isinstance(flow, SteadyFlow):
