@@ -41,7 +41,17 @@ def test_stages_belong_to_the_default_paper():
     assert set(DEFAULT_PAPERS) <= set(PAPERS)
     assert load_stages() == {}
     names = [s.name for s in registered_stages(DEFAULT_PAPERS)]
-    assert names == ["steady", "stability", "diagrams", "reduced", "waves", "transverse", "dns", "spatial", "closures"]
+    assert names == [
+        "steady",
+        "stability",
+        "diagrams",
+        "reduced",
+        "waves",
+        "transverse",
+        "dns",
+        "spatial",
+        "closures",
+    ]
     assert {s.paper for s in registered_stages(DEFAULT_PAPERS)} == {"mitarai2004"}
     # the stages that read nothing from the others run in the second process (reduced reads
     # the diagrams' sweeps; waves, issue 9, does not and must stay off the main path)
