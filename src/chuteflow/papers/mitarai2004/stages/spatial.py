@@ -25,19 +25,21 @@ from ..points import POINTS
 #: The paper's unstable points of φ = 0.05 (§4.2: P1 in regime B, P4 in A, P5 in C).
 SPATIAL_POINTS = ("P1", "P4", "P5")
 #: The reference the answers are compared with: the saddle family continued in V with steps
-#: of 0.07 instead of 0.1 of V_peak (each edge is then refined by Newton on σ(V) = 0 to
+#: of 0.05 instead of 0.1 of V_peak (each edge is then refined by Newton on σ(V) = 0 to
 #: 1e-10, so a different step changes it only if the continuation jumps between saddle
 #: families), and the dispersion curve sampled at 48 frequencies instead of 24 (the start of
 #: the refinement of ω_max). The resolution N itself is judged by the drift/tail tests at the
-#: saddle (``converged``). Smaller steps are not used: at P5 steps of 0.04 jump from the
-#: temporal peak to another saddle family on the first step down (V− = V_peak = 16.889
-#: instead of 16.2018), and at P4 a tighter saddle_rtol (1e-10) or N from 120 stops the
-#: continuation (a limitation of the continuation, docs/spatial.md).
-FINE_RAY_STEP = 0.07
+#: saddle (``converged``). The continuation depends on the step (measured): 0.05, 0.06, 0.1
+#: and 0.12 agree at P1, P4, P5; at P5 steps of 0.04 and 0.08 jump from the temporal peak to
+#: another saddle family on the first step down and report V− = V_peak = 16.889 (unflagged)
+#: instead of 16.2018; at P4 steps of 0.07 and 0.08 stop at the branch cut ("undetermined")
+#: (docs/spatial.md).
+FINE_RAY_STEP = 0.05
 FINE_NUM = 48
-#: Measured: the edges agree to 4e-13 (P5), the most amplified frequency and its growth to
-#: ≤ 2e-9 (P1, P4, against 48 samples with steps 0.04); N = 120 moved P1's V− by 7e-7 (the
-#: branch-point edge, where the family stops at |k*| ~ 2e-5). Tolerances with margin:
+#: Measured: the edges agree to ≤ 8e-9 (P1: 0, P4: 7e-11, P5: 0 with steps 0.05; 6.6e-9 at
+#: P4 with 0.06), the most amplified frequency and its growth to ≤ 2e-9 (48 samples);
+#: N = 120 moved P1's V− by 7e-7 (the branch-point edge, where the family stops at
+#: |k*| ~ 2e-5). Tolerances with margin:
 EDGE_RTOL = 1e-5
 SPATIAL_RTOL = 1e-6
 #: The kinematic edge against dQ0/dρ̄0 (tests/spatial/test_packet_edges.py: 4.5e-5 at P1,
@@ -114,7 +116,7 @@ def _points(ctx: StageContext) -> None:
             f"spatial.{name}",
             source="§4.2 (unstable points); Briggs (1964), Bers (1983)",
             statement=f"{name}: convective or absolute, the packet's edges V−, V+ and the most amplified "
-            "inlet frequency, converged in the resolution.",
+            "inlet frequency, unchanged by finer continuation steps and frequency sampling.",
             computed=f"{name} (θ = {p.theta:g}°, ν0(0) = {p.nu0:g}): {a.verdict}; V− = {a.v_minus:.6g}, "
             f"V+ = {a.v_plus:.6g} (N = {a.n}; {e_edge:.1e} from steps {FINE_RAY_STEP:g}); ω_max = {w:.5g}, "
             f"−Im k = {g:.5g} ({e_sp:.1e} from {FINE_NUM} samples); fastest ray V = {a.v_peak:.5g}, growth "
