@@ -41,12 +41,22 @@ def test_stages_belong_to_the_default_paper():
     assert set(DEFAULT_PAPERS) <= set(PAPERS)
     assert load_stages() == {}
     names = [s.name for s in registered_stages(DEFAULT_PAPERS)]
-    assert names == ["steady", "stability", "diagrams", "reduced", "waves", "transverse", "dns", "closures"]
+    assert names == [
+        "steady",
+        "stability",
+        "diagrams",
+        "reduced",
+        "waves",
+        "transverse",
+        "dns",
+        "spatial",
+        "closures",
+    ]
     assert {s.paper for s in registered_stages(DEFAULT_PAPERS)} == {"mitarai2004"}
     # the stages that read nothing from the others run in the second process (reduced reads
     # the diagrams' sweeps; waves, issue 9, does not and must stay off the main path)
     independent = {s.name for s in registered_stages(DEFAULT_PAPERS) if s.independent}
-    assert independent == {"stability", "waves", "transverse", "dns", "closures"}
+    assert independent == {"stability", "waves", "transverse", "dns", "spatial", "closures"}
     with pytest.raises(ParameterError, match="unknown paper"):
         load_paper("nope")
 

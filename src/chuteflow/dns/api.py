@@ -62,6 +62,7 @@ def simulate(
     trackers: Sequence[Tracker] = (),
     settings: NewtonSettings | None = None,
     min_dt_fraction: float = 1e-3,
+    initial: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -81,8 +82,8 @@ def simulate(
         Period L along the slope; the fundamental wavenumber is k = 2π/L.
     time, n, modes, dt, init, amplitude, seed, frame_speed, top, relax
         See :class:`DnsSimulation`.
-    snapshots, record_every, settings, min_dt_fraction
-        See :class:`DnsSimulation`.
+    snapshots, record_every, settings, min_dt_fraction, initial
+        See :class:`DnsSimulation` (``initial``: a callable δ ln ν(x), e.g. a localised pulse).
     out : path, optional
         NetCDF file written at the end (also for a run that stopped early: the partial
         result); its checkpoint is ``out + ".checkpoint.npz"``.
@@ -134,6 +135,7 @@ def simulate(
         record_every=record_every,
         settings=settings,
         min_dt_fraction=min_dt_fraction,
+        initial=initial,
         wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []

@@ -13,10 +13,12 @@ interrupted, trackers included (:meth:`chuteflow.trackers.Tracker.checkpoint`).
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 import time as _time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -29,7 +31,7 @@ from ..steady import SteadyFlow, steady_tangent
 from ..trackers import WavePolicy
 from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
-from .setup import INITS, DnsSetup, check_setup, history_coefficients, initial_coefficients
+from .setup import INITS, DnsSetup, _check_valid, check_setup, history_coefficients, initial_coefficients
 from .stepper import NewtonSettings, Stepper
 
 __all__ = ["DnsSimulation", "DnsState", "DnsStep"]
@@ -206,6 +208,15 @@ class DnsSimulation:
         Stop (status ``"stopped: ..."``) when Newton fails at Δt below this fraction of ``dt``.
     wave_policy : WavePolicy, optional
         How the wave at the end is judged (:func:`~chuteflow.trackers.wave_measures`).
+    initial : callable, optional
+        A start of the caller's: ``initial(x)`` → δ ln ν ≈ δν/ν0 at the points ``x`` in
+        [0, L) of the padded grid at t = 0 (uniform in y, as the noise; projected onto the
+        modes |m| ≤ M), e.g. a localised pulse for the impulse response
+        (``benchmarks/probes/packet_edges.py``). It replaces the random noise of
+        ``init="noise"`` (the run is a broadband start: the defaults of ``modes`` and
+        ``frame_speed``, the first BDF1 step and the measurement window are the noise's; the
+        dataset's ``init`` reads ``"custom"``); ``amplitude`` and ``seed`` are not used
+        (``amplitude`` records max |δ ln ν|).
     """
 
     def __init__(
@@ -228,7 +239,14 @@ class DnsSimulation:
         settings: NewtonSettings | None = None,
         min_dt_fraction: float = 1e-3,
         wave_policy: WavePolicy | None = None,
+        initial: Callable[[np.ndarray], np.ndarray] | None = None,
     ):
+        if initial is not None:
+            if not callable(initial):
+                raise ParameterError(
+                    f"initial = {type(initial).__name__}: a callable x -> δ ln ν(x), the initial perturbation"
+                )
+            init = "noise"
         if not isinstance(flow, SteadyFlow):
             raise ParameterError(
                 f"flow = {type(flow).__name__}: a SteadyFlow (chuteflow.steady.solve_steady(theta, nu0))"
@@ -288,6 +306,17 @@ class DnsSimulation:
         #: whether :class:`~chuteflow.trackers.SaturationStop` waits for growth or decay).
         self.max_growth_rate = float(self.mode.alpha.real)
         self.relax_change = 0.0
+        #: δ ln ν of ``initial`` on the padded grid (None: the ``init`` start)
+        self.initial: np.ndarray | None = None
+        if initial is not None:
+            ds = np.asarray(initial(self.disc.x.copy()), dtype=float)
+            if ds.shape != self.disc.x.shape or not np.all(np.isfinite(ds)):
+                raise ParameterError(
+                    f"initial: returned shape {ds.shape} (or non-finite values) for x of shape "
+                    f"{self.disc.x.shape}: it must give one finite δ ln ν per point"
+                )
+            self.initial = ds
+            self.setup = replace(self.setup, amplitude=float(np.max(np.abs(ds))))
 
     # -- what trackers ask ----------------------------------------------------------------
     def wave_amplitude(self, C: np.ndarray) -> float:
@@ -301,13 +330,25 @@ class DnsSimulation:
 
     def key(self) -> str:
         """The run's key: a checkpoint is continued only by the run that wrote it."""
-        return self.setup.key()
+        if self.initial is None:
+            return self.setup.key()
+        h = hashlib.sha256(self.setup.key().encode() + self.initial.tobytes())
+        return h.hexdigest()[:16]
 
     # -- the state ---------------------------------------------------------------------------
     def initial_state(self) -> DnsState:
         """The state at t = 0 (the relaxed steady flow plus the perturbation)."""
         s = self.setup
-        C, Cm, self.relax_change = initial_coefficients(self.disc, self.flow, self.mode, s, s.dt, s.relax)
+        if self.initial is None:
+            C, Cm, self.relax_change = initial_coefficients(self.disc, self.flow, self.mode, s, s.dt, s.relax)
+        else:
+            # the caller's δ ln ν on the relaxed steady state, a BDF1 first step (as from noise)
+            C, _, self.relax_change = initial_coefficients(
+                self.disc, self.flow, self.mode, replace(s, amplitude=0.0), s.dt, s.relax
+            )
+            C[0, :, 1:] += self.disc.to_modes(self.initial)[None, 1:]
+            _check_valid(self.disc, C, s)
+            Cm = None
         prev = None if Cm is None else np.array(self.stepper.physical(Cm))
         st = DnsState(
             C=C,
@@ -506,7 +547,7 @@ class DnsSimulation:
             "nx_padded": disc.nxp,
             "dt": setup.dt,
             "time_end": float(t[-1]) if len(t) else 0.0,
-            "init": setup.init,
+            "init": "custom" if self.initial is not None else setup.init,
             "amplitude": setup.amplitude,
             "seed": setup.seed,
             "frame_speed": setup.frame,

@@ -20,6 +20,7 @@ STAGE_MODULES: tuple[str, ...] = (
     "waves",
     "transverse",
     "dns",
+    "spatial",
     "closures",
 )
 
