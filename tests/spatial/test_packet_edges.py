@@ -50,3 +50,37 @@ def test_p4_p5_upper_edge_is_the_kinematic_wave_speed(theta, nu0, v_minus, v_plu
     assert res.v_plus == pytest.approx(longwave(flow).dQ_drho, rel=2e-4)
     assert res.v_minus == pytest.approx(v_minus, rel=1e-3)
     assert res.v_plus == pytest.approx(v_plus, rel=1e-3)
+
+
+def test_p5_edges_do_not_depend_on_the_continuation_step():
+    """The saddle family continued in V with steps of 0.08 V_peak (the default is 0.1): before
+    the corrector had to land near the predictor (``absolute.CORRECTOR_RATIO``), the first
+    step down from the temporal peak at P5 jumped to another saddle family (k* ≈ 0.028 −
+    0.012i, σ < 0) and reported V− = V_peak = 16.889 as converged; the edges with steps of
+    0.04 … 0.12 V_peak now agree to 1e-8 (measured: V− = 16.2018095 at each of 0.04, 0.06,
+    0.08, 0.1, 0.12). Tolerance 1e-6 relative against the default step's value, 16.20181 the
+    reproduce stage's reference (docs/spatial.md)."""
+    import dataclasses
+
+    from chuteflow.spatial import DEFAULT_SPATIAL_POLICY
+
+    flow = solve_steady(17.0, 0.10, ChuteModel(roughness=0.05))
+    res = absolute_instability(flow, policy=dataclasses.replace(DEFAULT_SPATIAL_POLICY, ray_step=0.08))
+    assert res.converged, res.note
+    assert res.v_minus == pytest.approx(16.2018095, rel=1e-6)
+    assert res.v_plus == pytest.approx(18.1392688, rel=1e-6)
+
+
+def test_a_corrector_far_from_the_predictor_is_rejected():
+    """The acceptance rule itself: Newton's saddle within CORRECTOR_RATIO × the predictor's
+    step of the predictor is the same family; further away it is not."""
+    from types import SimpleNamespace
+
+    from chuteflow.errors import ConvergenceError
+    from chuteflow.spatial.absolute import CORRECTOR_RATIO, _check_same_family
+
+    e = SimpleNamespace(k=1.6e-3 + 0j)
+    pred = 1.5e-3 - 1e-4j  # a step of ~1.4e-4
+    _check_same_family(e, pred, SimpleNamespace(k=pred + 0.2 * CORRECTOR_RATIO * abs(pred - e.k)))
+    with pytest.raises(ConvergenceError, match="another saddle family"):
+        _check_same_family(e, pred, SimpleNamespace(k=0.028 - 0.012j))

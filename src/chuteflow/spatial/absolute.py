@@ -178,9 +178,12 @@ def _ray_growth(e, V: float) -> float:
     return float((e.alpha + 1j * e.k * V).real)
 
 
-def _continue(branch: Branch, e0, V0: float, direction: float, dV0: float, policy, k_small: float):
+def _continue(
+    branch: Branch, e0, V0: float, direction: float, dV0: float, policy, k_small: float, unrefined: list
+):
     """Continue the saddle from (e0, V0) in V along ``direction`` until σ(V) changes sign
-    (downwards also until V = 0 is passed, to land on the lab frame). Returns
+    (downwards also until V = 0 is passed, to land on the lab frame); an edge whose
+    refinement fails is the secant estimate, with the reason appended to ``unrefined``. Returns
     (samples [(V, e)], edge V where σ = 0 or NaN, end), ``end`` one of ``"done"``,
     ``"branch point"`` (|k*| < ``k_small``: the family ends at k = 0, where α(0) = 0), ``"cut"``
     (it reaches Re k = 0 at finite |k|, where the continuation is not analytic)."""
@@ -197,6 +200,7 @@ def _continue(branch: Branch, e0, V0: float, direction: float, dV0: float, polic
             if pred.real <= 0:
                 raise ConvergenceError("the predictor crosses the branch cut")
             e_new = newton_saddle(branch, pred, V_new, policy, start=e)
+            _check_same_family(e, pred, e_new)
         except ChuteflowError:
             dV *= 0.5
             if dV < 1e-4 * dV0:
@@ -208,7 +212,12 @@ def _continue(branch: Branch, e0, V0: float, direction: float, dV0: float, polic
         if V_new == 0.0:
             passed_zero = True
         if s_old > 0 >= s_new and math.isnan(edge):
-            edge = _edge(branch, V, e, V_new, e_new, policy)
+            try:
+                edge = _edge(branch, V, e, V_new, e_new, policy)
+            except ChuteflowError as exc:
+                # the secant between the bracketing saddles, flagged by the caller's note
+                edge = V + (V_new - V) * s_old / (s_old - s_new)
+                unrefined.append(f"{exc}; the secant estimate {edge:.6g} is reported")
         V, e = V_new, e_new
         if abs(e.k) < k_small and abs(s_new) < 1e-2 * abs(_ray_growth(e0, V0)):
             return out, edge, "branch point"
@@ -216,6 +225,26 @@ def _continue(branch: Branch, e0, V0: float, direction: float, dV0: float, polic
             break
         dV = min(dV * 1.5, 4 * dV0)
     return out, edge, "done"
+
+
+#: A continuation step in V is accepted only where Newton's saddle lies within this fraction
+#: of the predictor's step from the predictor (a first-order predictor errs by O(ΔV²)): a
+#: corrector that travels further has found another saddle family (at P5, steps of 0.04 and
+#: 0.08 V_peak jumped from k* = 1.6e-3 to the family at k* ≈ 0.028 − 0.012i and reported its
+#: σ < 0 as the edge) or the step is too long to trust; either way the step is halved.
+CORRECTOR_RATIO = 0.5
+
+
+def _check_same_family(e, pred: complex, e_new) -> None:
+    """Raise :class:`ConvergenceError` where the corrector moved further from the predictor
+    than ``CORRECTOR_RATIO`` × the predictor's step (:data:`CORRECTOR_RATIO`)."""
+    step = abs(pred - e.k)
+    moved = abs(e_new.k - pred)
+    if moved > CORRECTOR_RATIO * step + 1e-9 * abs(e.k):
+        raise ConvergenceError(
+            f"the saddle moved {moved:.2g} from the predictor, more than {CORRECTOR_RATIO:g} × its step "
+            f"{step:.2g}: another saddle family or too long a step"
+        )
 
 
 def _edge(branch, Va, ea, Vb, eb, policy) -> float:
@@ -229,7 +258,18 @@ def _edge(branch, Va, ea, Vb, eb, policy) -> float:
         V_new = V - s / ds if ds != 0 else 0.5 * (lo + hi)
         if not (min(lo, hi) < V_new < max(lo, hi)):
             V_new = 0.5 * (lo + hi)
-        e_new = newton_saddle(branch, e.k - 1j * (V_new - V) / e.d2alpha, V_new, policy, start=e)
+        e_new = None
+        for _half in range(30):
+            pred = e.k - 1j * (V_new - V) / e.d2alpha
+            try:
+                e_new = newton_saddle(branch, pred, V_new, policy, start=e)
+                _check_same_family(e, pred, e_new)
+                break
+            except ChuteflowError:
+                e_new = None
+                V_new = 0.5 * (V + V_new)  # a shorter step from the last settled saddle
+        if e_new is None:
+            raise ConvergenceError(f"the edge between V = {Va:.6g} and {Vb:.6g} was not refined")
         if abs(V_new - V) <= 1e-10 * max(abs(V_new), 1.0):
             return float(V_new)
         if _ray_growth(e_new, V_new) > 0:
@@ -359,8 +399,10 @@ def absolute_instability(
     dV0 = policy.ray_step * max(abs(V_peak), 1e-3)
     # |k*| below which the family is at the branch point k = 0 (with σ < 1 % of the peak's)
     k_small = 0.05 * float(peak.k)
-    down, edge_down, end_down = _continue(branch, e_sad, V_peak, -1.0, dV0, policy, k_small)
-    up, edge_up, end_up = _continue(branch, e_sad, V_peak, +1.0, dV0, policy, k_small)
+    unrefined: list[str] = []
+    down, edge_down, end_down = _continue(branch, e_sad, V_peak, -1.0, dV0, policy, k_small, unrefined)
+    up, edge_up, end_up = _continue(branch, e_sad, V_peak, +1.0, dV0, policy, k_small, unrefined)
+    notes.extend(unrefined)
     samples = sorted(down + up[1:], key=lambda t: t[0])
     c0 = math.nan
     edges = {}
@@ -425,6 +467,7 @@ def absolute_instability(
         and (pinch is True or not check_pinch or growth_peak <= 0)
         and scan.converged
         and verdict != "undetermined"
+        and not unrefined
     )
     V = np.array([v for v, _ in samples])
     res = AbsoluteResult(

@@ -29,11 +29,10 @@ SPATIAL_POINTS = ("P1", "P4", "P5")
 #: 1e-10, so a different step changes it only if the continuation jumps between saddle
 #: families), and the dispersion curve sampled at 48 frequencies instead of 24 (the start of
 #: the refinement of ω_max). The resolution N itself is judged by the drift/tail tests at the
-#: saddle (``converged``). The continuation depends on the step (measured): 0.05, 0.06, 0.1
-#: and 0.12 agree at P1, P4, P5; at P5 steps of 0.04 and 0.08 jump from the temporal peak to
-#: another saddle family on the first step down and report V− = V_peak = 16.889 (unflagged)
-#: instead of 16.2018; at P4 steps of 0.07 and 0.08 stop at the branch cut ("undetermined")
-#: (docs/spatial.md).
+#: saddle (``converged``). Measured with the corrector's acceptance rule
+#: (``spatial.absolute.CORRECTOR_RATIO``): steps of 0.04, 0.05, 0.06, 0.08, 0.1 and 0.12 agree
+#: at P1, P4, P5 (before it, 0.04 and 0.08 jumped to another saddle family at P5, unflagged,
+#: and 0.07, 0.08 ended "undetermined" at P4; docs/spatial.md).
 FINE_RAY_STEP = 0.05
 FINE_NUM = 48
 #: Measured: the edges agree to ≤ 8e-9 (P1: 0, P4: 7e-11, P5: 0 with steps 0.05; 6.6e-9 at
