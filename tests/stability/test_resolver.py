@@ -185,3 +185,21 @@ def test_dispersion_reports_where_the_branch_is_not_the_least_stable_mode(flows)
     )
     assert abs(least - ref.alpha) < 1e-6
     assert abs(least_stable(p1, ks[1]).alpha - ref.alpha) < 1e-6
+
+
+def test_a_mode_finer_than_the_screen_is_not_missed():
+    """A random off-paper flow (try_random_points, seed 616275): at (k_x, k_z) = (0.005239,
+    0.165887) the answer −1.01264 − 0.18236i passes the tests only at N = 148, and a less
+    damped mode near −0.79 − 0.26i (dense QZ at N = 200 and 300: −0.79357 − 0.26440i and
+    −0.79359 − 0.26440i, tails 2e-7 and 4e-9) had tails 2e-3 … 7e-3 at the screen's N = 48,
+    so it was no candidate and −1.01264 was reported as converged. The screen is now repeated
+    at the answer's N (``resolver.SCREEN_REPEAT``): the answer is not −1.01264 as converged
+    any more (measured: the modes near −0.79 found, the top one undecided at N = 256, flagged)."""
+    from chuteflow import ChuteModel, solve_steady
+    from chuteflow.stability import resolver
+
+    flow = solve_steady(20.296, 0.0098, ChuteModel(roughness=0.0614, wall_loss=0.371))
+    m = least_stable(flow, 0.005239, kz=0.165887)
+    assert not (m.converged and m.alpha.real < -0.85), (m.alpha, m.note)
+    assert m.alpha.real > -0.85
+    assert resolver.SCREEN_REPEAT * 48 < 148  # the case the repeated screen is for

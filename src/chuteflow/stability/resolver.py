@@ -489,6 +489,21 @@ def global_candidates(
     return out
 
 
+#: The screen resolves what the answer needed. A mode's eigenvector tail falls about
+#: exponentially in N, so one that passes the tail test (1e-7) only at N_a has a tail of
+#: ~(1e-7)^(48/N_a) at the screen's N = 48: above the screen's candidate_tail (5e-4) once
+#: N_a > 2 × 48. Where the least-stable mode found passes the tests only at N_a >
+#: SCREEN_REPEAT × the screen's N, the screen is repeated at N_a itself, taking as
+#: candidates the eigenvalues above it whose tail there is below tail_tol^SCREEN_TAIL_POWER
+#: (1.3e-5: modes that pass the test by ~1.4 N_a), not the near-neutral band of the dilute
+#: top, whose tails stay ~1e-4 … 1e-3 at such N. Measured: θ = 20.296°, ν0(0) = 0.0098,
+#: φ = 0.0614, Φ = 0.371 at (k_x, k_z) = (0.005239, 0.165887) answered −1.01264 − 0.18236i
+#: (passes at N = 148) while the mode −0.79359 − 0.26440i (dense QZ at N = 200 and 300,
+#: tails 2e-7, 4e-9) had tails 2e-3 … 7e-3 at N = 48 and was no candidate.
+SCREEN_REPEAT = 2.0
+SCREEN_TAIL_POWER = 0.7
+
+
 def search_above(
     flow: SteadyFlow,
     kx: float,
@@ -505,12 +520,39 @@ def search_above(
     is less damped, or, where a candidate above the best resolved mode stays undecided,
     that candidate flagged (``physical = False``) with the resolved mode in its note.
     With ``answer=None`` (the search from scratch, where the continuation lost the branch
-    in 3D) every candidate is above; None when the dense solve has none."""
+    in 3D) every candidate is above; None when the dense solve has none. Where the mode
+    found passes the tests only at N > :data:`SCREEN_REPEAT` × the screen's N, the screen
+    is repeated at that mode's check resolution (finer modes above it are candidates only
+    there, with the tail a mode as fine as it would have)."""
     search = policy.search
     if search.max_candidates == 0:
         return answer
     if rungs is None:
         rungs = search.ladder(policy.n_max, policy.n_growth)
+    found = _search_once(flow, kx, kz, answer, policy, cache, rungs)
+    screened = search.n
+    while found is not None and found.physical and found.n > SCREEN_REPEAT * screened:
+        n2 = found.n
+        finer = dataclasses.replace(
+            policy,
+            search=dataclasses.replace(search, n=n2, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER),
+        )
+        found = _search_once(flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2])
+        screened = n2
+    return found
+
+
+def _search_once(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    answer: Mode | None,
+    policy: RejectionPolicy,
+    cache: OperatorCache,
+    rungs: list[int],
+) -> Mode | None:
+    """One screen at ``policy.search.n`` and its candidates followed (:func:`search_above`)."""
+    search = policy.search
     cands = global_candidates(flow, kx, kz, answer, policy, cache)
     if not cands:
         return answer
