@@ -65,6 +65,14 @@ class NewtonSettings:
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
         (:func:`~chuteflow.dns.columns.column_matrix`).
+    dt_tol : float
+        Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
+        :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
+        change beyond the linear extrapolation in time, relative to the wave
+        (:meth:`Stepper.step_error`): halved above ``dt_tol`` (the step is repeated above
+        2 ``dt_tol``), doubled below ``dt_tol``/8, between the run's Δt/64 and ``dt_max``.
+    dt_max : float
+        Largest step of the control; 0: 64 times the run's Δt.
     """
 
     atol: float = 1e-10
@@ -79,6 +87,8 @@ class NewtonSettings:
     preconditioner: str = "auto"
     switch_krylov: int = 60
     column_order: int = 2
+    dt_tol: float = 0.0
+    dt_max: float = 0.0
 
     def __post_init__(self):
         if self.preconditioner not in PRECONDITIONERS:
@@ -87,6 +97,10 @@ class NewtonSettings:
             )
         if self.column_order not in (2, 4):
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
+        if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
+            raise ParameterError(f"dt_tol = {self.dt_tol!r}: in [0, 1) (0 keeps Δt fixed; e.g. 1e-3)")
+        if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
+            raise ParameterError(f"dt_max = {self.dt_max!r}: ≥ 0 (0: 64 times the run's Δt)")
 
 
 @dataclass(frozen=True)
@@ -275,6 +289,22 @@ class Stepper:
         raise ConvergenceError(
             f"implicit step (Δt = {dt:g}): Newton residual {rn:.2e} after {s.max_iter} iterations"
         )
+
+    @staticmethod
+    def step_error(C_new: np.ndarray, guess: np.ndarray) -> float:
+        """The step's error indicator: the change beyond the linear extrapolation in time.
+
+        ``guess`` = C^n + ω (C^n − C^{n−1}) (Newton's starting point), so C^{n+1} − guess ≈
+        (1 + ω) Δt² ∂_t²C / 2 — one order below BDF2's local error (∝ Δt³ ∂_t³C), a cautious
+        indicator. Measured on the wave (modes m ≥ 1) relative to it, field by field
+        (‖ΔC_f‖₂ / ‖C_f‖₂), the largest over s, u, v, T; 0 without modes.
+        """
+        if C_new.shape[-1] < 2:
+            return 0.0
+        nubar = np.exp(C_new[0, :, 0].real)[:, None]
+        num = np.linalg.norm(nubar * (C_new[0, :, 1:] - guess[0, :, 1:]))
+        den = np.linalg.norm(nubar * C_new[0, :, 1:])
+        return float(num / max(den, 1e-300))
 
     def _conserve(self, C: np.ndarray, history: tuple, bdf) -> np.ndarray:
         d = self.disc
