@@ -385,7 +385,9 @@ class DnsSimulation:
         ok_since_change = 0
         stop: str | None = None
         ctl = stepper.settings
-        dt_lo, dt_hi = s.dt / 64.0, (ctl.dt_max or 64.0 * s.dt)
+        dt_lo, dt_hi = s.dt, max(ctl.dt_max or 64.0 * s.dt, s.dt)
+        if ctl.dt_tol > 0:
+            stepper.switch_dt = dt_lo
         while state.t < s.time * (1 - 1e-12):
             h = min(state.dt, s.time - state.t)
             C = state.C
@@ -416,13 +418,16 @@ class DnsSimulation:
             grow = False
             if ctl.dt_tol > 0 and guess is not None:
                 # Δt control (NewtonSettings.dt_tol): halve (repeat the step above 2 dt_tol),
-                # double well below; from the state only, so a resumed run takes the same steps
+                # double well below, unless GMRES struggles (its counts, unlike the error, can
+                # differ after a resume, which rebuilds the preconditioner)
                 err = stepper.step_error(C_new, guess)
                 if err > ctl.dt_tol and state.dt > dt_lo:
                     state.dt = max(0.5 * state.dt, dt_lo)
                     if err > 2 * ctl.dt_tol:
                         continue
-                grow = err < ctl.dt_tol / 8 and h >= state.dt * (1 - 1e-12)
+                grow = err < ctl.dt_tol / 8 and h >= state.dt * (1 - 1e-12) and info.krylov <= ctl.dt_krylov
+                if info.krylov > 2 * ctl.dt_krylov and state.dt > dt_lo:
+                    state.dt = max(0.5 * state.dt, dt_lo)  # the cost side: GMRES struggles
             t_prev = state.t
             state.prev, state.C = np.array(now_phys), C_new
             state.h_prev = h

@@ -70,9 +70,16 @@ class NewtonSettings:
         :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
         change beyond the linear extrapolation in time, relative to the wave
         (:meth:`Stepper.step_error`): halved above ``dt_tol`` (the step is repeated above
-        2 ``dt_tol``), doubled below ``dt_tol``/8, between the run's Δt/64 and ``dt_max``.
+        2 ``dt_tol``), doubled below ``dt_tol``/8, between the run's Δt (the step known to be
+        accurate: the control only lengthens it where the wave changes slowly, e.g. in the
+        co-moving frame) and ``dt_max``.
     dt_max : float
         Largest step of the control; 0: 64 times the run's Δt.
+    dt_krylov : int
+        Cost side of the control: Δt is not doubled after a step that needed more than this
+        many GMRES iterations, and halved after one that needed more than twice this (the
+        a0/Δt diagonal the preconditioners share with the Jacobian weakens as Δt grows). With
+        the control on, ``"auto"`` switches to the columns only at the run's Δt.
     """
 
     atol: float = 1e-10
@@ -89,6 +96,7 @@ class NewtonSettings:
     column_order: int = 2
     dt_tol: float = 0.0
     dt_max: float = 0.0
+    dt_krylov: int = 60
 
     def __post_init__(self):
         if self.preconditioner not in PRECONDITIONERS:
@@ -99,6 +107,8 @@ class NewtonSettings:
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(f"dt_tol = {self.dt_tol!r}: in [0, 1) (0 keeps Δt fixed; e.g. 1e-3)")
+        if self.dt_krylov < 1:
+            raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
         if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
             raise ParameterError(f"dt_max = {self.dt_max!r}: ≥ 0 (0: 64 times the run's Δt)")
 
@@ -147,6 +157,9 @@ class Stepper:
         #: Whether the column preconditioner is in use (from the start with
         #: ``preconditioner="columns"``, after the switch with ``"auto"``).
         self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
+        #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
+        #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
+        self.switch_dt = math.inf
 
     def reset(self) -> None:
         """Forget the preconditioner (it is rebuilt at the next step)."""
@@ -166,6 +179,19 @@ class Stepper:
         self._base_krylov = None
         self.factorisations += 1
         self._age = 0
+
+    def _key_ok(self, dt: float, bdf) -> bool:
+        """Whether the preconditioner's a0/Δt still serves: the same (Δt, a0), or, with the
+        step control on, a0/Δt within 25 % of it (after a doubling of Δt the variable-step
+        step's a0/Δt and the next constant step's differ by 10 %: one factorisation, not two)."""
+        key = self._lu_key
+        assert key is not None
+        if _close(key, (dt, bdf[0])):
+            return True
+        if self.settings.dt_tol > 0:
+            old, new = key[1] / key[0], bdf[0] / dt
+            return abs(new - old) <= 0.25 * old
+        return False
 
     def step(
         self,
@@ -195,7 +221,7 @@ class Stepper:
         bdf = BDF1 if first else ((1 + 2 * w) / (1 + w), -(1 + w), w * w / (1 + w))
         if first is False and w == 1.0:
             bdf = BDF2
-        if self._lus is None or self._lu_key is None or not _close(self._lu_key, (dt, bdf[0])):
+        if self._lus is None or self._lu_key is None or not self._key_ok(dt, bdf):
             self._factor(C_now, dt, bdf, history)
         self._age += 1
         C = (C_now if guess is None else guess).copy()
@@ -270,7 +296,13 @@ class Stepper:
                 break
             # a refresh for GMRES's sake at most every `refresh_every` steps: at large
             # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
-            if s.preconditioner == "auto" and not self.columns and d.modes and count[0] > s.switch_krylov:
+            if (
+                s.preconditioner == "auto"
+                and not self.columns
+                and d.modes
+                and count[0] > s.switch_krylov
+                and dt <= self.switch_dt * (1 + 1e-12)
+            ):
                 # the x-mean no longer describes the Jacobian: the local columns from now on
                 self.columns = True
                 self._factor(d.unpack(z), dt, bdf, history)
