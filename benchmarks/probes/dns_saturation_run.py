@@ -48,11 +48,11 @@ class Progress(Tracker):
             last = self.infos[-20:]
             print(
                 f"wall {w:7.1f} s  t {step.t:8.1f}  step {step.number:5d}  Δt {step.t - step.t_prev:6.1f}  "
-                f"amplitude {sim.wave_amplitude(step.y):.4f}  Newton {np.mean([i.newton for i in last]):.1f}  "
+                f"amplitude {sim.wave_amplitude(step.y):.4f}  "
+                f"Newton {np.mean([i.newton for i in last]):.1f}  "
                 f"GMRES {np.mean([i.krylov for i in last]):.1f}  columns {sim.stepper.columns}",
                 flush=True,
             )
-        return None
 
 
 def main(argv=None):
@@ -93,11 +93,13 @@ def main(argv=None):
     rho = np.asarray(state.records["rho"])
     mass = rho.mean(axis=-1)
     end = rho[-1]
+    lo, hi = end.min() / end.mean() - 1, end.max() / end.mean() - 1
     print(
-        f"end: {state.status} at t = {state.t:.0f}, {state.step} steps; ρ̄ {end.min() / end.mean() - 1:+.4f} … "
-        f"{end.max() / end.mean() - 1:+.4f}; this piece {time.perf_counter() - t0:.1f} s, total wall "
+        f"end: {state.status} at t = {state.t:.0f}, {state.step} steps; ρ̄ {lo:+.4f} … {hi:+.4f}"
+        f"; this piece {time.perf_counter() - t0:.1f} s, total wall "
         f"{state.wall:.1f} s; mass drift {np.max(np.abs(mass - mass[0])) / mass[0]:.1e}; "
-        f"Newton {np.mean(state.records['newton']):.2f}, GMRES {np.mean(state.records['krylov']):.1f} per step"
+        f"Newton {np.mean(state.records['newton']):.2f}, "
+        f"GMRES {np.mean(state.records['krylov']):.1f} per step"
     )
 
 
