@@ -41,7 +41,7 @@ VARIANTS = {
     "mean": NewtonSettings(preconditioner="mean"),
     "columns-2": NewtonSettings(preconditioner="columns", column_order=2),
     "columns-4": NewtonSettings(preconditioner="columns", column_order=4),
-    "mean-restart100": NewtonSettings(preconditioner="mean", gmres_restart=100, gmres_maxiter=2),
+    "mean-restart40": NewtonSettings(preconditioner="mean", gmres_restart=40, gmres_maxiter=4),
 }
 
 
