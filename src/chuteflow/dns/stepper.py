@@ -330,15 +330,17 @@ class Stepper:
 
         ``guess`` = C^n + ω (C^n − C^{n−1}) (Newton's starting point), so C^{n+1} − guess ≈
         (1 + ω) Δt² ∂_t²C / 2 — one order below BDF2's local error (∝ Δt³ ∂_t³C), a cautious
-        indicator. Measured on the wave (modes m ≥ 1) relative to it, field by field
-        (‖ΔC_f‖₂ / ‖C_f‖₂), the largest over s, u, v, T; 0 without modes.
+        indicator. Measured on the density wave: the modes m ≥ 1 of ln ν weighted by
+        ν̄_j = exp(ŝ_0(y_j)), ‖ν̄ ΔĈ_s‖₂ / ‖ν̄ Ĉ_s‖₂ (unweighted, the transported noise of the
+        dilute top at ν ~ 1e-9 held Δt at a twentieth of the run's; docs/dns.md); 0 without
+        modes.
         """
         if C_new.shape[-1] < 2:
             return 0.0
         nubar = np.exp(C_new[0, :, 0].real)[:, None]
-        num = np.linalg.norm(nubar * (C_new[0, :, 1:] - guess[0, :, 1:]))
-        den = np.linalg.norm(nubar * C_new[0, :, 1:])
-        return float(num / max(den, 1e-300))
+        num = float(np.linalg.norm(nubar * (C_new[0, :, 1:] - guess[0, :, 1:])))
+        den = float(np.linalg.norm(nubar * C_new[0, :, 1:]))
+        return num / max(den, 1e-300)
 
     def _conserve(self, C: np.ndarray, history: tuple, bdf) -> np.ndarray:
         d = self.disc
