@@ -9,6 +9,11 @@ second- and fourth-order x-differences. Prints per variant the seconds per step 
 shared machine: compare the iterations), Newton and GMRES iterations per step, the
 factorisations and how far the end states differ from the first variant's.
 
+``--checkpoint FILE`` starts instead from the state of a run's checkpoint (C and the previous
+level, e.g. of ``dns_saturation_run.py``: the natural wave, not a scaled one), with ``--warm``
+ignored; ``--dt 4,16,64`` takes the steps at each of these Δt (issue 42: the cost per unit
+time at large steps).
+
 Run: ``python benchmarks/probes/dns_large_step.py --nx 33 --ny 60 --steps 6``.
 """
 
@@ -36,7 +41,7 @@ VARIANTS = {
     "mean": NewtonSettings(preconditioner="mean"),
     "columns-2": NewtonSettings(preconditioner="columns", column_order=2),
     "columns-4": NewtonSettings(preconditioner="columns", column_order=4),
-    "mean-restart100": NewtonSettings(preconditioner="mean", gmres_restart=100, gmres_maxiter=2),
+    "mean-restart40": NewtonSettings(preconditioner="mean", gmres_restart=40, gmres_maxiter=4),
 }
 
 
@@ -61,6 +66,8 @@ def main(argv=None):
     ap.add_argument("--warm", type=int, default=5)
     ap.add_argument("--steps", type=int, default=6)
     ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--dt", default="4", help="comma-separated step sizes of the measured steps")
+    ap.add_argument("--checkpoint", default=None, help="start from this run's checkpoint (.npz)")
     ap.add_argument(
         "--scale",
         type=float,
@@ -72,20 +79,29 @@ def main(argv=None):
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
     flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+    if args.checkpoint:
+        with np.load(args.checkpoint) as ck:
+            C, prev, h_prev = ck["C"], ck["prev"], float(ck["scalars"][3])
+        args.warm = 0
     sim = DnsSimulation(
         flow,
         1000.0,
-        time=4.0 * args.warm,
+        time=4.0 * max(args.warm, 1),
         dt=4.0,
         n=args.ny,
         modes=(args.nx - 1) // 2,
-        amplitude=args.amplitude,
-        frame_speed=7.8,
+        amplitude=1e-3 if args.checkpoint else args.amplitude,
+        init="noise" if args.checkpoint else "mode",
+        frame_speed=None if args.checkpoint else 7.8,  # a noise run's frame: the mode's phase speed
         snapshots=2,
         settings=NewtonSettings(preconditioner="columns"),
     )
-    state = sim.run()
-    C, prev = state.C, state.prev
+    if args.checkpoint:
+        t_label = "checkpoint"
+    else:
+        state = sim.run()
+        C, prev, h_prev = state.C, state.prev, 4.0
+        t_label = f"{state.t:g} ({state.status})"
     if args.scale != 1.0:
         C = C.copy()
         C[:, :, 1:] *= args.scale
@@ -100,28 +116,27 @@ def main(argv=None):
     rho = sim.disc.depth_integrals(C)[0]
     tails = sim.resolution(C)
     print(
-        f"nx = {args.nx}, ny = {args.ny}, t = {state.t:g} ({state.status}): "
+        f"nx = {args.nx}, ny = {args.ny}, t = {t_label}: "
         f"ρ̄ {rho.min() / rho.mean() - 1:+.3f} … "
         f"{rho.max() / rho.mean() - 1:+.3f}; x_tail {tails['x_tail']:.1e}, y_tail {tails['y_tail']:.1e}"
     )
-    first = None
-    for name in args.variants.split(","):
-        r, fact, C_end = steps(sim, VARIANTS[name], C, tuple(prev), 4.0, 4.0, args.steps)
-        first = C_end if first is None else first
-        print(
-            json.dumps(
-                {
-                    "variant": name,
-                    "s_per_step": round(float(r[:, 0].mean()), 3),
-                    "first_step_s": round(float(r[0, 0]), 3),
-                    "newton_per_step": float(r[:, 1].mean()),
-                    "gmres_per_step": float(r[:, 2].mean()),
-                    "factorisations": fact,
-                    "max_dC_vs_first": float(np.abs(C_end - first).max()),
-                }
-            ),
-            flush=True,
-        )
+    for dt in (float(v) for v in args.dt.split(",")):
+        first = None
+        for name in args.variants.split(","):
+            r, fact, C_end = steps(sim, VARIANTS[name], C, tuple(prev), h_prev, dt, args.steps)
+            first = C_end if first is None else first
+            row = {
+                "variant": name,
+                "dt": dt,
+                "s_per_step": round(float(r[:, 0].mean()), 3),
+                "s_per_time_unit": round(float(r[:, 0].mean()) / dt, 4),
+                "first_step_s": round(float(r[0, 0]), 3),
+                "newton_per_step": float(r[:, 1].mean()),
+                "gmres_per_step": float(r[:, 2].mean()),
+                "factorisations": fact,
+                "max_dC_vs_first": float(np.abs(C_end - first).max()),
+            }
+            print(json.dumps(row), flush=True)
 
 
 if __name__ == "__main__":

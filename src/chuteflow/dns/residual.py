@@ -148,6 +148,6 @@ def evaluate_residuals(
         N(X) − B ∂_t X), and the partials of :meth:`ChuteModel.evaluate`.
     """
     th = math.radians(theta)
-    part = model.evaluate(state["nu"], state["T"])
+    part = model.evaluate(state["nu"], state["T"], compiled=True)
     comp = compiled_residuals()
     return {n: comp[n](state, part, math.sin(th), math.cos(th)) for n in names}, part

@@ -425,6 +425,10 @@ class DnsSimulation:
         last_ck = start
         ok_since_change = 0
         stop: str | None = None
+        ctl = stepper.settings
+        dt_lo, dt_hi = s.dt, max(ctl.dt_max or 64.0 * s.dt, s.dt)
+        if ctl.dt_tol > 0:
+            stepper.switch_dt = dt_lo
         while state.t < s.time * (1 - 1e-12):
             h = min(state.dt, s.time - state.t)
             C = state.C
@@ -452,6 +456,19 @@ class DnsSimulation:
             if not np.all(np.isfinite(C_new)):
                 stop = f"stopped at t = {state.t:.6g}: non-finite fields (the flow left the closures' range)"
                 break
+            grow = False
+            if ctl.dt_tol > 0 and guess is not None:
+                # Δt control (NewtonSettings.dt_tol): halve (repeat the step above 2 dt_tol),
+                # double well below, unless GMRES struggles (its counts, unlike the error, can
+                # differ after a resume, which rebuilds the preconditioner)
+                err = stepper.step_error(C_new, guess)
+                if err > ctl.dt_tol and state.dt > dt_lo:
+                    state.dt = max(0.5 * state.dt, dt_lo)
+                    if err > 2 * ctl.dt_tol:
+                        continue
+                grow = err < ctl.dt_tol / 8 and h >= state.dt * (1 - 1e-12) and info.krylov <= ctl.dt_krylov
+                if info.krylov > 2 * ctl.dt_krylov and state.dt > dt_lo:
+                    state.dt = max(0.5 * state.dt, dt_lo)  # the cost side: GMRES struggles
             t_prev = state.t
             state.prev, state.C = np.array(now_phys), C_new
             state.h_prev = h
@@ -461,12 +478,14 @@ class DnsSimulation:
             state.records["newton"].append(info.newton)
             state.records["krylov"].append(info.krylov)
             ok_since_change += 1
-            if state.dt < s.dt and ok_since_change >= 20:
+            if grow:
+                state.dt = min(2 * state.dt, dt_hi)
+            elif ctl.dt_tol == 0 and state.dt < s.dt and ok_since_change >= 20:
                 state.dt, ok_since_change = min(2 * state.dt, s.dt), 0
             if state.step % s.record_every == 0 or state.t >= s.time * (1 - 1e-12):
                 self._record(state)
             snaps_t = state.records["snap_t"]
-            if any(abs(state.t - k * s.dt) < 0.5 * s.dt for k in snap_steps[1:]) and (
+            if any(t_prev + 0.5 * s.dt <= k * s.dt < state.t + 0.5 * s.dt for k in snap_steps[1:]) and (
                 not snaps_t or state.t - snaps_t[-1] > 0.5 * s.dt
             ):
                 self._snapshot(state)

@@ -45,7 +45,9 @@ class NewtonSettings:
     gmres_rtol : float
         Relative tolerance of each GMRES solve.
     gmres_restart, gmres_maxiter : int
-        GMRES restart length and number of restarts.
+        GMRES restart length and number of restarts (100 × 2; was 40 × 4: at the ±18 % wave
+        of P1, L = 1000, nx = 65 the longer restart needs 135 instead of 362 iterations per
+        step at Δt = 32, 60 instead of 74 at Δt = 16, the same 13 at Δt = 4; docs/dns.md).
     refresh_after : int
         Rebuild the preconditioner when a step needed more Newton iterations than this.
     refresh_krylov : int
@@ -65,13 +67,28 @@ class NewtonSettings:
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
         (:func:`~chuteflow.dns.columns.column_matrix`).
+    dt_tol : float
+        Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
+        :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
+        change beyond the linear extrapolation in time, relative to the wave
+        (:meth:`Stepper.step_error`): halved above ``dt_tol`` (the step is repeated above
+        2 ``dt_tol``), doubled below ``dt_tol``/8, between the run's Δt (the step known to be
+        accurate: the control only lengthens it where the wave changes slowly, e.g. in the
+        co-moving frame) and ``dt_max``.
+    dt_max : float
+        Largest step of the control; 0: 64 times the run's Δt.
+    dt_krylov : int
+        Cost side of the control: Δt is not doubled after a step that needed more than this
+        many GMRES iterations, and halved after one that needed more than twice this (the
+        a0/Δt diagonal the preconditioners share with the Jacobian weakens as Δt grows). With
+        the control on, ``"auto"`` switches to the columns only at the run's Δt.
     """
 
     atol: float = 1e-10
     max_iter: int = 12
     gmres_rtol: float = 1e-6
-    gmres_restart: int = 40
-    gmres_maxiter: int = 4
+    gmres_restart: int = 100
+    gmres_maxiter: int = 2
     refresh_after: int = 3
     refresh_krylov: int = 30
     refresh_every: int = 20
@@ -79,6 +96,9 @@ class NewtonSettings:
     preconditioner: str = "auto"
     switch_krylov: int = 60
     column_order: int = 2
+    dt_tol: float = 0.0
+    dt_max: float = 0.0
+    dt_krylov: int = 60
 
     def __post_init__(self):
         if self.preconditioner not in PRECONDITIONERS:
@@ -87,6 +107,12 @@ class NewtonSettings:
             )
         if self.column_order not in (2, 4):
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
+        if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
+            raise ParameterError(f"dt_tol = {self.dt_tol!r}: in [0, 1) (0 keeps Δt fixed; e.g. 1e-3)")
+        if self.dt_krylov < 1:
+            raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
+        if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
+            raise ParameterError(f"dt_max = {self.dt_max!r}: ≥ 0 (0: 64 times the run's Δt)")
 
 
 @dataclass(frozen=True)
@@ -133,6 +159,9 @@ class Stepper:
         #: Whether the column preconditioner is in use (from the start with
         #: ``preconditioner="columns"``, after the switch with ``"auto"``).
         self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
+        #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
+        #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
+        self.switch_dt = math.inf
 
     def reset(self) -> None:
         """Forget the preconditioner (it is rebuilt at the next step)."""
@@ -152,6 +181,19 @@ class Stepper:
         self._base_krylov = None
         self.factorisations += 1
         self._age = 0
+
+    def _key_ok(self, dt: float, bdf) -> bool:
+        """Whether the preconditioner's a0/Δt still serves: the same (Δt, a0), or, with the
+        step control on, a0/Δt within 25 % of it (after a doubling of Δt the variable-step
+        step's a0/Δt and the next constant step's differ by 10 %: one factorisation, not two)."""
+        key = self._lu_key
+        assert key is not None
+        if _close(key, (dt, bdf[0])):
+            return True
+        if self.settings.dt_tol > 0:
+            old, new = key[1] / key[0], bdf[0] / dt
+            return abs(new - old) <= 0.25 * old
+        return False
 
     def step(
         self,
@@ -181,7 +223,7 @@ class Stepper:
         bdf = BDF1 if first else ((1 + 2 * w) / (1 + w), -(1 + w), w * w / (1 + w))
         if first is False and w == 1.0:
             bdf = BDF2
-        if self._lus is None or self._lu_key is None or not _close(self._lu_key, (dt, bdf[0])):
+        if self._lus is None or self._lu_key is None or not self._key_ok(dt, bdf):
             self._factor(C_now, dt, bdf, history)
         self._age += 1
         C = (C_now if guess is None else guess).copy()
@@ -256,7 +298,13 @@ class Stepper:
                 break
             # a refresh for GMRES's sake at most every `refresh_every` steps: at large
             # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
-            if s.preconditioner == "auto" and not self.columns and d.modes and count[0] > s.switch_krylov:
+            if (
+                s.preconditioner == "auto"
+                and not self.columns
+                and d.modes
+                and count[0] > s.switch_krylov
+                and dt <= self.switch_dt * (1 + 1e-12)
+            ):
                 # the x-mean no longer describes the Jacobian: the local columns from now on
                 self.columns = True
                 self._factor(d.unpack(z), dt, bdf, history)
@@ -275,6 +323,24 @@ class Stepper:
         raise ConvergenceError(
             f"implicit step (Δt = {dt:g}): Newton residual {rn:.2e} after {s.max_iter} iterations"
         )
+
+    @staticmethod
+    def step_error(C_new: np.ndarray, guess: np.ndarray) -> float:
+        """The step's error indicator: the change beyond the linear extrapolation in time.
+
+        ``guess`` = C^n + ω (C^n − C^{n−1}) (Newton's starting point), so C^{n+1} − guess ≈
+        (1 + ω) Δt² ∂_t²C / 2 — one order below BDF2's local error (∝ Δt³ ∂_t³C), a cautious
+        indicator. Measured on the density wave: the modes m ≥ 1 of ln ν weighted by
+        ν̄_j = exp(ŝ_0(y_j)), ‖ν̄ ΔĈ_s‖₂ / ‖ν̄ Ĉ_s‖₂ (unweighted, the transported noise of the
+        dilute top at ν ~ 1e-9 held Δt at a twentieth of the run's; docs/dns.md); 0 without
+        modes.
+        """
+        if C_new.shape[-1] < 2:
+            return 0.0
+        nubar = np.exp(C_new[0, :, 0].real)[:, None]
+        num = float(np.linalg.norm(nubar * (C_new[0, :, 1:] - guess[0, :, 1:])))
+        den = float(np.linalg.norm(nubar * C_new[0, :, 1:]))
+        return num / max(den, 1e-300)
 
     def _conserve(self, C: np.ndarray, history: tuple, bdf) -> np.ndarray:
         d = self.disc
