@@ -4,9 +4,8 @@ stability operator's eigenvalue (both derived from chuteflow.equations, where q 
 with ``lun_full``, as tests/dns/test_dns.py::test_linear_phase_short does for the paper's
 closure: measured 3.8e-6 relative (5e-5 there), asserted to 1 %.
 
-Not covered: ``garzo_dufty``. It has no steady flow at the paper's dilute points (docs:
-closures page), and at the denser θ = 16°, ν0(0) = 0.2 the simulation's steady relaxation
-(dns.relax_steady, Newton tolerance 1e-10, not a parameter) stalls at a residual of 4.3e-10.
+``garzo_dufty``: tests/closures/test_heat_flux_dns_gd.py (it has no steady flow at P1; at
+θ = 16°, ν0(0) = 0.2 it has one).
 """
 
 from __future__ import annotations
