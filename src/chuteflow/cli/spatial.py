@@ -239,7 +239,7 @@ def signalling_cmd(
 ) -> None:
     """Would a chute show density waves? The gain of inlet forcing over the chute, in Hz and metres."""
     from chuteflow.spatial import signalling
-    from chuteflow.spatial.signalling import _positive, check_units
+    from chuteflow.spatial.inlet_forcing import _positive, check_units
 
     # before any solve, named as the options are
     check_units(diameter, chute_length, g, threshold, names=("diameter", "chute_length", "g", "threshold"))

@@ -4,7 +4,7 @@ convective instability (the temporal analysis of the paper, §4, continued to co
 from ._core import DEFAULT_SPATIAL_POLICY, SpatialPolicy
 from .absolute import AbsoluteResult, absolute_instability
 from .branches import SpatialPoint, spatial_dispersion, spatial_point
-from .signalling import SignallingResult, signalling
+from .inlet_forcing import SignallingResult, signalling
 
 __all__ = [
     "DEFAULT_SPATIAL_POLICY",
