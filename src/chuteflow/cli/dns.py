@@ -58,6 +58,12 @@ def dns(
         "--saturation-tol",
         help="Stop once the wave's amplitude has settled to this relative change (--time: the longest run).",
     ),
+    dt_tol: float = typer.Option(
+        0.0,
+        "--dt-tol",
+        help="Time-step control (docs/dns.md): 0 keeps --dt; e.g. 1e-3 lengthens the step "
+        "where the wave changes slowly.",
+    ),
     resolution_tol: float = typer.Option(
         1e-4,
         "--resolution-tol",
@@ -113,6 +119,7 @@ def dns(
                 resolution_tol=resolution_tol,
                 out=out,
                 progress=progress,
+                settings=_step_control(dt_tol),
             )
     if plot is not None:
         from chuteflow.figures.dns import plot_dns, save
@@ -173,6 +180,12 @@ def waves(
     saturation_tol: float = typer.Option(
         0.02, "--saturation-tol", help="Relative change that counts as settled."
     ),
+    dt_tol: float = typer.Option(
+        0.0,
+        "--dt-tol",
+        help="Time-step control (docs/dns.md): 0 keeps --dt; e.g. 1e-3 lengthens the step "
+        "where the wave changes slowly.",
+    ),
     workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
     reduced: bool = typer.Option(
         False, "--reduced", help="Also run the 1D model (§5.1.2) at each flow and print its wave beside."
@@ -220,6 +233,7 @@ def waves(
         amplitude=amplitude,
         seed=seed,
         saturation_tol=saturation_tol,
+        dt_tol=dt_tol,
     )
     con = Console(stderr=True)
 
@@ -287,3 +301,17 @@ def _reduced_waves(rows: list, model: ChuteModel, length: float, amplitude: floa
         for k in REDUCED_KEYS:
             v = w[k]
             r[f"reduced_{k}"] = v if isinstance(v, str) else _num(float(v))
+
+
+def _step_control(dt_tol: float):
+    """The Newton settings of ``--dt-tol`` (None: the defaults, a fixed Δt)."""
+    import math
+
+    from chuteflow.dns.stepper import NewtonSettings
+    from chuteflow.errors import ParameterError
+
+    if not (math.isfinite(dt_tol) and 0 <= dt_tol < 1):
+        raise ParameterError(
+            f"dt_tol = {dt_tol!r} is outside [0, 1): the time-step control's tolerance (0 keeps the step)"
+        )
+    return NewtonSettings(dt_tol=dt_tol) if dt_tol else None
