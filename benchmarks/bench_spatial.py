@@ -30,9 +30,9 @@ if __package__ in (None, ""):
 
 import numpy as np
 
-#: (θ, ν0(0), ω_max) of the paper's unstable points (ω_max measured:
-#: tests/spatial/test_spatial_metric.py and the metric ``spatial``).
-POINTS = {"P1": (16.0, 0.05, 0.0171871), "P4": (14.0, 0.05, 0.00231089), "P5": (17.0, 0.10, 0.0279487)}
+#: ω_max at the paper's unstable points (measured: tests/spatial/test_spatial_metric.py and
+#: the metric ``spatial``); their (θ, ν0(0)) from papers.mitarai2004.points.
+OMEGA_MAX = {"P1": 0.0171871, "P4": 0.00231089, "P5": 0.0279487}
 
 
 def _best(fn, repeat):
@@ -51,6 +51,7 @@ def run(quick: bool = False) -> list[dict]:
 
     from chuteflow._threads import limit_blas_threads
     from chuteflow.closures import ChuteModel
+    from chuteflow.papers.mitarai2004.points import point
     from chuteflow.spatial import absolute_instability, spatial_point
     from chuteflow.stability import OperatorCache, stability_operator
     from chuteflow.steady import solve_steady
@@ -58,10 +59,10 @@ def run(quick: bool = False) -> list[dict]:
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
     rep = 1 if quick else 3
-    names = ["P1"] if quick else list(POINTS)
+    names = ["P1"] if quick else list(OMEGA_MAX)
     rows = []
     for name in names:
-        theta, nu0, w = POINTS[name]
+        theta, nu0, w = point(name).theta, point(name).nu0, OMEGA_MAX[name]
         flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
         spatial_point(flow, w, cache=OperatorCache())  # warm-up (compilation)
         t_sp, pt = _best(lambda f=flow, w=w: spatial_point(f, w, cache=OperatorCache()), rep)

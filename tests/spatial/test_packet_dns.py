@@ -14,6 +14,7 @@ import pytest
 
 from chuteflow.dns.packet import PacketGrowth, analytic_signal, growth_edges, ray_growth
 from chuteflow.errors import ParameterError
+from chuteflow.papers.mitarai2004.stages.spatial import PULSE_RUN
 
 SIGMA0, C, D, K0 = 1e-3, 6.0, 2000.0, 0.02  # edges 6 ∓ 2√2 = 3.1716, 8.8284
 
@@ -112,17 +113,7 @@ def test_p1_packet_edges_from_the_simulation():
         # the x tail (2e-3: the bump's own spectrum at k_max, e^{-8}, in decaying modes) is
         # above simulate's default resolution tolerance
         warnings.simplefilter("ignore")
-        ds = simulate_pulse(
-            flow,
-            30000.0,
-            time=3000.0,
-            width=150.0,
-            frame_speed=frame,
-            n=48,
-            modes=128,
-            dt=20.0,
-            record_every=5,
-        )
+        ds = simulate_pulse(flow, frame_speed=frame, **PULSE_RUN)
     assert ds.attrs["init"] == "custom"
     assert ds.attrs["status"] == "ok"
     V = np.linspace(3.0, 10.5, 301)

@@ -18,6 +18,7 @@ is).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from ....report.registry import StageContext, register_stage
 from ..points import POINTS
@@ -33,6 +34,17 @@ SPATIAL_POINTS = ("P1", "P4", "P5")
 #: (``spatial.absolute.CORRECTOR_RATIO``): steps of 0.04, 0.05, 0.06, 0.08, 0.1 and 0.12 agree
 #: at P1, P4, P5 (before it, 0.04 and 0.08 jumped to another saddle family at P5, unflagged,
 #: and 0.07, 0.08 ended "undetermined" at P4; docs/spatial.md).
+#: The cheap impulse-response run of the DNS check at P1 (L = 30000, t = 3000, 20 s; the
+#: probe benchmarks/probes/packet_edges.py runs the longer L = 60000, t = 6000 one).
+PULSE_RUN: dict[str, Any] = {
+    "length": 30000.0,
+    "time": 3000.0,
+    "width": 150.0,
+    "n": 48,
+    "modes": 128,
+    "dt": 20.0,
+    "record_every": 5,
+}
 FINE_RAY_STEP = 0.05
 FINE_NUM = 48
 #: Measured: the edges agree to ≤ 8e-9 (P1: 0, P4: 7e-11, P5: 0 with steps 0.05; 6.6e-9 at
@@ -174,17 +186,7 @@ def _dns_check(ctx: StageContext) -> None:
     frame = 0.5 * (a.v_minus + a.v_plus)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the bump's own tail at k_max (2e-3), decaying modes
-        ds = simulate_pulse(
-            flow,
-            30000.0,
-            time=3000.0,
-            width=150.0,
-            frame_speed=frame,
-            n=48,
-            modes=128,
-            dt=20.0,
-            record_every=5,
-        )
+        ds = simulate_pulse(flow, frame_speed=frame, **PULSE_RUN)
     V = np.linspace(3.0, 10.5, 301)
     r = ray_growth(
         ds["x"].values, ds["time"].values, ds["rho_bar"].values, V,
