@@ -322,6 +322,15 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     )
 
 
+def _checked(res: AbsoluteResult, strict: bool) -> AbsoluteResult:
+    """``res``, or with ``strict=True`` a :class:`ConvergenceError` where it is flagged."""
+    if strict and not res.converged:
+        raise ConvergenceError(
+            f"absolute instability at theta = {res.theta:g}, nu0 = {res.nu0:g}: {res.note}"
+        )
+    return res
+
+
 def _stable(flow: SteadyFlow, scan: BranchScan, peak, strict: bool) -> AbsoluteResult:
     """The verdict ``"stable"`` of a flow whose temporal growth is ≤ 0 at every k of its scan:
     no packet grows, nothing to continue."""
@@ -349,11 +358,7 @@ def _stable(flow: SteadyFlow, scan: BranchScan, peak, strict: bool) -> AbsoluteR
         nu0=flow.nu0,
         model=flow.model,
     )
-    if strict and not res.converged:
-        raise ConvergenceError(
-            f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}"
-        )
-    return res
+    return _checked(res, strict)
 
 
 def absolute_instability(
@@ -497,8 +502,4 @@ def absolute_instability(
         nu0=flow.nu0,
         model=flow.model,
     )
-    if strict and not res.converged:
-        raise ConvergenceError(
-            f"absolute instability at theta = {flow.theta:g}, nu0 = {flow.nu0:g}: {res.note}"
-        )
-    return res
+    return _checked(res, strict)
