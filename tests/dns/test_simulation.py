@@ -255,3 +255,29 @@ def test_cli_dns_and_waves_json_keys_are_documented(tmp_path):
     r = runner.invoke(app, ["waves", "--points", "P1", "--theta", "16", "--json"])
     assert r.exit_code == 2
     assert "points" in r.output
+
+
+def test_cli_waves_reduced_runs_the_1d_model_as_long_as_the_full_one():
+    """``chuteflow waves --reduced``: the 1D model (§5.1.2) gets the same ``--time`` as the full
+    equations. At P1 it is unstable at every wavenumber (k_c = ∞, tests/reduced/test_model.py)
+    and its noise leaves the steady family's range by t ≈ 40 (ρ̄ −36 … +22 %); stopped at
+    t = 20 it is still a small, growing wave (|ρ̄/⟨ρ̄⟩ − 1| ≈ 4e-3 from noise of 1e-3: fastest
+    discrete growth 0.22, e^{0.22·20}·1e-3 ≈ 0.08 is its bound). Before, the 1D run ignored
+    ``--time`` and always ran until it left (``left_validity``)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+    from tests.cli.test_cli_reference import documented, undocumented
+
+    flow = ["--theta", "16", "--nu0", "0.05", "--roughness", "0.05", "--length", "1000"]
+    grid = ["--time", "20", "--dt", "4", "--nx", "3", "--ny", "24", "--reduced", "--json"]
+    r = CliRunner().invoke(app, ["waves", *flow, *grid])
+    assert r.exit_code == 0, r.output
+    w = json.loads(r.stdout.strip().splitlines()[-1])
+    assert not undocumented("waves", w, documented())
+    p = w["points"][0]
+    assert p["reduced_verdict"] == "growing"
+    assert 1e-3 < max(-p["reduced_rho_min_rel"], p["reduced_rho_max_rel"]) < 0.08
+    assert p["reduced_short_wave_unstable"] is True

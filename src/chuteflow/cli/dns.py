@@ -188,7 +188,10 @@ def waves(
     ),
     workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
     reduced: bool = typer.Option(
-        False, "--reduced", help="Also run the 1D model (§5.1.2) at each flow and print its wave beside."
+        False,
+        "--reduced",
+        help="Also run the 1D model (§5.1.2) at each flow, with the same L, noise, --time and "
+        "--saturation-tol, and print its wave beside.",
     ),
     out_dir: Path | None = typer.Option(
         None, "--out-dir", help="One NetCDF file per flow (a killed map continues from there)."
@@ -256,7 +259,7 @@ def waves(
             r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
         rows.append(r)
     if reduced:
-        _reduced_waves(rows, model, length, amplitude, seed, con)
+        _reduced_waves(rows, model, settings, con)
     if as_json:
         typer.echo(json.dumps({"length": length, **model.to_dict(), "points": rows}))
         return
@@ -270,17 +273,30 @@ def waves(
 
 
 #: The 1D model's keys of ``chuteflow waves --reduced`` (prefixed ``reduced_``).
-REDUCED_KEYS = ("verdict", "rho_min_rel", "rho_max_rel", "wave_speed", "wavelength", "t_saturation")
+REDUCED_KEYS = (
+    "verdict",
+    "rho_min_rel",
+    "rho_max_rel",
+    "wave_speed",
+    "wavelength",
+    "t_saturation",
+    "short_wave_unstable",
+)
 
 
-def _reduced_waves(rows: list, model: ChuteModel, length: float, amplitude: float, seed: int, con) -> None:
-    """The 1D model's wave from noise at each row's flow (one model per θ), into the rows."""
+def _reduced_waves(rows: list, model: ChuteModel, settings, con) -> None:
+    """The 1D model's wave from noise at each row's flow (one model per θ), into the rows.
+
+    The same period, noise, longest time and saturation test as the full equations' runs
+    (``settings``, a :class:`~chuteflow.dns.WaveMapSettings`): the 1D run stops once its
+    amplitude settles, or at ``settings.time`` (then ``growing``, as the full run would say).
+    """
 
     from chuteflow.errors import ChuteflowError
     from chuteflow.reduced import reduced_model
     from chuteflow.reduced import simulate as run
     from chuteflow.reduced.model import SEEDS
-    from chuteflow.trackers import wave_measures
+    from chuteflow.trackers import SaturationStop, wave_measures
 
     models: dict = {}
     for r in rows:
@@ -289,18 +305,30 @@ def _reduced_waves(rows: list, model: ChuteModel, length: float, amplitude: floa
             if th not in models:
                 nus = tuple(float(q["nu0"]) for q in rows if float(q["theta"]) == th)
                 models[th] = reduced_model(th, model, tol=1e-4, seeds=(*nus, *SEEDS))
-            ds = run(models[th], length, nu0=nu, amplitude=amplitude, seed=seed, on_exit="stop")
+            s = settings
+            ds = run(
+                models[th],
+                s.length,
+                nu0=nu,
+                amplitude=s.amplitude,
+                seed=s.seed,
+                time=s.time,
+                on_exit="stop",
+                trackers=(SaturationStop(s.saturation_tol, count=200),),
+            )
             a = ds.attrs
             w = wave_measures(
-                ds["t"].values, ds["rho"].values, length, float(a["frame_speed"]), status=str(a["status"])
+                ds["t"].values, ds["rho"].values, s.length, float(a["frame_speed"]), status=str(a["status"])
             )
+            # the 1D model unstable at every k (k_c = ∞): its wave is the grid's, not the flow's
+            w["short_wave_unstable"] = str(a["short_wave_unstable"]) == "True"  # stored as text
         except ChuteflowError as exc:
             con.print(f"1D model at θ = {th:g}, ν0 = {nu:g}: {exc}", style="yellow", highlight=False)
             w = dict.fromkeys(REDUCED_KEYS, "nan")
             w["verdict"] = "failed"
         for k in REDUCED_KEYS:
             v = w[k]
-            r[f"reduced_{k}"] = v if isinstance(v, str) else _num(float(v))
+            r[f"reduced_{k}"] = v if isinstance(v, (str, bool)) else _num(float(v))
 
 
 def _step_control(dt_tol: float):
