@@ -187,6 +187,12 @@ def waves(
         "where the wave changes slowly.",
     ),
     workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
+    scheduler: str | None = typer.Option(
+        None,
+        "--scheduler",
+        help="Run the flows on this Dask scheduler (tcp://host:8786; needs the dask extra); "
+        "--out-dir must then be a directory the workers see.",
+    ),
     reduced: bool = typer.Option(
         False,
         "--reduced",
@@ -247,7 +253,9 @@ def waves(
             highlight=False,
         )
 
-    ds = map_waves(pts, settings, model=model, out_dir=out_dir, workers=workers, progress=progress)
+    ds = map_waves(
+        pts, settings, model=model, out_dir=out_dir, workers=workers, progress=progress, scheduler=scheduler
+    )
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)
         ds.to_netcdf(out, engine="h5netcdf")

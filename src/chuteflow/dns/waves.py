@@ -2,7 +2,8 @@
 
 :func:`map_waves` runs :func:`chuteflow.dns.simulate` from small noise at each (θ, ν0(0)) of a
 list until the wave's amplitude settles (:class:`~chuteflow.trackers.SaturationStop`) or the
-time runs out, in parallel over the flows (a process pool), each run written to its own
+time runs out, in parallel over the flows (a process pool, or a Dask cluster: ``client=`` or
+``scheduler=``), each run written to its own
 NetCDF file in ``out_dir`` with its checkpoint beside it: a killed map continues where every
 run stood, and a finished run is read back instead of re-run. The result has, per flow, the
 wave at the end (:func:`~chuteflow.trackers.wave_measures`: verdict, min/max of ρ̄ relative to
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import math
 import os
+import uuid
 import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -166,6 +168,8 @@ def map_waves(
     out_dir: str | os.PathLike | None = None,
     workers: int = 1,
     progress: Callable[[int, int, dict], None] | None = None,
+    client=None,
+    scheduler: str | None = None,
 ) -> xr.Dataset:
     """The saturated waves at the flows ``points`` = [(θ, ν0(0)), …] (see the module notes).
 
@@ -183,6 +187,13 @@ def map_waves(
         Processes running flows at once (1: in this process).
     progress : callable, optional
         ``progress(done, total, row)`` after each flow.
+    client : dask.distributed.Client, optional
+        Run the flows on this Dask cluster instead of local processes (one task per flow;
+        ``workers`` is then ignored). With ``out_dir`` the workers write and read the runs'
+        files there, so it must be a directory they all see.
+    scheduler : str, optional
+        Address of a Dask scheduler (``tcp://host:8786``): a client is opened for the map and
+        closed after. Needs the ``chuteflow[dask]`` extra.
 
     Returns
     -------
@@ -201,7 +212,26 @@ def map_waves(
     md = model.to_dict()
     od = None if out_dir is None else str(out_dir)
     rows: dict[int, dict] = {}
-    if workers == 1 or len(pts) == 1:
+    if client is not None or scheduler is not None:
+        from ..sweep.engine import dask_client
+
+        run = uuid.uuid4().hex[:8]
+        with dask_client(client, scheduler) as c:
+            from dask.distributed import as_completed as dask_completed  # there: dask_client checked
+
+            futures = {
+                c.submit(_one, th, nu, md, s, od, pure=False, key=f"chuteflow-wave-{run}-{i}"): i
+                for i, (th, nu) in enumerate(pts)
+            }
+            try:
+                for fut in dask_completed(list(futures)):
+                    rows[futures[fut]] = fut.result()
+                    if progress is not None:
+                        progress(len(rows), len(pts), rows[futures[fut]])
+            except BaseException:
+                c.cancel(list(futures))
+                raise
+    elif workers == 1 or len(pts) == 1:
         for i, (th, nu) in enumerate(pts):
             rows[i] = _one(th, nu, md, s, od)
             if progress is not None:

@@ -17,6 +17,7 @@ import sys
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -36,7 +37,16 @@ from .store import ConfigMismatchError, PartStore, atomic_target
 if TYPE_CHECKING:
     from ..steady import SteadyFlow
 
-__all__ = ["Sweep", "SweepStats", "run_sweep", "assemble", "load_sweep", "write_dataset", "markers"]
+__all__ = [
+    "Sweep",
+    "SweepStats",
+    "run_sweep",
+    "assemble",
+    "load_sweep",
+    "write_dataset",
+    "markers",
+    "dask_client",
+]
 
 
 @dataclass
@@ -221,22 +231,9 @@ class Sweep:
         return None
 
     def _run_dask(self, todo, finished, client, scheduler, keep_flows=False):
-        try:
-            from dask.distributed import Client, as_completed
-        except ImportError:
-            raise ParameterError(
-                "scheduler: running on Dask needs dask.distributed, which is not installed; "
-                "install the extra with pip install 'chuteflow[dask]'"
-            ) from None
-        own = client is None
-        if own:
-            try:
-                client = Client(scheduler, timeout="20s")
-            except OSError as exc:
-                raise ParameterError(
-                    f"scheduler: cannot connect to the Dask scheduler at {scheduler!r}: {exc}"
-                ) from None
-        try:
+        with dask_client(client, scheduler) as client:
+            from dask.distributed import as_completed  # there: dask_client has checked
+
             st = self.stats
             st.backend = "dask"
             st.workers = sum(client.nthreads().values())
@@ -252,9 +249,35 @@ class Sweep:
             except BaseException:
                 client.cancel(futures)
                 raise
-        finally:
-            if own:
-                client.close()
+
+
+@contextmanager
+def dask_client(client=None, scheduler: str | None = None):
+    """The Dask client to run on: ``client`` itself, or one connected to ``scheduler`` for the
+    ``with`` block (closed after). One-line :class:`ParameterError` when dask.distributed is
+    missing, both are given, or the scheduler cannot be reached."""
+    if client is not None and scheduler is not None:
+        raise ParameterError("scheduler: give either a Dask client or a scheduler address, not both")
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise ParameterError(
+            "scheduler: running on Dask needs dask.distributed, which is not installed; "
+            "install the extra with pip install 'chuteflow[dask]'"
+        ) from None
+    if client is not None:
+        yield client
+        return
+    try:
+        own = Client(scheduler, timeout="20s")
+    except OSError as exc:
+        raise ParameterError(
+            f"scheduler: cannot connect to the Dask scheduler at {scheduler!r}: {exc}"
+        ) from None
+    try:
+        yield own
+    finally:
+        own.close()
 
 
 def _run_serial(cfg, todo, finished, keep_flows=False):
