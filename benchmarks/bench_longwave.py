@@ -32,20 +32,13 @@ from pathlib import Path
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np
+from benchmarks._timing import best_of as _best
 
 POINTS = {"P1": (16.0, 0.05), "P3": (16.0, 0.10), "P5": (17.0, 0.10)}
 K_FIT = (1e-6, 2e-6, 4e-6)
-
-
-def _best(fn, repeat):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def _qz_fit(flow, n, dq, ks, quick):

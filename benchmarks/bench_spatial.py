@@ -22,26 +22,18 @@ the temporal peak's k — what one eigenvalue costs without the targeted solver.
 from __future__ import annotations
 
 import sys
-import time
 from pathlib import Path
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import numpy as np
+
+from benchmarks._timing import best_of as _best
 
 #: ω_max at the paper's unstable points (measured: tests/spatial/test_spatial_metric.py and
 #: the metric ``spatial``); their (θ, ν0(0)) from papers.mitarai2004.points.
 OMEGA_MAX = {"P1": 0.0171871, "P4": 0.00231089, "P5": 0.0279487}
-
-
-def _best(fn, repeat):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def run(quick: bool = False) -> list[dict]:

@@ -34,31 +34,26 @@ from __future__ import annotations
 
 import math
 import sys
-import time
 from pathlib import Path
 
 if __package__ in (None, ""):
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import numpy as np
+from benchmarks._timing import best_of
 
 THETA, NU0, N = 16.0, 0.05, 100
 
 
-#: CPU time (this process, ``time.process_time``) of the fastest run of the last ``_best``:
+#: CPU time (this process, ``time.process_time``) of the fastest run of the last ``_best_cpu``:
 #: the wall times are those of a shared machine, the CPU time what the code itself costs.
 _CPU = {"last": math.nan}
 
 
-def _best(fn, repeat):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = fn()
-        wall = time.perf_counter() - t0
-        if wall < best:
-            best, _CPU["last"] = wall, time.process_time() - c0
-    return best, out
+def _best_cpu(fn, repeat):
+    """``best_of`` that records the fastest call's CPU time in ``_CPU["last"]``."""
+    return best_of(fn, repeat, cpu=_CPU)
 
 
 def run(quick: bool = False) -> list[dict]:
@@ -76,7 +71,7 @@ def run(quick: bool = False) -> list[dict]:
     rows = []
 
     # 1. alpha2z: perturbation theory vs eigenvalue fit
-    t_lw, lw = _best(lambda: transverse_longwave(flow), rep)
+    t_lw, lw = _best_cpu(lambda: transverse_longwave(flow), rep)
 
     def eig_fit():
         vals = []
@@ -88,7 +83,7 @@ def run(quick: bool = False) -> list[dict]:
             vals.append(w[np.argmax(w.real)].real / kz**2)
         return vals[0] - (vals[1] - vals[0]) / 2.0  # linear in k_z through 1e-5, 3e-5 → 0
 
-    t_fit, a2_fit = _best(eig_fit, rep)
+    t_fit, a2_fit = _best_cpu(eig_fit, rep)
     rows.append(
         {
             "name": "transverse_alpha2z",
@@ -104,10 +99,10 @@ def run(quick: bool = False) -> list[dict]:
     # 2. a transverse dispersion of 50 kz: the tracked branch vs the dense scan, same run
     kz = np.geomspace(1e-5, 3.0, 50)
     a2 = float(lw.alpha2_z.real)
-    t_tr, dtr = _best(lambda: transverse_dispersion(flow, kz, alpha2z=a2), rep)
+    t_tr, dtr = _best_cpu(lambda: transverse_dispersion(flow, kz, alpha2z=a2), rep)
     c_tr = _CPU["last"]
     kz_b = kz[np.isfinite(dtr.alpha_re)]
-    t_dn, dden = _best(lambda: transverse_dispersion(flow, kz_b, method="dense"), 1)
+    t_dn, dden = _best_cpu(lambda: transverse_dispersion(flow, kz_b, method="dense"), 1)
     diff = float(np.max(np.abs(dtr.alpha_re[: len(kz_b)] - dden.alpha_re)))
     rows.append(
         {
@@ -123,10 +118,10 @@ def run(quick: bool = False) -> list[dict]:
     )
 
     # 3. the whole transverse analysis: tracked vs dense (same grid)
-    t_all, res = _best(lambda: transverse(flow, num=25), rep)
+    t_all, res = _best_cpu(lambda: transverse(flow, num=25), rep)
     c_all = _CPU["last"]
     s = res.to_dict()
-    t_den, rden = _best(lambda: transverse(flow, num=25, method="dense"), 1)
+    t_den, rden = _best_cpu(lambda: transverse(flow, num=25, method="dense"), 1)
     sd = rden.to_dict()
     rows.append(
         {
@@ -148,8 +143,8 @@ def run(quick: bool = False) -> list[dict]:
         ks = np.geomspace(1e-4, 0.05, 20)
         return max((tr.mode(float(k)).alpha.real, float(k)) for k in ks)
 
-    t_tp, tp = _best(lambda: transverse_peak(flow, alpha2z=a2, policy=RejectionPolicy(n_start=48)), rep)
-    t_tv, tv = _best(lambda: transverse(flow, num=40), 1)
+    t_tp, tp = _best_cpu(lambda: transverse_peak(flow, alpha2z=a2, policy=RejectionPolicy(n_start=48)), rep)
+    t_tv, tv = _best_cpu(lambda: transverse(flow, num=40), 1)
     rows.append(
         {
             "name": "transverse_peak",
@@ -160,8 +155,8 @@ def run(quick: bool = False) -> list[dict]:
             f"baseline transverse(num=40): {tv.growth_max:.6g} at {tv.kz_max:.5g}",
         }
     )
-    t_lp, lp = _best(lambda: longitudinal_peak(flow), rep)
-    t_ls, ls = _best(lon_scan, 1)
+    t_lp, lp = _best_cpu(lambda: longitudinal_peak(flow), rep)
+    t_ls, ls = _best_cpu(lon_scan, 1)
     rows.append(
         {
             "name": "longitudinal_peak",
@@ -172,11 +167,11 @@ def run(quick: bool = False) -> list[dict]:
             f"baseline 20 judged k_x at N = 80 (grid maximum, unrefined): {ls[0]:.6g} at {ls[1]:.5g}",
         }
     )
-    t_by, dby = _best(lambda: transverse_dispersion(flow, kz, alpha2z=a2, beyond=True), rep)
+    t_by, dby = _best_cpu(lambda: transverse_dispersion(flow, kz, alpha2z=a2, beyond=True), rep)
     c_by = _CPU["last"]
     past = np.nonzero(np.asarray(dby.method) == "shift")[0]
     sample = kz[past[:: max(1, len(past) // 3)][:3]]
-    t_ds, _ = _best(lambda: transverse_dispersion(flow, sample, method="dense"), 1)
+    t_ds, _ = _best_cpu(lambda: transverse_dispersion(flow, sample, method="dense"), 1)
     rows.append(
         {
             "name": "transverse_dispersion_beyond",
