@@ -185,7 +185,13 @@ def least_stable(
     if found is None and lost is not None:
         found = search_above(flow, k, kz, None, policy, cache, rungs)
         if found is not None:
-            found = dataclasses.replace(found, note=join_notes(lost, found.note))
+            # the lost branch is how the search was reached, not a defect of this answer
+            found = dataclasses.replace(
+                found,
+                note=join_notes(
+                    f"found by the global search: the continuation from k = 0 {lost}", found.note
+                ),
+            )
         else:
             found, _ = _tracked_or_direct(flow, k, kz, ns, sigma, method, policy, cache)
     elif sigma is None and found is not None:
