@@ -90,21 +90,28 @@ class Branch:
         self.last = eigenpair_at(self.op, complex(k_real), mode.alpha, V / self.op.col_eq, derivatives=2)
 
     def at(
-        self, k: complex, *, start: ComplexEigenpair | None = None, derivatives: int = 2
+        self,
+        k: complex,
+        *,
+        start: ComplexEigenpair | None = None,
+        derivatives: int = 2,
+        sheet: str = "principal",
     ) -> ComplexEigenpair:
-        """The eigenpair at ``k`` (from ``start``, default the last one evaluated), with α' and α''."""
+        """The eigenpair at ``k`` (from ``start``, default the last one evaluated), with α' and α''.
+        ``sheet``: the root κ(k) of the far-field condition (:data:`~chuteflow.stability.
+        complex_k.SHEETS`); on ``"principal"`` the cut Re k = 0 stops the branch."""
         s = self.last if start is None else start
         guess = s.alpha + s.dalpha * (complex(k) - s.k)
-        if not (complex(k).real > 0):
+        if sheet == "principal" and not (complex(k).real > 0):
             raise ConvergenceError(
                 f"k = {complex(k):.6g} reached the branch cut Re k = 0 of the far-field decay "
                 "rate: the branch cannot be continued there"
             )
-        e = eigenpair_at(self.op, k, guess, s.w, derivatives=derivatives)
+        e = eigenpair_at(self.op, k, guess, s.w, derivatives=derivatives, sheet=sheet)
         self.last = e
         return e
 
-    def convergence(self, e: ComplexEigenpair) -> tuple[float, float, int]:
+    def convergence(self, e: ComplexEigenpair, sheet: str = "principal") -> tuple[float, float, int]:
         """(drift, tail, N') of the eigenpair: |α(k; N) − α(k; N')| with N' = 0.8 N and the
         Chebyshev tail of its eigenvector, the temporal modes' two tests."""
         n2 = check_n(self.n)
@@ -112,7 +119,7 @@ class Branch:
         nf = len(self.op.fields)
         w2 = interp_vector(e.w * self.op.col_eq, nf, self.n, n2) / op2.col_eq
         try:
-            e2 = eigenpair_at(op2, e.k, e.alpha, w2, derivatives=0)
+            e2 = eigenpair_at(op2, e.k, e.alpha, w2, derivatives=0, sheet=sheet)
             drift = abs(e2.alpha - e.alpha)
         except ConvergenceError:
             drift = math.inf
@@ -122,19 +129,25 @@ class Branch:
 
 
 def newton_k(
-    branch: Branch, k0: complex, target: complex, policy: SpatialPolicy, start=None, V: float = 0.0
+    branch: Branch,
+    k0: complex,
+    target: complex,
+    policy: SpatialPolicy,
+    start=None,
+    V: float = 0.0,
+    sheet: str = "principal",
 ) -> ComplexEigenpair:
     """The root k of α(k) + ikV = ``target`` near ``k0`` by Newton (k ← k − (α + ikV − target)/(α' + iV));
-    V = 0: the spatial branch α(k) = target."""
+    V = 0: the spatial branch α(k) = target. ``sheet`` as in :meth:`Branch.at`."""
     k = complex(k0)
-    e = branch.at(k, start=start)
+    e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
         d = e.dalpha + 1j * V
         if d == 0 or not np.isfinite(d):
             break
         dk = -(e.alpha + 1j * k * V - target) / d
         k = k + dk
-        e = branch.at(k, start=e)
+        e = branch.at(k, start=e, sheet=sheet)
         res = abs(e.alpha + 1j * k * V - target)
         # the step, or the residual at the round-off of the eigenvalue (~1e-15 of rates ~1e-3)
         if abs(dk) <= policy.k_rtol * max(abs(k), 1e-12) or res <= 5e-14:
@@ -146,17 +159,18 @@ def newton_k(
 
 
 def newton_saddle(
-    branch: Branch, k0: complex, V: float, policy: SpatialPolicy, start=None
+    branch: Branch, k0: complex, V: float, policy: SpatialPolicy, start=None, sheet: str = "principal"
 ) -> ComplexEigenpair:
-    """The saddle point of α(k) + ikV near ``k0``: α'(k) = −iV, by Newton (k ← k − (α' + iV)/α'')."""
+    """The saddle point of α(k) + ikV near ``k0``: α'(k) = −iV, by Newton (k ← k − (α' + iV)/α'').
+    ``sheet`` as in :meth:`Branch.at`."""
     k = complex(k0)
-    e = branch.at(k, start=start)
+    e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
         if e.d2alpha == 0 or not np.isfinite(e.d2alpha):
             break
         dk = -(e.dalpha + 1j * V) / e.d2alpha
         k = k + dk
-        e = branch.at(k, start=e)
+        e = branch.at(k, start=e, sheet=sheet)
         if abs(dk) <= policy.saddle_rtol * max(abs(k), 1e-12):
             return e
     raise ConvergenceError(

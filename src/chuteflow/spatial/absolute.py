@@ -46,6 +46,7 @@ the kinematic-wave speed c0 = dQ0/dρ̄0 (Appendix B; −Im α'(0) = −Im α1 o
 from __future__ import annotations
 
 import cmath
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -89,6 +90,12 @@ class AbsoluteResult:
         decided or not checked).
     pinch_v : float
         The ray checked: V_peak, where the family's saddle is the real temporal peak.
+    lab_pinch : bool or None
+        Where the family leaves the principal sheet before V = 0: whether its saddle continued
+        to V = 0 on the continued sheet pinches the contour (module docstring, "The lab frame");
+        :attr:`k_saddle` and :attr:`alpha_saddle` are that saddle's when True, NaN otherwise
+        (None: the family reached V = 0 on the principal sheet, or the step was not taken or
+        not decided; the note says which).
     kinematic_speed : float
         c0, where the family ends at the branch point k = 0 (NaN if it does not).
     rays : tuple of ndarray
@@ -119,6 +126,7 @@ class AbsoluteResult:
     drift: float
     tail: float
     converged: bool
+    lab_pinch: bool | None = None
     note: str = ""
     theta: float = math.nan
     nu0: float = math.nan
@@ -147,6 +155,7 @@ class AbsoluteResult:
             "pinch": self.pinch,
             "pinch_v": self.pinch_v,
             "kinematic_speed": self.kinematic_speed,
+            "lab_pinch": self.lab_pinch,
             "n": int(self.n),
             "drift": self.drift,
             "tail": self.tail,
@@ -233,6 +242,22 @@ def _continue(
 #: 0.08 V_peak jumped from k* = 1.6e-3 to the family at k* ≈ 0.028 − 0.012i and reported its
 #: σ < 0 as the edge) or the step is too long to trust; either way the step is halved.
 CORRECTOR_RATIO = 0.5
+
+#: The sheet of κ(k) on which the lab-frame saddle is sought beyond the cut (module docstring).
+LAB_SHEET = "continued"
+
+#: A root path of the lab-frame pinch check that crosses the real axis within this fraction
+#: of |k*| of k = 0 passes through the contour's end point k = 0 (module docstring, "The lab
+#: frame"); it counts as a crossing of the half-line [0, ∞).
+ENDPOINT_RTOL = 1e-6
+
+#: Newton's relative step on k at which a root of the lab-frame pinch check is settled.
+PINCH_K_RTOL = 1e-8
+
+#: The tilt η of the target paths α(k*) + s (1 ± iη) of the lab-frame collapse check.
+PINCH_TILT = 0.05
+
+DEBUG_CROSSINGS: list | None = None
 
 
 def _check_same_family(e, pred: complex, e_new) -> None:
@@ -322,6 +347,167 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     )
 
 
+def _continue_to_lab(branch: Branch, V0: float, e0, dV0: float, policy: SpatialPolicy):
+    """Continue the saddle family from (``e0``, ``V0``), where it left the principal sheet
+    (the cut Re k = 0, or the branch point k = 0), down to the lab frame V = 0 on the continued
+    sheet κ = k (module docstring, "The lab frame"). Returns (samples [(V, e)], the saddle at
+    V = 0 or None, why not)."""
+    out = [(V0, e0)]
+    V, e, dV = V0, e0, dV0
+    for _ in range(400):
+        if V <= 0.0:
+            return out, e, ""
+        V_new = max(V - dV, 0.0)
+        pred = e.k - 1j * (V_new - V) / e.d2alpha
+        try:
+            e_new = newton_saddle(branch, pred, V_new, policy, start=e, sheet=LAB_SHEET)
+            _check_same_family(e, pred, e_new)
+        except ChuteflowError as exc:
+            dV *= 0.5
+            if dV < 1e-4 * dV0:
+                return out, None, f"the saddle family stops at V = {V:.4g} on the continued sheet ({exc})"
+            continue
+        out.append((V_new, e_new))
+        V, e = V_new, e_new
+        dV = min(dV * 1.5, 4 * dV0)
+    return out, None, f"the saddle family did not reach V = 0 on the continued sheet (last V = {V:.4g})"
+
+
+def _half_line_crossings(path: list) -> list:
+    """The points where the polyline ``path`` [(s, k)] crosses the real axis, as
+    (index of the segment, Re k at the crossing by linear interpolation)."""
+    out = []
+    for i in range(len(path) - 1):
+        a, b = path[i][1], path[i + 1][1]
+        if a.imag == b.imag or (a.imag > 0) == (b.imag > 0) and a.imag != 0 and b.imag != 0:
+            continue
+        t = -a.imag / (b.imag - a.imag)
+        out.append((i, a.real + t * (b.real - a.real)))
+    return out
+
+
+def _lab_pinch(branch: Branch, e, growth_peak: float, policy: SpatialPolicy) -> tuple[bool | None, str]:
+    """Whether the lab-frame saddle ``e`` on the continued sheet pinches the half-line
+    contour [0, ∞) of the impulse response's k > 0 half (module docstring, "The lab frame").
+
+    The two roots of α(k) = α(k*) + s w, from k* ± √(2sw/α''), are followed as s grows until
+    Re α(k*) + s exceeds (1 + pinch_margin) × the largest temporal growth (no point of the
+    contour reaches that level); the path from one root's end through k* to the other's
+    crosses [0, ∞) an odd number of times exactly when the contour cannot be pulled off the
+    saddle. w = 1 ± i :data:`PINCH_TILT`: the straight path w = 1 (Briggs' lowering of Im ω at
+    fixed Re ω) is degenerate where α is real along the saddle's steepest-ascent path (at P5
+    the roots run along the imaginary axis into another saddle); the two tilted paths pass
+    such a critical value on either side, and the answer stands only where both agree (None
+    otherwise)."""
+    pol = dataclasses.replace(policy, k_rtol=max(policy.k_rtol, PINCH_K_RTOL))
+    found = []
+    try:
+        for tilt in (PINCH_TILT, -PINCH_TILT):
+            found.append(_crossings(branch, e, growth_peak, pol, complex(1.0, tilt)))
+    except ChuteflowError as exc:
+        return None, f"the lab-frame pinch was not decided ({exc})"
+    odd = [c % 2 == 1 for c, _, _, _ in found]
+    count, at_end, ends, level = found[0]
+    if odd[0] != odd[1]:
+        return None, (
+            f"the lab-frame pinch was not decided: the two tilted paths of the collapse check cross "
+            f"the half-line [0, inf) {found[0][0]} and {found[1][0]} times"
+        )
+    if odd[0]:
+        return True, (
+            f"the lab-frame saddle k* = {e.k:.6g} pinches through the contour's end point k = 0 "
+            "(its steepest-descent path from k = 0 runs into the saddle)"
+            if at_end
+            else ""
+        )
+    return False, (
+        f"the lab-frame saddle k* = {e.k:.6g} (growth {e.alpha.real:.4g}) on the continued sheet does "
+        f"not pinch the contour: its spatial branches (ends {ends} at growth {level:.3g}) cross "
+        f"the half-line [0, inf) {count} times"
+    )
+
+
+def _crossings(branch: Branch, e, growth_peak: float, policy: SpatialPolicy, w: complex):
+    """The collapse check of :func:`_lab_pinch` along the target path α(k*) + s w: (number of
+    crossings of [0, ∞), how many of them at k = 0, the roots' ends, the final growth)."""
+    sh = LAB_SHEET
+    a0 = e.alpha
+    s_end = (1.0 + policy.pinch_margin) * max(growth_peak, 0.0) - a0.real
+    if s_end <= 0:
+        s_end = abs(a0.real) + max(growth_peak, 0.0) + 1e-6
+    s = 1e-3 * s_end
+    root = cmath.sqrt(2.0 * s * w / e.d2alpha)
+    pairs = [newton_k(branch, k0, a0 + s * w, policy, start=e, sheet=sh) for k0 in (e.k + root, e.k - root)]
+    paths: list[list] = [[(s, p)] for p in pairs]
+    factor = 3.0
+    while s < s_end:
+        s_new = min(s_end, factor * s)
+        try:
+            nxt = []
+            for p in pairs:
+                pred = p.k + (s_new - s) * w / p.dalpha
+                q = newton_k(branch, pred, a0 + s_new * w, policy, start=p, sheet=sh)
+                _check_same_family(p, pred, q)
+                nxt.append(q)
+            if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
+                raise ConvergenceError("the two roots fell onto one")
+        except ChuteflowError:
+            if factor <= 1.01:
+                raise
+            factor = max(1.01, factor**0.5)
+            continue
+        for path, q in zip(paths, nxt):
+            path.append((s_new, q))
+        pairs, s = nxt, s_new
+        factor = min(3.0, factor * 1.5)
+    count, at_end = 0, 0
+    tol_end = ENDPOINT_RTOL * abs(e.k)
+    for path in paths:
+        # the saddle k* itself starts each path (α = α(k*) at s = 0)
+        full = [(0.0, e)] + path
+        for i, x in _half_line_crossings([(sv, q.k) for sv, q in full]):
+            (sa, pa), (sb, pb) = full[i], full[i + 1]
+            if abs(x) < 2 * abs(pb.k - pa.k):
+                x = _locate_crossing(branch, a0, w, sa, pa, sb, pb, policy, tol_end)
+            at_end += abs(x) <= tol_end
+            count += x > -tol_end
+            if DEBUG_CROSSINGS is not None:
+                DEBUG_CROSSINGS.append((w, x, sa, sb))
+    ends = ", ".join(f"{p.k:.4g}" for p in pairs)
+    return count, at_end, ends, a0.real + s_end
+
+
+def _locate_crossing(
+    branch, a0: complex, w: complex, sa: float, pa, sb: float, pb, policy, tol_end: float
+) -> float:
+    """Re k where the root path of α(k) = a0 + s w crosses the real axis between the roots ``pa``
+    at s = ``sa`` and ``pb`` at ``sb`` (Im k of opposite signs): the path is bisected in s (in
+    √s from the saddle, ``sa`` = 0, where the root leaves k* like √s) until the linear
+    interpolation's crossing x lies further from k = 0 than twice the bracket (its side is
+    then certain); a bracket shorter than ``tol_end`` ends it (the path passes through
+    k = 0: the returned x is within ``tol_end`` of 0)."""
+    k_sad = pa.k if sa == 0.0 else None
+    for _ in range(80):
+        dk = abs(pb.k - pa.k)
+        x = pa.k.real + (pb.k.real - pa.k.real) * (-pa.k.imag) / (pb.k.imag - pa.k.imag)
+        if abs(x) >= 2 * dk or dk <= 0.5 * tol_end:
+            return float(x)
+        if sa == 0.0 and k_sad is not None:
+            sm = 0.25 * sb
+            k0, start = k_sad + 0.5 * (pb.k - k_sad), pb
+        else:
+            sm = 0.5 * (sa + sb)
+            k0, start = pa.k + (sm - sa) * w / pa.dalpha, pa
+        pm = newton_k(branch, k0, a0 + sm * w, policy, start=start, sheet=LAB_SHEET)
+        if abs(pm.k - pa.k) > dk and abs(pm.k - pb.k) > dk:
+            raise ConvergenceError(f"the root path left its bracket near k = {x:.3g} (s = {sm:.3g})")
+        if (pm.k.imag > 0) == (pa.k.imag > 0):
+            sa, pa = sm, pm
+        else:
+            sb, pb = sm, pm
+    raise ConvergenceError(f"a crossing of the real axis near k = {x:.3g} was not located")
+
+
 def _checked(res: AbsoluteResult, strict: bool) -> AbsoluteResult:
     """``res``, or with ``strict=True`` a :class:`ConvergenceError` where it is flagged."""
     if strict and not res.converged:
@@ -348,6 +534,7 @@ def _stable(flow: SteadyFlow, scan: BranchScan, peak, strict: bool) -> AbsoluteR
         pinch=None,
         pinch_v=nan,
         kinematic_speed=nan,
+        lab_pinch=None,
         rays=(np.empty(0), np.empty(0), np.empty(0), np.empty(0)),
         n=int(scan.n[i]),
         drift=float(scan.drift[i]),
@@ -369,6 +556,7 @@ def absolute_instability(
     strict: bool = False,
     check_pinch: bool = True,
     scan: BranchScan | None = None,
+    lab_frame: bool = True,
 ) -> AbsoluteResult:
     """Absolute or convective instability of ``flow`` by the Briggs–Bers saddle points of its
     α(0) = 0 branch continued to complex k (module docstring).
@@ -437,6 +625,19 @@ def absolute_instability(
             )
     lab = [e for V, e in down if V == 0.0]
     e0 = lab[0] if lab else None
+    lab_pinch: bool | None = None
+    lab_sheet = "principal"
+    if e0 is None and lab_frame and growth_peak > 0:
+        V_last, e_last = down[-1]
+        cont, e_lab, why = _continue_to_lab(branch, V_last, e_last, dV0, policy)
+        samples_lab = cont[1:]
+        if e_lab is not None:
+            lab_pinch, why = _lab_pinch(branch, e_lab, growth_peak, policy)
+            if lab_pinch:
+                e0, lab_sheet = e_lab, LAB_SHEET
+        if why:
+            notes.append(why)
+    conflict = False
     if growth_peak <= 0:
         verdict, v_minus, v_plus = "stable", math.nan, math.nan
     else:
@@ -444,6 +645,12 @@ def absolute_instability(
         v_plus = max(edges.values()) if len(edges) == 2 else math.nan
         if e0 is not None:
             verdict = "absolute" if e0.alpha.real > 0 else "convective"
+            if len(edges) == 2 and (verdict == "absolute") != (v_minus < 0 < v_plus):
+                conflict = True
+                notes.append(
+                    f"the lab-frame saddle (growth {e0.alpha.real:.4g}) and the edges "
+                    f"(V- = {v_minus:.6g}, V+ = {v_plus:.6g}) disagree"
+                )
         elif len(edges) == 2:
             verdict = "absolute" if v_minus < 0 < v_plus else "convective"
         else:
@@ -452,7 +659,7 @@ def absolute_instability(
         k0, a0 = complex(e0.k), complex(e0.alpha)
     else:
         k0, a0 = complex(math.nan, math.nan), complex(math.nan, math.nan)
-        if growth_peak > 0:
+        if growth_peak > 0 and not lab_frame:
             notes.append("no saddle of the family at V = 0 (the lab frame lies outside the continuation)")
     # Briggs' check on the family at the ray of fastest growth V_peak, where its saddle is the
     # real temporal peak; the continuation in V carries that pinch along the family
@@ -464,7 +671,7 @@ def absolute_instability(
         if why:
             notes.append(why)
     e_conv = e0 if e0 is not None else e_sad
-    drift, tl, _ = branch.convergence(e_conv)
+    drift, tl, _ = branch.convergence(e_conv, sheet=lab_sheet if e0 is not None else "principal")
     if not policy.rejection.accepts(drift, tl):
         notes.append(f"the saddle misses the temporal tests (drift {drift:.1e}, tail {tl:.1e})")
     ok = (
@@ -473,6 +680,7 @@ def absolute_instability(
         and scan.converged
         and verdict != "undetermined"
         and not unrefined
+        and not conflict
     )
     V = np.array([v for v, _ in samples])
     res = AbsoluteResult(
@@ -487,6 +695,7 @@ def absolute_instability(
         pinch=pinch,
         pinch_v=float(pinch_V),
         kinematic_speed=c0,
+        lab_pinch=lab_pinch,
         rays=(
             V,
             np.array([_ray_growth(e, v) for v, e in samples]),

@@ -13,7 +13,11 @@ into the dilute top. κ(k) = k in the right half-plane Re k > 0 and κ(k) = −k
 one; the branch cut is the imaginary axis Re k = 0, where k² ≤ 0, κ is imaginary and the
 far field neither decays nor grows. A spatial branch k(ω) (:mod:`chuteflow.spatial`) is
 continued inside Re k > 0 (waves of positive frequency travel down the slope with Re k > 0);
-one that reaches the cut cannot be continued analytically and is returned flagged.
+one that reaches the cut cannot be continued analytically on this sheet and is returned
+flagged. Across the cut, the root continued analytically from Re k > 0 is κ = k itself
+(``sheet="continued"``, :data:`SHEETS`): A(k) is then a polynomial in k, analytic in the whole
+plane, and the perturbation grows into the top where Re k < 0. It is the sheet on which the
+lab-frame saddle of :mod:`chuteflow.spatial.absolute` is sought.
 
 α(k) is computed by Newton's method on the bordered system
 
@@ -40,14 +44,28 @@ import scipy.linalg as sla
 from ..errors import ConvergenceError, ParameterError
 from .operator import StabilityOperator
 
-__all__ = ["far_field_decay", "complex_matrices", "ComplexEigenpair", "eigenpair_at"]
+__all__ = ["SHEETS", "far_field_decay", "complex_matrices", "ComplexEigenpair", "eigenpair_at"]
+
+#: The two sheets of κ(k): ``"principal"`` κ = √(k²), Re κ > 0 (the perturbation decays into
+#: the dilute top); ``"continued"`` κ = k, the root continued analytically from Re k > 0 across
+#: the cut (it grows into the top where Re k < 0). They agree on Re k > 0.
+SHEETS = ("principal", "continued")
 
 
-def far_field_decay(k: complex) -> complex:
+def _check_sheet(sheet: str) -> str:
+    if sheet not in SHEETS:
+        raise ParameterError(f"sheet = {sheet!r}: expected one of {', '.join(SHEETS)}")
+    return sheet
+
+
+def far_field_decay(k: complex, sheet: str = "principal") -> complex:
     """κ = √(k²) with Re κ > 0: the decay rate of the far-field condition f' + κ f = 0 at complex
     k (κ = |k| for real k). Raises :class:`~chuteflow.errors.ParameterError` on the branch cut
-    Re k = 0 (k ≠ 0), where the continued perturbation does not decay into the dilute top."""
+    Re k = 0 (k ≠ 0), where the continued perturbation does not decay into the dilute top.
+    ``sheet="continued"``: κ = k at every k (:data:`SHEETS`; no cut, A(k) is a polynomial)."""
     k = complex(k)
+    if _check_sheet(sheet) == "continued":
+        return k
     if k.real == 0.0 and k.imag != 0.0:
         raise ParameterError(
             f"k = {k:.6g} lies on the branch cut Re k = 0 of the far-field decay rate √(k²): "
@@ -56,14 +74,15 @@ def far_field_decay(k: complex) -> complex:
     return k if k.real >= 0 else -k
 
 
-def complex_matrices(op: StabilityOperator, k: complex, *, derivatives: int = 0):
+def complex_matrices(op: StabilityOperator, k: complex, *, derivatives: int = 0, sheet: str = "principal"):
     """The equilibrated A(k) at complex k (k_z = 0) and, with ``derivatives`` ≥ 1 (2), its
-    first (and second) derivative in k; a tuple of 1 to 3 complex arrays (module docstring)."""
+    first (and second) derivative in k; a tuple of 1 to 3 complex arrays (module docstring).
+    ``sheet``: the root κ(k) of the far-field condition (:data:`SHEETS`)."""
     if op.three_d:
         raise ParameterError("complex k is implemented for the two-dimensional operator (k_z = 0)")
     k = complex(k)
-    kappa = far_field_decay(k)
-    dkappa = 1.0 if k.real >= 0 else -1.0
+    kappa = far_field_decay(k, sheet)
+    dkappa = 1.0 if (sheet == "continued" or k.real >= 0) else -1.0
     pieces = op._pieces_eq
     rows, cols, vals = op._K_eq
     ik = 1j * k
@@ -127,12 +146,14 @@ def eigenpair_at(
     derivatives: int = 1,
     tol: float = 1e-13,
     maxiter: int = 30,
+    sheet: str = "principal",
 ) -> ComplexEigenpair:
     """Newton on the bordered system (module docstring) at complex ``k`` from (``alpha0``,
     ``w0``), an eigenpair estimate on the equilibrated pencil; with ``derivatives`` 1 or 2
     also α'(k) (and α''(k)). Raises :class:`~chuteflow.errors.ConvergenceError` when Newton
-    does not settle (the start is too far from an eigenpair)."""
-    mats = complex_matrices(op, k, derivatives=derivatives)
+    does not settle (the start is too far from an eigenpair). ``sheet``: the root κ(k) of the
+    far-field condition (:data:`SHEETS`; ``"continued"`` crosses the cut Re k = 0)."""
+    mats = complex_matrices(op, k, derivatives=derivatives, sheet=sheet)
     A = mats[0]
     bd = np.diag(op.B_eq).astype(complex)
     M = A.shape[0]
