@@ -136,9 +136,10 @@ def newton_k(
     start=None,
     V: float = 0.0,
     sheet: str = "principal",
+    max_step: float = math.inf,
 ) -> ComplexEigenpair:
     """The root k of α(k) + ikV = ``target`` near ``k0`` by Newton (k ← k − (α + ikV − target)/(α' + iV));
-    V = 0: the spatial branch α(k) = target. ``sheet`` as in :meth:`Branch.at`."""
+    V = 0: the spatial branch α(k) = target. ``sheet`` and ``max_step`` as in :func:`newton_saddle`."""
     k = complex(k0)
     e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
@@ -146,6 +147,8 @@ def newton_k(
         if d == 0 or not np.isfinite(d):
             break
         dk = -(e.alpha + 1j * k * V - target) / d
+        if abs(dk) > max_step:
+            break
         k = k + dk
         e = branch.at(k, start=e, sheet=sheet)
         res = abs(e.alpha + 1j * k * V - target)
@@ -159,16 +162,25 @@ def newton_k(
 
 
 def newton_saddle(
-    branch: Branch, k0: complex, V: float, policy: SpatialPolicy, start=None, sheet: str = "principal"
+    branch: Branch,
+    k0: complex,
+    V: float,
+    policy: SpatialPolicy,
+    start=None,
+    sheet: str = "principal",
+    max_step: float = math.inf,
 ) -> ComplexEigenpair:
     """The saddle point of α(k) + ikV near ``k0``: α'(k) = −iV, by Newton (k ← k − (α' + iV)/α'').
-    ``sheet`` as in :meth:`Branch.at`."""
+    ``sheet`` as in :meth:`Branch.at`; a Newton step longer than ``max_step`` gives up (the
+    start is too far from a saddle)."""
     k = complex(k0)
     e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
         if e.d2alpha == 0 or not np.isfinite(e.d2alpha):
             break
         dk = -(e.dalpha + 1j * V) / e.d2alpha
+        if abs(dk) > max_step:
+            break
         k = k + dk
         e = branch.at(k, start=e, sheet=sheet)
         if abs(dk) <= policy.saddle_rtol * max(abs(k), 1e-12):

@@ -360,7 +360,10 @@ def _continue_to_lab(branch: Branch, V0: float, e0, dV0: float, policy: SpatialP
         V_new = max(V - dV, 0.0)
         pred = e.k - 1j * (V_new - V) / e.d2alpha
         try:
-            e_new = newton_saddle(branch, pred, V_new, policy, start=e, sheet=LAB_SHEET)
+            step = abs(pred - e.k)
+            e_new = newton_saddle(
+                branch, pred, V_new, policy, start=e, sheet=LAB_SHEET, max_step=step + 1e-9 * abs(e.k)
+            )
             _check_same_family(e, pred, e_new)
         except ChuteflowError as exc:
             dV *= 0.5
@@ -446,7 +449,9 @@ def _crossings(branch: Branch, e, growth_peak: float, policy: SpatialPolicy, w: 
             nxt = []
             for p in pairs:
                 pred = p.k + (s_new - s) * w / p.dalpha
-                q = newton_k(branch, pred, a0 + s_new * w, policy, start=p, sheet=sh)
+                q = newton_k(
+                    branch, pred, a0 + s_new * w, policy, start=p, sheet=sh, max_step=abs(pred - p.k)
+                )
                 _check_same_family(p, pred, q)
                 nxt.append(q)
             if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
@@ -556,7 +561,7 @@ def absolute_instability(
     strict: bool = False,
     check_pinch: bool = True,
     scan: BranchScan | None = None,
-    lab_frame: bool = True,
+    lab_frame: bool = False,
 ) -> AbsoluteResult:
     """Absolute or convective instability of ``flow`` by the Briggs–Bers saddle points of its
     α(0) = 0 branch continued to complex k (module docstring).

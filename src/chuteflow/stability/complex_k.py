@@ -51,6 +51,11 @@ __all__ = ["SHEETS", "far_field_decay", "complex_matrices", "ComplexEigenpair", 
 #: the cut (it grows into the top where Re k < 0). They agree on Re k > 0.
 SHEETS = ("principal", "continued")
 
+#: Newton on the bordered system also stops where its step on α stops shrinking (by 4×) at a
+#: size below this fraction of max(1, |α|): the round-off floor, above ``tol`` near a multiple
+#: eigenvalue (the residual test then decides).
+STAGNATION_RTOL = 1e-10
+
 
 def _check_sheet(sheet: str) -> str:
     if sheet not in SHEETS:
@@ -166,6 +171,7 @@ def eigenpair_at(
     scale = float(np.abs(A).max())
     lu = None
     it = 0
+    prev = math.inf
     for it in range(1, maxiter + 1):  # noqa: B007 - the count is reported
         J[:M, :M] = A
         J[np.arange(M), np.arange(M)] -= alpha * bd
@@ -177,8 +183,14 @@ def eigenpair_at(
         alpha = alpha + dx[M]
         if not (np.isfinite(alpha) and np.all(np.isfinite(dx))):
             break
-        if abs(dx[M]) <= tol * max(1.0, abs(alpha)) and np.abs(dx[:M]).max() <= 1e-9 * np.abs(v).max():
+        step = abs(dx[M])
+        if step <= tol * max(1.0, abs(alpha)) and np.abs(dx[:M]).max() <= 1e-9 * np.abs(v).max():
             break
+        # stagnation at the round-off floor (a near-multiple eigenvalue raises it above tol):
+        # the step no longer shrinks, at a size that is noise next to the eigenvalue
+        if it >= 6 and step <= STAGNATION_RTOL * max(1.0, abs(alpha)) and step >= 0.25 * prev:
+            break
+        prev = step
     res = float(np.abs(A @ v - alpha * bd * v).max() / (scale * np.abs(v).max()))
     if not (cmath.isfinite(alpha) and res < 1e-9):
         raise ConvergenceError(
