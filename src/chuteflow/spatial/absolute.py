@@ -17,12 +17,29 @@ Limitation. The far-field decay rate κ = √(k²) has its branch cut on Re k = 
 (:mod:`chuteflow.stability.complex_k`). Where the saddle family continued from the temporal
 peak reaches that cut (or k → 0, where α = 0 and the edge is the kinematic-wave speed
 dQ0/dρ̄0) before σ(V) changes sign on a side, the edge found is that limit; at the paper's
-points P1, P4, P5 the family never reaches V = 0, both edges are positive (P1: 4.1525 and
-9.0043) and the verdict is ``"convective"``, resting on V₋ > 0 (the lab-frame saddle itself
-is not computed: ``absolute_growth`` is NaN). Where neither edge is decided the verdict is
-``"undetermined"`` and flagged, with the growing range found so far in :attr:`rays`.
-Continuing across the cut (the next sheet, where the top condition no longer decays, or the
-cut's own contribution to the impulse response) is not implemented.
+points P1, P4, P5 the family never reaches V = 0 on this sheet, both edges are positive (P1:
+4.1525 and 9.0043) and the verdict is ``"convective"``, resting on V₋ > 0. Where neither edge
+is decided the verdict is ``"undetermined"`` and flagged, with the growing range found so far
+in :attr:`rays`.
+
+The lab frame (``lab_frame=True``). The impulse response at x = 0 is ∫ exp(α(k) t) dk over
+real k, with α(k) computed with κ = |k|. Its half k > 0 is J = ∫_0^∞ exp(α₊(k) t) dk, with α₊
+the eigenvalue of the pencil with κ = k (``sheet="continued"``), a polynomial in k and so
+analytic across Re k = 0; the half k < 0 is the complex conjugate of J (the equations are
+real). J's end point k = 0, where α₊(0) = 0 (mass conservation), contributes algebraically in
+t; a saddle k* of α₊ contributes exp(α₊(k*) t) exactly where the steepest-descent deformation
+of the half-line [0, ∞) (end point fixed) must pass through it. So the family is continued
+from where it left the principal sheet down to V = 0 on the continued sheet
+(:func:`_continue_to_lab`), and its saddle is checked by Briggs' collapse criterion adapted to
+the half-line (:func:`_lab_pinch`): the two roots of α₊(k) = α₊(k*) + s are followed from k*
+as s grows until Re α₊ exceeds every value on the contour; the path from one root's end through
+k* to the other's must cross [0, ∞) an odd number of times (the contour, which the roots never
+touch, is then trapped between them as s returns to 0; an even count lets it slide off, around
+the end point if need be). The check runs along two target paths tilted by ±5 % in Im α (a
+path straight up passes exactly through another critical value where α₊ is nearly real along
+the saddle's ascent path) and stands only where both agree. Where it pinches, ``k_saddle``
+and ``absolute_growth`` are that saddle's and the verdict follows its sign; otherwise they
+stay NaN and the note says why (``lab_pinch``).
 
 Method. At V_peak = c_g(k_peak), the group velocity at the temporal peak k_peak, the saddle is
 k_peak itself (Re α'(k_peak) = 0) and σ(V_peak) = Re α(k_peak), the largest temporal growth.
@@ -257,8 +274,6 @@ PINCH_K_RTOL = 1e-8
 #: The tilt η of the target paths α(k*) + s (1 ± iη) of the lab-frame collapse check.
 PINCH_TILT = 0.05
 
-DEBUG_CROSSINGS: list | None = None
-
 
 def _check_same_family(e, pred: complex, e_new) -> None:
     """Raise :class:`ConvergenceError` where the corrector moved further from the predictor
@@ -413,8 +428,14 @@ def _lab_pinch(branch: Branch, e, growth_peak: float, policy: SpatialPolicy) -> 
     count, at_end, ends, level = found[0]
     if odd[0] != odd[1]:
         return None, (
-            f"the lab-frame pinch was not decided: the two tilted paths of the collapse check cross "
-            f"the half-line [0, inf) {found[0][0]} and {found[1][0]} times"
+            f"the lab-frame pinch of the saddle k* = {e.k:.10g}, alpha* = {e.alpha:.10g} on the continued "
+            f"sheet was not decided: the two tilted paths of the collapse check cross the half-line "
+            f"[0, inf) {found[0][0]} and {found[1][0]} times"
+            + (
+                " (Re alpha* < 0 = alpha(0): it cannot make the flow absolute either way)"
+                if e.alpha.real < 0
+                else ""
+            )
         )
     if odd[0]:
         return True, (
@@ -476,8 +497,6 @@ def _crossings(branch: Branch, e, growth_peak: float, policy: SpatialPolicy, w: 
                 x = _locate_crossing(branch, a0, w, sa, pa, sb, pb, policy, tol_end)
             at_end += abs(x) <= tol_end
             count += x > -tol_end
-            if DEBUG_CROSSINGS is not None:
-                DEBUG_CROSSINGS.append((w, x, sa, sb))
     ends = ", ".join(f"{p.k:.4g}" for p in pairs)
     return count, at_end, ends, a0.real + s_end
 
@@ -575,6 +594,12 @@ def absolute_instability(
     continuation step does not settle, an edge is not decided, the saddle misses the temporal
     tests or does not pinch (``strict=True``: :class:`~chuteflow.errors.ConvergenceError`
     instead).
+
+    ``lab_frame=True``: where the saddle family leaves the principal sheet before V = 0 (the
+    cut Re k = 0, or the branch point k = 0), continue it to V = 0 on the continued sheet and
+    check its pinch (module docstring, "The lab frame"; :attr:`AbsoluteResult.lab_pinch`).
+    Off by default: it costs 1.5–3 times the rest of the analysis at the paper's points, where
+    none of these saddles pinches decidedly.
     """
     flow = check_flow(flow)
     policy = DEFAULT_SPATIAL_POLICY if policy is None else policy
