@@ -418,10 +418,8 @@ def _lab_pinch(branch: Branch, e, growth_peak: float, policy: SpatialPolicy) -> 
     such a critical value on either side, and the answer stands only where both agree (None
     otherwise)."""
     pol = dataclasses.replace(policy, k_rtol=max(policy.k_rtol, PINCH_K_RTOL))
-    found = []
     try:
-        for tilt in (PINCH_TILT, -PINCH_TILT):
-            found.append(_crossings(branch, e, growth_peak, pol, complex(1.0, tilt)))
+        found = [_crossings(branch, e, growth_peak, pol, complex(1.0, t)) for t in (PINCH_TILT, -PINCH_TILT)]
     except ChuteflowError as exc:
         return None, f"the lab-frame pinch was not decided ({exc})"
     odd = [c % 2 == 1 for c, _, _, _ in found]
@@ -659,8 +657,7 @@ def absolute_instability(
     lab_sheet = "principal"
     if e0 is None and lab_frame and growth_peak > 0:
         V_last, e_last = down[-1]
-        cont, e_lab, why = _continue_to_lab(branch, V_last, e_last, dV0, policy)
-        samples_lab = cont[1:]
+        _, e_lab, why = _continue_to_lab(branch, V_last, e_last, dV0, policy)
         if e_lab is not None:
             lab_pinch, why = _lab_pinch(branch, e_lab, growth_peak, policy)
             if lab_pinch:

@@ -172,7 +172,7 @@ def eigenpair_at(
     lu = None
     it = 0
     prev = math.inf
-    for it in range(1, maxiter + 1):  # noqa: B007 - the count is reported
+    for it in range(1, maxiter + 1):
         J[:M, :M] = A
         J[np.arange(M), np.arange(M)] -= alpha * bd
         J[:M, M] = -bd * v
