@@ -326,6 +326,8 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
     target exceeds (1 + pinch_margin) × the largest temporal growth (above which no real k
     solves it), end in opposite half-planes."""
     a_v = e.alpha + 1j * e.k * V
+    # only the roots' half-planes matter: Newton on k stops at PINCH_K_RTOL
+    policy = dataclasses.replace(policy, k_rtol=max(policy.k_rtol, PINCH_K_RTOL))
     s_end = (1.0 + policy.pinch_margin) * max(growth_peak, 0.0) - a_v.real
     if s_end <= 0:
         s_end = abs(a_v.real) + max(growth_peak, 0.0) + 1e-6
@@ -340,7 +342,9 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
             try:
                 nxt = []
                 for p in pairs:
-                    dk = (s_new - s) / (p.dalpha + 1j * V)
+                    d = p.dalpha + 1j * V
+                    dk = (s_new - s) / d
+                    dk -= 0.5 * p.d2alpha * dk * dk / d  # second order: α' Δk + α'' Δk²/2 = Δs
                     nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
                 if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
                     raise ConvergenceError("the two roots fell onto one")

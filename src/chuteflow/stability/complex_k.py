@@ -56,6 +56,11 @@ SHEETS = ("principal", "continued")
 #: eigenvalue (the residual test then decides).
 STAGNATION_RTOL = 1e-10
 
+#: α' and α'' are solved with the last Newton iteration's LU factors where that iteration's
+#: step was below this fraction of the solution (relative errors of that order, below the
+#: saddle and root tolerances of :mod:`chuteflow.spatial`); else J is factorised anew.
+REUSE_RTOL = 1e-11
+
 
 def _check_sheet(sheet: str) -> str:
     if sheet not in SHEETS:
@@ -197,11 +202,18 @@ def eigenpair_at(
             f"no eigenvalue near {complex(alpha0):.6g} at k = {complex(k):.6g}: Newton on the "
             f"pencil did not settle (relative residual {res:.1e})"
         )
-    # the Jacobian at the solution (refactor once, cheap next to the iterations)
-    J[:M, :M] = A
-    J[np.arange(M), np.arange(M)] -= alpha * bd
-    J[:M, M] = -bd * v
-    lu = sla.lu_factor(J, check_finite=False)
+    # the Jacobian at the solution: the last iteration's factorisation where its Newton step
+    # was below REUSE_RTOL (the Jacobians then differ by that fraction), else refactored
+    last_v = float(np.abs(dx[:M]).max()) if lu is not None else math.inf
+    if derivatives >= 1 and (
+        lu is None
+        or last_v > REUSE_RTOL * float(np.abs(v).max())
+        or abs(dx[M]) > REUSE_RTOL * max(1.0, abs(alpha))
+    ):
+        J[:M, :M] = A
+        J[np.arange(M), np.arange(M)] -= alpha * bd
+        J[:M, M] = -bd * v
+        lu = sla.lu_factor(J, check_finite=False)
     da = d2a = complex(math.nan, math.nan)
     if derivatives >= 1:
         dA = mats[1]
