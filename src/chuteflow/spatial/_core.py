@@ -38,6 +38,10 @@ class SpatialPolicy:
     pinch_margin : float
         The Briggs collapse check raises Re α from the saddle's to the temporal peak's growth
         times (1 + ``pinch_margin``) (0.5).
+    coarse : float
+        The saddle family's continuation in V, the collapse checks and the lab-frame steps run
+        at N = ``coarse`` × N (0.6; 1 turns it off); the edges, the kinematic-wave speed, the
+        lab-frame saddle and the temporal tests are then refined at N itself.
     """
 
     k_rtol: float = 1e-11
@@ -46,6 +50,7 @@ class SpatialPolicy:
     rejection: RejectionPolicy = DEFAULT_POLICY
     ray_step: float = 0.1
     pinch_margin: float = 0.5
+    coarse: float = 0.6
 
     def __post_init__(self):
         if not (0 < self.k_rtol < 1e-3):
@@ -62,6 +67,8 @@ class SpatialPolicy:
             raise ParameterError(f"ray_step = {self.ray_step!r} is outside (0, 0.5]: relative step in V")
         if not (0 < self.pinch_margin <= 10):
             raise ParameterError(f"pinch_margin = {self.pinch_margin!r} is outside (0, 10]")
+        if not (0.3 <= self.coarse <= 1):
+            raise ParameterError(f"coarse = {self.coarse!r} is outside [0.3, 1]: a fraction of N")
 
 
 DEFAULT_SPATIAL_POLICY = SpatialPolicy()
@@ -88,6 +95,29 @@ class Branch:
         self.op = stability_operator(flow, self.n, cache=cache)
         V = np.concatenate([mode.fields[f] for f in self.op.fields])
         self.last = eigenpair_at(self.op, complex(k_real), mode.alpha, V / self.op.col_eq, derivatives=2)
+
+    def transfer(self, e: ComplexEigenpair, other: Branch, sheet: str = "principal") -> ComplexEigenpair:
+        """The eigenpair ``e`` of ``other`` (another resolution of the same flow) refined at this
+        branch's N: its eigenvector interpolated, Newton at the same k."""
+        if other.n == self.n:
+            return e
+        nf = len(self.op.fields)
+        w = interp_vector(e.w * other.op.col_eq, nf, other.n, self.n) / self.op.col_eq
+        out = eigenpair_at(self.op, e.k, e.alpha, w, derivatives=2, sheet=sheet)
+        self.last = out
+        return out
+
+    def coarsened(self, factor: float) -> Branch:
+        """The same branch at N = round(``factor`` N) (at least 16), started from the seed's
+        eigenpair interpolated there: the cheaper evaluator of :class:`SpatialPolicy`'s
+        ``coarse`` steps."""
+        b = object.__new__(Branch)
+        b.flow, b.policy, b.cache, b.seed_mode = self.flow, self.policy, self.cache, self.seed_mode
+        b.n = max(16, int(round(factor * self.n)))
+        b.op = stability_operator(self.flow, b.n, cache=self.cache)
+        b.last = self.last
+        b.last = b.transfer(self.last, self)
+        return b
 
     def at(
         self,

@@ -320,6 +320,35 @@ def _edge(branch, Va, ea, Vb, eb, policy) -> float:
     return float(V)
 
 
+def _refine_edge(branch: Branch, cb: Branch, edge: float, side: list, policy, unrefined: list) -> float:
+    """The edge ``edge`` found at the coarse N of ``cb`` refined at ``branch``'s N: the coarse
+    saddle nearest to it carried over (:meth:`Branch.transfer`), then Newton on σ(V) = 0 with
+    dσ/dV = −Im k* (the envelope theorem), each step a saddle at the new V. NaN stays NaN; a
+    refinement that fails keeps the coarse edge, noted in ``unrefined``."""
+    if math.isnan(edge):
+        return edge
+    V, e_c = min(side, key=lambda t: abs(t[0] - edge))
+    try:
+        e = branch.transfer(e_c, cb)
+        for _ in range(20):
+            pred = e.k - 1j * (edge - V) / e.d2alpha
+            e_new = newton_saddle(branch, pred, edge, policy, start=e)
+            _check_same_family(e, pred, e_new)
+            V, e = edge, e_new
+            ds = -e.k.imag
+            step = -_ray_growth(e, V) / ds if ds != 0 else math.nan
+            if not math.isfinite(step):
+                break
+            edge = V + step
+            if abs(step) <= 1e-10 * max(abs(V), 1.0):
+                return float(edge)
+    except ChuteflowError as exc:
+        unrefined.append(f"the edge {edge:.6g} was not refined at N = {branch.n} ({exc})")
+        return edge
+    unrefined.append(f"the edge {edge:.6g} was not refined at N = {branch.n}")
+    return edge
+
+
 def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolicy) -> tuple[bool | None, str]:
     """Briggs' collapse check at the saddle ``e`` of the frame V (module docstring): the two
     roots of α(k) + ikV = α_V* + s, from k* ± √(2s/α''), followed as s grows until Re of the
@@ -614,6 +643,9 @@ def absolute_instability(
         return _stable(flow, scan, peak, strict)
     branch = Branch(flow, float(peak.k), policy, cache)
     e_peak = branch.last
+    # the continuation, the checks and the lab-frame steps at the coarse N; refined at N below
+    cb = branch.coarsened(policy.coarse) if policy.coarse < 1 else branch
+    e_peak_c = cb.last
     notes = []
     if not scan.converged:
         notes.append("the temporal branch scan is not converged")
@@ -621,12 +653,16 @@ def absolute_instability(
     growth_peak = float(e_peak.alpha.real)
     # the saddle at V_peak: on the real axis up to the refinement of the peak
     e_sad = newton_saddle(branch, e_peak.k, V_peak, policy, start=e_peak)
+    e_sad_c = e_sad if cb is branch else newton_saddle(cb, e_peak_c.k, V_peak, policy, start=e_peak_c)
     dV0 = policy.ray_step * max(abs(V_peak), 1e-3)
     # |k*| below which the family is at the branch point k = 0 (with σ < 1 % of the peak's)
     k_small = 0.05 * float(peak.k)
     unrefined: list[str] = []
-    down, edge_down, end_down = _continue(branch, e_sad, V_peak, -1.0, dV0, policy, k_small, unrefined)
-    up, edge_up, end_up = _continue(branch, e_sad, V_peak, +1.0, dV0, policy, k_small, unrefined)
+    down, edge_down, end_down = _continue(cb, e_sad_c, V_peak, -1.0, dV0, policy, k_small, unrefined)
+    up, edge_up, end_up = _continue(cb, e_sad_c, V_peak, +1.0, dV0, policy, k_small, unrefined)
+    if cb is not branch:
+        edge_down = _refine_edge(branch, cb, edge_down, down, policy, unrefined)
+        edge_up = _refine_edge(branch, cb, edge_up, up, policy, unrefined)
     notes.extend(unrefined)
     samples = sorted(down + up[1:], key=lambda t: t[0])
     c0 = math.nan
@@ -640,7 +676,7 @@ def absolute_instability(
             # α(0) = 0 (mass conservation); the ray there is the kinematic-wave speed c0
             # α'(k) = −i c0 + 2 α2 k + …: the linear term removed with α''
             k_bp = 2e-5 * float(peak.k)
-            e_bp = branch.at(complex(k_bp, 0.0), start=e_last)
+            e_bp = branch.at(complex(k_bp, 0.0), start=branch.transfer(e_last, cb))
             c0 = float(-(e_bp.dalpha - e_bp.d2alpha * k_bp).imag)
             edges[name] = c0
             notes.append(
@@ -657,10 +693,15 @@ def absolute_instability(
             )
     lab = [e for V, e in down if V == 0.0]
     e0 = lab[0] if lab else None
+    if e0 is not None and cb is not branch:
+        e0 = newton_saddle(branch, e0.k, 0.0, policy, start=branch.transfer(e0, cb))
     lab_pinch: bool | None = None
     lab_sheet = "principal"
     if e0 is None and lab_frame and growth_peak > 0:
         V_last, e_last = down[-1]
+        # at N itself: the saddles across the cut are resolved less well than the family's
+        # (at P4 the coarse N moves k* by 30 %)
+        e_last = branch.transfer(e_last, cb)
         _, e_lab, why = _continue_to_lab(branch, V_last, e_last, dV0, policy)
         if e_lab is not None:
             lab_pinch, why = _lab_pinch(branch, e_lab, growth_peak, policy)
@@ -698,7 +739,7 @@ def absolute_instability(
     pinch_V = math.nan
     if check_pinch and growth_peak > 0:
         pinch_V = V_peak
-        pinch, why = _pinch(branch, e_sad, V_peak, growth_peak, policy)
+        pinch, why = _pinch(cb, e_sad_c, V_peak, growth_peak, policy)
         if why:
             notes.append(why)
     e_conv = e0 if e0 is not None else e_sad
