@@ -125,3 +125,14 @@ def test_p1_p4_lab_frame_saddle_does_not_pinch(theta, nu0):
     assert res.converged, res.note
     assert "does not pinch the contour" in res.note
     assert res.to_dict()["lab_pinch"] is False
+
+
+def test_spatial_policy_coarse_is_checked():
+    """A fraction of N outside [0.3, 1] is a one-line error naming the parameter."""
+    import dataclasses
+
+    with pytest.raises(ParameterError, match="coarse"):
+        dataclasses.replace(DEFAULT_SPATIAL_POLICY, coarse=1.5)
+    with pytest.raises(ParameterError, match="coarse"):
+        dataclasses.replace(DEFAULT_SPATIAL_POLICY, coarse=0.0)
+    assert DEFAULT_SPATIAL_POLICY.coarse == 0.6

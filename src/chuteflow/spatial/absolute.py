@@ -53,6 +53,13 @@ two roots of α(k) + ikV_peak = α_V(k*) + s from k* ± √(2s/α''(k*)) as s gr
 when they end in opposite half-planes. Where the family reaches V = 0, the lab-frame
 saddle's Re α(k*₀) is the absolute growth rate.
 
+Resolution. The continuation, the edges' brackets and Briggs' check at V_peak run at the
+coarse N = ``SpatialPolicy.coarse`` × N (0.6: N = 48 for N = 80), where an evaluation of α(k)
+costs about a fifth; each edge is then refined at N (the coarse saddle nearest to it carried
+over, Newton on σ(V) = 0 with dσ/dV = −Im k*), and so are the kinematic-wave speed, the saddle
+of the temporal tests and the lab-frame steps. The edges at the paper's points agree with the
+all-N continuation to 7e-9 (P1's branch-point V₋), 4e-8 (P4's V₊) and 1e-10 elsewhere.
+
 The branch point. At the paper's points the family ends, on one side, at k* → 0 with σ → 0:
 the branch point k = 0 of κ = √(k²), where α(0) = 0 (mass conservation). The ray there is
 the kinematic-wave speed c0 = dQ0/dρ̄0 (Appendix B; −Im α'(0) = −Im α1 of
@@ -116,7 +123,8 @@ class AbsoluteResult:
     kinematic_speed : float
         c0, where the family ends at the branch point k = 0 (NaN if it does not).
     rays : tuple of ndarray
-        (V, σ(V), Re k*, Im k*) along the continuation.
+        (V, σ(V), Re k*, Im k*) along the continuation (at the coarse N of
+        :attr:`SpatialPolicy.coarse`, 0.6 N by default; the edges are refined at N).
     n : int
         Resolution N of the operator.
     drift, tail : float
@@ -629,8 +637,8 @@ def absolute_instability(
     ``lab_frame=True``: where the saddle family leaves the principal sheet before V = 0 (the
     cut Re k = 0, or the branch point k = 0), continue it to V = 0 on the continued sheet and
     check its pinch (module docstring, "The lab frame"; :attr:`AbsoluteResult.lab_pinch`).
-    Off by default: it costs 1.5–3 times the rest of the analysis at the paper's points, where
-    none of these saddles pinches decidedly.
+    Off by default: it costs 2–5 times the rest of the analysis at the paper's points (its steps
+    run at the full N), where none of these saddles pinches decidedly.
     """
     flow = check_flow(flow)
     policy = DEFAULT_SPATIAL_POLICY if policy is None else policy
@@ -643,7 +651,7 @@ def absolute_instability(
         return _stable(flow, scan, peak, strict)
     branch = Branch(flow, float(peak.k), policy, cache)
     e_peak = branch.last
-    # the continuation, the checks and the lab-frame steps at the coarse N; refined at N below
+    # the continuation and Briggs' check at the coarse N; the edges refined at N below
     cb = branch.coarsened(policy.coarse) if policy.coarse < 1 else branch
     e_peak_c = cb.last
     notes = []
