@@ -99,6 +99,7 @@ def test_p4_edges_at_the_coarse_continuation_equal_the_full_one():
     flow = solve_steady(14.0, 0.05, ChuteModel(roughness=0.05))
     fast = absolute_instability(flow)
     full = absolute_instability(flow, policy=dataclasses.replace(DEFAULT_SPATIAL_POLICY, coarse=1.0))
-    assert fast.converged and full.converged
+    assert fast.converged, fast.note
+    assert full.converged, full.note
     assert fast.v_minus == pytest.approx(full.v_minus, rel=1e-7)
     assert fast.v_plus == pytest.approx(full.v_plus, rel=1e-7)
