@@ -69,6 +69,7 @@ ABSOLUTE_KEYS = (
     "pinch",
     "pinch_v",
     "kinematic_speed",
+    "lab_pinch",
     "n",
     "drift",
     "tail",
@@ -180,6 +181,12 @@ def absolute_cmd(
     nu0: float = _opt_nu0(),
     model: ChuteModel = MODEL_OPTIONS_HERE,
     nu_top: float = typer.Option(1e-9, "--nu-top", help=_NU_TOP_HELP),
+    lab_frame: bool = typer.Option(
+        False,
+        "--lab-frame",
+        help="Where the saddle family leaves the principal sheet before V = 0, continue it to the "
+        "lab frame across the branch cut and check that its saddle pinches (slower).",
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print one JSON object."),
 ) -> None:
     """Absolute or convective instability (Briggs–Bers): the packet's edges and the V = 0 saddle."""
@@ -188,7 +195,7 @@ def absolute_cmd(
     console = _console()
     flow = _steady(console, theta, nu0, model, nu_top)
     with console.status("saddle points along the rays x = V t (Briggs–Bers)"):
-        res = absolute_instability(flow, strict=False)
+        res = absolute_instability(flow, strict=False, lab_frame=lab_frame)
     if not res.converged:
         _warn(f"verdict {res.verdict!r} is not converged ({res.note})")
     out = _summary(res, flow)

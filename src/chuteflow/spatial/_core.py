@@ -38,6 +38,10 @@ class SpatialPolicy:
     pinch_margin : float
         The Briggs collapse check raises Re α from the saddle's to the temporal peak's growth
         times (1 + ``pinch_margin``) (0.5).
+    coarse : float
+        The saddle family's continuation in V, the collapse checks and the lab-frame steps run
+        at N = ``coarse`` × N (0.6; 1 turns it off); the edges, the kinematic-wave speed, the
+        lab-frame saddle and the temporal tests are then refined at N itself.
     """
 
     k_rtol: float = 1e-11
@@ -46,6 +50,7 @@ class SpatialPolicy:
     rejection: RejectionPolicy = DEFAULT_POLICY
     ray_step: float = 0.1
     pinch_margin: float = 0.5
+    coarse: float = 0.6
 
     def __post_init__(self):
         if not (0 < self.k_rtol < 1e-3):
@@ -62,6 +67,8 @@ class SpatialPolicy:
             raise ParameterError(f"ray_step = {self.ray_step!r} is outside (0, 0.5]: relative step in V")
         if not (0 < self.pinch_margin <= 10):
             raise ParameterError(f"pinch_margin = {self.pinch_margin!r} is outside (0, 10]")
+        if not (0.3 <= self.coarse <= 1):
+            raise ParameterError(f"coarse = {self.coarse!r} is outside [0.3, 1]: a fraction of N")
 
 
 DEFAULT_SPATIAL_POLICY = SpatialPolicy()
@@ -89,22 +96,52 @@ class Branch:
         V = np.concatenate([mode.fields[f] for f in self.op.fields])
         self.last = eigenpair_at(self.op, complex(k_real), mode.alpha, V / self.op.col_eq, derivatives=2)
 
+    def transfer(self, e: ComplexEigenpair, other: Branch, sheet: str = "principal") -> ComplexEigenpair:
+        """The eigenpair ``e`` of ``other`` (another resolution of the same flow) refined at this
+        branch's N: its eigenvector interpolated, Newton at the same k."""
+        if other.n == self.n:
+            return e
+        nf = len(self.op.fields)
+        w = interp_vector(e.w * other.op.col_eq, nf, other.n, self.n) / self.op.col_eq
+        out = eigenpair_at(self.op, e.k, e.alpha, w, derivatives=2, sheet=sheet)
+        self.last = out
+        return out
+
+    def coarsened(self, factor: float) -> Branch:
+        """The same branch at N = round(``factor`` N) (at least 16), started from the seed's
+        eigenpair interpolated there: the cheaper evaluator of :class:`SpatialPolicy`'s
+        ``coarse`` steps."""
+        b = object.__new__(Branch)
+        b.flow, b.policy, b.cache, b.seed_mode = self.flow, self.policy, self.cache, self.seed_mode
+        b.n = max(16, int(round(factor * self.n)))
+        b.op = stability_operator(self.flow, b.n, cache=self.cache)
+        b.last = self.last
+        b.last = b.transfer(self.last, self)
+        return b
+
     def at(
-        self, k: complex, *, start: ComplexEigenpair | None = None, derivatives: int = 2
+        self,
+        k: complex,
+        *,
+        start: ComplexEigenpair | None = None,
+        derivatives: int = 2,
+        sheet: str = "principal",
     ) -> ComplexEigenpair:
-        """The eigenpair at ``k`` (from ``start``, default the last one evaluated), with α' and α''."""
+        """The eigenpair at ``k`` (from ``start``, default the last one evaluated), with α' and α''.
+        ``sheet``: the root κ(k) of the far-field condition (:data:`~chuteflow.stability.
+        complex_k.SHEETS`); on ``"principal"`` the cut Re k = 0 stops the branch."""
         s = self.last if start is None else start
         guess = s.alpha + s.dalpha * (complex(k) - s.k)
-        if not (complex(k).real > 0):
+        if sheet == "principal" and not (complex(k).real > 0):
             raise ConvergenceError(
                 f"k = {complex(k):.6g} reached the branch cut Re k = 0 of the far-field decay "
                 "rate: the branch cannot be continued there"
             )
-        e = eigenpair_at(self.op, k, guess, s.w, derivatives=derivatives)
+        e = eigenpair_at(self.op, k, guess, s.w, derivatives=derivatives, sheet=sheet)
         self.last = e
         return e
 
-    def convergence(self, e: ComplexEigenpair) -> tuple[float, float, int]:
+    def convergence(self, e: ComplexEigenpair, sheet: str = "principal") -> tuple[float, float, int]:
         """(drift, tail, N') of the eigenpair: |α(k; N) − α(k; N')| with N' = 0.8 N and the
         Chebyshev tail of its eigenvector, the temporal modes' two tests."""
         n2 = check_n(self.n)
@@ -112,7 +149,7 @@ class Branch:
         nf = len(self.op.fields)
         w2 = interp_vector(e.w * self.op.col_eq, nf, self.n, n2) / op2.col_eq
         try:
-            e2 = eigenpair_at(op2, e.k, e.alpha, w2, derivatives=0)
+            e2 = eigenpair_at(op2, e.k, e.alpha, w2, derivatives=0, sheet=sheet)
             drift = abs(e2.alpha - e.alpha)
         except ConvergenceError:
             drift = math.inf
@@ -122,19 +159,28 @@ class Branch:
 
 
 def newton_k(
-    branch: Branch, k0: complex, target: complex, policy: SpatialPolicy, start=None, V: float = 0.0
+    branch: Branch,
+    k0: complex,
+    target: complex,
+    policy: SpatialPolicy,
+    start=None,
+    V: float = 0.0,
+    sheet: str = "principal",
+    max_step: float = math.inf,
 ) -> ComplexEigenpair:
     """The root k of α(k) + ikV = ``target`` near ``k0`` by Newton (k ← k − (α + ikV − target)/(α' + iV));
-    V = 0: the spatial branch α(k) = target."""
+    V = 0: the spatial branch α(k) = target. ``sheet`` and ``max_step`` as in :func:`newton_saddle`."""
     k = complex(k0)
-    e = branch.at(k, start=start)
+    e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
         d = e.dalpha + 1j * V
         if d == 0 or not np.isfinite(d):
             break
         dk = -(e.alpha + 1j * k * V - target) / d
+        if abs(dk) > max_step:
+            break
         k = k + dk
-        e = branch.at(k, start=e)
+        e = branch.at(k, start=e, sheet=sheet)
         res = abs(e.alpha + 1j * k * V - target)
         # the step, or the residual at the round-off of the eigenvalue (~1e-15 of rates ~1e-3)
         if abs(dk) <= policy.k_rtol * max(abs(k), 1e-12) or res <= 5e-14:
@@ -146,17 +192,27 @@ def newton_k(
 
 
 def newton_saddle(
-    branch: Branch, k0: complex, V: float, policy: SpatialPolicy, start=None
+    branch: Branch,
+    k0: complex,
+    V: float,
+    policy: SpatialPolicy,
+    start=None,
+    sheet: str = "principal",
+    max_step: float = math.inf,
 ) -> ComplexEigenpair:
-    """The saddle point of α(k) + ikV near ``k0``: α'(k) = −iV, by Newton (k ← k − (α' + iV)/α'')."""
+    """The saddle point of α(k) + ikV near ``k0``: α'(k) = −iV, by Newton (k ← k − (α' + iV)/α'').
+    ``sheet`` as in :meth:`Branch.at`; a Newton step longer than ``max_step`` gives up (the
+    start is too far from a saddle)."""
     k = complex(k0)
-    e = branch.at(k, start=start)
+    e = branch.at(k, start=start, sheet=sheet)
     for _ in range(policy.maxiter):
         if e.d2alpha == 0 or not np.isfinite(e.d2alpha):
             break
         dk = -(e.dalpha + 1j * V) / e.d2alpha
+        if abs(dk) > max_step:
+            break
         k = k + dk
-        e = branch.at(k, start=e)
+        e = branch.at(k, start=e, sheet=sheet)
         if abs(dk) <= policy.saddle_rtol * max(abs(k), 1e-12):
             return e
     raise ConvergenceError(
