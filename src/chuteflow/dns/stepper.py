@@ -24,12 +24,13 @@ from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError, ParameterError
 from .columns import ColumnPreconditioner
+from .coupled import CoupledPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
 __all__ = ["NewtonSettings", "Stepper", "StepInfo", "PRECONDITIONERS"]
 
 #: Preconditioners of the Newton–Krylov solve (:class:`NewtonSettings`).
-PRECONDITIONERS = ("auto", "mean", "columns")
+PRECONDITIONERS = ("auto", "mean", "columns", "coupled")
 
 
 @dataclass(frozen=True)
@@ -164,7 +165,7 @@ class Stepper:
     def __init__(self, disc: Discretisation, settings: NewtonSettings | None = None):
         self.disc = disc
         self.settings = settings or NewtonSettings()
-        self._lus: MeanBlocks | ColumnPreconditioner | None = None
+        self._lus: MeanBlocks | ColumnPreconditioner | CoupledPreconditioner | None = None
         self._lu_key: tuple | None = None
         self.factorisations = 0
         self._age = 0
@@ -186,7 +187,9 @@ class Stepper:
         return (np.exp(d.to_physical(C[0])), d.to_physical(C[1]), d.to_physical(C[2]), d.to_physical(C[3]))
 
     def _factor(self, C, dt, bdf, history):
-        if self.columns:
+        if self.settings.preconditioner == "coupled" and self.disc.modes:
+            self._lus = CoupledPreconditioner.build(self.disc, C, history, dt, bdf)
+        elif self.columns:
             self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf, self.settings.column_order)
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
@@ -330,7 +333,8 @@ class Stepper:
                 self._base_krylov = count[0]
             # the column preconditioner is dear to build: refreshed when GMRES needs twice
             # what it needed right after the last build (and more than `refresh_krylov`)
-            limit = max(s.refresh_krylov, 2 * self._base_krylov) if self.columns else s.refresh_krylov
+            dear = self.columns or s.preconditioner == "coupled"
+            limit = max(s.refresh_krylov, 2 * self._base_krylov) if dear else s.refresh_krylov
             if it > s.refresh_after or (count[0] > limit and self._age >= s.refresh_every):
                 self._factor(d.unpack(z), dt, bdf, history)
         rn = float(np.max(np.abs(r)))
