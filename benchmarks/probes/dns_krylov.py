@@ -151,7 +151,10 @@ def main(argv=None):
         C, prev, h_prev, t = ck["C"], tuple(ck["prev"]), float(ck["scalars"][3]), float(ck["scalars"][0])
     with np.load(args.state) as ck:
         dt_run = float(ck["scalars"][2])
-    print(f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}", flush=True)
+    print(
+        f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}",
+        flush=True,
+    )
     names = args.variants.split(",") if args.variants else list(VARIANTS)
     for dt in (float(v) for v in args.dt.split(",")):
         first = None

@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sps
-from scipy.sparse.linalg import splu
 
 from .columns import PRIMITIVE_JETS, jet_coefficients
 from .discretisation import BDF2, UNKNOWNS, Discretisation
@@ -68,7 +67,9 @@ def coupled_blocks(
     return blocks
 
 
-def coupled_matrix(disc: Discretisation, coefficients: dict[str, np.ndarray], reach: int = 1) -> sps.csc_matrix:
+def coupled_matrix(
+    disc: Discretisation, coefficients: dict[str, np.ndarray], reach: int = 1
+) -> sps.csc_matrix:
     """The complex sparse matrix of the preconditioner (:func:`coupled_blocks` for every mode),
     unknowns ordered (m = −M … M, field, y_j)."""
     M = disc.modes
