@@ -86,8 +86,8 @@ def test_block_elimination_solves_the_coupled_matrix(p1):
 
 def test_newton_with_coupled_reaches_the_same_steps(p1):
     """Three BDF2 steps at a finite wave: the coupled and the x-mean preconditioners give the
-    same solution to the Newton tolerance, the coupled one (switched to at the first GMRES
-    solve, ``coupled_krylov=0``) with fewer GMRES iterations."""
+    same solution to the Newton tolerance, the coupled one (from the first step,
+    ``coupled_krylov=0``) with fewer GMRES iterations."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
     C0 = _wave(d, p1, 0.1)
     out = {}
@@ -103,7 +103,7 @@ def test_newton_with_coupled_reaches_the_same_steps(p1):
             hist = (st.physical(C_new), hist[0])
             C, first = C_new, False
         out[name] = (C, krylov)
-        assert st.coupled == (name == "coupled")  # switched at the first GMRES solve
+        assert st.coupled == (name == "coupled")
     assert np.abs(out["mean"][0] - out["coupled"][0]).max() <= 1e-8
     assert out["coupled"][1] <= out["mean"][1]
 

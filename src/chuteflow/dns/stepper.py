@@ -81,7 +81,8 @@ class NewtonSettings:
         seconds per application (docs/dns.md, *Where a nonlinear step's time goes*).
     coupled_krylov : int
         GMRES iterations of one solve that make ``"coupled"`` leave the x-mean blocks (at any
-        Δt: the coupled build costs about three x-mean builds).
+        Δt: the coupled build costs about three x-mean builds); 0: the coupled blocks from
+        the first step.
     switch_krylov : int
         GMRES iterations of one solve that make ``"auto"`` switch to ``"columns"``.
     column_order : {2, 4}
@@ -187,8 +188,9 @@ class Stepper:
         #: ``preconditioner="columns"``, after the switch with ``"auto"``).
         self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
         #: Whether the mode-coupling preconditioner is in use (``"coupled"``, after the
-        #: linear phase).
-        self.coupled = False
+        #: linear phase; from the start with ``coupled_krylov=0``).
+        self.coupled = self.settings.preconditioner == "coupled" and self.settings.coupled_krylov == 0
+        self.coupled = self.coupled and disc.modes >= 1
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
         #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
         self.switch_dt = math.inf
