@@ -11,15 +11,17 @@ m = −M … M it couples mode m to m' through the harmonic ĉ_{m−m'} of the c
 
 with the x-derivatives exact in every mode (the transport of ln ν included). The x-mean
 preconditioner keeps m' = m only (and the mean state's coefficients); this one keeps
-|m − m'| ≤ ``reach`` (a block-banded matrix in the mode index) and the per-mode top
-conditions of u, v, T (eq. (4.5)) exactly. It is factorised once by
-:func:`scipy.sparse.linalg.splu` and reused across steps; docs/dns.md, *Where a nonlinear
-step's time goes*.
+|m − m'| ≤ ``reach`` (a block-banded matrix in the mode index, :func:`coupled_blocks`) and
+the per-mode top conditions of u, v, T (eq. (4.5)) exactly. :class:`CoupledPreconditioner`
+(reach 1) factorises it by block elimination and is reused across steps;
+:func:`coupled_matrix` assembles any reach as one sparse matrix (a reference for the tests,
+and the measurement of reach 2). The uniform mass source λ of the mode-0 mass rows is left
+out, as in the other preconditioners. docs/dns.md, *Where a nonlinear step's time goes*.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 import scipy.sparse as sps
@@ -104,13 +106,13 @@ class CoupledPreconditioner:
     """
 
     disc: Discretisation
-    blocks: np.ndarray
+    blocks: InitVar[np.ndarray]  # (M + 1, 3, size, size) of coupled_blocks; not kept
     _sinv: list = field(init=False, repr=False)
     _k: list = field(init=False, repr=False)
     _w: list = field(init=False, repr=False)
 
-    def __post_init__(self):
-        B = self.blocks  # (M + 1, 3, size, size): q = −1 (U), 0 (D), +1 (L)
+    def __post_init__(self, blocks):
+        B = blocks  # q = −1 (U), 0 (D), +1 (L)
         M = B.shape[0] - 1
         U, D, L = B[:, 0], B[:, 1], B[:, 2]
         sinv: list = [None] * (M + 1)

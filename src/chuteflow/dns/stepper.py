@@ -76,9 +76,9 @@ class NewtonSettings:
         ``"coupled"``: ``"mean"`` until one GMRES solve needs more than ``coupled_krylov``
         iterations, then the Jacobian at the local state with each Fourier mode coupled to
         its neighbours ±1 through the first x-harmonics of the coefficients
-        (:class:`~chuteflow.dns.coupled.CoupledPreconditioner`): 3–5 times fewer GMRES
-        iterations than ``"mean"`` at a ±20 % wave and Δt = 32–64, for about twice the
-        seconds per application (docs/dns.md, *Where a nonlinear step's time goes*).
+        (:class:`~chuteflow.dns.coupled.CoupledPreconditioner`): 4–5.5 times fewer GMRES
+        iterations than ``"mean"`` at a ±20 % wave and Δt = 32–64, for three to four times
+        the seconds per application (docs/dns.md, *Where a nonlinear step's time goes*).
     coupled_krylov : int
         GMRES iterations of one solve that make ``"coupled"`` leave the x-mean blocks (at any
         Δt: the coupled build costs about three x-mean builds); 0: the coupled blocks from
@@ -137,6 +137,8 @@ class NewtonSettings:
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(f"dt_tol = {self.dt_tol!r}: in [0, 1) (0 keeps Δt fixed; e.g. 1e-3)")
+        if self.coupled_krylov < 0:
+            raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
         if self.dt_krylov < 1:
             raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
         if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
