@@ -3,8 +3,9 @@
 Two stages (docs/dns.md, *Where a nonlinear step's time goes*):
 
 ``--make-state FILE``: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), L = 1000, from noise of
-amplitude 1e-3 with the time-step control (``dt_tol`` = 1e-3, Δt from 4), ``--nx`` ×
-``--ny``, up to ``--time`` (27000: ρ̄ ≈ ±20 %, the nonlinear phase); the final state is
+amplitude 1e-3 with the time-step control (``dt_tol`` = 1e-3, Δt from 4) and
+``--preconditioner``, ``--nx`` × ``--ny``, up to ``--time`` (27000: ρ̄ ≈ ±20 %, the nonlinear
+phase), printing the wave and its spectrum's tails there; the final state is
 written with the simulation's own :meth:`~chuteflow.dns.simulation.DnsState.save` (C and the
 previous level), so that the measurement can be repeated on the same state.
 
@@ -17,7 +18,8 @@ state's distance to the first variant's (they solve the same equations to the Ne
 tolerance). The machine is shared: compare the seconds only within one run.
 
 Run: ``python benchmarks/probes/dns_krylov.py --make-state /tmp/p1_41x64.npz --nx 41 --ny 64``
-then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64``.
+then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64
+--dt 16,32,64 --variants mean,coupled`` (the table of docs/dns.md).
 """
 
 from __future__ import annotations
@@ -49,11 +51,12 @@ VARIANTS = {
 }
 
 
-def simulation(nx: int, ny: int, t_end: float) -> DnsSimulation:
+def simulation(nx: int, ny: int, t_end: float, preconditioner: str = "auto") -> DnsSimulation:
     flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+    settings = NewtonSettings(dt_tol=1e-3, preconditioner=preconditioner)
     return DnsSimulation(
         flow, 1000.0, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
-        init="noise", amplitude=1e-3, snapshots=2, settings=NewtonSettings(dt_tol=1e-3),
+        init="noise", amplitude=1e-3, snapshots=2, settings=settings,
     )  # fmt: skip
 
 
@@ -129,6 +132,7 @@ def main(argv=None):
     ap.add_argument("--ny", type=int, default=64)
     ap.add_argument("--make-state", default=None, help="run from noise to --time and save the state here")
     ap.add_argument("--time", type=float, default=27000.0)
+    ap.add_argument("--preconditioner", default="auto", help="of the --make-state run")
     ap.add_argument("--state", default=None, help="measure from this saved state")
     ap.add_argument("--dt", default="16", help="comma-separated Δt of the measured steps")
     ap.add_argument("--steps", type=int, default=4)
@@ -137,7 +141,7 @@ def main(argv=None):
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
     if args.make_state:
-        sim = simulation(args.nx, args.ny, args.time)
+        sim = simulation(args.nx, args.ny, args.time, args.preconditioner)
         t0 = time.perf_counter()
         state = sim.run()
         state.save(args.make_state, sim.key())
