@@ -3,8 +3,9 @@
 P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), L = 1000, from noise of amplitude 1e-3 in the frame of
 the eigenmode's phase velocity, ``--nx`` × ``--ny``, Δt = ``--dt`` as the shortest step and
 ``NewtonSettings(dt_tol=--dt-tol)`` (0: the fixed Δt of the earlier runs), stopped by
-``SaturationStop(0.02)``. Resumable: the state is checkpointed to ``--checkpoint`` every 20 s,
-so the run can be made of pieces (``timeout 540 python … ; python …`` continues). Prints every
+``SaturationStop(--saturation-tol)`` (0.02; 0: at ``--time``). Resumable: the state is
+checkpointed to ``--checkpoint`` every 20 s, so the run can be made of pieces
+(``timeout 540 python … ; python …`` continues). Prints every
 ``--every`` seconds the time, step, Δt, wave amplitude, Newton and GMRES iterations per step,
 and at the end the wave (ρ̄ min/max over its mean), the wall time of this piece and the total
 wall time, and the mass drift.
@@ -66,6 +67,9 @@ def main(argv=None):
     ap.add_argument("--preconditioner", default="auto")
     ap.add_argument("--checkpoint", default="dns_saturation_run.ck.npz")
     ap.add_argument("--every", type=float, default=15.0)
+    ap.add_argument(
+        "--saturation-tol", type=float, default=0.02, help="SaturationStop's tolerance; 0: run to --time"
+    )
     args = ap.parse_args(argv)
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
@@ -86,7 +90,8 @@ def main(argv=None):
     sim.stepper.step = counted  # type: ignore[method-assign]
     t0 = time.perf_counter()
     state = sim.run(
-        [Progress(args.every, infos), SaturationStop(0.02, interval=150.0)],
+        [Progress(args.every, infos)]
+        + ([SaturationStop(args.saturation_tol, interval=150.0)] if args.saturation_tol > 0 else []),
         checkpoint=args.checkpoint,
         checkpoint_every=20.0,
     )

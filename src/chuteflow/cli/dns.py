@@ -64,6 +64,12 @@ def dns(
         help="Time-step control (docs/dns.md): 0 keeps --dt; e.g. 1e-3 lengthens the step "
         "where the wave changes slowly.",
     ),
+    preconditioner: str = typer.Option(
+        "auto",
+        "--preconditioner",
+        help="Newton–Krylov preconditioner (docs/dns.md): auto, mean, columns or coupled "
+        "(neighbouring Fourier modes coupled: fewer GMRES iterations at large amplitude).",
+    ),
     resolution_tol: float = typer.Option(
         1e-4,
         "--resolution-tol",
@@ -119,7 +125,7 @@ def dns(
                 resolution_tol=resolution_tol,
                 out=out,
                 progress=progress,
-                settings=_step_control(dt_tol),
+                settings=_step_control(dt_tol, preconditioner),
             )
     if plot is not None:
         from chuteflow.figures.dns import plot_dns, save
@@ -339,8 +345,9 @@ def _reduced_waves(rows: list, model: ChuteModel, settings, con) -> None:
             r[f"reduced_{k}"] = v if isinstance(v, (str, bool)) else _num(float(v))
 
 
-def _step_control(dt_tol: float):
-    """The Newton settings of ``--dt-tol`` (None: the defaults, a fixed Δt)."""
+def _step_control(dt_tol: float, preconditioner: str = "auto"):
+    """The Newton settings of ``--dt-tol`` and ``--preconditioner`` (None: the defaults, a
+    fixed Δt)."""
     import math
 
     from chuteflow.dns.stepper import NewtonSettings
@@ -350,4 +357,6 @@ def _step_control(dt_tol: float):
         raise ParameterError(
             f"dt_tol = {dt_tol!r} is outside [0, 1): the time-step control's tolerance (0 keeps the step)"
         )
-    return NewtonSettings(dt_tol=dt_tol) if dt_tol else None
+    if not dt_tol and preconditioner == "auto":
+        return None
+    return NewtonSettings(dt_tol=dt_tol, preconditioner=preconditioner)

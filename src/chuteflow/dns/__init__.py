@@ -5,8 +5,9 @@ Johnson–Jackson floor (2.9), (2.10), on a slope periodic in x over a length L,
 to the dilute top of the steady flow. Unknowns s = ln ν, u, v, T; Fourier (x, 3/2-rule
 padding) × Chebyshev (y) collocation; BDF2 steps solved by Newton–Krylov preconditioned by
 the per-Fourier-mode linearisation about the x-averaged state in the linear phase and by
-the Jacobian of each x-column at the local state (:mod:`.columns`) at large amplitude. The residual and the
-linearisation are derived from :mod:`chuteflow.equations` (:mod:`.residual`).
+the Jacobian of each x-column at the local state (:mod:`.columns`) at large amplitude, or, as an
+option, by the local Jacobian with neighbouring Fourier modes coupled (:mod:`.coupled`). The
+residual and the linearisation are derived from :mod:`chuteflow.equations` (:mod:`.residual`).
 
 ``DnsSimulation(flow, length, ...).run(trackers)`` → a :class:`DnsState` (saves and loads
 itself; trackers from :mod:`chuteflow.trackers`, shared with the 1D model);
@@ -18,6 +19,7 @@ tails, mass drift, status); ``summary(ds)`` → the JSON scalars of ``chuteflow 
 
 from .api import simulate, summary
 from .columns import ColumnPreconditioner
+from .coupled import CoupledPreconditioner
 from .diagnostics import VERDICTS, WavePolicy, bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
 from .residual import compiled_residuals, evaluate_residuals
@@ -29,6 +31,7 @@ from .waves import WaveMapSettings, map_waves
 __all__ = [
     "INITS",
     "ColumnPreconditioner",
+    "CoupledPreconditioner",
     "DnsSetup",
     "DnsSimulation",
     "WaveMapSettings",

@@ -33,7 +33,13 @@ from scipy.sparse.linalg import splu
 
 from .discretisation import BDF2, UNKNOWNS, Discretisation
 
-__all__ = ["ColumnPreconditioner", "PRIMITIVE_JETS", "column_coefficients", "column_matrix"]
+__all__ = [
+    "ColumnPreconditioner",
+    "PRIMITIVE_JETS",
+    "column_coefficients",
+    "column_matrix",
+    "jet_coefficients",
+]
 
 #: The jets of s, u, v, T the pointwise rows depend on, with their orders (b in x, c in y).
 PRIMITIVE_JETS = tuple(
@@ -70,6 +76,14 @@ def column_coefficients(
     exp(ŝ_0(y_j)) as :meth:`Discretisation.residual` divides their modes. Evaluated on the
     padded grid, then projected onto the modes m ≤ M and taken at the 2M + 1 points x_i.
     """
+    padded = jet_coefficients(disc, C, history, dt, bdf, rel_step)
+    return {name: _at_points(disc, A) for name, A in padded.items()}
+
+
+def jet_coefficients(
+    disc: Discretisation, C: np.ndarray, history: tuple, dt: float, bdf=BDF2, rel_step: float = 1e-7
+) -> dict[str, np.ndarray]:
+    """The coefficients of :func:`column_coefficients` on the padded grid (4, N+1, nxp)."""
     prim = disc.primitive_jets(C)
     inflow = ~(prim["v"][-1] > 0)  # the upwind choice at the top, kept while differentiating
     R0 = disc.pointwise_rows(disc.state_jets(prim), history, dt, bdf, inflow)
@@ -83,7 +97,7 @@ def column_coefficients(
         pert[name] = base + h
         A = (disc.pointwise_rows(disc.state_jets(pert), history, dt, bdf, inflow) - R0) / h
         A[0, 1 : last + 1] /= nubar[1 : last + 1, None]
-        out[name] = _at_points(disc, A)
+        out[name] = A
     return out
 
 

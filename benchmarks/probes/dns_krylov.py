@@ -1,0 +1,191 @@
+"""Where a nonlinear step's time goes: GMRES iterations and seconds per preconditioner.
+
+Two stages (docs/dns.md, *Where a nonlinear step's time goes*):
+
+``--make-state FILE``: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), L = 1000, from noise of
+amplitude 1e-3 with the time-step control (``dt_tol`` = 1e-3, Δt from 4) and
+``--preconditioner``, ``--nx`` × ``--ny``, up to ``--time`` (27000: ρ̄ ≈ ±20 %, the nonlinear
+phase), printing the wave and its spectrum's tails there; the final state is
+written with the simulation's own :meth:`~chuteflow.dns.simulation.DnsState.save` (C and the
+previous level), so that the measurement can be repeated on the same state.
+
+``--state FILE``: from that state, ``--steps`` implicit steps of Δt = ``--dt`` (the
+control's step of the nonlinear phase, 16) once per preconditioner variant, each with a
+fresh :class:`~chuteflow.dns.Stepper` (the first step includes the build). Prints per
+variant the GMRES iterations, residual evaluations and preconditioner applications per
+step, the seconds per step (first and later) and the seconds of the build, with the end
+state's distance to the first variant's (they solve the same equations to the Newton
+tolerance). The machine is shared: compare the seconds only within one run.
+
+Run: ``python benchmarks/probes/dns_krylov.py --make-state /tmp/p1_41x64.npz --nx 41 --ny 64``
+then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64
+--dt 16,32,64 --variants mean,coupled`` (the table of docs/dns.md).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+import warnings
+from pathlib import Path
+
+if __package__ in (None, ""):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "src"))
+
+import numpy as np
+
+from chuteflow._threads import limit_blas_threads
+from chuteflow.closures import ChuteModel
+from chuteflow.dns import DnsSimulation, NewtonSettings, Stepper
+from chuteflow.dns.setup import history_coefficients
+from chuteflow.steady import solve_steady
+
+VARIANTS = {
+    "mean": dict(preconditioner="mean"),
+    "columns": dict(preconditioner="columns"),
+    # the coupled blocks from the first step (by default they replace the x-mean ones once a
+    # GMRES solve needs more than coupled_krylov = 20 iterations)
+    "coupled": dict(preconditioner="coupled", coupled_krylov=0),
+}
+
+
+def simulation(nx: int, ny: int, t_end: float, preconditioner: str = "auto") -> DnsSimulation:
+    flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+    settings = NewtonSettings(dt_tol=1e-3, preconditioner=preconditioner)
+    return DnsSimulation(
+        flow, 1000.0, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
+        init="noise", amplitude=1e-3, snapshots=2, settings=settings,
+    )  # fmt: skip
+
+
+def wave(sim: DnsSimulation, C: np.ndarray) -> str:
+    rho = sim.disc.depth_integrals(C)[0]
+    tails = sim.resolution(C)
+    return (
+        f"ρ̄ {rho.min() / rho.mean() - 1:+.4f} … {rho.max() / rho.mean() - 1:+.4f}; "
+        f"x_tail {tails['x_tail']:.1e}, y_tail {tails['y_tail']:.1e}"
+    )
+
+
+class Counted:
+    """Counts the residual evaluations and preconditioner applications of a stepper."""
+
+    def __init__(self, stepper: Stepper):
+        self.residuals = self.applies = 0
+        self.apply_s = self.residual_s = 0.0
+        d = stepper.disc
+        res = d.residual
+
+        def residual(*a, **k):
+            t0 = time.perf_counter()
+            out = res(*a, **k)
+            self.residual_s += time.perf_counter() - t0
+            self.residuals += 1
+            return out
+
+        object.__setattr__(d, "residual", residual)
+        self._restore = lambda: object.__delattr__(d, "residual")
+        factor = stepper._factor
+
+        def factor_(*a, **k):
+            t0 = time.perf_counter()
+            factor(*a, **k)
+            self.build_s += time.perf_counter() - t0
+            lus = stepper._lus
+            app = lus.apply
+
+            def apply(R):
+                t1 = time.perf_counter()
+                out = app(R)
+                self.apply_s += time.perf_counter() - t1
+                self.applies += 1
+                return out
+
+            object.__setattr__(lus, "apply", apply)
+
+        self.build_s = 0.0
+        stepper._factor = factor_  # type: ignore[method-assign]
+
+
+def measure(sim, settings, C, prev, h_prev, dt, n):
+    st = Stepper(sim.disc, settings)
+    cnt = Counted(st)
+    rows = []
+    try:
+        for _ in range(n):
+            now = st.physical(C)
+            guess = C + (dt / h_prev) * (C - history_coefficients(sim.disc, prev))
+            t0 = time.perf_counter()
+            C_new, info = st.step(C, (now, prev), dt, guess=guess, ratio=dt / h_prev)
+            rows.append((time.perf_counter() - t0, info.newton, info.krylov))
+            prev, C, h_prev = now, C_new, dt
+    finally:
+        cnt._restore()
+    return np.array(rows), cnt, st.factorisations, C
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--nx", type=int, default=41)
+    ap.add_argument("--ny", type=int, default=64)
+    ap.add_argument("--make-state", default=None, help="run from noise to --time and save the state here")
+    ap.add_argument("--time", type=float, default=27000.0)
+    ap.add_argument("--preconditioner", default="auto", help="of the --make-state run")
+    ap.add_argument("--state", default=None, help="measure from this saved state")
+    ap.add_argument("--dt", default="16", help="comma-separated Δt of the measured steps")
+    ap.add_argument("--steps", type=int, default=4)
+    ap.add_argument("--variants", default=None, help="comma-separated names (default: all)")
+    args = ap.parse_args(argv)
+    limit_blas_threads(1)
+    warnings.simplefilter("ignore", RuntimeWarning)
+    if args.make_state:
+        sim = simulation(args.nx, args.ny, args.time, args.preconditioner)
+        t0 = time.perf_counter()
+        state = sim.run()
+        state.save(args.make_state, sim.key())
+        print(
+            f"state at t = {state.t:.0f} ({state.status}), {state.step} steps, "
+            f"{time.perf_counter() - t0:.1f} s: {wave(sim, state.C)}",
+            flush=True,
+        )
+        if not args.state:
+            return
+    sim = simulation(args.nx, args.ny, args.time)
+    with np.load(args.state) as ck:
+        C, prev, h_prev, t = ck["C"], tuple(ck["prev"]), float(ck["scalars"][3]), float(ck["scalars"][0])
+    with np.load(args.state) as ck:
+        dt_run = float(ck["scalars"][2])
+    print(
+        f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}",
+        flush=True,
+    )
+    names = args.variants.split(",") if args.variants else list(VARIANTS)
+    for dt in (float(v) for v in args.dt.split(",")):
+        first = None
+        for name in names:
+            settings = NewtonSettings(**VARIANTS[name])
+            r, cnt, fact, C_end = measure(sim, settings, C, prev, h_prev, dt, args.steps)
+            first = C_end if first is None else first
+            n = len(r)
+            row = {
+                "variant": name,
+                "dt": dt,
+                "gmres_per_step": float(r[:, 2].mean()),
+                "newton_per_step": float(r[:, 1].mean()),
+                "residuals_per_step": cnt.residuals / n,
+                "applies_per_step": cnt.applies / n,
+                "s_first_step": round(float(r[0, 0]), 3),
+                "s_per_later_step": round(float(r[1:, 0].mean()), 3) if n > 1 else None,
+                "build_s": round(cnt.build_s, 3),
+                "factorisations": fact,
+                "ms_per_residual": round(1e3 * cnt.residual_s / max(cnt.residuals, 1), 2),
+                "ms_per_apply": round(1e3 * cnt.apply_s / max(cnt.applies, 1), 2),
+                "max_dC_vs_first": float(np.abs(C_end - first).max()),
+            }
+            print(json.dumps(row), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,130 @@
+"""Tests of the mode-coupling preconditioner (docs/dns.md, *Where a nonlinear step's time goes*).
+
+References: the per-mode linearisation :meth:`Discretisation.linear_blocks` (built from
+:func:`chuteflow.equations.compiled_equations`, checked against the finite-difference Jacobian
+in test_dns.py) at an x-independent state, a sparse LU of the assembled matrix for the block
+elimination, and the step of the x-mean preconditioner for the Newton solution.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.sparse.linalg import splu
+
+from chuteflow.closures import ChuteModel
+from chuteflow.dns import Discretisation, Stepper
+from chuteflow.dns.columns import jet_coefficients
+from chuteflow.dns.coupled import CoupledPreconditioner, coupled_blocks, coupled_matrix
+from chuteflow.dns.discretisation import BDF2
+from chuteflow.dns.stepper import NewtonSettings
+from chuteflow.steady import solve_steady
+
+from .test_columns import _steady, _wave
+
+MODEL = ChuteModel(roughness=0.05)
+
+
+@pytest.fixture(scope="module")
+def p1():
+    return solve_steady(16.0, 0.05, MODEL)
+
+
+def test_coupled_blocks_at_uniform_state_are_the_mode_jacobian(p1):
+    """At an x-independent state only the diagonal blocks are non-zero, and the block of mode
+    m is the per-mode Jacobian of linear_blocks (x-derivatives exact: ik)."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 3, frame=7.8)
+    C = _steady(d, p1)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    dt = 3.0
+    B = coupled_blocks(d, jet_coefficients(d, C, hist, dt, BDF2), np.arange(d.modes + 1), 1)
+    blocks = d.linear_blocks(C)
+    for mode in range(d.modes + 1):
+        ik = 1j * d.k[mode]
+        ref = (
+            blocks["K"] * d.k[mode]
+            + blocks["Bt"] * (1.5 / dt - d.frame * ik)
+            + blocks["pieces"].get(0, 0)
+            + ik * blocks["pieces"].get(1, 0)
+            + ik**2 * blocks["pieces"].get(2, 0)
+        )
+        scale = np.abs(ref).max()
+        assert np.abs(B[mode, 0]).max() <= 1e-9 * scale
+        assert np.abs(B[mode, 2]).max() <= 1e-9 * scale
+        # one-sided differences of step 1e-7 × max|jet| in the coefficients; the density top
+        # row drops the O(ν(y_max)) term of the linear problem's condition (as test_columns)
+        # (v at the floor node, v = 0 by its floor row, is skipped: the floor rows of the
+        # simulation keep their ∂_t v term, linear_blocks drops it)
+        for j in (j for j in range(ref.shape[1]) if j != 2 * (d.n + 1)):
+            s = np.abs(ref[:, j]).max()
+            assert np.abs(B[mode, 1][:, j] - ref[:, j]).max() <= 1e-5 * s + 1e-6, (mode, j)
+
+
+def test_block_elimination_solves_the_coupled_matrix(p1):
+    """apply(R) equals a sparse LU solve of the assembled matrix of modes −M … M (with
+    R_{−m} = conj R_m) at a finite-amplitude state, and the solution is that of a real field."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 16, 4, frame=7.8)
+    C = _wave(d, p1, 0.2)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    P = CoupledPreconditioner.build(d, C, hist, 4.0, BDF2)
+    J = coupled_matrix(d, jet_coefficients(d, C, hist, 4.0, BDF2), 1)
+    rng = np.random.default_rng(1)
+    R = rng.normal(size=d.shape) + 1j * rng.normal(size=d.shape)
+    R[..., 0] = R[..., 0].real
+    M = d.modes
+    full = np.concatenate([np.conj(R[..., :0:-1]), R], axis=-1)
+    y = splu(J.tocsc()).solve(np.ascontiguousarray(full.transpose(2, 0, 1)).ravel())
+    y = y.reshape(2 * M + 1, 4, d.n + 1).transpose(1, 2, 0)
+    x = P.apply(R)
+    scale = np.abs(x).max()
+    assert np.abs(y[..., M:] - x).max() <= 1e-9 * scale
+    assert np.abs(y[..., :M][..., ::-1] - np.conj(y[..., M + 1 :])).max() <= 1e-9 * scale
+    assert np.all(x[..., 0].imag == 0)
+
+
+def test_newton_with_coupled_reaches_the_same_steps(p1):
+    """Three BDF2 steps at a finite wave: the coupled and the x-mean preconditioners give the
+    same solution to the Newton tolerance, the coupled one (from the first step,
+    ``coupled_krylov=0``) with fewer GMRES iterations."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
+    C0 = _wave(d, p1, 0.1)
+    out = {}
+    for name in ("mean", "coupled"):
+        st = Stepper(d, NewtonSettings(preconditioner=name, coupled_krylov=0))
+        C, first = C0.copy(), True
+        hist = (st.physical(C), st.physical(C))
+        krylov = 0
+        for _ in range(3):
+            C_new, info = st.step(C, hist, 4.0, first=first)
+            assert info.residual < 1e-10
+            krylov += info.krylov
+            hist = (st.physical(C_new), hist[0])
+            C, first = C_new, False
+        out[name] = (C, krylov)
+        assert st.coupled == (name == "coupled")
+    assert np.abs(out["mean"][0] - out["coupled"][0]).max() <= 1e-8
+    assert out["coupled"][1] <= out["mean"][1]
+
+
+def test_cli_preconditioner_coupled():
+    """``chuteflow dns --preconditioner coupled`` runs from noise with the step control and
+    conserves mass as the default does; an unknown name is a one-line error."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+
+    runner = CliRunner()
+    args = ["dns", "--theta", "16", "--nu0", "0.05", "--length", "1000", "--init", "noise"]
+    args += ["--nx", "9", "--ny", "32", "--time", "2000", "--dt", "4", "--dt-tol", "1e-3", "--json"]
+    r = runner.invoke(app, [*args, "--preconditioner", "coupled"])
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout.strip().splitlines()[-1])
+    assert d["mass_drift"] < 1e-12
+    r = runner.invoke(app, [*args, "--preconditioner", "ilu"])
+    assert r.exit_code == 2
+    assert "preconditioner" in r.output
+    assert "Traceback" not in r.output
