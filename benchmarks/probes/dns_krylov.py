@@ -2,14 +2,16 @@
 
 Two stages (docs/dns.md, *Where a nonlinear step's time goes*):
 
-``--make-state FILE``: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05), L = 1000, from noise of
+``--make-state FILE``: P1 (θ = 16°, ν0(0) = 0.05, φ = 0.05; ``--theta``, ``--nu0``), L = 1000
+(``--length``), from noise of
 amplitude 1e-3 with the time-step control (``dt_tol`` = 1e-3, Δt from 4) and
 ``--preconditioner``, ``--nx`` × ``--ny``, up to ``--time`` (27000: ρ̄ ≈ ±20 %, the nonlinear
 phase), printing the wave and its spectrum's tails there; the final state is
 written with the simulation's own :meth:`~chuteflow.dns.simulation.DnsState.save` (C and the
 previous level), so that the measurement can be repeated on the same state.
 
-``--state FILE``: from that state, ``--steps`` implicit steps of Δt = ``--dt`` (the
+``--state FILE``: from that state (or a run's checkpoint, with its ``--length`` and grid),
+``--steps`` implicit steps of Δt = ``--dt`` (the
 control's step of the nonlinear phase, 16) once per preconditioner variant, each with a
 fresh :class:`~chuteflow.dns.Stepper` (the first step includes the build). Prints per
 variant the GMRES iterations, residual evaluations and preconditioner applications per
@@ -51,11 +53,13 @@ VARIANTS = {
 }
 
 
-def simulation(nx: int, ny: int, t_end: float, preconditioner: str = "auto") -> DnsSimulation:
-    flow = solve_steady(16.0, 0.05, ChuteModel(roughness=0.05))
+def simulation(
+    nx: int, ny: int, t_end: float, preconditioner: str = "auto", *, theta=16.0, nu0=0.05, length=1000.0
+) -> DnsSimulation:
+    flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
     settings = NewtonSettings(dt_tol=1e-3, preconditioner=preconditioner)
     return DnsSimulation(
-        flow, 1000.0, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
+        flow, length, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
         init="noise", amplitude=1e-3, snapshots=2, settings=settings,
     )  # fmt: skip
 
@@ -128,6 +132,9 @@ def measure(sim, settings, C, prev, h_prev, dt, n):
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--theta", type=float, default=16.0, help="θ in degrees (P1: 16)")
+    ap.add_argument("--nu0", type=float, default=0.05, help="ν0(0) (P1: 0.05)")
+    ap.add_argument("--length", type=float, default=1000.0, help="period L (a --state's run's)")
     ap.add_argument("--nx", type=int, default=41)
     ap.add_argument("--ny", type=int, default=64)
     ap.add_argument("--make-state", default=None, help="run from noise to --time and save the state here")
@@ -140,8 +147,9 @@ def main(argv=None):
     args = ap.parse_args(argv)
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
+    where = dict(theta=args.theta, nu0=args.nu0, length=args.length)
     if args.make_state:
-        sim = simulation(args.nx, args.ny, args.time, args.preconditioner)
+        sim = simulation(args.nx, args.ny, args.time, args.preconditioner, **where)
         t0 = time.perf_counter()
         state = sim.run()
         state.save(args.make_state, sim.key())
@@ -152,7 +160,7 @@ def main(argv=None):
         )
         if not args.state:
             return
-    sim = simulation(args.nx, args.ny, args.time)
+    sim = simulation(args.nx, args.ny, args.time, **where)
     with np.load(args.state) as ck:
         C, prev, h_prev, t = ck["C"], tuple(ck["prev"]), float(ck["scalars"][3]), float(ck["scalars"][0])
     with np.load(args.state) as ck:

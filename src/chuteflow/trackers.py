@@ -31,6 +31,7 @@ models: the saturated amplitude, wave speed, wavelength, time to saturate and th
 from __future__ import annotations
 
 import math
+import time
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -47,6 +48,7 @@ __all__ = [
     "SaturationStop",
     "ProgressTracker",
     "ValidityStop",
+    "WallTimeStop",
     "ResolutionMonitor",
     "ResolutionWarning",
     "saturated",
@@ -236,6 +238,34 @@ class ValidityStop(Tracker):
 
     def left_validity(self, sim, message):
         return True
+
+
+class WallTimeStop(Tracker):
+    """Pause the run after ``seconds`` of wall time in this call (status ``"paused at t = …"``).
+
+    A run with a checkpoint keeps it (as for a stopped one), so the same call again continues
+    for another ``seconds``; the records so far are judged as usual
+    (:func:`wave_measures`: e.g. ``growing`` when the wave had not settled when the time ran
+    out). Meant for runs of unknown length: a map of flows with a budget per flow, or a wave
+    that may never saturate.
+    """
+
+    def __init__(self, seconds: float):
+        if not (math.isfinite(seconds) and seconds > 0):
+            raise ParameterError(f"wall_limit = {seconds!r}: a positive number of seconds of wall time")
+        self.seconds = float(seconds)
+
+    def initialize(self, sim, initial, t_end):
+        self._start, self._t_end = time.perf_counter(), float(t_end)
+
+    def handle(self, sim, step):
+        last = step.t >= self._t_end * (1 - 1e-12)  # the run ends here anyway
+        if not last and time.perf_counter() - self._start >= self.seconds:
+            return (
+                f"paused at t = {step.t:.6g}: wall-time limit of {self.seconds:g} s reached "
+                "(the same call with the same checkpoint continues)"
+            )
+        return None
 
 
 class ResolutionMonitor(Tracker):

@@ -196,6 +196,32 @@ def test_resume_after_sigkill_is_exact(tmp_path, p1):
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
 
 
+def test_wall_limit_pauses_and_the_same_call_continues(tmp_path, p1):
+    """simulate(..., wall_limit=) pauses after that much wall time (here after every step),
+    keeps the checkpoint and judges the wave so far; the same call again continues, and the
+    pieces give the uninterrupted run (to 1e-13, as the SIGKILL resume: the preconditioner is
+    rebuilt at each piece)."""
+    ref = simulate(p1, 1000.0, **SMALL)
+    ck = tmp_path / "run.ck.npz"
+    pieces = []
+    for _ in range(20):
+        ds = simulate(p1, 1000.0, checkpoint=ck, wall_limit=1e-9, **SMALL)
+        pieces.append(str(ds.attrs["status"]))
+        if not pieces[-1].startswith("paused"):
+            break
+        assert ck.exists()
+        assert ds.attrs["verdict"] in ("growing", "decaying")  # judged, not "stopped"
+    assert pieces[0].startswith("paused at t = 4:")
+    assert "wall-time limit" in pieces[0]
+    assert len(pieces) == 10  # one step a piece; the last one ends the run
+    assert pieces[-1] == "ok"
+    assert not ck.exists()
+    assert np.array_equal(ds["time"].values, ref["time"].values)
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+    with pytest.raises(ParameterError, match="wall_limit"):
+        simulate(p1, 1000.0, wall_limit=0.0, **SMALL)
+
+
 def test_bad_input(p1):
     with pytest.raises(ParameterError, match="flow"):
         DnsSimulation((16.0, 0.05), 1000.0)  # type: ignore[arg-type]

@@ -70,6 +70,12 @@ def dns(
         help="Newton–Krylov preconditioner (docs/dns.md): auto, mean, columns or coupled "
         "(neighbouring Fourier modes coupled: fewer GMRES iterations at large amplitude).",
     ),
+    wall_limit: float | None = typer.Option(
+        None,
+        "--wall-limit",
+        help="Pause after this many seconds of wall time (status 'paused'; with --out the same "
+        "command continues).",
+    ),
     resolution_tol: float = typer.Option(
         1e-4,
         "--resolution-tol",
@@ -126,6 +132,7 @@ def dns(
                 out=out,
                 progress=progress,
                 settings=_step_control(dt_tol, preconditioner),
+                wall_limit=wall_limit,
             )
     if plot is not None:
         from chuteflow.figures.dns import plot_dns, save
@@ -147,7 +154,7 @@ def dns(
         )
     if ds.attrs.get("resolution_warnings"):
         con.print(f"warning: {ds.attrs['resolution_warnings']}", style="yellow", highlight=False)
-    if str(ds.attrs["status"]).startswith("stopped"):
+    if str(ds.attrs["status"]).startswith(("stopped", "paused")):
         kept = f"; the run so far is in {out} and its checkpoint" if out is not None else ""
         con.print(f"warning: {ds.attrs['status']}{kept}", style="yellow", highlight=False)
     if out is not None:
@@ -191,6 +198,17 @@ def waves(
         "--dt-tol",
         help="Time-step control (docs/dns.md): 0 keeps --dt; e.g. 1e-3 lengthens the step "
         "where the wave changes slowly.",
+    ),
+    preconditioner: str = typer.Option(
+        "auto",
+        "--preconditioner",
+        help="Newton–Krylov preconditioner (docs/dns.md): auto, mean, columns or coupled.",
+    ),
+    wall_limit: float | None = typer.Option(
+        None,
+        "--wall-limit",
+        help="Seconds of wall time per flow: a run still going pauses (verdict on the wave so "
+        "far); with --out-dir the same command continues.",
     ),
     workers: int = typer.Option(1, "--workers", help="Flows run at once (processes)."),
     scheduler: str | None = typer.Option(
@@ -249,6 +267,7 @@ def waves(
         seed=seed,
         saturation_tol=saturation_tol,
         dt_tol=dt_tol,
+        preconditioner=preconditioner,
     )
     con = Console(stderr=True)
 
@@ -260,7 +279,14 @@ def waves(
         )
 
     ds = map_waves(
-        pts, settings, model=model, out_dir=out_dir, workers=workers, progress=progress, scheduler=scheduler
+        pts,
+        settings,
+        model=model,
+        out_dir=out_dir,
+        workers=workers,
+        progress=progress,
+        scheduler=scheduler,
+        wall_limit=wall_limit,
     )
     if out is not None:
         out.parent.mkdir(parents=True, exist_ok=True)

@@ -19,6 +19,7 @@ from ..trackers import (
     ResolutionWarning,
     SaturationStop,
     Tracker,
+    WallTimeStop,
     WavePolicy,
 )
 from .diagnostics import bdf2_eigenvalue, measure_mode
@@ -63,6 +64,7 @@ def simulate(
     settings: NewtonSettings | None = None,
     min_dt_fraction: float = 1e-3,
     initial: Callable[[np.ndarray], np.ndarray] | None = None,
+    wall_limit: float | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -104,6 +106,11 @@ def simulate(
         :class:`~chuteflow.trackers.ResolutionWarning` above it).
     trackers : sequence of Tracker
         More trackers (:mod:`chuteflow.trackers`).
+    wall_limit : float, optional
+        Seconds of wall time after which the run pauses
+        (:class:`~chuteflow.trackers.WallTimeStop`): status ``"paused at t = …"``, the wave
+        so far judged (e.g. ``verdict`` ``growing``), the checkpoint kept so that the same
+        call continues.
 
     Returns
     -------
@@ -145,6 +152,8 @@ def simulate(
         tracking.append(SaturationStop(saturation_tol, interval=sim.setup.time / 200, min_samples=20))
     monitor = ResolutionMonitor(resolution_tol, every=max(1, 10 // sim.setup.record_every))
     tracking.append(monitor)
+    if wall_limit is not None:
+        tracking.append(WallTimeStop(wall_limit))
     tracking.extend(trackers)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ResolutionWarning)

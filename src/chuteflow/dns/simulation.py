@@ -395,7 +395,8 @@ class DnsSimulation:
         ``state``: continue from it (default: the checkpoint at ``checkpoint`` if it holds
         this run, else :meth:`initial_state`). With ``checkpoint`` the state is saved every
         ``checkpoint_every`` seconds of wall time and at the end (also when the run stops
-        early: the partial result is kept); it is removed once the run has finished.
+        early, or is paused by :class:`~chuteflow.trackers.WallTimeStop`: the partial result
+        is kept); it is removed once the run has finished.
         A Newton failure halves Δt (BDF1 restart) down to ``min_dt_fraction`` × ``dt``, then
         the run stops with status ``"stopped at t = …: why"`` and the data so far.
         """
@@ -508,7 +509,7 @@ class DnsSimulation:
         for tr in trackers:
             tr.finalize(self, state)
         if checkpoint is not None:
-            if state.status.startswith("stopped"):
+            if state.status.startswith(("stopped", "paused")):
                 state.save(checkpoint, key, trackers)  # the partial run is kept
             elif Path(checkpoint).exists():
                 Path(checkpoint).unlink()

@@ -28,6 +28,7 @@ import xarray as xr
 
 from ..closures import ChuteModel
 from ..errors import ParameterError
+from ..trackers import WallTimeStop
 from .stepper import NewtonSettings
 
 __all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
@@ -78,6 +79,9 @@ class WaveMapSettings:
         docs/dns.md *Time-step control*): 0 keeps Δt = ``dt``; e.g. 1e-3 lengthens the step
         up to 64 ``dt`` where the wave changes slowly (P1 from noise: ~10× fewer steps in
         the linear phase, 2–4× in the nonlinear one).
+    preconditioner : str
+        Newton–Krylov preconditioner of the runs
+        (:attr:`~chuteflow.dns.stepper.NewtonSettings.preconditioner`, docs/dns.md).
     """
 
     length: float = 1000.0
@@ -90,6 +94,7 @@ class WaveMapSettings:
     saturation_tol: float = 0.02
     resolution_tol: float = 1e-4
     dt_tol: float = 0.0
+    preconditioner: str = "auto"
 
     def __post_init__(self):
         for name in ("length", "time", "dt"):
@@ -103,27 +108,42 @@ class WaveMapSettings:
                 f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
                 "(0 keeps the step)"
             )
+        self.newton()  # checks the preconditioner
+
+    def newton(self) -> NewtonSettings | None:
+        """The runs' Newton settings (None: the solver's defaults)."""
+        if not self.dt_tol and self.preconditioner == "auto":
+            return None
+        return NewtonSettings(dt_tol=self.dt_tol, preconditioner=self.preconditioner)
 
 
 def _name(theta: float, nu0: float) -> str:
     return f"theta{theta:g}_nu0{nu0:g}"
 
 
-def _one(theta: float, nu0: float, model_dict: dict, s: WaveMapSettings, out_dir: str | None) -> dict:
+def _one(
+    theta: float,
+    nu0: float,
+    model_dict: dict,
+    s: WaveMapSettings,
+    out_dir: str | None,
+    wall_limit: float | None = None,
+) -> dict:
     """Run (or read back) the wave at one flow; returns its scalars and shape."""
     from ..steady import solve_steady
     from .api import simulate, summary
 
     model = ChuteModel(**model_dict)
     out = None if out_dir is None else Path(out_dir) / f"{_name(theta, nu0)}.nc"
+    ck = None if out is None else Path(str(out) + ".checkpoint.npz")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         flow = solve_steady(theta, nu0, model, strict=True)
-        if out is not None and out.exists() and not Path(str(out) + ".checkpoint.npz").exists():
+        if out is not None and out.exists() and not (ck is not None and ck.exists()):
             ds: xr.Dataset | None = xr.load_dataset(out, engine="h5netcdf")
             assert ds is not None
             done = ds.attrs.get("map_settings") == repr(s) and not str(ds.attrs["status"]).startswith(
-                "stopped"
+                ("stopped", "paused")
             )
             if not done:
                 ds = None
@@ -144,7 +164,9 @@ def _one(theta: float, nu0: float, model_dict: dict, s: WaveMapSettings, out_dir
                 record_every=max(1, int(round(s.time / s.dt / 2000))),
                 saturation_tol=s.saturation_tol,
                 resolution_tol=s.resolution_tol,
-                settings=NewtonSettings(dt_tol=s.dt_tol) if s.dt_tol else None,
+                settings=s.newton(),
+                wall_limit=wall_limit,
+                checkpoint=ck,
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
@@ -170,6 +192,7 @@ def map_waves(
     progress: Callable[[int, int, dict], None] | None = None,
     client=None,
     scheduler: str | None = None,
+    wall_limit: float | None = None,
 ) -> xr.Dataset:
     """The saturated waves at the flows ``points`` = [(θ, ν0(0)), …] (see the module notes).
 
@@ -194,6 +217,10 @@ def map_waves(
     scheduler : str, optional
         Address of a Dask scheduler (``tcp://host:8786``): a client is opened for the map and
         closed after. Needs the ``chuteflow[dask]`` extra.
+    wall_limit : float, optional
+        Seconds of wall time per flow and call (:class:`~chuteflow.trackers.WallTimeStop`): a
+        run still going then pauses (status ``"paused at t = …"``, judged on the wave so far,
+        e.g. ``growing``); with ``out_dir`` the same call continues the paused runs.
 
     Returns
     -------
@@ -209,6 +236,8 @@ def map_waves(
         raise ParameterError("points: give at least one (theta, nu0)")
     if int(workers) != workers or workers < 1:
         raise ParameterError(f"workers = {workers!r} must be a positive integer")
+    if wall_limit is not None:
+        WallTimeStop(wall_limit)  # checks it here, not in every worker
     md = model.to_dict()
     od = None if out_dir is None else str(out_dir)
     rows: dict[int, dict] = {}
@@ -220,7 +249,7 @@ def map_waves(
             from dask.distributed import as_completed as dask_completed  # there: dask_client checked
 
             futures = {
-                c.submit(_one, th, nu, md, s, od, pure=False, key=f"chuteflow-wave-{run}-{i}"): i
+                c.submit(_one, th, nu, md, s, od, wall_limit, pure=False, key=f"chuteflow-wave-{run}-{i}"): i
                 for i, (th, nu) in enumerate(pts)
             }
             try:
@@ -233,12 +262,12 @@ def map_waves(
                 raise
     elif workers == 1 or len(pts) == 1:
         for i, (th, nu) in enumerate(pts):
-            rows[i] = _one(th, nu, md, s, od)
+            rows[i] = _one(th, nu, md, s, od, wall_limit)
             if progress is not None:
                 progress(len(rows), len(pts), rows[i])
     else:
         with ProcessPoolExecutor(max_workers=int(workers)) as ex:
-            futs = {ex.submit(_one, th, nu, md, s, od): i for i, (th, nu) in enumerate(pts)}
+            futs = {ex.submit(_one, th, nu, md, s, od, wall_limit): i for i, (th, nu) in enumerate(pts)}
             for f in as_completed(futs):
                 rows[futs[f]] = f.result()
                 if progress is not None:
