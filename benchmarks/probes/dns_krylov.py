@@ -12,12 +12,15 @@ previous level), so that the measurement can be repeated on the same state.
 
 ``--state FILE``: from that state (or a run's checkpoint, with its ``--length`` and grid),
 ``--steps`` implicit steps of Δt = ``--dt`` (the
-control's step of the nonlinear phase, 16) once per preconditioner variant, each with a
-fresh :class:`~chuteflow.dns.Stepper` (the first step includes the build). Prints per
+control's step of the nonlinear phase, 16) once per preconditioner variant (``coupled``
+falls back to the columns where its fresh blocks do not serve; ``coupled_only`` never does),
+each with a fresh :class:`~chuteflow.dns.Stepper` (the first step includes the build). Prints per
 variant the GMRES iterations, residual evaluations and preconditioner applications per
 step, the seconds per step (first and later) and the seconds of the build, with the end
 state's distance to the first variant's (they solve the same equations to the Newton
-tolerance). The machine is shared: compare the seconds only within one run.
+tolerance), and before them how far the coefficients of the Jacobian are from their first
+R x-harmonics (R = 1: the coupled preconditioner). The machine is shared: compare the
+seconds only within one run.
 
 Run: ``python benchmarks/probes/dns_krylov.py --make-state /tmp/p1_41x64.npz --nx 41 --ny 64``
 then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64
@@ -50,7 +53,30 @@ VARIANTS = {
     # the coupled blocks from the first step (by default they replace the x-mean ones once a
     # GMRES solve needs more than coupled_krylov = 20 iterations)
     "coupled": dict(preconditioner="coupled", coupled_krylov=0),
+    # the coupled blocks alone, never the columns (switch_krylov out of reach)
+    "coupled_only": dict(preconditioner="coupled", coupled_krylov=0, switch_krylov=10**9),
 }
+
+
+def harmonics(sim: DnsSimulation, C: np.ndarray, prev: tuple, dt: float) -> str:
+    """How far the Jacobian's coefficients are from their first R x-harmonics: the relative
+    L2 error of the truncation, over all coefficients weighted by their size, R = 0, 1, 2, 4, 8
+    (R = 0 is the x-mean preconditioner's, R = 1 the coupled one's)."""
+    from chuteflow.dns.columns import jet_coefficients
+    from chuteflow.dns.discretisation import BDF2
+
+    st = Stepper(sim.disc, NewtonSettings())
+    coefs = jet_coefficients(sim.disc, C, (st.physical(C), prev), dt, BDF2)
+    A = np.stack(list(coefs.values()))  # (jets, rows, N+1, nxp)
+    nxp = A.shape[-1]
+    H = np.fft.fft(A, axis=-1)
+    out = []
+    for R in (0, 1, 2, 4, 8):
+        Ht = H.copy()
+        Ht[..., R + 1 : nxp - R] = 0.0
+        err = np.linalg.norm(np.fft.ifft(Ht, axis=-1).real - A) / np.linalg.norm(A)
+        out.append(f"R = {R}: {err:.3f}")
+    return "coefficients' truncation error " + ", ".join(out)
 
 
 def simulation(
@@ -169,6 +195,7 @@ def main(argv=None):
         f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}",
         flush=True,
     )
+    print(harmonics(sim, C, prev, float(args.dt.split(",")[0])), flush=True)
     names = args.variants.split(",") if args.variants else list(VARIANTS)
     for dt in (float(v) for v in args.dt.split(",")):
         first = None

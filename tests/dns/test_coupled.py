@@ -108,6 +108,32 @@ def test_newton_with_coupled_reaches_the_same_steps(p1):
     assert out["coupled"][1] <= out["mean"][1]
 
 
+def test_coupled_falls_back_to_columns_where_fresh_blocks_do_not_serve(p1):
+    """Where a GMRES solve right after the coupled blocks were built still needs more than
+    ``switch_krylov`` iterations (``switch_krylov=0`` forces it here; in a run, a wave of
+    ±40 … 80 %, docs/dns.md), ``"coupled"`` goes over to the columns and the step reaches the
+    x-mean preconditioner's solution to the Newton tolerance."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
+    C = _wave(d, p1, 0.1)
+    hist = None
+    out = {}
+    for name, extra in (("mean", {}), ("coupled", dict(coupled_krylov=0, switch_krylov=0))):
+        st = Stepper(d, NewtonSettings(preconditioner=name, **extra))
+        hist = (st.physical(C), st.physical(C))
+        C_new, info = st.step(C, hist, 4.0, first=True)
+        assert info.residual < 1e-10
+        out[name] = (C_new, st)
+    st = out["coupled"][1]
+    assert st.columns
+    assert not st.coupled
+    assert np.abs(out["mean"][0] - out["coupled"][0]).max() <= 1e-8
+    # and without the forcing the coupled blocks stay (the test above)
+    st = Stepper(d, NewtonSettings(preconditioner="coupled", coupled_krylov=0))
+    st.step(C, hist, 4.0, first=True)
+    assert st.coupled
+    assert not st.columns
+
+
 def test_cli_preconditioner_coupled():
     """``chuteflow dns --preconditioner coupled`` runs from noise with the step control and
     conserves mass as the default does; an unknown name is a one-line error."""

@@ -78,13 +78,18 @@ class NewtonSettings:
         its neighbours ±1 through the first x-harmonics of the coefficients
         (:class:`~chuteflow.dns.coupled.CoupledPreconditioner`): 4–5.5 times fewer GMRES
         iterations than ``"mean"`` at a ±20 % wave and Δt = 32–64, for three to four times
-        the seconds per application (docs/dns.md, *Where a nonlinear step's time goes*).
+        the seconds per application (docs/dns.md, *Where a nonlinear step's time goes*);
+        where even freshly built coupled blocks leave one GMRES solve above
+        ``switch_krylov`` iterations (at Δt ≤ the run's Δt under the step control), the
+        columns from then on: at a ±40 … 80 % wave the first harmonics miss 30 % of the
+        coefficients and Newton with the coupled blocks alone does not converge.
     coupled_krylov : int
         GMRES iterations of one solve that make ``"coupled"`` leave the x-mean blocks (at any
         Δt: the coupled build costs about three x-mean builds); 0: the coupled blocks from
         the first step.
     switch_krylov : int
-        GMRES iterations of one solve that make ``"auto"`` switch to ``"columns"``.
+        GMRES iterations of one solve that make ``"auto"`` switch to ``"columns"`` (and
+        ``"coupled"``, after a solve right after its blocks were built).
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
         (:func:`~chuteflow.dns.columns.column_matrix`).
@@ -187,10 +192,11 @@ class Stepper:
         self._age = 0
         self._base_krylov: int | None = None
         #: Whether the column preconditioner is in use (from the start with
-        #: ``preconditioner="columns"``, after the switch with ``"auto"``).
+        #: ``preconditioner="columns"``, after the switch with ``"auto"`` or ``"coupled"``).
         self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
         #: Whether the mode-coupling preconditioner is in use (``"coupled"``, after the
-        #: linear phase; from the start with ``coupled_krylov=0``).
+        #: linear phase; from the start with ``coupled_krylov=0``; until the switch to the
+        #: columns).
         self.coupled = self.settings.preconditioner == "coupled" and self.settings.coupled_krylov == 0
         self.coupled = self.coupled and disc.modes >= 1
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
@@ -349,9 +355,26 @@ class Stepper:
                 self.columns = True
                 self._factor(d.unpack(z), dt, bdf, history)
                 continue
-            if s.preconditioner == "coupled" and not self.coupled and d.modes and count[0] > s.coupled_krylov:
+            if (
+                s.preconditioner == "coupled"
+                and not (self.coupled or self.columns)
+                and d.modes
+                and count[0] > s.coupled_krylov
+            ):
                 # the x-mean no longer describes the Jacobian: neighbouring modes coupled from now on
                 self.coupled = True
+                self._factor(d.unpack(z), dt, bdf, history)
+                continue
+            if (
+                self.coupled
+                and self._age <= 1
+                and self._base_krylov is None
+                and count[0] > s.switch_krylov
+                and dt <= self.switch_dt * (1 + 1e-12)
+            ):
+                # freshly built, the first harmonics still miss the Jacobian (a wave of ±40 % and
+                # more, whose coefficients need harmonics 4–8): the local columns from now on
+                self.coupled, self.columns = False, True
                 self._factor(d.unpack(z), dt, bdf, history)
                 continue
             if self._base_krylov is None:
