@@ -99,6 +99,7 @@ def dns(
     from rich.console import Console
 
     from chuteflow.dns import simulate, summary
+    from chuteflow.dns.stepper import step_settings
     from chuteflow.errors import ParameterError
     from chuteflow.steady import solve_steady
     from chuteflow.trackers import ResolutionWarning
@@ -131,7 +132,7 @@ def dns(
                 resolution_tol=resolution_tol,
                 out=out,
                 progress=progress,
-                settings=_step_control(dt_tol, preconditioner),
+                settings=step_settings(dt_tol, preconditioner),
                 wall_limit=wall_limit,
             )
     if plot is not None:
@@ -369,20 +370,3 @@ def _reduced_waves(rows: list, model: ChuteModel, settings, con) -> None:
         for k in REDUCED_KEYS:
             v = w[k]
             r[f"reduced_{k}"] = v if isinstance(v, (str, bool)) else _num(float(v))
-
-
-def _step_control(dt_tol: float, preconditioner: str = "auto"):
-    """The Newton settings of ``--dt-tol`` and ``--preconditioner`` (None: the defaults, a
-    fixed Δt)."""
-    import math
-
-    from chuteflow.dns.stepper import NewtonSettings
-    from chuteflow.errors import ParameterError
-
-    if not (math.isfinite(dt_tol) and 0 <= dt_tol < 1):
-        raise ParameterError(
-            f"dt_tol = {dt_tol!r} is outside [0, 1): the time-step control's tolerance (0 keeps the step)"
-        )
-    if not dt_tol and preconditioner == "auto":
-        return None
-    return NewtonSettings(dt_tol=dt_tol, preconditioner=preconditioner)

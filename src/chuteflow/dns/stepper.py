@@ -141,13 +141,25 @@ class NewtonSettings:
         if self.column_order not in (2, 4):
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
-            raise ParameterError(f"dt_tol = {self.dt_tol!r}: in [0, 1) (0 keeps Δt fixed; e.g. 1e-3)")
+            raise ParameterError(
+                f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
+                "(0 keeps Δt fixed; e.g. 1e-3)"
+            )
         if self.coupled_krylov < 0:
             raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
         if self.dt_krylov < 1:
             raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
         if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
             raise ParameterError(f"dt_max = {self.dt_max!r}: ≥ 0 (0: 64 times the run's Δt)")
+
+
+def step_settings(dt_tol: float = 0.0, preconditioner: str = "auto") -> NewtonSettings | None:
+    """The Newton settings of a run's time-step control and preconditioner, checked; None
+    where both are the defaults (the solver's own settings, a fixed Δt). The one rule behind
+    ``chuteflow dns --dt-tol --preconditioner`` and
+    :meth:`~chuteflow.dns.waves.WaveMapSettings.newton`."""
+    settings = NewtonSettings(dt_tol=dt_tol, preconditioner=preconditioner)
+    return None if settings == NewtonSettings() else settings
 
 
 @dataclass(frozen=True)

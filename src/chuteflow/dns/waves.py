@@ -29,7 +29,7 @@ import xarray as xr
 from ..closures import ChuteModel
 from ..errors import ParameterError
 from ..trackers import WallTimeStop
-from .stepper import NewtonSettings
+from .stepper import NewtonSettings, step_settings
 
 __all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
 
@@ -103,18 +103,12 @@ class WaveMapSettings:
                 raise ParameterError(f"{name} = {v!r} must be a positive number")
         if not 0 < self.saturation_tol < 1:
             raise ParameterError(f"saturation_tol = {self.saturation_tol!r} must be in (0, 1)")
-        if not (math.isfinite(self.dt_tol) and 0 <= self.dt_tol < 1):
-            raise ParameterError(
-                f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
-                "(0 keeps the step)"
-            )
-        self.newton()  # checks the preconditioner
+        self.newton()  # checks dt_tol and the preconditioner
 
     def newton(self) -> NewtonSettings | None:
-        """The runs' Newton settings (None: the solver's defaults)."""
-        if not self.dt_tol and self.preconditioner == "auto":
-            return None
-        return NewtonSettings(dt_tol=self.dt_tol, preconditioner=self.preconditioner)
+        """The runs' Newton settings (:func:`~chuteflow.dns.stepper.step_settings`; None:
+        the solver's defaults)."""
+        return step_settings(self.dt_tol, self.preconditioner)
 
 
 def _name(theta: float, nu0: float) -> str:
