@@ -67,14 +67,16 @@ def test_wall_limit_pauses_each_flow_and_the_same_call_continues(serial, tmp_pat
     """map_waves(..., wall_limit=) pauses a flow still running after that much wall time
     (here after its first step): the row says so (status "paused at t = 4: …", the wave so
     far judged, not "stopped"), the checkpoint is kept, and calls again continue to the
-    uninterrupted map's numbers."""
-    first = map_waves(POINTS[:1], SETTINGS, out_dir=tmp_path, wall_limit=1e-9)
+    uninterrupted map's numbers. The output folder need not exist (the checkpoint is written
+    there before the NetCDF file)."""
+    out = tmp_path / "map" / "waves"
+    first = map_waves(POINTS[:1], SETTINGS, out_dir=out, wall_limit=1e-9)
     assert str(first["status"].values[0]).startswith("paused at t = 4:")
     assert first["verdict"].values[0] in ("growing", "decaying")
-    assert len(list(tmp_path.glob("*.checkpoint.npz"))) == 1
-    done = map_waves(POINTS[:1], SETTINGS, out_dir=tmp_path)  # no limit: runs to the end
+    assert len(list(out.glob("*.checkpoint.npz"))) == 1
+    done = map_waves(POINTS[:1], SETTINGS, out_dir=out)  # no limit: runs to the end
     assert done["status"].values[0] == "ok"
-    assert not list(tmp_path.glob("*.checkpoint.npz"))
+    assert not list(out.glob("*.checkpoint.npz"))
     for k in ("rho_min_rel", "rho_max_rel", "mass_drift"):
         np.testing.assert_allclose(done[k].values, serial[k].values[:1], rtol=1e-9, atol=1e-15, err_msg=k)
     with pytest.raises(ParameterError, match="wall_limit"):

@@ -144,6 +144,8 @@ def _one(
         else:
             ds = None
         if ds is None:
+            if out is not None:
+                out.parent.mkdir(parents=True, exist_ok=True)  # the checkpoint goes there too
             ds = simulate(
                 flow,
                 s.length,
@@ -164,7 +166,6 @@ def _one(
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
-                out.parent.mkdir(parents=True, exist_ok=True)
                 ds.to_netcdf(out, engine="h5netcdf")
     sm = summary(ds)
     rho = ds["rho_bar"].values[-1]
