@@ -10,6 +10,7 @@ paper's unstable points P1, P4, P5 (:func:`chuteflow.dns.map_waves`, L = 1000).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 from ....report.registry import StageContext, register_stage
 from ..points import POINTS
@@ -24,6 +25,15 @@ K_VERIFY = 0.003
 QUICK_WAVE = (3, 24, 20.0, 30000.0, 1e-2)
 #: The full stage's map of the saturated waves at the paper's unstable points.
 FULL_POINTS = ("P1", "P4", "P5")
+#: Its runs: L = 1000, nx = 65, N = 80 (the resolved reference grid of docs/dns.md), from
+#: noise 1e-3 to saturation (2 %; P1 saturates at t ≈ 35000), with the step control and the
+#: mode coupling: the stage in 6.7 min on 2 cores (P1 −23.5 … +28.7 %, the reference wave;
+#: ≈ 26 min for P1 alone with a fixed Δt = 4 and the x-mean blocks). At L = 1000 P4 is stable
+#: (Re α = −2.3e-4) and P5 nearly neutral (1.2e-5): their notes say "decaying" and
+#: "growing"; their waves need L ≈ 6300 and ≥ 2000 (docs/dns.md, *Outcomes*), hours here.
+FULL_MAP: dict[str, Any] = dict(
+    length=1000.0, time=45000.0, dt=4.0, modes=32, n=80, dt_tol=1e-3, preconditioner="coupled"
+)
 
 
 @register_stage(
@@ -178,7 +188,7 @@ def _wave_map(ctx: StageContext) -> None:
 
     pts = [POINTS[n] for n in FULL_POINTS]
     ctx.progress(f"DNS: saturated waves at {', '.join(FULL_POINTS)}")
-    settings = WaveMapSettings(length=1000.0, time=30000.0, dt=4.0, modes=32, n=80)
+    settings = WaveMapSettings(**FULL_MAP)
     ds = map_waves(
         [(p.theta, p.nu0) for p in pts],
         settings,
@@ -192,6 +202,7 @@ def _wave_map(ctx: StageContext) -> None:
         ctx.report.add_note(
             f"DNS wave at {name} (L = 1000, nx = 65, ny = 80, from noise): {ds['verdict'].values[i]}; "
             f"ρ̄ {100 * float(ds['rho_min_rel'][i]):+.1f} … {100 * float(ds['rho_max_rel'][i]):+.1f} %, "
+            f"linear growth rate at k = 2π/L {float(ds['growth_rate_linear'][i]):.3g}, "
             f"c = {float(ds['wave_speed'][i]):.4g} (linear {float(ds['phase_velocity_linear'][i]):.4g}), "
             f"λ = {float(ds['wavelength'][i]):.4g}, saturated at t ≈ {float(ds['t_saturation'][i]):.0f}; "
             f"tails x {float(ds['x_tail'][i]):.1e}, y {float(ds['y_tail'][i]):.1e}; mass drift "
