@@ -203,17 +203,50 @@ class Stepper:
         self.factorisations = 0
         self._age = 0
         self._base_krylov: int | None = None
-        #: Whether the column preconditioner is in use (from the start with
-        #: ``preconditioner="columns"``, after the switch with ``"auto"`` or ``"coupled"``).
-        self.columns = self.settings.preconditioner == "columns" and disc.modes >= 1
-        #: Whether the mode-coupling preconditioner is in use (``"coupled"``, after the
-        #: linear phase; from the start with ``coupled_krylov=0``; until the switch to the
-        #: columns).
-        self.coupled = self.settings.preconditioner == "coupled" and self.settings.coupled_krylov == 0
-        self.coupled = self.coupled and disc.modes >= 1
+        #: The preconditioner in use: ``"mean"``, ``"coupled"`` or ``"columns"`` (from the
+        #: start as ``preconditioner`` names it, ``"coupled"`` only with ``coupled_krylov=0``;
+        #: then as :meth:`_escalation` decides).
+        pre = self.settings.preconditioner
+        self.kind = "mean"
+        if disc.modes >= 1 and pre == "columns":
+            self.kind = "columns"
+        elif disc.modes >= 1 and pre == "coupled" and self.settings.coupled_krylov == 0:
+            self.kind = "coupled"
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
         #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
         self.switch_dt = math.inf
+
+    @property
+    def columns(self) -> bool:
+        """Whether the column preconditioner is in use."""
+        return self.kind == "columns"
+
+    @property
+    def coupled(self) -> bool:
+        """Whether the mode-coupling preconditioner is in use."""
+        return self.kind == "coupled"
+
+    def _escalation(self, krylov: int, dt: float) -> str | None:
+        """The preconditioner to go over to after a GMRES solve of ``krylov`` iterations at the
+        step ``dt`` (None: keep this one). ``"auto"``: the x-mean blocks give way to the
+        columns above ``switch_krylov``; ``"coupled"``: to the coupled blocks above
+        ``coupled_krylov``, and these, where freshly built they still need more than
+        ``switch_krylov`` (a wave of ±40 % and more, whose coefficients need harmonics
+        4–8), to the columns. The columns only at Δt ≤ :attr:`switch_dt`."""
+        s = self.settings
+        if not self.disc.modes:
+            return None
+        at_run_dt = dt <= self.switch_dt * (1 + 1e-12)
+        if self.kind == "mean":
+            # the x-mean no longer describes the Jacobian
+            if s.preconditioner == "auto" and krylov > s.switch_krylov and at_run_dt:
+                return "columns"
+            if s.preconditioner == "coupled" and krylov > s.coupled_krylov:
+                return "coupled"
+        fresh = self._age <= 1 and self._base_krylov is None
+        if self.kind == "coupled" and fresh and krylov > s.switch_krylov and at_run_dt:
+            return "columns"
+        return None
 
     def reset(self) -> None:
         """Forget the preconditioner (it is rebuilt at the next step)."""
@@ -225,9 +258,9 @@ class Stepper:
         return (np.exp(d.to_physical(C[0])), d.to_physical(C[1]), d.to_physical(C[2]), d.to_physical(C[3]))
 
     def _factor(self, C, dt, bdf, history):
-        if self.coupled:
+        if self.kind == "coupled":
             self._lus = CoupledPreconditioner.build(self.disc, C, history, dt, bdf)
-        elif self.columns:
+        elif self.kind == "columns":
             self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf, self.settings.column_order)
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
@@ -356,44 +389,16 @@ class Stepper:
                 break
             # a refresh for GMRES's sake at most every `refresh_every` steps: at large
             # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
-            if (
-                s.preconditioner == "auto"
-                and not self.columns
-                and d.modes
-                and count[0] > s.switch_krylov
-                and dt <= self.switch_dt * (1 + 1e-12)
-            ):
-                # the x-mean no longer describes the Jacobian: the local columns from now on
-                self.columns = True
-                self._factor(d.unpack(z), dt, bdf, history)
-                continue
-            if (
-                s.preconditioner == "coupled"
-                and not (self.coupled or self.columns)
-                and d.modes
-                and count[0] > s.coupled_krylov
-            ):
-                # the x-mean no longer describes the Jacobian: neighbouring modes coupled from now on
-                self.coupled = True
-                self._factor(d.unpack(z), dt, bdf, history)
-                continue
-            if (
-                self.coupled
-                and self._age <= 1
-                and self._base_krylov is None
-                and count[0] > s.switch_krylov
-                and dt <= self.switch_dt * (1 + 1e-12)
-            ):
-                # freshly built, the first harmonics still miss the Jacobian (a wave of ±40 % and
-                # more, whose coefficients need harmonics 4–8): the local columns from now on
-                self.coupled, self.columns = False, True
+            nxt = self._escalation(count[0], dt)
+            if nxt is not None:
+                self.kind = nxt
                 self._factor(d.unpack(z), dt, bdf, history)
                 continue
             if self._base_krylov is None:
                 self._base_krylov = count[0]
             # the column preconditioner is dear to build: refreshed when GMRES needs twice
             # what it needed right after the last build (and more than `refresh_krylov`)
-            dear = self.columns or self.coupled
+            dear = self.kind != "mean"
             limit = max(s.refresh_krylov, 2 * self._base_krylov) if dear else s.refresh_krylov
             if it > s.refresh_after or (count[0] > limit and self._age >= s.refresh_every):
                 self._factor(d.unpack(z), dt, bdf, history)
