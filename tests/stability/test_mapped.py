@@ -66,8 +66,14 @@ def test_mapped_grid_needs_fewer_nodes_for_the_papers_tolerance(p1_flow):
 # coefficients that differ by round-off (barycentric instead of Clenshaw interpolation) the
 # same comparison gives 2.7e-7 and 7.8e-8 at N = 200 (6.3e-8 and 2.0e-8 at N = 160, where
 # the earlier code gave 1.6e-7 and 6.2e-9): a band of ~3e-7, hence 5e-7.
+# P2 at k = 0.5: the least-stable mode is −0.51873938 − 4.66064670i (dense QZ on the mapped
+# grid at N = 256 and 320: change 5e-9, tails 2e-12 and 7e-13), which the screen at N = 48
+# did not admit (tail 1.5e-3) before its rate rule (resolver.SCREEN_RATE_RUNGS), so both
+# grids gave −0.98558926 − 2.90109674i as converged. At N = 200 neither grid resolves it:
+# mapped −0.51873937 (drift 1.6e-6), plain −0.51925837 − 4.65991239i (drift 2.9e-3 at
+# N = 94, where the ladder gives up on it): 1.9e-4 relative, within the plain grid's drift.
 TOL = {"P4": 5e-7}
-TOL_LARGE_K = {"P4": 1e-3}
+TOL_LARGE_K = {"P4": 1e-3, "P2": 1e-3}
 
 
 @pytest.mark.slow

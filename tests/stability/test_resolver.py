@@ -193,8 +193,10 @@ def test_a_mode_finer_than_the_screen_is_not_missed():
     damped mode near −0.79 − 0.26i (dense QZ at N = 200 and 300: −0.79357 − 0.26440i and
     −0.79359 − 0.26440i, tails 2e-7 and 4e-9) had tails 2e-3 … 7e-3 at the screen's N = 48,
     so it was no candidate and −1.01264 was reported as converged. The screen is now repeated
-    at the answer's N (``resolver.SCREEN_REPEAT``): the answer is not −1.01264 as converged
-    any more (measured: the modes near −0.79 found, the top one undecided at N = 256, flagged)."""
+    at the answer's N (``resolver.SCREEN_REPEAT``), and the rate rule admits eigenvalues whose
+    tails fall fast from N = 48 to 75 (``resolver.SCREEN_RATE_RUNGS``): the answer is not
+    −1.01264 as converged any more (measured: −0.72336 − 0.26704i, undecided at N = 94 and
+    flagged, with −0.798571 − 0.283765i named as the resolved mode below it)."""
     from chuteflow import ChuteModel, solve_steady
     from chuteflow.stability import resolver
 
@@ -203,3 +205,58 @@ def test_a_mode_finer_than_the_screen_is_not_missed():
     assert not (m.converged and m.alpha.real < -0.85), (m.alpha, m.note)
     assert m.alpha.real > -0.85
     assert resolver.SCREEN_REPEAT * 48 < 148  # the case the repeated screen is for
+
+
+@pytest.fixture(scope="module")
+def random_133117():
+    """The flow of try_random_points seed 133117: θ = 21.373°, ν0(0) = 0.0082, φ = 0.1076,
+    Φ = 0.313 (dilute: u0 at the top 20.0239)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    return solve_steady(21.373, 0.0082, ChuteModel(roughness=0.1076, wall_loss=0.313))
+
+
+def test_a_mode_that_converges_slower_than_the_answer_is_not_missed(random_133117):
+    """At (k_x, k_z) = (0.019049, 0.155868) dense QZ at N = 250, 350, 450 (mapped grid, the
+    brute-force check of try_random_points) resolves −0.381435 − 0.249904i (drift 7.9e-6,
+    1.4e-7, 2.3e-11; tails ≤ 3e-9). Its tails at the screen's N = 48, 60, 75 are 9.9e-4,
+    3.1e-4, 9.6e-5, above the screen's 5e-4 at N = 48, and the answer −2.146494 − 0.283356i
+    passes the tests at N = 75 (no repeated screen), so it was reported as converged. The
+    rate rule (``resolver.SCREEN_RATE_RUNGS``: tails falling ×0.31 a rung, projected to pass
+    at N ≈ 155) makes the slow mode a candidate; it is undecided by the ladder, so the answer
+    is its estimate, flagged, within its drift of the reference (measured 8.5e-4, drift
+    1.3e-3 at N = 94)."""
+    m = least_stable(random_133117, 0.019049, kz=0.155868)
+    assert not m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.381435 - 0.249904j)) < m.drift, (m.alpha, m.drift)
+    assert "-2.14649" in m.note
+
+
+def test_the_dilute_tops_continuum_is_no_candidate(random_133117):
+    """At (k_x, k_z) = (0.001326, 0.061321) the top of the dense spectrum is the dilute top's
+    continuum, clustered at α_top = −i k_x u0(top) = −0.0265517i, one member of which has
+    tails falling ×0.36 a rung (1.2e-2, 4.8e-3, 1.7e-3 at N = 48, 60, 75) and 7e-6 at N = 256:
+    it is not a mode (``resolver.CONTINUUM_NEAR``, ``CONTINUUM_DRIFT``). Dense QZ at N = 350
+    names −0.4413 − 0.0184i the least-stable resolved mode; the answer is that mode,
+    converged."""
+    from chuteflow.stability.resolver import _top_continuum
+
+    m = least_stable(random_133117, 0.001326, kz=0.061321)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.4413 - 0.0184j)) < 1e-4
+    a_top, near = _top_continuum(random_133117, 0.001326, 0.061321)
+    assert abs(a_top - (-0.0265517j)) < 1e-7
+    # the continuum's top member lies 3.8e-8 from α_top; the answer 0.44 away
+    assert 1e-7 < near < 0.05
+
+
+def test_a_slow_mode_at_a_paper_point_is_the_answer(flows):
+    """P2 (θ = 16°, ν0(0) = 0.08), k = 0.5 (2D): the mode −0.51873938 − 4.66064670i passes
+    both tests only at N = 256 (dense QZ on the mapped grid at N = 256 and 320: change 5e-9,
+    tails 2e-12 and 7e-13), its tails at the screen's N = 48, 60, 75 are 1.5e-3, 4.5e-4,
+    8.4e-5: no candidate before the rate rule, so the more damped −0.98558926 − 2.90109674i
+    was reported as converged. Now the answer is that mode, converged at N = 256."""
+    m = least_stable(flows("P2"), 0.5)
+    assert m.converged, (m.alpha, m.note)
+    assert m.n == 256
+    assert abs(m.alpha - (-0.51873938 - 4.66064670j)) < 1e-7, m.alpha

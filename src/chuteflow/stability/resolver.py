@@ -23,9 +23,12 @@ Resolver (:func:`least_stable`)
     2. *Search above it* (:func:`search_above`): one dense eigensolve of the whole spectrum
        (:func:`~.eigen.shifted_spectrum`: one LU and a standard eigenproblem) at the
        coarse resolution ``policy.search.n`` (48) on the grid of the question; every
-       eigenvalue above the answer whose eigenvector is nearly resolved there is a
+       eigenvalue above the answer whose eigenvector is nearly resolved there, or whose
+       tail falls fast enough through the next two rungs (:data:`SCREEN_RATE_RUNGS`), is a
        candidate, followed by shift-invert on the rungs 48, 60, 75, 94, … (each rung's
-       α(N') is the rung below) until decided (:func:`follow_candidate`).
+       α(N') is the rung below) until decided (:func:`follow_candidate`); one that settles
+       at the dilute top's continuum, α = −i k_x u0(y_max), is not a mode
+       (:data:`CONTINUUM_NEAR`).
 
     Finite wavevectors, 2D and 3D, are solved on the sinh-mapped grid
     (:func:`~.modes.cache_for`, the one place where the grid is chosen).
@@ -389,6 +392,13 @@ class _Candidate:
                 drift = math.inf
         self.mode = mode = make_mode(p, a, w, drift, n2, policy)
         self.alpha, self.v, self.n_from = complex(a), w, nn
+        a_top, near = _top_continuum(flow, kx, kz)
+        if abs(a - a_top) <= near and drift < CONTINUUM_DRIFT * max(1.0, abs(a)):
+            return self._decide(
+                "not a mode",
+                f"the dilute top's continuum: settled (drift {drift:.1e}) within {abs(a - a_top):.1e} "
+                f"of α = −i k_x u0(top) = {a_top:.6g} at N = {nn}",
+            )
         ans = self.answer
         if ans is not None and abs(a - ans.alpha) <= 2 * max(drift, ans.drift, policy.drift_tol):
             # the candidate converges onto the answer (its coarse eigenvalue lay farther off)
@@ -456,36 +466,108 @@ def follow_candidate(
     return c.result()
 
 
+def _spectrum_above(p: Pencil, answer: Mode | None, floor: float):
+    """The dense spectrum of the pencil ``p`` (:func:`~.eigen.shifted_spectrum`, QZ where σ
+    lies on an eigenvalue), shifted to the right of the answer, with the eigenvectors of the
+    eigenvalues above ``floor``: (α, V) or None where none is above."""
+    # one LU and a standard eigensolve, shifted to the right of the answer (accurate where
+    # the candidates are): 3–4.5 × faster than QZ at N = 48
+    sigma = 0.5 if answer is None else complex(max(answer.alpha.real, 0.0) + 0.5, answer.alpha.imag)
+    A, B = p.equilibrated()
+    got = shifted_spectrum(A, np.real(np.diag(B)), sigma, vectors_above=floor)
+    w, V = qz(A, B) if got is None else got
+    return None if V is None else (w, V)
+
+
+#: The rate rule of the screen (:func:`global_candidates`). An eigenvalue whose tail at the
+#: screen's N (48) is above ``candidate_tail`` is still a candidate where, followed through
+#: dense solves on the next SCREEN_RATE_RUNGS rungs (60, 75), its tail falls at each, fast
+#: enough that, continued at the slowest of those geometric rates, it reaches the tail
+#: threshold by the top of the ladder. A mode's tail falls geometrically in N; the
+#: eigenvalues of the dilute top's continuum fall slowly or unevenly. Measured: θ = 21.373°,
+#: ν0(0) = 0.0082, φ = 0.1076, Φ = 0.313 at (k_x, k_z) = (0.019049, 0.155868): the mode
+#: −0.3814 − 0.2499i (dense QZ at N = 250 … 450: drift 7.9e-6 … 2.3e-11) has tails 9.9e-4,
+#: 3.1e-4, 9.6e-5, 3.0e-5 at N = 48, 60, 75, 94 (×0.31 a rung; projected to pass at
+#: N ≈ 155) and was no candidate, so −2.1465 − 0.2834i was reported as converged. At
+#: (0.001326, 0.061321) of the same flow the continuum's −0.214 − 0.018i falls ×0.32 from
+#: 48 to 60 but ×0.75 from 60 to 75 (projected N > 400): not a candidate; see also
+#: :data:`CONTINUUM_NEAR`.
+SCREEN_RATE_RUNGS = 2
+#: The dilute top's continuum is not a mode. Where ν0 → ν_top the perturbations are only
+#: carried by the flow, so the continuum clusters at α_top = −i k_x u0(y_max): eigenvalues
+#: pinned there (drift ~1e-10 … 1e-6) while their tails stay unresolved, some of them
+#: falling ×0.36 a rung (θ = 21.373° … at (0.001326, 0.061321): 1.2e-2, 4.8e-3, 1.7e-3 at
+#: N = 48, 60, 75; drift 5e-11 and tail 7e-6 at N = 256). The smoothest nearly passes the
+#: tests at high N: on the unmapped grid at P1, k = 0.5, N = 200, −1.3e-8 − 4.959346i
+#: (α_top = −4.959346i; drift 9e-12, tail 9.7e-6, below the repeated screen's 1.3e-5); at
+#: P3, k = 0.002, the cluster's arc reaches −1.3e-5 − 0.0186683i (α_top = −0.0186684i;
+#: drift 1.6e-6, tail 9.2e-5 at N = 94). A candidate within CONTINUUM_NEAR × |k| u0(y_max)
+#: of α_top whose eigenvalue has settled (drift < CONTINUUM_DRIFT × max(1, |α|), the
+#: rule of :func:`~.modes.direct_mode`) is decided not a mode (:func:`_top_continuum`);
+#: and the rate rule admits no eigenvalue that moves less than that from one screen to the
+#: next, nor one that moves by half the distance to its nearest neighbour or more (not
+#: followed unambiguously). The slow modes the rate rule is for move by 1e-3 … 1e-2 (the
+#: mode above by 3e-3 and 2e-3, its neighbours 0.02 … 0.03 away; P2, k = 0.5,
+#: −0.5187 − 4.6606i: 1e-2, 0.52 from α_top = −4.6377i against the radius 0.046).
+CONTINUUM_NEAR = 1e-2
+CONTINUUM_DRIFT = 1e-4
+
+
+def _top_continuum(flow: SteadyFlow, kx: float, kz: float) -> tuple[complex, float]:
+    """(α_top, radius): where the dilute top's continuum clusters, α_top = −i k_x u0(y_max),
+    and the distance within which a settled candidate is taken to be it
+    (:data:`CONTINUUM_NEAR`)."""
+    u_top = float(flow.u[-1])
+    return complex(0.0, -kx * u_top), CONTINUUM_NEAR * math.hypot(kx, kz) * max(abs(u_top), 1.0)
+
+
 def global_candidates(
-    flow: SteadyFlow, kx: float, kz: float, answer: Mode | None, policy: RejectionPolicy, cache: OperatorCache
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    answer: Mode | None,
+    policy: RejectionPolicy,
+    cache: OperatorCache,
+    finer: list[int] | None = None,
+    top: int | None = None,
 ) -> list[tuple[complex, np.ndarray]]:
     """Eigenpairs above ``answer`` from one dense eigensolve at ``policy.search.n``
     (:func:`~.eigen.shifted_spectrum`), best first:
     eigenvectors nearly resolved there (tail < ``policy.search.candidate_tail``), Re α above
     the answer's by more than its uncertainty (its drift, at least the drift threshold),
-    neither the answer itself nor, in a real pencil (k_x = 0), the conjugate of one kept."""
+    neither the answer itself nor, in a real pencil (k_x = 0), the conjugate of one kept.
+
+    With finer resolutions ``finer`` (the next rungs) and the ladder's ``top``, an
+    eigenvalue above the answer whose tail is not below ``candidate_tail`` is a candidate
+    too where its tail falls fast enough (:data:`SCREEN_RATE_RUNGS`): it continues as the
+    mutually nearest eigenvalue of a dense solve at each of them, its tail falls at each,
+    and at the slowest of those geometric rates it reaches ``policy.tail_tol`` by
+    N = ``top``."""
     search = policy.search
     n = search.n
     p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
-    # the dense spectrum by one LU and a standard eigensolve, shifted to the right of the
-    # answer (accurate where the candidates are): 3–4.5 × faster than QZ at N = 48
-    sigma = 0.5 if answer is None else complex(max(answer.alpha.real, 0.0) + 0.5, answer.alpha.imag)
     floor = -math.inf
     if answer is not None:
         floor = answer.alpha.real + max(
             answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol
         )
-    A, B = p.equilibrated()
-    got = shifted_spectrum(A, np.real(np.diag(B)), sigma, vectors_above=floor)
-    w, V = qz(A, B) if got is None else got
+    got = _spectrum_above(p, answer, floor)
+    if got is None:
+        return []
+    w, V = got
     above = np.nonzero(w.real > floor)[0]
-    if len(above) == 0 or V is None:
+    if len(above) == 0:
         return []
     t = tails(p, V[:, above], policy.tail_terms)
+    slow = t >= search.candidate_tail
+    falls = np.zeros(len(above), dtype=bool)
+    finer = [m for m in (finer or []) if m > n]
+    if finer and top is not None and np.any(slow):
+        falls = slow & _tail_falls_in_time(flow, kx, kz, answer, policy, cache, w[above], t, n, finer, top)
     out: list[tuple[complex, np.ndarray]] = []
-    for j, tj in zip(above, t):
+    for j, tj, fj in zip(above, t, falls):
         a = complex(w[j])
-        if tj >= search.candidate_tail:
+        if tj >= search.candidate_tail and not fj:
             continue
         if answer is not None and abs(a - answer.alpha) <= 1e-3 * max(abs(answer.alpha), 1e-3):
             continue
@@ -493,6 +575,52 @@ def global_candidates(
             continue
         out.append((a, V[:, j]))
     return out
+
+
+def _tail_falls_in_time(
+    flow, kx, kz, answer, policy, cache, a1: np.ndarray, t1: np.ndarray, n1: int, finer: list[int], top: int
+) -> np.ndarray:
+    """For the eigenvalues ``a1`` (tails ``t1``) of the screen at N = ``n1``: whether each
+    continues, as the mutually nearest eigenvalue of a dense solve at each resolution of
+    ``finer`` in turn, with a tail that falls at every step and that, falling on from the
+    last at the slowest of those geometric rates in N, reaches ``policy.tail_tol`` by
+    N = ``top`` (:data:`SCREEN_RATE_RUNGS`)."""
+    ok = np.ones(len(a1), dtype=bool)
+    alpha, tail, n_prev = a1.copy(), t1.copy(), n1
+    rate = np.full(len(a1), -np.inf)  # the slowest ln(tail) per unit N so far (< 0)
+    lo = float(np.min(a1.real))
+    lo -= 0.5 * (abs(lo) + 1e-3)
+    for n in finer:
+        p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
+        got = _spectrum_above(p, answer, lo)
+        if got is None:
+            return np.zeros(len(a1), dtype=bool)
+        w, V = got
+        near = np.nonzero(w.real > lo)[0]
+        if len(near) == 0:
+            return np.zeros(len(a1), dtype=bool)
+        b, t = w[near], tails(p, V[:, near], policy.tail_terms)
+        d = np.abs(alpha[:, None] - b[None, :])
+        to_n = np.argmin(d, axis=1)  # nearest at n of each followed eigenvalue
+        back = np.argmin(d, axis=0)  # nearest among those of each at n
+        mutual = back[to_n] == np.arange(len(a1))
+        falls = t[to_n] < tail
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.log(t[to_n] / tail) / (n - n_prev)
+        # followed unambiguously only where it moves by less than half the distance to its
+        # nearest neighbour at n; and an eigenvalue pinned while its tail is unresolved is
+        # the dilute top's continuum (modes.direct_mode's rule; CONTINUUM_NEAR)
+        step = np.abs(b[to_n] - alpha)
+        gap = np.abs(b[:, None] - b[None, :])
+        gap[np.diag_indices_from(gap)] = np.inf
+        alone = step < 0.5 * gap.min(axis=1)[to_n]
+        moves = step >= CONTINUUM_DRIFT * np.maximum(1.0, np.abs(alpha))
+        ok &= mutual & falls & alone & moves
+        rate = np.maximum(rate, np.where(ok, r, 0.0))
+        alpha, tail, n_prev = b[to_n], t[to_n], n
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n_pass = n_prev + np.log(policy.tail_tol / tail) / rate
+    return ok & ((tail <= policy.tail_tol) | (n_pass <= top))
 
 
 #: The screen resolves what the answer needed. A mode's eigenvector tail falls about
@@ -535,7 +663,8 @@ def search_above(
         return answer
     if rungs is None:
         rungs = search.ladder(policy.n_max, policy.n_growth)
-    found = _search_once(flow, kx, kz, answer, policy, cache, rungs)
+    # the rate rule's screens on the next rungs of the search's ladder (SCREEN_RATE_RUNGS)
+    found = _search_once(flow, kx, kz, answer, policy, cache, rungs, rungs[1 : SCREEN_RATE_RUNGS + 1])
     screened = search.n
     while found is not None and found.physical and found.n > SCREEN_REPEAT * screened:
         n2 = found.n
@@ -556,10 +685,12 @@ def _search_once(
     policy: RejectionPolicy,
     cache: OperatorCache,
     rungs: list[int],
+    finer: list[int] | None = None,
 ) -> Mode | None:
-    """One screen at ``policy.search.n`` and its candidates followed (:func:`search_above`)."""
+    """One screen at ``policy.search.n`` (with the rate rule's ``finer`` resolutions, see
+    :func:`global_candidates`) and its candidates followed (:func:`search_above`)."""
     search = policy.search
-    cands = global_candidates(flow, kx, kz, answer, policy, cache)
+    cands = global_candidates(flow, kx, kz, answer, policy, cache, finer, rungs[-1])
     if not cands:
         return answer
     # the least-stable mode that passes both tests, and the candidates not decided
