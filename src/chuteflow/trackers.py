@@ -51,6 +51,7 @@ __all__ = [
     "WallTimeStop",
     "ResolutionMonitor",
     "ResolutionWarning",
+    "run_tail",
     "saturated",
     "VERDICTS",
     "WavePolicy",
@@ -268,14 +269,54 @@ class WallTimeStop(Tracker):
         return None
 
 
+def run_tail(series) -> float:
+    """The tail of a run from its tails over time (``x_tail`` or ``y_tail`` at each record):
+    the largest from the series' first minimum on; 0 for an empty series.
+
+    The one definition of a run's resolution, used by :class:`ResolutionMonitor` and the
+    simulations' ``x_tail``/``y_tail``. The initial condition's own high modes (noise) are
+    data, not truncation: they decay over the first steps. What the run itself puts into its
+    highest modes shows once the tail stops falling: from there on every value counts. A
+    tail that falls to the end gives the last value; one that never falls, the largest.
+    (P1, L = 2000, noise 1e-4: 3.1e-4 at t = 24 from the noise, then lower; 2.1e-4 at the
+    end, from the wave.)"""
+    v = np.asarray(series, dtype=float)
+    if v.size == 0:
+        return 0.0
+    rise = np.nonzero(np.diff(v) >= 0)[0]
+    return float(v[rise[0] if rise.size else -1 :].max())
+
+
+class _RunTail:
+    """:func:`run_tail` of a series seen one value at a time."""
+
+    __slots__ = ("last", "peak", "rising")
+
+    def __init__(self, peak: float = 0.0, last: float = math.nan, rising: bool = False):
+        self.peak, self.last, self.rising = peak, last, rising
+
+    def add(self, v: float) -> float:
+        if self.rising:
+            self.peak = max(self.peak, v)
+        elif v >= self.last:  # False while last is NaN (the first value)
+            self.rising, self.peak = True, max(self.last, v)
+        else:
+            self.peak = v  # still falling: the latest is the minimum so far
+        self.last = v
+        return self.peak
+
+
 class ResolutionMonitor(Tracker):
     """Watch the amplitude of the highest resolved modes, ``sim.resolution(y)``.
 
-    Every ``every`` steps the largest ``x_tail`` and ``y_tail`` (amplitude of the highest
-    modes relative to the largest, see the simulation's ``resolution``) are updated in
-    :attr:`x_tail` and :attr:`y_tail`. When one of them rises above ``tol``: with
-    ``action="warn"`` a :class:`ResolutionWarning` (once per direction), with ``"stop"`` the
-    run stops with status ``"under-resolved"`` (its data kept: rerun finer).
+    Every ``every`` steps (and at the start and the end) the ``x_tail`` and ``y_tail``
+    (amplitude of the highest modes relative to the largest, see the simulation's
+    ``resolution``) are measured; :attr:`x_tail` and :attr:`y_tail` are the run's tails by
+    :func:`run_tail` (the largest from the first minimum on: the initial condition's own
+    high modes do not count while they decay). When one of them rises above ``tol`` (or
+    ends above it): with ``action="warn"`` a :class:`ResolutionWarning` (once per
+    direction), with ``"stop"`` the run stops with status ``"under-resolved"`` (its data
+    kept: rerun finer).
     """
 
     def __init__(self, tol: float = 1e-4, *, every: int = 10, action: str = "warn"):
@@ -286,8 +327,16 @@ class ResolutionMonitor(Tracker):
         if action not in ("warn", "stop"):
             raise ParameterError(f"action = {action!r}: choose 'warn' or 'stop'")
         self.tol, self.every, self.action = float(tol), int(every), action
-        self.x_tail, self.y_tail = 0.0, 0.0
+        self._tails = {"x": _RunTail(), "y": _RunTail()}
         self._warned: set[str] = set()
+
+    @property
+    def x_tail(self) -> float:
+        return self._tails["x"].peak
+
+    @property
+    def y_tail(self) -> float:
+        return self._tails["y"].peak
 
     def initialize(self, sim, initial, t_end):
         self._measure(sim, initial.y)
@@ -298,14 +347,14 @@ class ResolutionMonitor(Tracker):
         return self._measure(sim, step.y)
 
     def finalize(self, sim, info):
-        self._measure(sim, info.y)
+        self._measure(sim, info.y, end=True)
 
-    def _measure(self, sim, y) -> str | None:
+    def _measure(self, sim, y, end: bool = False) -> str | None:
         r = sim.resolution(y)
-        self.x_tail = max(self.x_tail, float(r["x_tail"]))
-        self.y_tail = max(self.y_tail, float(r["y_tail"]))
-        for d, v in (("x", self.x_tail), ("y", self.y_tail)):
-            if v > self.tol and d not in self._warned:
+        for d in ("x", "y"):
+            tail = self._tails[d]
+            v = tail.add(float(r[f"{d}_tail"]))
+            if v > self.tol and (tail.rising or end) and d not in self._warned:
                 self._warned.add(d)
                 if self.action == "stop":
                     return "under-resolved"
@@ -318,10 +367,20 @@ class ResolutionMonitor(Tracker):
         return None
 
     def checkpoint(self):
-        return {"tails": np.array([self.x_tail, self.y_tail])}
+        x, y = self._tails["x"], self._tails["y"]
+        return {
+            "tails": np.array([x.peak, y.peak]),
+            "tails_last": np.array([x.last, y.last]),
+            "tails_rising": np.array([x.rising, y.rising]),
+        }
 
     def restore(self, saved):
-        self.x_tail, self.y_tail = (float(v) for v in saved["tails"])
+        peaks = [float(v) for v in saved["tails"]]
+        # a checkpoint written before run_tail kept only the maxima: counted as rising
+        last = saved.get("tails_last", np.array(peaks))
+        rising = saved.get("tails_rising", np.array([True, True]))
+        for i, d in enumerate(("x", "y")):
+            self._tails[d] = _RunTail(peaks[i], float(last[i]), bool(rising[i]))
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from .._files import atomic_write
 from ..errors import ConvergenceError, ParameterError
 from ..stability import OperatorCache, least_stable
 from ..steady import SteadyFlow, steady_tangent
-from ..trackers import WavePolicy
+from ..trackers import WavePolicy, run_tail
 from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
 from .setup import INITS, DnsSetup, _check_valid, check_setup, history_coefficients, initial_coefficients
@@ -594,8 +594,8 @@ class DnsSimulation:
             "mode_phase_velocity": float(mode.wave_speed),
             "rho_bar0": flow.rho_bar,
             "Q0": flow.Q,
-            "x_tail": float(x_tail.max()) if x_tail.size else 0.0,
-            "y_tail": float(y_tail.max()) if y_tail.size else 0.0,
+            "x_tail": run_tail(x_tail),
+            "y_tail": run_tail(y_tail),
             "x_tail_end": float(x_tail[-1]) if x_tail.size else 0.0,
             "y_tail_end": float(y_tail[-1]) if y_tail.size else 0.0,
             "steady_relaxation": self.relax_change,

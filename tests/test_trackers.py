@@ -1,0 +1,91 @@
+"""The layer-neutral trackers (:mod:`chuteflow.trackers`) on scripted series: the one
+definition of a run's tail (:func:`~chuteflow.trackers.run_tail`) and the monitor that uses it."""
+
+from __future__ import annotations
+
+import warnings
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from chuteflow.trackers import ResolutionMonitor, ResolutionWarning, run_tail
+
+
+def test_run_tail_counts_from_the_first_minimum():
+    assert run_tail([]) == 0.0
+    assert run_tail([5.0, 3.0, 1.0, 2.0, 4.0, 0.5]) == 4.0  # the noise's 5 and 3 decay first
+    assert run_tail([3.0, 2.0, 1.0]) == 1.0  # falls to the end: the last value
+    assert run_tail([1.0, 2.0, 3.0, 2.5]) == 3.0  # never falls first: the largest
+    assert run_tail([0.0, 1e-5, 2e-5, 1e-5]) == 2e-5  # a run from a smooth state (x_tail 0 at t = 0)
+
+
+class _Scripted:
+    """A duck-typed simulation whose ``resolution`` returns the next scripted tails."""
+
+    def __init__(self, xs, ys):
+        self.values = iter(zip(xs, ys))
+
+    def resolution(self, y):
+        x, yy = next(self.values)
+        return {"x_tail": x, "y_tail": yy}
+
+
+def _run(monitor, xs, ys):
+    sim = _Scripted(xs, ys)
+    monitor.initialize(sim, SimpleNamespace(y=None), 1.0)
+    status = None
+    for i in range(1, len(xs) - 1):
+        status = monitor.handle(sim, SimpleNamespace(number=i, y=None)) or status
+    monitor.finalize(sim, SimpleNamespace(y=None))
+    return status
+
+
+def test_the_monitor_streams_the_same_tail_and_ignores_decaying_noise():
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        xs = list(rng.uniform(0, 1e-3, 12))
+        ys = list(rng.uniform(0, 1e-3, 12))
+        mon = ResolutionMonitor(0.5, every=1)
+        _run(mon, xs, ys)
+        assert mon.x_tail == run_tail(xs) and mon.y_tail == run_tail(ys)
+    # the initial noise's tail (3e-3) decays below the tolerance and the run stays below it:
+    # no warning (the old monitor kept the maximum, 3e-3, and warned)
+    xs = [3e-3, 5e-4, 2e-5, 3e-5, 4e-5, 3e-5]
+    mon = ResolutionMonitor(1e-4, every=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ResolutionWarning)
+        _run(mon, xs, [1e-6] * len(xs))
+    assert mon.x_tail == 4e-5
+    # the run itself pushes the tail above the tolerance: it warns, or stops
+    xs = [3e-3, 5e-4, 2e-5, 3e-4, 4e-4, 5e-4]
+    with pytest.warns(ResolutionWarning, match="highest x modes carry 3.0e-04"):
+        _run(ResolutionMonitor(1e-4, every=1), xs, [1e-6] * len(xs))
+    assert _run(ResolutionMonitor(1e-4, every=1, action="stop"), xs, [1e-6] * len(xs)) == "under-resolved"
+    # a tail still above the tolerance at the end warns even while it falls
+    xs = [3e-3, 2e-3, 1e-3]
+    with pytest.warns(ResolutionWarning, match="1.0e-03"):
+        _run(ResolutionMonitor(1e-4, every=1), xs, [1e-6] * len(xs))
+
+
+def test_the_monitor_resumes_from_its_checkpoint():
+    xs = [3e-3, 5e-4, 2e-5, 3e-5, 4e-5, 3e-5, 6e-5, 1e-5]
+    ys = [1e-6] * len(xs)
+    whole = ResolutionMonitor(1e-4, every=1)
+    _run(whole, xs, ys)
+    first = ResolutionMonitor(1e-4, every=1)
+    sim = _Scripted(xs, ys)
+    first.initialize(sim, SimpleNamespace(y=None), 1.0)
+    for i in range(1, 4):
+        first.handle(sim, SimpleNamespace(number=i, y=None))
+    saved = {k: np.asarray(v) for k, v in first.checkpoint().items()}
+    second = ResolutionMonitor(1e-4, every=1)
+    second.restore(saved)
+    for i in range(4, len(xs) - 1):
+        second.handle(sim, SimpleNamespace(number=i, y=None))
+    second.finalize(sim, SimpleNamespace(y=None))
+    assert (second.x_tail, second.y_tail) == (whole.x_tail, whole.y_tail) == (6e-5, 1e-6)
+    # a checkpoint of the old form (the maxima only) still loads
+    old = ResolutionMonitor(1e-4)
+    old.restore({"tails": np.array([2e-5, 1e-6])})
+    assert (old.x_tail, old.y_tail) == (2e-5, 1e-6)
