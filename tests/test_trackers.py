@@ -48,7 +48,8 @@ def test_the_monitor_streams_the_same_tail_and_ignores_decaying_noise():
         ys = list(rng.uniform(0, 1e-3, 12))
         mon = ResolutionMonitor(0.5, every=1)
         _run(mon, xs, ys)
-        assert mon.x_tail == run_tail(xs) and mon.y_tail == run_tail(ys)
+        assert mon.x_tail == run_tail(xs)
+        assert mon.y_tail == run_tail(ys)
     # the initial noise's tail (3e-3) decays below the tolerance and the run stays below it:
     # no warning (the old monitor kept the maximum, 3e-3, and warned)
     xs = [3e-3, 5e-4, 2e-5, 3e-5, 4e-5, 3e-5]

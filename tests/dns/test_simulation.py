@@ -281,6 +281,18 @@ def test_cli_dns_and_waves_json_keys_are_documented(tmp_path):
     r = runner.invoke(app, ["waves", "--points", "P1", "--theta", "16", "--json"])
     assert r.exit_code == 2
     assert "points" in r.output
+    # one period per flow, or a one-line error naming the parameter
+    two = ["--theta", "16", "--nu0", "0.05,0.06", "--roughness", "0.05"]
+    r = runner.invoke(app, ["waves", *two, "--length", "1000,1500", *grid, "--json"])
+    assert r.exit_code == 0, r.output
+    w2 = json.loads(r.stdout.strip().splitlines()[-1])
+    assert w2["length"] == [1000.0, 1500.0]
+    assert [p["length"] for p in w2["points"]] == [1000.0, 1500.0]
+    r = runner.invoke(app, ["waves", *two, "--length", "1000,1500,2000", *grid])
+    assert r.exit_code == 2
+    assert "length" in r.output
+    assert "one per flow" in r.output
+    assert "Traceback" not in r.output
 
 
 def test_cli_waves_reduced_runs_the_1d_model_as_long_as_the_full_one():

@@ -81,3 +81,28 @@ def test_wall_limit_pauses_each_flow_and_the_same_call_continues(serial, tmp_pat
         np.testing.assert_allclose(done[k].values, serial[k].values[:1], rtol=1e-9, atol=1e-15, err_msg=k)
     with pytest.raises(ParameterError, match="wall_limit"):
         map_waves(POINTS, SETTINGS, wall_limit=-1.0)
+
+
+def test_each_flow_may_have_its_own_period(serial, tmp_path):
+    """Points (θ, ν0, L): each flow runs at its own period (here the second at L = 1500); a
+    flow at the settings' L is the same run as before, the file of another L is named by it,
+    a map run again reads both back, and a new L for a flow is a new run, not the old file."""
+    pts = [(*POINTS[0], 1000.0), (*POINTS[1], 1500.0)]
+    got = map_waves(pts, SETTINGS, out_dir=tmp_path)
+    assert list(got["length"].values) == [1000.0, 1500.0]
+    for k in ("rho_min_rel", "rho_max_rel", "growth_rate_linear"):
+        assert got[k].values[0] == serial[k].values[0], k
+    # k = 2π/1500 is another wavenumber: another linear growth rate
+    assert got["growth_rate_linear"].values[1] != serial["growth_rate_linear"].values[1]
+    names = sorted(p.name for p in tmp_path.glob("*.nc"))
+    assert names == ["theta16.5_nu00.06_L1500.nc", "theta16_nu00.05.nc"]
+    again = map_waves(pts, SETTINGS, out_dir=tmp_path)
+    np.testing.assert_array_equal(again["wall_time"].values, got["wall_time"].values)
+    other = map_waves([(*POINTS[1], 1200.0)], SETTINGS, out_dir=tmp_path)
+    assert other["length"].values[0] == 1200.0
+    assert other["growth_rate_linear"].values[0] != got["growth_rate_linear"].values[1]
+    assert got["phase"].values[0] == 0.0
+    assert got["phase"].values[-1] < 1.0
+    for bad, match in (([(16.0,)], "theta, nu0"), ([(16.0, 0.05, -1.0)], "length")):
+        with pytest.raises(ParameterError, match=match):
+            map_waves(bad, SETTINGS)

@@ -184,7 +184,11 @@ def waves(
         None, "--points", help="The paper's points instead, e.g. P1,P4,P5 (their roughness is used)."
     ),
     model: ChuteModel = MODEL_OPTIONS_HERE,
-    length: float = typer.Option(1000.0, "--length", help="Period L along the slope (diameters)."),
+    length: str = typer.Option(
+        "1000",
+        "--length",
+        help="Period L along the slope (diameters): one for every flow, or one per flow, comma-separated.",
+    ),
     time: float = typer.Option(30000.0, "--time", help="Longest simulated time (stops once saturated)."),
     dt: float = typer.Option(4.0, "--dt", help="Time step."),
     nx: int = typer.Option(65, "--nx", help="Fourier unknowns per node, nx = 2M + 1."),
@@ -258,8 +262,13 @@ def waves(
         if theta is None or nu0 is None:
             raise ParameterError("theta, nu0: give --theta and --nu0 (comma-separated), or --points")
         pts = [(t, n) for t in _floats(theta, "theta") for n in _floats(nu0, "nu0")]
+    lengths = _floats(length, "length")
+    if not lengths or len(lengths) not in (1, len(pts)):
+        raise ParameterError(
+            f"length = {length!r}: give one period for every flow or one per flow ({len(pts)} flows)"
+        )
     settings = WaveMapSettings(
-        length=length,
+        length=lengths[0],
         time=time,
         dt=dt,
         modes=(nx - 1) // 2,
@@ -280,7 +289,7 @@ def waves(
         )
 
     ds = map_waves(
-        pts,
+        [(t, n, lengths[i] if len(lengths) > 1 else lengths[0]) for i, (t, n) in enumerate(pts)],
         settings,
         model=model,
         out_dir=out_dir,
@@ -294,7 +303,11 @@ def waves(
         ds.to_netcdf(out, engine="h5netcdf")
     rows = []
     for i in range(ds.sizes["point"]):
-        r: dict[str, object] = {"theta": float(ds["theta"][i]), "nu0": float(ds["nu0"][i])}
+        r: dict[str, object] = {
+            "theta": float(ds["theta"][i]),
+            "nu0": float(ds["nu0"][i]),
+            "length": float(ds["length"][i]),
+        }
         for k in WAVE_KEYS:
             v = ds[k].values[i]
             r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
@@ -302,11 +315,15 @@ def waves(
     if reduced:
         _reduced_waves(rows, model, settings, con)
     if as_json:
-        typer.echo(json.dumps({"length": length, **model.to_dict(), "points": rows}))
+        typer.echo(
+            json.dumps(
+                {"length": lengths[0] if len(lengths) == 1 else lengths, **model.to_dict(), "points": rows}
+            )
+        )
         return
     for r in rows:
         typer.echo(
-            f"θ = {r['theta']:g}, ν0 = {r['nu0']:g}: {r['verdict']}; "
+            f"θ = {r['theta']:g}, ν0 = {r['nu0']:g}, L = {r['length']:g}: {r['verdict']}; "
             f"ρ̄ {r['rho_min_rel']} … {r['rho_max_rel']}; "
             f"c = {r['wave_speed']}, λ = {r['wavelength']}, t_sat = {r['t_saturation']}; linear Re α = "
             f"{r['growth_rate_linear']}, c = {r['phase_velocity_linear']}"
@@ -347,9 +364,10 @@ def _reduced_waves(rows: list, model: ChuteModel, settings, con) -> None:
                 nus = tuple(float(q["nu0"]) for q in rows if float(q["theta"]) == th)
                 models[th] = reduced_model(th, model, tol=1e-4, seeds=(*nus, *SEEDS))
             s = settings
+            L = float(r["length"])
             ds = run(
                 models[th],
-                s.length,
+                L,
                 nu0=nu,
                 amplitude=s.amplitude,
                 seed=s.seed,
@@ -359,7 +377,7 @@ def _reduced_waves(rows: list, model: ChuteModel, settings, con) -> None:
             )
             a = ds.attrs
             w = wave_measures(
-                ds["t"].values, ds["rho"].values, s.length, float(a["frame_speed"]), status=str(a["status"])
+                ds["t"].values, ds["rho"].values, L, float(a["frame_speed"]), status=str(a["status"])
             )
             # the 1D model unstable at every k (k_c = ∞): its wave is the grid's, not the flow's
             w["short_wave_unstable"] = str(a["short_wave_unstable"]) == "True"  # stored as text

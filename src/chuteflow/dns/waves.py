@@ -9,7 +9,9 @@ run stood, and a finished run is read back instead of re-run. The result has, pe
 wave at the end (:func:`~chuteflow.trackers.wave_measures`: verdict, min/max of ρ̄ relative to
 its mean, wave speed, wavelength that won, time to saturate), its shape ρ̄(ξ)/⟨ρ̄⟩ − 1 in the
 co-moving frame (crest at L/2), next to the linear growth rate and phase velocity of the
-fundamental k = 2π/L, the mass drift and the resolution tails.
+fundamental k = 2π/L, the mass drift and the resolution tails. Each flow may have its own
+period L (``(θ, ν0, L)`` points): flows far apart are unstable at different lengths (at the
+paper's points L_c ≈ 880 at P1, ≈ 2000 at P5, ≈ 6300 at P4).
 """
 
 from __future__ import annotations
@@ -111,24 +113,26 @@ class WaveMapSettings:
         return step_settings(self.dt_tol, self.preconditioner)
 
 
-def _name(theta: float, nu0: float) -> str:
-    return f"theta{theta:g}_nu0{nu0:g}"
+def _name(theta: float, nu0: float, length: float, s: WaveMapSettings) -> str:
+    """The file of one flow's run (its period named where it is not the settings')."""
+    return f"theta{theta:g}_nu0{nu0:g}" + ("" if length == s.length else f"_L{length:g}")
 
 
 def _one(
     theta: float,
     nu0: float,
+    length: float,
     model_dict: dict,
     s: WaveMapSettings,
     out_dir: str | None,
     wall_limit: float | None = None,
 ) -> dict:
-    """Run (or read back) the wave at one flow; returns its scalars and shape."""
+    """Run (or read back) the wave at one flow and period; returns its scalars and shape."""
     from ..steady import solve_steady
     from .api import simulate, summary
 
     model = ChuteModel(**model_dict)
-    out = None if out_dir is None else Path(out_dir) / f"{_name(theta, nu0)}.nc"
+    out = None if out_dir is None else Path(out_dir) / f"{_name(theta, nu0, length, s)}.nc"
     ck = None if out is None else Path(str(out) + ".checkpoint.npz")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -136,8 +140,10 @@ def _one(
         if out is not None and out.exists() and not (ck is not None and ck.exists()):
             ds: xr.Dataset | None = xr.load_dataset(out, engine="h5netcdf")
             assert ds is not None
-            done = ds.attrs.get("map_settings") == repr(s) and not str(ds.attrs["status"]).startswith(
-                ("stopped", "paused")
+            done = (
+                ds.attrs.get("map_settings") == repr(s)
+                and float(ds.attrs["length"]) == length
+                and not str(ds.attrs["status"]).startswith(("stopped", "paused"))
             )
             if not done:
                 ds = None
@@ -148,7 +154,7 @@ def _one(
                 out.parent.mkdir(parents=True, exist_ok=True)  # the checkpoint goes there too
             ds = simulate(
                 flow,
-                s.length,
+                length,
                 time=s.time,
                 dt=s.dt,
                 modes=s.modes,
@@ -174,11 +180,32 @@ def _one(
     row = {k: sm.get(k) for k in WAVE_KEYS}
     row["growth_rate_linear"] = sm["alpha_re"]
     row["phase_velocity_linear"] = sm["mode_phase_velocity"]
-    return {"theta": theta, "nu0": nu0, **row, "shape": shape, "xi": ds["x"].values}
+    return {
+        "theta": theta,
+        "nu0": nu0,
+        "length": length,
+        **row,
+        "shape": shape,
+        "phase": ds["x"].values / length,
+    }
+
+
+def _point(p, default_length: float) -> tuple[float, float, float]:
+    """(θ, ν0, L) of one entry of ``points``."""
+    try:
+        vals = [float(v) for v in p]
+    except (TypeError, ValueError):
+        raise ParameterError(f"points: {p!r} is not (theta, nu0) or (theta, nu0, length)") from None
+    if len(vals) not in (2, 3):
+        raise ParameterError(f"points: {p!r} is not (theta, nu0) or (theta, nu0, length)")
+    length = vals[2] if len(vals) == 3 else default_length
+    if not (math.isfinite(length) and length > 0):
+        raise ParameterError(f"points: length = {length!r} at {p!r} must be a positive number (the period L)")
+    return vals[0], vals[1], length
 
 
 def map_waves(
-    points: Sequence[tuple[float, float]],
+    points: Sequence[Sequence[float]],
     settings: WaveMapSettings | None = None,
     *,
     model: ChuteModel | None = None,
@@ -193,8 +220,10 @@ def map_waves(
 
     Parameters
     ----------
-    points : sequence of (float, float)
-        Inclination (degrees) and floor density of each steady flow.
+    points : sequence of (float, float) or (float, float, float)
+        Inclination (degrees) and floor density of each steady flow, and optionally its
+        period L (default ``settings.length``): flows unstable at different lengths each get
+        theirs (e.g. the paper's P4 is stable at L = 1000, its k_c ≈ 1e-3).
     settings : WaveMapSettings
         The runs' grid, time and stop.
     model : ChuteModel, optional
@@ -220,13 +249,13 @@ def map_waves(
     Returns
     -------
     xarray.Dataset
-        Dimension ``point`` (and ``xi`` for the shapes): ``theta``, ``nu0`` and the scalars of
-        :data:`WAVE_KEYS` per flow, ``shape(point, xi)`` = ρ̄/⟨ρ̄⟩ − 1 at the end, crest at L/2;
-        the settings and the model as attributes.
+        Dimension ``point`` (and ``phase`` for the shapes): ``theta``, ``nu0``, ``length``
+        and the scalars of :data:`WAVE_KEYS` per flow, ``shape(point, phase)`` = ρ̄/⟨ρ̄⟩ − 1
+        at the end against ξ/L (crest at 1/2); the settings and the model as attributes.
     """
     s = settings or WaveMapSettings()
     model = model or ChuteModel()
-    pts = [(float(a), float(b)) for a, b in points]
+    pts = [_point(p, s.length) for p in points]
     if not pts:
         raise ParameterError("points: give at least one (theta, nu0)")
     if int(workers) != workers or workers < 1:
@@ -244,8 +273,10 @@ def map_waves(
             from dask.distributed import as_completed as dask_completed  # there: dask_client checked
 
             futures = {
-                c.submit(_one, th, nu, md, s, od, wall_limit, pure=False, key=f"chuteflow-wave-{run}-{i}"): i
-                for i, (th, nu) in enumerate(pts)
+                c.submit(
+                    _one, th, nu, L, md, s, od, wall_limit, pure=False, key=f"chuteflow-wave-{run}-{i}"
+                ): i
+                for i, (th, nu, L) in enumerate(pts)
             }
             try:
                 for fut in dask_completed(list(futures)):
@@ -256,13 +287,13 @@ def map_waves(
                 c.cancel(list(futures))
                 raise
     elif workers == 1 or len(pts) == 1:
-        for i, (th, nu) in enumerate(pts):
-            rows[i] = _one(th, nu, md, s, od, wall_limit)
+        for i, (th, nu, L) in enumerate(pts):
+            rows[i] = _one(th, nu, L, md, s, od, wall_limit)
             if progress is not None:
                 progress(len(rows), len(pts), rows[i])
     else:
         with ProcessPoolExecutor(max_workers=int(workers)) as ex:
-            futs = {ex.submit(_one, th, nu, md, s, od, wall_limit): i for i, (th, nu) in enumerate(pts)}
+            futs = {ex.submit(_one, th, nu, L, md, s, od, wall_limit): i for i, (th, nu, L) in enumerate(pts)}
             for f in as_completed(futs):
                 rows[futs[f]] = f.result()
                 if progress is not None:
@@ -277,13 +308,14 @@ def map_waves(
     }
     for k in ("verdict", "status"):
         data[k] = (("point",), np.array([str(r[k]) for r in ordered]))
-    data["shape"] = (("point", "xi"), np.array([r["shape"] for r in ordered]), {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
+    data["shape"] = (("point", "phase"), np.array([r["shape"] for r in ordered]), {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
     return xr.Dataset(
         data,
         coords={
             "theta": ("point", [p[0] for p in pts], {"units": "degree"}),
             "nu0": ("point", [p[1] for p in pts]),
-            "xi": ("xi", ordered[0]["xi"], {"long_name": "ξ, crest at L/2", "units": "sigma"}),
+            "length": ("point", [p[2] for p in pts], {"long_name": "period L", "units": "sigma"}),
+            "phase": ("phase", ordered[0]["phase"], {"long_name": "ξ/L, crest at 1/2", "units": "1"}),
         },
         attrs={
             "title": "saturated density waves of the full equations (chuteflow.dns.map_waves)",
