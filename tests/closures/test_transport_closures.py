@@ -182,15 +182,20 @@ def test_garzo_dufty_dilute_limit_is_boltzmann(e):
 @pytest.mark.parametrize("e", ES)
 def test_lun_full_heat_flux_term(e):
     """lun_full: Table 1's functions unchanged, κ_h = fh T^{3/2} (kinetic.LunFullClosure),
-    proportional to (1 − e_p) through η(1 − η)(2η − 1)."""
+    proportional to (1 − e_p) through (η − 1)(2η − 1). Reference: Lun et al. (1984)'s
+    coefficient as MFiX writes it (CurtinIDS/mfix model/calc_mu_s.f, GT_PDE_LUN, the
+    commented-out Kphi_s = (Kth*/g0) 12/5 η(η − 1)(2η − 1)(1 + 12/5 η ν g0)(ν g0' + 2 g0) T
+    with Kth* = 75√π/(48 η (41 − 33η))), per unit ρ_p σ and in √T units."""
     eta = (1 + e) / 2
     nu, T = NUS, np.full_like(NUS, 2.0)
     full = ChuteModel(restitution=e, transport="lun_full").evaluate(nu, T)
     lun = ChuteModel(restitution=e).evaluate(nu, T)
     g = (1 - nu / 0.6) ** (-1.5)
     dg = 1.5 / 0.6 * (1 - nu / 0.6) ** (-2.5)
-    fh = 25 * SQPI / (16 * (41 - 33 * eta)) * (1 + 2.4 * eta * nu * g) * 2.4 * eta * (1 - eta) * (2 * eta - 1)
-    fh *= (2 * nu * g + nu**2 * dg) / (nu * g)
+    # MFiX's Kphi_s over ρ_p σ T^{3/2}, with Kth*/(ρ_p σ √T) = 75√π/(48 η (41 − 33η))
+    kth = 75 * SQPI / (48 * eta * (41 - 33 * eta))
+    fh = kth / g * 2.4 * eta * (eta - 1) * (2 * eta - 1) * (1 + 2.4 * eta * nu * g) * (nu * dg + 2 * g)
+    assert np.all(fh < 0)  # heat flows up the density gradient for e_p < 1
     np.testing.assert_allclose(full["kappa_h"][(0, 0)], fh * T**1.5, rtol=1e-12)
     np.testing.assert_allclose(full["kappa_h"][(0, 1)], 1.5 * fh * T**0.5, rtol=1e-12)
     for name in ("p", "mu", "zeta", "kappa", "Gamma", "eta_star", "Gamma_star"):

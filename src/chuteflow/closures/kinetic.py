@@ -120,11 +120,16 @@ class LunFullClosure(LunClosure):
 
     f1 … f7 are Table 1's; κ_h = fh T^{3/2} with (η = (1 + e_p)/2)
 
-        fh = 25√π / (16 (41 − 33η)) (1 + 12/5 η ν g0) · 12/5 η (1 − η)(2η − 1) · (ν² g0)'/(ν g0),
+        fh = 25√π / (16 (41 − 33η)) (1 + 12/5 η ν g0) · 12/5 (η − 1)(2η − 1) · (ν² g0)'/(ν g0),
 
-    proportional to 1 − e_p as the footnote says (Lun et al. 1984, the heat flux of their
-    §4, transcribed in the form of Table 1's f4; see the closures page of the docs for the
-    caveat on this transcription).
+    proportional to 1 − e_p as the footnote says, and negative for 1/2 < η < 1 (heat flows
+    up the density gradient). Source: Lun et al. (1984)'s coefficient as two codes transcribe
+    it, in the same sign convention (q = −κ∇T − κ_h∇ν): MFiX's ``GT_PDE_LUN``
+    (CurtinIDS/mfix ``model/calc_mu_s.f``, ``Kphi_s``, written out there and commented out:
+    MFiX runs with 0) and sedFoam's ``LunConductivityAlpha.C``
+    (SedFoam/sedfoam ``solver/kineticTheoryModels/conductivityModelAlpha/Lun``), which agree
+    with each other algebraically. The text of Lun et al. (1984) was not at hand. An earlier
+    transcription here had 12/5 η(1 − η)(2η − 1): the opposite sign and a factor η.
     """
 
     name: ClassVar[str] = "lun_full"
@@ -140,8 +145,7 @@ class LunFullClosure(LunClosure):
             / (16 * (41 - 33 * eta))
             * (1 + sp.Rational(12, 5) * eta * nu * g0)
             * sp.Rational(12, 5)
-            * eta
-            * (1 - eta)
+            * (eta - 1)
             * (2 * eta - 1)
             * sp.diff(nu**2 * g0, nu)
             / (nu * g0)

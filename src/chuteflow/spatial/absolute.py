@@ -357,6 +357,34 @@ def _refine_edge(branch: Branch, cb: Branch, edge: float, side: list, policy, un
     return edge
 
 
+def _march(pairs: list, s: float, s_end: float, advance, *, floor: float, regrow: bool, on_step=None) -> list:
+    """Follow the two roots of a collapse check (:func:`_pinch`, :func:`_crossings`) from the
+    target's parameter ``s`` to ``s_end``: ``advance(pairs, s, s_new)`` gives the roots at
+    ``s_new`` (a ChuteflowError where the step was too long). Steps of ×3 in s; after a failed
+    step (or the two roots falling onto one) the factor shrinks to its square root, down to
+    ``floor`` (then the failure is raised), and with ``regrow`` it grows back ×1.5 (at most
+    3) after each step taken, when ``on_step(s_new, roots)`` is called. Returns the roots at
+    ``s_end``."""
+    factor = 3.0
+    while s < s_end:
+        s_new = min(s_end, factor * s)
+        try:
+            nxt = advance(pairs, s, s_new)
+            if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
+                raise ConvergenceError("the two roots fell onto one")
+        except ChuteflowError:
+            if factor <= floor:
+                raise
+            factor = max(floor, factor**0.5)
+            continue
+        pairs, s = nxt, s_new
+        if on_step is not None:
+            on_step(s, pairs)
+        if regrow:
+            factor = min(3.0, factor * 1.5)
+    return pairs
+
+
 def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolicy) -> tuple[bool | None, str]:
     """Briggs' collapse check at the saddle ``e`` of the frame V (module docstring): the two
     roots of α(k) + ikV = α_V* + s, from k* ± √(2s/α''), followed as s grows until Re of the
@@ -370,28 +398,20 @@ def _pinch(branch: Branch, e, V: float, growth_peak: float, policy: SpatialPolic
         s_end = abs(a_v.real) + max(growth_peak, 0.0) + 1e-6
     s = 1e-3 * s_end
     root = cmath.sqrt(2.0 * s / e.d2alpha)
-    pairs: list = []
+
+    def advance(pairs: list, s: float, s_new: float) -> list:
+        nxt = []
+        for p in pairs:
+            d = p.dalpha + 1j * V
+            dk = (s_new - s) / d
+            dk -= 0.5 * p.d2alpha * dk * dk / d  # second order: α' Δk + α'' Δk²/2 = Δs
+            nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
+        return nxt
+
     try:
-        pairs.extend(newton_k(branch, k0, a_v + s, policy, start=e, V=V) for k0 in (e.k + root, e.k - root))
-        factor = 3.0
-        while s < s_end:
-            s_new = min(s_end, factor * s)
-            try:
-                nxt = []
-                for p in pairs:
-                    d = p.dalpha + 1j * V
-                    dk = (s_new - s) / d
-                    dk -= 0.5 * p.d2alpha * dk * dk / d  # second order: α' Δk + α'' Δk²/2 = Δs
-                    nxt.append(newton_k(branch, p.k + dk, a_v + s_new, policy, start=p, V=V))
-                if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
-                    raise ConvergenceError("the two roots fell onto one")
-            except ChuteflowError:
-                # a step too long for the predictor: shorter ones, down to the old fixed 1.5
-                if factor <= 1.5:
-                    raise
-                factor = max(1.5, factor**0.5)
-                continue
-            pairs, s = nxt, s_new
+        pairs = [newton_k(branch, k0, a_v + s, policy, start=e, V=V) for k0 in (e.k + root, e.k - root)]
+        # a step too long for the predictor: shorter ones, down to the old fixed 1.5
+        pairs = _march(pairs, s, s_end, advance, floor=1.5, regrow=False)
     except ChuteflowError as exc:
         return None, f"the pinch was not decided ({exc})"
     im = [p.k.imag for p in pairs]
@@ -502,29 +522,21 @@ def _crossings(branch: Branch, e, growth_peak: float, policy: SpatialPolicy, w: 
     root = cmath.sqrt(2.0 * s * w / e.d2alpha)
     pairs = [newton_k(branch, k0, a0 + s * w, policy, start=e, sheet=sh) for k0 in (e.k + root, e.k - root)]
     paths: list[list] = [[(s, p)] for p in pairs]
-    factor = 3.0
-    while s < s_end:
-        s_new = min(s_end, factor * s)
-        try:
-            nxt = []
-            for p in pairs:
-                pred = p.k + (s_new - s) * w / p.dalpha
-                q = newton_k(
-                    branch, pred, a0 + s_new * w, policy, start=p, sheet=sh, max_step=abs(pred - p.k)
-                )
-                _check_same_family(p, pred, q)
-                nxt.append(q)
-            if abs(nxt[0].k - nxt[1].k) <= 1e-6 * abs(nxt[0].k):
-                raise ConvergenceError("the two roots fell onto one")
-        except ChuteflowError:
-            if factor <= 1.01:
-                raise
-            factor = max(1.01, factor**0.5)
-            continue
+
+    def advance(pairs: list, s: float, s_new: float) -> list:
+        nxt = []
+        for p in pairs:
+            pred = p.k + (s_new - s) * w / p.dalpha
+            q = newton_k(branch, pred, a0 + s_new * w, policy, start=p, sheet=sh, max_step=abs(pred - p.k))
+            _check_same_family(p, pred, q)
+            nxt.append(q)
+        return nxt
+
+    def record(s_new: float, nxt: list) -> None:
         for path, q in zip(paths, nxt):
             path.append((s_new, q))
-        pairs, s = nxt, s_new
-        factor = min(3.0, factor * 1.5)
+
+    pairs = _march(pairs, s, s_end, advance, floor=1.01, regrow=True, on_step=record)
     count, at_end = 0, 0
     tol_end = ENDPOINT_RTOL * abs(e.k)
     for path in paths:
