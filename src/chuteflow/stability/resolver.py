@@ -466,10 +466,11 @@ def follow_candidate(
     return c.result()
 
 
-def _spectrum_above(p: Pencil, answer: Mode | None, floor: float):
+def _spectrum_above(p: Pencil, answer: Mode | None, floor: float | None):
     """The dense spectrum of the pencil ``p`` (:func:`~.eigen.shifted_spectrum`, QZ where σ
-    lies on an eigenvalue), shifted to the right of the answer, with the eigenvectors of the
-    eigenvalues above ``floor``: (α, V) or None where none is above."""
+    lies on an eigenvalue), shifted to the right of the answer, with the eigenvectors where
+    some eigenvalue is above ``floor`` (None: always, without the eigenvalues-only solve
+    that decides it): (α, V) or None where none is above."""
     # one LU and a standard eigensolve, shifted to the right of the answer (accurate where
     # the candidates are): 3–4.5 × faster than QZ at N = 48
     sigma = 0.5 if answer is None else complex(max(answer.alpha.real, 0.0) + 0.5, answer.alpha.imag)
@@ -551,7 +552,7 @@ def global_candidates(
         floor = answer.alpha.real + max(
             answer.drift if math.isfinite(answer.drift) else 0.0, policy.drift_tol
         )
-    got = _spectrum_above(p, answer, floor)
+    got = _spectrum_above(p, answer, floor if math.isfinite(floor) else None)
     if got is None:
         return []
     w, V = got
@@ -592,7 +593,7 @@ def _tail_falls_in_time(
     lo -= 0.5 * (abs(lo) + 1e-3)
     for n in finer:
         p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
-        got = _spectrum_above(p, answer, lo)
+        got = _spectrum_above(p, answer, None)  # the eigenvalues followed lie above lo
         if got is None:
             return np.zeros(len(a1), dtype=bool)
         w, V = got
