@@ -287,25 +287,6 @@ def run_tail(series) -> float:
     return float(v[rise[0] if rise.size else -1 :].max())
 
 
-class _RunTail:
-    """:func:`run_tail` of a series seen one value at a time."""
-
-    __slots__ = ("last", "peak", "rising")
-
-    def __init__(self, peak: float = 0.0, last: float = math.nan, rising: bool = False):
-        self.peak, self.last, self.rising = peak, last, rising
-
-    def add(self, v: float) -> float:
-        if self.rising:
-            self.peak = max(self.peak, v)
-        elif v >= self.last:  # False while last is NaN (the first value)
-            self.rising, self.peak = True, max(self.last, v)
-        else:
-            self.peak = v  # still falling: the latest is the minimum so far
-        self.last = v
-        return self.peak
-
-
 class ResolutionMonitor(Tracker):
     """Watch the amplitude of the highest resolved modes, ``sim.resolution(y)``.
 
@@ -327,16 +308,16 @@ class ResolutionMonitor(Tracker):
         if action not in ("warn", "stop"):
             raise ParameterError(f"action = {action!r}: choose 'warn' or 'stop'")
         self.tol, self.every, self.action = float(tol), int(every), action
-        self._tails = {"x": _RunTail(), "y": _RunTail()}
+        self._series: dict[str, list[float]] = {"x": [], "y": []}  # the tails measured
         self._warned: set[str] = set()
 
     @property
     def x_tail(self) -> float:
-        return self._tails["x"].peak
+        return run_tail(self._series["x"])
 
     @property
     def y_tail(self) -> float:
-        return self._tails["y"].peak
+        return run_tail(self._series["y"])
 
     def initialize(self, sim, initial, t_end):
         self._measure(sim, initial.y)
@@ -352,9 +333,12 @@ class ResolutionMonitor(Tracker):
     def _measure(self, sim, y, end: bool = False) -> str | None:
         r = sim.resolution(y)
         for d in ("x", "y"):
-            tail = self._tails[d]
-            v = tail.add(float(r[f"{d}_tail"]))
-            if v > self.tol and (tail.rising or end) and d not in self._warned:
+            series = self._series[d]
+            series.append(float(r[f"{d}_tail"]))
+            v = run_tail(series)
+            # while the tail still falls it is the initial condition's (run_tail)
+            rising = len(series) > 1 and bool(np.any(np.diff(series) >= 0))
+            if v > self.tol and (rising or end) and d not in self._warned:
                 self._warned.add(d)
                 if self.action == "stop":
                     return "under-resolved"
@@ -367,20 +351,13 @@ class ResolutionMonitor(Tracker):
         return None
 
     def checkpoint(self):
-        x, y = self._tails["x"], self._tails["y"]
-        return {
-            "tails": np.array([x.peak, y.peak]),
-            "tails_last": np.array([x.last, y.last]),
-            "tails_rising": np.array([x.rising, y.rising]),
-        }
+        return {f"tails_{d}": np.array(v) for d, v in self._series.items()}
 
     def restore(self, saved):
-        peaks = [float(v) for v in saved["tails"]]
-        # a checkpoint written before run_tail kept only the maxima: counted as rising
-        last = saved.get("tails_last", np.array(peaks))
-        rising = saved.get("tails_rising", np.array([True, True]))
-        for i, d in enumerate(("x", "y")):
-            self._tails[d] = _RunTail(peaks[i], float(last[i]), bool(rising[i]))
+        if "tails_x" in saved:
+            self._series = {d: [float(v) for v in saved[f"tails_{d}"]] for d in ("x", "y")}
+        else:  # a checkpoint written before run_tail kept only the maxima: counted as reached
+            self._series = {d: [float(v)] * 2 for d, v in zip(("x", "y"), saved["tails"])}
 
 
 @dataclass(frozen=True)
