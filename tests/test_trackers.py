@@ -18,6 +18,14 @@ def test_run_tail_counts_from_the_first_minimum():
     assert run_tail([3.0, 2.0, 1.0]) == 1.0  # falls to the end: the last value
     assert run_tail([1.0, 2.0, 3.0, 2.5]) == 3.0  # never falls first: the largest
     assert run_tail([0.0, 1e-5, 2e-5, 1e-5]) == 2e-5  # a run from a smooth state (x_tail 0 at t = 0)
+    # noise's products: 0 at t = 0, ≈ 4e-3 at once, a thousandfold lower later (P5 from noise
+    # of 1e-2): from the minimum after that fall on, the wave's own tail
+    assert run_tail(P5_LIKE) == 8e-5
+    assert run_tail(P5_LIKE[:7]) == 4.4e-3  # not yet fallen a thousandfold: the largest
+
+
+# x tails of a P5-like run from noise: the start's transient, its decay, the bore's rise
+P5_LIKE = [0.0, 4e-3, 3e-3, 4.4e-3, 1e-3, 1e-4, 5e-5, 2e-5, 3e-5, 1e-8, 2e-8, 1e-7, 2e-6, 3e-5, 8e-5]
 
 
 class _Scripted:
@@ -90,3 +98,52 @@ def test_the_monitor_resumes_from_its_checkpoint():
     old = ResolutionMonitor(1e-4)
     old.restore({"tails": np.array([2e-5, 1e-6])})
     assert (old.x_tail, old.y_tail) == (2e-5, 1e-6)
+
+
+class _Refinable(_Scripted):
+    def can_refine(self):
+        return True
+
+
+def test_a_settling_monitor_leaves_the_starts_transient_alone():
+    """From noise (settle=True) the start's transient neither warns nor refines; once it has
+    fallen a thousandfold (its decay's wiggle at 3e-5 is still its own) the wave's own rise
+    refines at tol/4 (3e-5 > 2.5e-5, rising); a monitor without settle refines at the
+    transient's first rise. At the end a transient that never died warns all the same."""
+
+    def first_refine(mon, xs):
+        sim = _Refinable(xs, [1e-6] * len(xs))
+        mon.initialize(sim, SimpleNamespace(y=None), 1.0)
+        for i in range(1, len(xs)):
+            if mon.handle(sim, SimpleNamespace(number=i, y=None)) == "refine":
+                return i
+        return None
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ResolutionWarning)
+        assert first_refine(ResolutionMonitor(1e-4, every=1, action="refine", settle=True), P5_LIKE) == 13
+    assert first_refine(ResolutionMonitor(1e-4, every=1, action="refine"), P5_LIKE) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ResolutionWarning)
+        _run(ResolutionMonitor(1e-4, every=1, settle=True), P5_LIKE[:12], [1e-6] * 12)
+    with pytest.warns(ResolutionWarning, match="4.4e-03"):
+        _run(ResolutionMonitor(1e-4, every=1, settle=True), P5_LIKE[:6], [1e-6] * 6)
+
+
+def test_a_refined_run_has_left_its_transient_behind_and_the_checkpoint_says_so():
+    """After a refinement the x series starts anew on the finer grid; it rises from its first
+    value (no thousandfold fall in it), yet the next rise past tol/4 refines again: the start's
+    transient was behind the first refinement. A resumed monitor keeps that (checkpoint)."""
+    xs = [*P5_LIKE[:14], 1e-8, 1e-7, 3e-5]  # refined at 13 (3e-5), then the finer grid's tails
+    sim = _Refinable(xs, [1e-6] * len(xs))
+    mon = ResolutionMonitor(1e-4, every=1, action="refine", settle=True)
+    mon.initialize(sim, SimpleNamespace(y=None), 1.0)
+    got = [mon.handle(sim, SimpleNamespace(number=i, y=None)) for i in range(1, 14)]
+    assert got[-1] == "refine"
+    mon.refined(sim, SimpleNamespace(y=None))  # measures 1e-8
+    saved = mon.checkpoint()
+    again = ResolutionMonitor(1e-4, every=1, action="refine", settle=True)
+    again.restore(saved)
+    assert not again.settle
+    assert again.handle(sim, SimpleNamespace(number=15, y=None)) is None  # 1e-7
+    assert again.handle(sim, SimpleNamespace(number=16, y=None)) == "refine"  # 3e-5

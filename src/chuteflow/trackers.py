@@ -19,7 +19,9 @@ simulation ``sim`` is duck-typed:
 * ``sim.max_growth_rate`` → float, the largest linear growth rate of the run's modes
   (:class:`SaturationStop`);
 * ``sim.resolution(y)`` → dict with ``x_tail`` and ``y_tail``, the amplitude of the highest
-  modes relative to the largest (:class:`ResolutionMonitor`).
+  modes relative to the largest (:class:`ResolutionMonitor`);
+* ``sim.can_refine()`` → bool, whether its x grid may still grow (:class:`ResolutionMonitor`
+  with ``action="refine"``; the simulation then refines and calls :meth:`Tracker.refined`).
 
 and of a step ``step``: ``step.t_prev``, ``step.t``, ``step.number``, ``step.y`` (the state at
 its end) and ``step.state(t)`` (the state at ``t`` in [t_prev, t]).
@@ -82,6 +84,9 @@ class Tracker:
 
     def finalize(self, sim: Any, info: Any) -> None:
         """Called once at the end of the run."""
+
+    def refined(self, sim: Any, state: Any) -> None:
+        """Called after the simulation refined its grid (the state ``state.y`` has more modes)."""
 
     def checkpoint(self) -> dict[str, np.ndarray]:
         """What the tracker has gathered, as arrays (saved with a resumable run's state)."""
@@ -269,22 +274,51 @@ class WallTimeStop(Tracker):
         return None
 
 
+#: A start's transient has died when its tail has fallen this far below its first peak (P5:
+#: 4.4e-3 to 2e-8; a wiggle of its decay above 1e-3 of the peak is still the start's)
+#: (:func:`run_tail`).
+TRANSIENT_FALL = 1e-3
+
+
+def _transient_end(v: np.ndarray) -> int | None:
+    """Where a start's transient ends in a series of tails: the first local minimum once the
+    tail has fallen :data:`TRANSIENT_FALL` below its first peak; None while it has not."""
+    d = np.diff(v)
+    falls = np.nonzero(d < 0)[0]
+    if not falls.size:
+        return None
+    p = int(falls[0])  # the first peak
+    low = np.nonzero(v[p:] <= TRANSIENT_FALL * v[p])[0]
+    if not low.size:
+        return None
+    q = p + int(low[0])
+    rise = np.nonzero(d[q:] >= 0)[0]
+    return q + int(rise[0]) if rise.size else v.size - 1
+
+
 def run_tail(series) -> float:
     """The tail of a run from its tails over time (``x_tail`` or ``y_tail`` at each record):
-    the largest from the series' first minimum on; 0 for an empty series.
+    the largest from the end of the start's transient on; 0 for an empty series.
 
     The one definition of a run's resolution, used by :class:`ResolutionMonitor` and the
-    simulations' ``x_tail``/``y_tail``. The initial condition's own high modes (noise) are
-    data, not truncation: they decay over the first steps. What the run itself puts into its
-    highest modes shows once the tail stops falling: from there on every value counts. A
-    tail that falls to the end gives the last value; one that never falls, the largest.
+    simulations' ``x_tail``/``y_tail``. The initial condition's own high modes (noise) and
+    what they make at once (their products: from noise of 1e-2 in modes ≤ M/2 the top
+    eighth of the modes carries ≈ 4e-3 of the largest within one step, P5) are data, not
+    truncation: they decay. What the run itself puts into its highest modes shows once they
+    have: from the first minimum on, where the tail falls from the start, or from the first
+    minimum after it has fallen a thousandfold (:data:`TRANSIENT_FALL`) below its first peak,
+    where it rises first; every later value counts. A tail that falls to the end gives the
+    last value; one that rises from the start and never falls a thousandfold, the largest.
     (P1, L = 2000, noise 1e-4: 3.1e-4 at t = 24 from the noise, then lower; 2.1e-4 at the
     end, from the wave.)"""
     v = np.asarray(series, dtype=float)
     if v.size == 0:
         return 0.0
-    rise = np.nonzero(np.diff(v) >= 0)[0]
-    return float(v[rise[0] if rise.size else -1 :].max())
+    end = _transient_end(v)
+    if end is None:
+        rise = np.nonzero(np.diff(v) >= 0)[0]
+        end = int(rise[0]) if rise.size else v.size - 1
+    return float(v[end:].max())
 
 
 class ResolutionMonitor(Tracker):
@@ -298,16 +332,33 @@ class ResolutionMonitor(Tracker):
     ends above it): with ``action="warn"`` a :class:`ResolutionWarning` (once per
     direction), with ``"stop"`` the run stops with status ``"under-resolved"`` (its data
     kept: rerun finer).
+
+    With ``action="refine"`` the x grid follows the wave: once the x tail, rising, passes
+    ``tol / REFINE_MARGIN`` the monitor returns ``"refine"`` where ``sim.can_refine()``
+    says the grid may still grow, and the simulation doubles its modes (exactly: the state
+    is the same function, :meth:`chuteflow.dns.DnsSimulation.refine`) and calls
+    :meth:`Tracker.refined`, which starts the x series anew. Where the grid may not grow
+    (``max_modes`` reached) it warns as with ``"warn"``. The margin keeps the tail below
+    ``tol`` between two measurements while it rises (tenfold in ≈ 20 steps at P5's bore,
+    docs/dns.md). With ``settle=True`` (a broadband start: noise) the monitor neither
+    refines nor warns before the start's own transient has died (:func:`run_tail`; at the end
+    it warns all the same): noise of 1e-2 puts 4e-3 into the top modes at once, which
+    decays a thousandfold within t ≈ 1000 at P5 and is no reason to run the whole linear
+    phase on a finer grid.
     """
 
-    def __init__(self, tol: float = 1e-4, *, every: int = 10, action: str = "warn"):
+    #: Refine when the x tail passes tol / REFINE_MARGIN (``action="refine"``).
+    REFINE_MARGIN = 4.0
+
+    def __init__(self, tol: float = 1e-4, *, every: int = 10, action: str = "warn", settle: bool = False):
         if not (math.isfinite(tol) and 0 < tol < 1):
             raise ParameterError(f"resolution_tol = {tol!r} must be in (0, 1): a relative amplitude")
         if int(every) != every or every < 1:
             raise ParameterError(f"every = {every!r} must be a positive number of steps")
-        if action not in ("warn", "stop"):
-            raise ParameterError(f"action = {action!r}: choose 'warn' or 'stop'")
+        if action not in ("warn", "stop", "refine"):
+            raise ParameterError(f"action = {action!r}: choose 'warn', 'stop' or 'refine'")
         self.tol, self.every, self.action = float(tol), int(every), action
+        self.settle = bool(settle)
         self._series: dict[str, list[float]] = {"x": [], "y": []}  # the tails measured
         self._warned: set[str] = set()
 
@@ -330,15 +381,36 @@ class ResolutionMonitor(Tracker):
     def finalize(self, sim, info):
         self._measure(sim, info.y, end=True)
 
+    def refined(self, sim, state):
+        # the x spectrum of the finer grid: a new series (the coarse grid's tails are its own);
+        # a start's transient is behind a run that refined (it refines only after it)
+        self._series["x"] = []
+        self._warned.discard("x")
+        self.settle = False
+        self._measure(sim, state.y)
+
     def _measure(self, sim, y, end: bool = False) -> str | None:
         r = sim.resolution(y)
         for d in ("x", "y"):
             series = self._series[d]
             series.append(float(r[f"{d}_tail"]))
             v = run_tail(series)
-            # while the tail still falls it is the initial condition's (run_tail)
+            # while the tail still falls it is the initial condition's (run_tail); from a
+            # broadband start (settle) it is the start's own until that has died away
             rising = len(series) > 1 and bool(np.any(np.diff(series) >= 0))
-            if v > self.tol and (rising or end) and d not in self._warned:
+            transient = self.settle and _transient_end(np.asarray(series)) is None
+            if (
+                d == "x"
+                and self.action == "refine"
+                and not end
+                and len(series) > 1
+                and series[-1] >= series[-2]
+                and v > self.tol / self.REFINE_MARGIN
+                and not transient
+                and sim.can_refine()
+            ):
+                return "refine"
+            if v > self.tol and (rising or end) and (end or not transient) and d not in self._warned:
                 self._warned.add(d)
                 if self.action == "stop":
                     return "under-resolved"
@@ -351,9 +423,12 @@ class ResolutionMonitor(Tracker):
         return None
 
     def checkpoint(self):
-        return {f"tails_{d}": np.array(v) for d, v in self._series.items()}
+        out = {f"tails_{d}": np.array(v) for d, v in self._series.items()}
+        return {**out, "settle": np.array(self.settle)}
 
     def restore(self, saved):
+        if "settle" in saved:
+            self.settle = bool(saved["settle"])
         if "tails_x" in saved:
             self._series = {d: [float(v) for v in saved[f"tails_{d}"]] for d in ("x", "y")}
         else:  # a checkpoint written before run_tail kept only the maxima: counted as reached

@@ -319,3 +319,119 @@ def test_cli_waves_reduced_runs_the_1d_model_as_long_as_the_full_one():
     assert p["reduced_verdict"] == "growing"
     assert 1e-3 < max(-p["reduced_rho_min_rel"], p["reduced_rho_max_rel"]) < 0.08
     assert p["reduced_short_wave_unstable"] is True
+
+
+# -- the x grid that follows the wave (max_modes, DnsSimulation.refine) ----------------------------
+# P1 (L = 1000) from its mode at 1 % on a grid of M = 2: the second harmonic carries ≈ 0.1 of the
+# first at once, so with a tolerance of 1e-2 the grid must double twice (M = 2 → 4 → 8) to stay
+# resolved; M = 8 from the start is the reference.
+# (n = 24 leaves y under-resolved at this amplitude: these tests are about x)
+Y_COARSE = pytest.mark.filterwarnings("ignore:the highest y modes")
+REFINE = dict(time=120.0, dt=4.0, init="mode", amplitude=0.01, n=24, resolution_tol=1e-2)
+
+
+@Y_COARSE
+def test_refine_keeps_the_state_and_its_mass(p1):
+    """refine() pads the coefficients with zeros (the same function: modes ≤ M unchanged but
+    for a uniform shift of ln ν of the coarse quadrature's aliasing error, here 6e-14) and
+    keeps the total mass the run conserved to round-off; the records move to the finer grid."""
+    sim = DnsSimulation(
+        p1, 1000.0, time=40.0, dt=4.0, init="mode", amplitude=0.01, n=24, modes=2, max_modes=8
+    )
+    st = sim.run()
+    C, prev = st.C.copy(), st.prev.copy()
+    mass = sim.disc.total_mass(prev[0], prev[3][-1])
+    rho_old = np.asarray(st.records["rho"][-1])
+    sim.refine(st)
+    assert sim.disc.modes == 4
+    assert st.C.shape[-1] == 5
+    assert sim.can_refine()
+    assert np.array_equal(st.C[1:, :, :3], C[1:])  # u, v, T: the same coefficients
+    assert np.array_equal(st.C[0, :, 1:3], C[0, :, 1:])
+    assert np.abs(st.C[0, :, 0] - C[0, :, 0]).max() < 1e-12  # the mass shift
+    assert not st.C[..., 3:].any()
+    nu, _, _, T = st.prev
+    assert abs(sim.disc.total_mass(nu, T[-1]) / mass - 1) < 1e-14  # the history level too
+    rho = st.records["rho"]
+    assert all(len(r) == sim.disc.nxp for r in rho)
+    # the last record, interpolated, is ρ̄ of the refined state on the finer grid up to what the
+    # coarse samples of ρ̄ = ∫e^s dy (not band-limited) miss: 1.4e-7 here
+    assert np.allclose(rho[-1], sim.disc.depth_integrals(st.C)[0], rtol=1e-6, atol=0)
+    assert abs(np.mean(rho[-1]) - np.mean(rho_old)) < 1e-13
+    sim.refine(st)
+    assert sim.disc.modes == 8
+    assert not sim.can_refine()
+    with pytest.raises(ParameterError, match="max_modes"):
+        sim.refine(st)
+
+
+@Y_COARSE
+def test_a_refining_run_stays_resolved_and_matches_the_fine_grid(p1):
+    """On M = 2 the run is not resolved (x tail 0.37 at the end); with max_modes = 8 it doubles
+    twice and ends with the tail of the M = 8 run (3.6e-4 against 3.1e-4), ρ̄ within 1e-3 of
+    it (the difference is the coarse grid's first 40 time units), mass to 1e-13."""
+    with pytest.warns(ResolutionWarning, match="x modes"):
+        coarse = simulate(p1, 1000.0, modes=2, **REFINE)
+    fine = simulate(p1, 1000.0, modes=8, **REFINE)
+    ds = simulate(p1, 1000.0, modes=2, max_modes=8, **REFINE)
+    a = ds.attrs
+    assert (a["nx_initial"], a["nx"], a["nx_max"], a["refinements"]) == (5, 17, 17, 2)
+    assert a["refined_at"].startswith("t = 40 (nx 9), t = 80 (nx 17)")
+    assert ds["rho_bar"].shape == fine["rho_bar"].shape
+    assert coarse.attrs["x_tail_end"] > 0.3
+    assert a["x_tail_end"] < 1e-3
+    assert a["x_tail_end"] == pytest.approx(fine.attrs["x_tail_end"], rel=0.3)
+    err = np.abs(ds["rho_bar"].values[-1] - fine["rho_bar"].values[-1]).max() / float(p1.rho_bar)
+    assert err < 1e-3
+    assert a["mass_drift"] < 1e-13
+    assert "not resolved in x" not in a["resolution_warnings"]
+    s = summary(ds)
+    assert (s["nx_initial"], s["nx"], s["refinements"]) == (5, 17, 2)
+    with pytest.raises(ParameterError, match="max_modes"):
+        simulate(p1, 1000.0, modes=4, max_modes=2, **REFINE)
+
+
+class _PauseAt(Tracker):
+    """Pause the run after step ``at`` (None: never)."""
+
+    def __init__(self, at):
+        self.at = at
+
+    def handle(self, sim, step):
+        return f"paused at step {step.number}" if step.number == self.at else None
+
+
+@Y_COARSE
+def test_a_refined_run_resumes_exactly(tmp_path, p1):
+    """Paused after the first refinement (step 15; M = 4), the same call continues from the
+    checkpoint on the refined grid and refines once more: the uninterrupted run to 1e-13."""
+    ref = simulate(p1, 1000.0, modes=2, max_modes=8, **REFINE)
+    ck = tmp_path / "run.ck.npz"
+    first = simulate(p1, 1000.0, modes=2, max_modes=8, checkpoint=ck, trackers=[_PauseAt(15)], **REFINE)
+    assert first.attrs["status"] == "paused at step 15"
+    assert first.attrs["nx"] == 9
+    assert ck.exists()
+    ds = simulate(p1, 1000.0, modes=2, max_modes=8, checkpoint=ck, trackers=[_PauseAt(None)], **REFINE)
+    assert ds.attrs["status"] == "ok"
+    assert not ck.exists()
+    assert ds.attrs["refined_at"] == ref.attrs["refined_at"]
+    assert np.array_equal(ds["time"].values, ref["time"].values)
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+
+
+def test_resample_is_trigonometric_interpolation():
+    """_resample: a trigonometric polynomial of degree 3 sampled on 7 (odd) or 8 (even, with its
+    Nyquist term) points is reproduced exactly on 13 points."""
+    from chuteflow.dns.simulation import _resample
+
+    def f(x):
+        return 1.0 + 0.3 * np.cos(x) - 0.2 * np.sin(2 * x) + 0.1 * np.cos(3 * x + 0.4)
+
+    for n in (7, 8):
+        x = 2 * np.pi * np.arange(n) / n
+        xf = 2 * np.pi * np.arange(13) / 13
+        np.testing.assert_allclose(_resample(f(x), 13), f(xf), rtol=0, atol=1e-14)
+    # the Nyquist term cos(4x) on 8 points: split between ±4 on the finer grid
+    x8 = 2 * np.pi * np.arange(8) / 8
+    x17 = 2 * np.pi * np.arange(17) / 17
+    np.testing.assert_allclose(_resample(np.cos(4 * x8), 17), np.cos(4 * x17), rtol=0, atol=1e-14)

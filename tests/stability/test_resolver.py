@@ -250,6 +250,23 @@ def test_the_dilute_tops_continuum_is_no_candidate(random_133117):
     assert 1e-7 < near < 0.05
 
 
+def test_an_eigenvalue_set_aside_above_the_answer_is_named():
+    """θ = 19.49°, ν0(0) = 0.0378, φ = 0.0754, Φ = 0.485, (k_x, k_z) = (0.006465, 0.132867)
+    (try_random_points, seed 170629): dense QZ at N = 250 names −0.8007 the least-stable
+    resolved mode; above it −0.339166 − 0.027338i settles (drift 7.9e-5) while its
+    eigenvector does not (tail 7.0e-6 at N = 250, falling as ~1/N: 4.0e-5 … 1.9e-5 at
+    N = 48 … 94), so by the contract it is no mode. The answer is −0.800705 − 0.026639i,
+    converged, and its note names what was set aside (before, it said nothing)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(19.49, 0.0378, ChuteModel(roughness=0.0754, wall_loss=0.485))
+    m = least_stable(flow, 0.006465, kz=0.132867)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.800705 - 0.026639j)) < 1e-5
+    assert "1 eigenvalue(s) above it decided not modes, the least damped -0.339" in m.note
+    assert "tail does not decay" in m.note
+
+
 def test_a_slow_mode_at_a_paper_point_is_the_answer(flows):
     """P2 (θ = 16°, ν0(0) = 0.08), k = 0.5 (2D): the mode −0.51873938 − 4.66064670i passes
     both tests only at N = 256 (dense QZ on the mapped grid at N = 256 and 320: change 5e-9,

@@ -32,6 +32,12 @@ def dns(
         "--nx",
         help="Fourier unknowns per node, nx = 2M + 1 (default 5 from a mode, 2·max(8, L/30)+1 from noise).",
     ),
+    max_nx: int | None = typer.Option(
+        None,
+        "--max-nx",
+        help="Let the x grid follow the wave: double nx, up to this, where the highest x modes "
+        "rise towards --resolution-tol (default: keep --nx).",
+    ),
     ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
     dt: float | None = typer.Option(None, "--dt", help="Time step (default: wave period / 100)."),
     init: str = typer.Option("mode", "--init", help="mode (least-stable eigenmode at k = 2π/L) or noise."),
@@ -106,6 +112,10 @@ def dns(
 
     if nx is not None and (nx < 1 or nx % 2 == 0):
         raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
+    if max_nx is not None and (max_nx < 1 or max_nx % 2 == 0 or (nx is not None and max_nx < nx)):
+        raise ParameterError(
+            f"max_nx = {max_nx}: an odd number ≥ nx (the largest x grid, nx = 2M + 1, the run may refine to)"
+        )
     if init not in ("mode", "noise"):
         raise ParameterError(f"init = {init!r}: choose mode or noise")
     con = Console(stderr=True)
@@ -120,6 +130,7 @@ def dns(
                 time=time,
                 n=ny,
                 modes=None if nx is None else (nx - 1) // 2,
+                max_modes=None if max_nx is None else (max_nx - 1) // 2,
                 dt=dt,
                 init=init,
                 amplitude=amplitude,
@@ -192,6 +203,12 @@ def waves(
     time: float = typer.Option(30000.0, "--time", help="Longest simulated time (stops once saturated)."),
     dt: float = typer.Option(4.0, "--dt", help="Time step."),
     nx: int = typer.Option(65, "--nx", help="Fourier unknowns per node, nx = 2M + 1."),
+    max_nx: int | None = typer.Option(
+        None,
+        "--max-nx",
+        help="Let each run's x grid follow its wave: double nx, up to this, where the highest x "
+        "modes rise towards the resolution tolerance (default: keep --nx).",
+    ),
     ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
     amplitude: float = typer.Option(1e-3, "--amplitude", help="Size of the initial noise in ln ν."),
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
@@ -247,6 +264,10 @@ def waves(
 
     if nx < 1 or nx % 2 == 0:
         raise ParameterError(f"nx = {nx}: an odd number ≥ 1 (nx = 2M + 1 real Fourier unknowns)")
+    if max_nx is not None and (max_nx % 2 == 0 or max_nx < nx):
+        raise ParameterError(
+            f"max_nx = {max_nx}: an odd number ≥ nx = {nx} (the largest x grid a run may refine to)"
+        )
     if points is not None:
         if theta is not None or nu0 is not None:
             raise ParameterError("points: give either --points or --theta with --nu0, not both")
@@ -278,6 +299,7 @@ def waves(
         saturation_tol=saturation_tol,
         dt_tol=dt_tol,
         preconditioner=preconditioner,
+        max_modes=None if max_nx is None else (max_nx - 1) // 2,
     )
     con = Console(stderr=True)
 
@@ -310,7 +332,7 @@ def waves(
         }
         for k in WAVE_KEYS:
             v = ds[k].values[i]
-            r[k] = str(v) if k in ("verdict", "status") else _num(float(v))
+            r[k] = str(v) if k in ("verdict", "status") else int(v) if k == "nx" else _num(float(v))
         rows.append(r)
     if reduced:
         _reduced_waves(rows, model, settings, con)

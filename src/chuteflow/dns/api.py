@@ -65,6 +65,7 @@ def simulate(
     min_dt_fraction: float = 1e-3,
     initial: Callable[[np.ndarray], np.ndarray] | None = None,
     wall_limit: float | None = None,
+    max_modes: int | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -106,6 +107,11 @@ def simulate(
         :class:`~chuteflow.trackers.ResolutionWarning` above it).
     trackers : sequence of Tracker
         More trackers (:mod:`chuteflow.trackers`).
+    max_modes : int, optional
+        Let the x grid follow the wave (:meth:`DnsSimulation.refine`): the modes double,
+        up to this many, wherever the x tail rises past ``resolution_tol`` / 4, so that a
+        steepening front (P5's bore) stays resolved; default: the grid is kept and a
+        rising tail only warns. ``nx``, ``refinements`` and ``refined_at`` in the result.
     wall_limit : float, optional
         Seconds of wall time after which the run pauses
         (:class:`~chuteflow.trackers.WallTimeStop`): status ``"paused at t = …"``, the wave
@@ -143,6 +149,7 @@ def simulate(
         settings=settings,
         min_dt_fraction=min_dt_fraction,
         initial=initial,
+        max_modes=max_modes,
         wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []
@@ -150,7 +157,12 @@ def simulate(
         tracking.append(ProgressTracker(progress))
     if saturation_tol is not None:
         tracking.append(SaturationStop(saturation_tol, interval=sim.setup.time / 200, min_samples=20))
-    monitor = ResolutionMonitor(resolution_tol, every=max(1, 10 // sim.setup.record_every))
+    monitor = ResolutionMonitor(
+        resolution_tol,
+        every=max(1, 10 // sim.setup.record_every),
+        action="refine" if sim.can_refine() else "warn",
+        settle=sim.setup.init == "noise",  # (a custom start too)
+    )
     tracking.append(monitor)
     if wall_limit is not None:
         tracking.append(WallTimeStop(wall_limit))
@@ -182,6 +194,8 @@ def summary(ds: xr.Dataset) -> dict:
         "k",
         "nx",
         "ny",
+        "nx_initial",
+        "refinements",
         "dt",
         "time_end",
         "init",

@@ -36,6 +36,29 @@ from .stepper import NewtonSettings, Stepper
 
 __all__ = ["DnsSimulation", "DnsState", "DnsStep"]
 
+#: The largest x grid a run may be refined to (nx = 2M + 1 = 1025).
+MAX_MODES = 512
+
+
+def _pad_modes(C: np.ndarray, modes: int) -> np.ndarray:
+    """Coefficients (…, M + 1) with zeros up to ``modes``: the same function on more modes."""
+    out = np.zeros((*C.shape[:-1], modes + 1), dtype=C.dtype)
+    out[..., : C.shape[-1]] = C
+    return out
+
+
+def _resample(f: np.ndarray, n: int) -> np.ndarray:
+    """Periodic samples (…, n_old) of a record trigonometrically interpolated onto ``n`` points."""
+    f = np.asarray(f, dtype=float)
+    n_old = f.shape[-1]
+    F = np.fft.rfft(f, axis=-1) / n_old
+    if n_old % 2 == 0:
+        F[..., -1] *= 0.5  # the Nyquist mode is shared by ±n_old/2 on the finer grid
+    G = np.zeros((*f.shape[:-1], n // 2 + 1), dtype=complex)
+    m = min(F.shape[-1], G.shape[-1])
+    G[..., :m] = F[..., :m]
+    return np.fft.irfft(G * n, n=n, axis=-1)
+
 
 @dataclass
 class DnsState:
@@ -64,7 +87,9 @@ class DnsState:
         Wall-clock seconds spent so far (over every resumed part).
     records : dict of lists
         ``t``, ``rho``, ``Q``, ``x_tail``, ``y_tail`` every ``record_every`` steps;
-        ``snap_t``, ``snaps`` the full fields; ``newton``, ``krylov`` per step.
+        ``snap_t``, ``snaps`` the full fields; ``newton``, ``krylov`` per step;
+        ``refine_t``, ``refine_modes`` when and to how many x modes the grid was refined
+        (:meth:`DnsSimulation.refine`; the records before are resampled onto the finer grid).
     """
 
     C: np.ndarray = field(repr=False)
@@ -80,7 +105,19 @@ class DnsState:
     amplitude: float = 0.0
     records: dict = field(default_factory=dict, repr=False)
 
-    RECORDS = ("t", "rho", "Q", "x_tail", "y_tail", "snap_t", "snaps", "newton", "krylov")
+    RECORDS = (
+        "t",
+        "rho",
+        "Q",
+        "x_tail",
+        "y_tail",
+        "snap_t",
+        "snaps",
+        "newton",
+        "krylov",
+        "refine_t",
+        "refine_modes",
+    )
 
     def __post_init__(self):
         for k in self.RECORDS:
@@ -137,7 +174,8 @@ class DnsState:
                     status=str(ck["status"]),
                     wall=wall,
                     amplitude=amp,
-                    records={k: list(ck[f"rec_{k}"]) for k in cls.RECORDS},
+                    # (a checkpoint from before a record existed has none of it)
+                    records={k: list(ck[f"rec_{k}"]) for k in cls.RECORDS if f"rec_{k}" in ck.files},
                 )
                 names = [str(n) for n in ck["trackers"]]
                 if names == [type(tr).__name__ for tr in trackers]:
@@ -208,6 +246,11 @@ class DnsSimulation:
         Stop (status ``"stopped: ..."``) when Newton fails at Δt below this fraction of ``dt``.
     wave_policy : WavePolicy, optional
         How the wave at the end is judged (:func:`~chuteflow.trackers.wave_measures`).
+    max_modes : int, optional
+        Let the x grid follow the wave: where the x tail rises towards the resolution
+        tolerance (:class:`~chuteflow.trackers.ResolutionMonitor` with ``action="refine"``)
+        the modes are doubled, up to this many (:meth:`refine`). Default ``modes``: the grid
+        is kept.
     initial : callable, optional
         A start of the caller's: ``initial(x)`` → δ ln ν ≈ δν/ν0 at the points ``x`` in
         [0, L) of the padded grid at t = 0 (uniform in y, as the noise; projected onto the
@@ -240,6 +283,7 @@ class DnsSimulation:
         min_dt_fraction: float = 1e-3,
         wave_policy: WavePolicy | None = None,
         initial: Callable[[np.ndarray], np.ndarray] | None = None,
+        max_modes: int | None = None,
     ):
         if initial is not None:
             if not callable(initial):
@@ -300,6 +344,15 @@ class DnsSimulation:
             s.theta, s.model, s.length, flow.y_max, s.n, s.modes, frame=s.frame, top=s.top
         )
         self.stepper = Stepper(self.disc, settings)
+        if max_modes is None:
+            max_modes = s.modes
+        if int(max_modes) != max_modes or not s.modes <= max_modes <= MAX_MODES:
+            raise ParameterError(
+                f"max_modes = {max_modes!r} must be a whole number in [modes = {s.modes}, {MAX_MODES}]: "
+                "the most x modes the grid may be refined to"
+            )
+        #: The most x modes :meth:`refine` may reach.
+        self.max_modes = int(max_modes)
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
@@ -334,6 +387,66 @@ class DnsSimulation:
             return self.setup.key()
         h = hashlib.sha256(self.setup.key().encode() + self.initial.tobytes())
         return h.hexdigest()[:16]
+
+    # -- the grid that follows the wave ----------------------------------------------------------
+    def can_refine(self) -> bool:
+        """Whether :meth:`refine` may still add x modes (``max_modes`` not reached)."""
+        return self.disc.modes < self.max_modes
+
+    def _set_modes(self, modes: int) -> None:
+        """The discretisation and the stepper at ``modes`` x modes (the preconditioner's kind
+        and the step control's switch kept: the same wave on a finer grid)."""
+        s, old = self.setup, self.stepper
+        self.disc = Discretisation(
+            s.theta, s.model, s.length, self.flow.y_max, s.n, int(modes), frame=s.frame, top=s.top
+        )
+        self.stepper = Stepper(self.disc, old.settings)
+        if self.disc.modes >= 1:
+            self.stepper.kind = old.kind
+        self.stepper.switch_dt = old.switch_dt
+
+    def refine(self, state: DnsState) -> None:
+        """Double the x modes of the run (at most ``max_modes``), in place.
+
+        The state is the same function on the finer grid (its coefficients padded with zeros;
+        the BDF2 history level likewise), so the run goes on as it was, only with room for a
+        steeper wave; the records so far (ρ̄, Q, the snapshots) are interpolated onto the
+        finer padded grid, so that the result has one x axis. ``refine_t`` and
+        ``refine_modes`` record it.
+        """
+        if not self.can_refine():
+            raise ParameterError(f"max_modes = {self.max_modes}: the grid has as many x modes already")
+        old, old_stepper = self.disc, self.stepper
+        modes = min(2 * max(old.modes, 1), self.max_modes)
+        levels = [state.C] if state.prev is None else [state.C, history_coefficients(old, tuple(state.prev))]
+        # the total mass of each level by the coarse grid's quadrature (what the run conserved)
+        mass = [old.total_mass(*self._mass_fields(old_stepper, C)) for C in levels]
+        self._set_modes(modes)
+        fine = [_pad_modes(C, modes) for C in levels]
+        for C, m in zip(fine, mass):
+            # the finer quadrature of the same function differs by the coarse one's aliasing
+            # error: a uniform shift of ln ν of that size keeps the mass the run conserved
+            C[0, :, 0] += math.log(m / self.disc.total_mass(*self._mass_fields(self.stepper, C)))
+        state.C = fine[0]
+        state.C_init = _pad_modes(state.C_init, modes)
+        if len(fine) > 1:
+            state.prev = np.array(self.stepper.physical(fine[1]))
+        r = state.records
+        for k in ("rho", "Q", "snaps"):
+            r[k] = [_resample(v, self.disc.nxp) for v in r[k]]
+        r["refine_t"].append(state.t)
+        r["refine_modes"].append(modes)
+
+    @staticmethod
+    def _mass_fields(stepper: Stepper, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nu, _, _, T = stepper.physical(C)
+        return nu, T[-1]
+
+    def _follow(self, state: DnsState) -> None:
+        """Put the discretisation at the grid of ``state`` (a checkpoint of a refined run)."""
+        modes = state.C.shape[-1] - 1
+        if modes != self.disc.modes:
+            self._set_modes(modes)
 
     # -- the state ---------------------------------------------------------------------------
     def initial_state(self) -> DnsState:
@@ -400,7 +513,7 @@ class DnsSimulation:
         A Newton failure halves Δt (BDF1 restart) down to ``min_dt_fraction`` × ``dt``, then
         the run stops with status ``"stopped at t = …: why"`` and the data so far.
         """
-        s, disc, stepper = self.setup, self.disc, self.stepper
+        s, stepper = self.setup, self.stepper
         trackers = list(trackers)
         key = self.key()
         if state is None and checkpoint is not None and Path(checkpoint).exists():
@@ -409,11 +522,13 @@ class DnsSimulation:
             for tr in trackers:
                 tr.initialize(self, probe, s.time)
             state = DnsState.load(checkpoint, key, trackers) or probe
+            self._follow(state)
         elif state is None:
             state = self.initial_state()
             for tr in trackers:
                 tr.initialize(self, state, s.time)
         else:
+            self._follow(state)
             for tr in trackers:
                 tr.initialize(self, state, s.time)
         state.status = "running"
@@ -429,8 +544,9 @@ class DnsSimulation:
         ctl = stepper.settings
         dt_lo, dt_hi = s.dt, max(ctl.dt_max or 64.0 * s.dt, s.dt)
         if ctl.dt_tol > 0:
-            stepper.switch_dt = dt_lo
+            self.stepper.switch_dt = dt_lo
         while state.t < s.time * (1 - 1e-12):
+            disc, stepper = self.disc, self.stepper  # (refine replaces them)
             h = min(state.dt, s.time - state.t)
             C = state.C
             now_phys = stepper.physical(C)
@@ -492,6 +608,12 @@ class DnsSimulation:
                 self._snapshot(state)
             step = DnsStep(C, C_new, t_prev, state.t, state.step)
             stops = [r for r in [tr.handle(self, step) for tr in trackers] if r]
+            if "refine" in stops:
+                # the x grid follows the wave (ResolutionMonitor, action="refine")
+                stops = [r for r in stops if r != "refine"]
+                self.refine(state)
+                for tr in trackers:
+                    tr.refined(self, state)
             if checkpoint is not None and _time.perf_counter() - last_ck > checkpoint_every:
                 last_ck = _time.perf_counter()
                 state.wall = wall0 + last_ck - start
@@ -562,9 +684,16 @@ class DnsSimulation:
             "length": setup.length,
             "k": k,
             "ny": setup.n,
-            "nx": 2 * setup.modes + 1,
-            "modes": setup.modes,
+            "nx": 2 * disc.modes + 1,
+            "modes": disc.modes,
             "nx_padded": disc.nxp,
+            # the grid that followed the wave (max_modes): where it started, when it doubled
+            "nx_initial": 2 * setup.modes + 1,
+            "nx_max": 2 * self.max_modes + 1,
+            "refinements": len(r["refine_t"]),
+            "refined_at": ", ".join(
+                f"t = {t_:.6g} (nx {2 * m_ + 1})" for t_, m_ in zip(r["refine_t"], r["refine_modes"])
+            ),
             "dt": setup.dt,
             "time_end": float(t[-1]) if len(t) else 0.0,
             "init": "custom" if self.initial is not None else setup.init,

@@ -31,6 +31,7 @@ import xarray as xr
 from ..closures import ChuteModel
 from ..errors import ParameterError
 from ..trackers import WallTimeStop
+from .simulation import _resample
 from .stepper import NewtonSettings, step_settings
 
 __all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
@@ -50,6 +51,7 @@ WAVE_KEYS = (
     "mass_drift",
     "x_tail",
     "y_tail",
+    "nx",
     "status",
     "steps",
     "wall_time",
@@ -84,6 +86,9 @@ class WaveMapSettings:
     preconditioner : str
         Newton–Krylov preconditioner of the runs
         (:attr:`~chuteflow.dns.stepper.NewtonSettings.preconditioner`, docs/dns.md).
+    max_modes : int, optional
+        Let each run's x grid follow its wave, doubling up to this many modes
+        (:meth:`~chuteflow.dns.DnsSimulation.refine`); default: ``modes`` throughout.
     """
 
     length: float = 1000.0
@@ -97,6 +102,7 @@ class WaveMapSettings:
     resolution_tol: float = 1e-4
     dt_tol: float = 0.0
     preconditioner: str = "auto"
+    max_modes: int | None = None
 
     def __post_init__(self):
         for name in ("length", "time", "dt"):
@@ -105,6 +111,13 @@ class WaveMapSettings:
                 raise ParameterError(f"{name} = {v!r} must be a positive number")
         if not 0 < self.saturation_tol < 1:
             raise ParameterError(f"saturation_tol = {self.saturation_tol!r} must be in (0, 1)")
+        if self.max_modes is not None and (
+            int(self.max_modes) != self.max_modes or self.max_modes < self.modes
+        ):
+            raise ParameterError(
+                f"max_modes = {self.max_modes!r} must be a whole number ≥ modes = {self.modes} "
+                "(the most x modes a run may refine to)"
+            )
         self.newton()  # checks dt_tol and the preconditioner
 
     def newton(self) -> NewtonSettings | None:
@@ -169,6 +182,7 @@ def _one(
                 settings=s.newton(),
                 wall_limit=wall_limit,
                 checkpoint=ck,
+                max_modes=s.max_modes,
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
@@ -308,14 +322,23 @@ def map_waves(
     }
     for k in ("verdict", "status"):
         data[k] = (("point",), np.array([str(r[k]) for r in ordered]))
-    data["shape"] = (("point", "phase"), np.array([r["shape"] for r in ordered]), {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
+    # runs whose grids refined differently: the shapes on the finest grid among them
+    n_phase = max(len(r["shape"]) for r in ordered)
+    shapes = np.array(
+        [r["shape"] if len(r["shape"]) == n_phase else _resample(r["shape"], n_phase) for r in ordered]
+    )
+    data["shape"] = (("point", "phase"), shapes, {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
     return xr.Dataset(
         data,
         coords={
             "theta": ("point", [p[0] for p in pts], {"units": "degree"}),
             "nu0": ("point", [p[1] for p in pts]),
             "length": ("point", [p[2] for p in pts], {"long_name": "period L", "units": "sigma"}),
-            "phase": ("phase", ordered[0]["phase"], {"long_name": "ξ/L, crest at 1/2", "units": "1"}),
+            "phase": (
+                "phase",
+                np.arange(n_phase) / n_phase,
+                {"long_name": "ξ/L, crest at 1/2", "units": "1"},
+            ),
         },
         attrs={
             "title": "saturated density waves of the full equations (chuteflow.dns.map_waves)",

@@ -416,7 +416,8 @@ class _Candidate:
             return self._decide(
                 "not a mode",
                 f"its eigenvector's tail does not decay ({self.tails[-4]:.1e} → {mode.tail:.1e} over three "
-                f"rungs up to N = {nn}): the continuum of the dilute top or a spurious eigenvalue",
+                f"rungs up to N = {nn}): no resolved eigenfunction (the dilute top's continuum, a "
+                "spurious eigenvalue, or one whose eigenfunction is singular)",
             )
         t = self.tails
         decaying = len(t) >= 4 and t[-1] < t[-2] < t[-3]
@@ -705,6 +706,7 @@ def _search_once(
     ]
     for c in active:
         c.answer = answer
+    followed_all = list(active)
     undecided += [Followed(a, None, "undecided", "not followed") for a, _ in cands[search.max_candidates :]]
     # every candidate advances rung by rung (each operator is built once), best first; a
     # candidate below the least-stable mode that passes both tests needs no more solves
@@ -782,6 +784,33 @@ def _search_once(
             f"{search.max_candidates}), e.g. {not_followed[0].start:.6g} at N = {search.n}",
         )
         return dataclasses.replace(best, physical=False, note=note)
-    if best is answer:
+    rejected = _rejected_above(followed_all, best)
+    if best is answer and not rejected:
         return answer
-    return dataclasses.replace(best, method="global", note=join_notes(best.note, *notes))
+    return dataclasses.replace(
+        best, method=best.method if best is answer else "global", note=join_notes(best.note, *notes, rejected)
+    )
+
+
+def _rejected_above(followed: list[_Candidate], best: Mode) -> str:
+    """The note that names the eigenvalues above the answer decided "not a mode" (the least
+    damped of them, with the evidence): by the contract they are no modes — the dilute top's
+    continuum, an eigenvalue whose eigenvector's tail does not decay —, and a researcher sees
+    what was set aside (e.g. an eigenvalue that settles while its eigenvector does not)."""
+    out = [
+        c.done
+        for c in followed
+        if c.done is not None
+        and c.done.verdict == "not a mode"
+        and c.done.mode is not None
+        and c.done.mode.alpha.real > best.alpha.real
+    ]
+    if not out:
+        return ""
+    top = max(out, key=lambda f: f.mode.alpha.real)  # type: ignore[union-attr]
+    m = top.mode
+    assert m is not None
+    return (
+        f"{len(out)} eigenvalue(s) above it decided not modes, the least damped {m.alpha:.6g} "
+        f"(N = {m.n}, drift {m.drift:.1e}, tail {m.tail:.1e}): {top.why}"
+    )
