@@ -267,6 +267,40 @@ def test_an_eigenvalue_set_aside_above_the_answer_is_named():
     assert "tail does not decay" in m.note
 
 
+def test_a_fast_mode_near_the_top_continuum_is_a_mode():
+    """θ = 19.166°, ν0(0) = 0.0103, φ = 0.049, Φ = 0.399, (k_x, k_z) = (0.003284, 0.070959)
+    (try_random_points seed 53879): dense QZ at N = 250 resolves −0.002201971641 −
+    0.215659192228i (drift 1e-12, tail 1e-14). It lies 0.023 from α_top = −0.2383i, inside
+    the continuum radius 0.052 (k_z ≫ k_x), and has settled to 5.4e-5 by N = 60 because its
+    tail falls ×0.04 a rung (5.6e-5, 2.4e-6, 1.0e-7 at N = 48, 60, 75): the continuum rule
+    took it for the continuum and −0.0834 − 0.2131i was answered, flagged
+    (``resolver.CONTINUUM_TAIL_FALL``). Now it is the answer, converged."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(19.166, 0.0103, ChuteModel(roughness=0.049, wall_loss=0.399))
+    m = least_stable(flow, 0.003284, kz=0.070959)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.002201971641 - 0.215659192228j)) < 1e-8
+
+
+def test_a_slowly_converging_mode_beside_the_band_is_the_estimate():
+    """θ = 16.648°, ν0(0) = 0.0192, φ = 0.0684, Φ = 0.388, (k_x, k_z) = (0.00615, 0.006292)
+    (the same seed): the mode −0.000538047 − 0.014374555i (dense QZ at N = 350; at N = 250
+    3.4e-7 away) needs N > 256 to pass the drift test; its tails fall ×0.40 over three rungs
+    at first (2.1e-5 … 8.4e-6 at N = 48 … 94), and the stall rule decided it "not a mode":
+    the fallback answered −0.000547 − 0.014300i, a member of the unresolved band beside it,
+    flagged with a drift of 4e-6 although 7.5e-5 from the mode. A tail below the tracker's
+    threshold (1e-5) is a mode's and the stall rule leaves it alone; the answer is the mode,
+    flagged, within its drift of the reference."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(16.648, 0.0192, ChuteModel(roughness=0.0684, wall_loss=0.388))
+    m = least_stable(flow, 0.00615, kz=0.006292)
+    assert not m.converged
+    assert m.drift < 1e-5
+    assert abs(m.alpha - (-0.000538047 - 0.014374555j)) < m.drift, (m.alpha, m.drift)
+
+
 def test_a_slow_mode_at_a_paper_point_is_the_answer(flows):
     """P2 (θ = 16°, ν0(0) = 0.08), k = 0.5 (2D): the mode −0.51873938 − 4.66064670i passes
     both tests only at N = 256 (dense QZ on the mapped grid at N = 256 and 320: change 5e-9,

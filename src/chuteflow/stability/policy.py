@@ -66,7 +66,13 @@ class SearchPolicy:
         6e-4, 5e-4, 4e-4 …, 0.5 over three rungs) and the band of eigenvalues around it
         keeps tails of 1e-4 … 2e-5 (0.5 … 1). Its drift is no criterion: the continuum's is
         ~1e-9, and the critical-layer mode's drifts are 3e-4, 2e-4, 3e-4, 3e-4 up to N = 94
-        before they fall.
+        before they fall. The rule judges only tails above the tracker's threshold
+        (``track_tail_tol``): a mode beside the continuum converges slowly at first
+        (θ = 16.648°, ν0(0) = 0.0192, φ = 0.0684, Φ = 0.388, (0.00615, 0.006292): tails
+        2.1e-5, 1.4e-5, 8.0e-6, 8.4e-6 at N = 48 … 94, 0.40 over three rungs, then 4e-6,
+        1.4e-6, 1.5e-7 at N = 118, 148, 231), as fast as a band member of an unresolved
+        band falls at times (16.5°, 0.13, φ = 0.08, Φ = 0.30, k = 0.005: 3.4e-4 … 1.5e-4,
+        0.44); their levels differ tenfold.
     hopeless : float
         A candidate whose tail fell at each of the last two rungs and whose drift,
         extrapolated to the top of the ladder at its own rate of
