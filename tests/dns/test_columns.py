@@ -136,3 +136,27 @@ def test_auto_switches_to_columns(p1):
     assert st.columns
     with pytest.raises(ValueError, match="preconditioner"):
         NewtonSettings(preconditioner="ilu")
+
+
+def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
+    """``NewtonSettings.columns_max_nx``: the column LU fills in with nx (P5, N = 64: 0.75 GB
+    and 16 s at nx = 129, > 4.9 GB and 15 min at 257; a run refined to 513 was killed at
+    24 GB). On a finer grid ``"auto"`` goes over to the coupled blocks where it would take
+    the columns, ``"columns"`` starts with them, and the coupled blocks stay; the step still
+    converges."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)  # nx = 13
+    C = _wave(d, p1, 0.1)
+    st = Stepper(d, NewtonSettings(switch_krylov=0, columns_max_nx=11))
+    assert not st.columns_fit
+    hist = (st.physical(C), st.physical(C))
+    _, info = st.step(C, hist, 4.0, first=True)
+    assert st.kind == "coupled"
+    assert info.residual < 1e-10
+    assert Stepper(d, NewtonSettings(preconditioner="columns", columns_max_nx=11)).kind == "coupled"
+    assert Stepper(d, NewtonSettings(preconditioner="columns", columns_max_nx=13)).kind == "columns"
+    coupled = NewtonSettings(preconditioner="coupled", coupled_krylov=0, switch_krylov=0, columns_max_nx=11)
+    st = Stepper(d, coupled)
+    st.step(C, hist, 4.0, first=True)
+    assert st.kind == "coupled"
+    with pytest.raises(ValueError, match="columns_max_nx"):
+        NewtonSettings(columns_max_nx=0)

@@ -402,7 +402,7 @@ class DnsSimulation:
         )
         self.stepper = Stepper(self.disc, old.settings)
         if self.disc.modes >= 1:
-            self.stepper.kind = old.kind
+            self.stepper.use(old.kind)  # the columns give way to the coupled blocks where too fine
         self.stepper.switch_dt = old.switch_dt
 
     def refine(self, state: DnsState) -> None:

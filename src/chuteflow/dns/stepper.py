@@ -93,6 +93,15 @@ class NewtonSettings:
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
         (:func:`~chuteflow.dns.columns.column_matrix`).
+    columns_max_nx : int
+        Largest x grid (2M + 1 points) on which the column preconditioner is built; on a
+        finer one the coupled blocks serve instead (``"columns"`` and ``"auto"`` included).
+        The sparse LU of the columns fills in (the top conditions couple every column
+        through |k|): at P5's ±6 … 18 % wave (L = 2000, N = 64) nx = 33, 65, 129 cost
+        0.16, 0.34, 0.75 GB of factors and 3, 6, 16 s, nx = 257 more than 4.9 GB and
+        15 min, and a run refined to nx = 513 was killed for memory at 24 GB; the coupled
+        blocks cost 1.0 GB and 5 s at nx = 257, 1.8 GB and 9 s at 513
+        (docs/dns.md, *The column preconditioner (large amplitude)*).
     dt_tol : float
         Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
         :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
@@ -124,6 +133,7 @@ class NewtonSettings:
     switch_krylov: int = 60
     coupled_krylov: int = 20
     column_order: int = 2
+    columns_max_nx: int = 129
     dt_tol: float = 0.0
     dt_max: float = 0.0
     dt_krylov: int = 60
@@ -145,6 +155,8 @@ class NewtonSettings:
                 f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
                 "(0 keeps Δt fixed; e.g. 1e-3)"
             )
+        if self.columns_max_nx < 1:
+            raise ParameterError(f"columns_max_nx = {self.columns_max_nx!r}: ≥ 1 x points")
         if self.coupled_krylov < 0:
             raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
         if self.dt_krylov < 1:
@@ -209,12 +221,24 @@ class Stepper:
         pre = self.settings.preconditioner
         self.kind = "mean"
         if disc.modes >= 1 and pre == "columns":
-            self.kind = "columns"
+            self.kind = "columns" if self.columns_fit else "coupled"
         elif disc.modes >= 1 and pre == "coupled" and self.settings.coupled_krylov == 0:
             self.kind = "coupled"
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
         #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
         self.switch_dt = math.inf
+
+    @property
+    def columns_fit(self) -> bool:
+        """Whether the grid is coarse enough for the column preconditioner
+        (``NewtonSettings.columns_max_nx``: its LU fills in beyond)."""
+        return 2 * self.disc.modes + 1 <= self.settings.columns_max_nx
+
+    def use(self, kind: str) -> None:
+        """Go over to the preconditioner ``kind`` (``"columns"`` becomes ``"coupled"`` on a
+        grid too fine for it, :attr:`columns_fit`); rebuilt at the next step."""
+        self.kind = "coupled" if kind == "columns" and not self.columns_fit else kind
+        self._lus = None
 
     @property
     def columns(self) -> bool:
@@ -232,7 +256,8 @@ class Stepper:
         columns above ``switch_krylov``; ``"coupled"``: to the coupled blocks above
         ``coupled_krylov``, and these, where freshly built they still need more than
         ``switch_krylov`` (a wave of ±40 % and more, whose coefficients need harmonics
-        4–8), to the columns. The columns only at Δt ≤ :attr:`switch_dt`."""
+        4–8), to the columns. The columns only at Δt ≤ :attr:`switch_dt`, and only on a grid
+        they fit (:attr:`columns_fit`; else ``"auto"`` goes over to the coupled blocks)."""
         s = self.settings
         if not self.disc.modes:
             return None
@@ -240,11 +265,11 @@ class Stepper:
         if self.kind == "mean":
             # the x-mean no longer describes the Jacobian
             if s.preconditioner == "auto" and krylov > s.switch_krylov and at_run_dt:
-                return "columns"
+                return "columns" if self.columns_fit else "coupled"
             if s.preconditioner == "coupled" and krylov > s.coupled_krylov:
                 return "coupled"
         fresh = self._age <= 1 and self._base_krylov is None
-        if self.kind == "coupled" and fresh and krylov > s.switch_krylov and at_run_dt:
+        if self.kind == "coupled" and fresh and krylov > s.switch_krylov and at_run_dt and self.columns_fit:
             return "columns"
         return None
 
