@@ -221,7 +221,7 @@ class Stepper:
         pre = self.settings.preconditioner
         self.kind = "mean"
         if disc.modes >= 1 and pre == "columns":
-            self.kind = "columns" if self.columns_fit else "coupled"
+            self.use("columns")
         elif disc.modes >= 1 and pre == "coupled" and self.settings.coupled_krylov == 0:
             self.kind = "coupled"
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
@@ -257,7 +257,7 @@ class Stepper:
         ``coupled_krylov``, and these, where freshly built they still need more than
         ``switch_krylov`` (a wave of ±40 % and more, whose coefficients need harmonics
         4–8), to the columns. The columns only at Δt ≤ :attr:`switch_dt`, and only on a grid
-        they fit (:attr:`columns_fit`; else ``"auto"`` goes over to the coupled blocks)."""
+        they fit (:attr:`columns_fit`; on a finer grid :meth:`use` takes the coupled blocks)."""
         s = self.settings
         if not self.disc.modes:
             return None
@@ -265,10 +265,11 @@ class Stepper:
         if self.kind == "mean":
             # the x-mean no longer describes the Jacobian
             if s.preconditioner == "auto" and krylov > s.switch_krylov and at_run_dt:
-                return "columns" if self.columns_fit else "coupled"
+                return "columns"  # (the coupled blocks where the grid is too fine: use)
             if s.preconditioner == "coupled" and krylov > s.coupled_krylov:
                 return "coupled"
         fresh = self._age <= 1 and self._base_krylov is None
+        # (where the columns do not fit, the coupled blocks are already the last resort)
         if self.kind == "coupled" and fresh and krylov > s.switch_krylov and at_run_dt and self.columns_fit:
             return "columns"
         return None
@@ -416,7 +417,7 @@ class Stepper:
             # amplitude the x-mean preconditioner misses the mode coupling however fresh it is
             nxt = self._escalation(count[0], dt)
             if nxt is not None:
-                self.kind = nxt
+                self.use(nxt)
                 self._factor(d.unpack(z), dt, bdf, history)
                 continue
             if self._base_krylov is None:
