@@ -352,10 +352,22 @@ class _Candidate:
     its last eigenpair, the mode at the last rung, the tails seen, and once decided its
     :class:`Followed`."""
 
-    def __init__(self, flow, kx, kz, alpha: complex, v: np.ndarray, n_from: int, policy, cache):
+    def __init__(
+        self,
+        flow,
+        kx,
+        kz,
+        alpha: complex,
+        v: np.ndarray,
+        n_from: int,
+        policy,
+        cache,
+        tail: float | None = None,
+    ):
         self.flow, self.kx, self.kz, self.policy, self.cache = flow, kx, kz, policy, cache
         self.start = self.alpha = complex(alpha)
         self.v, self.n_from = v, n_from
+        self.tail0 = tail  # the tail of ``v`` at N = n_from, where the screen measured it
         self.mode: Mode | None = None
         self.tails: list[float] = []
         self.done: Followed | None = None
@@ -392,9 +404,11 @@ class _Candidate:
                 drift = math.inf
         tail_before = self.tails[-1] if self.tails else None
         if tail_before is None and self.mode is None and nn != self.n_from:
-            # the screen's tail of the eigenvector followed (at N = n_from)
-            p0 = stability_operator(flow, self.n_from, three_d, cache=self.cache).pencil(kx, kz)
-            tail_before = float(tails(p0, self.v[:, None], policy.tail_terms)[0])
+            # the tail of the eigenvector followed, at N = n_from (the screen's, where it ran)
+            if self.tail0 is None:
+                p0 = stability_operator(flow, self.n_from, three_d, cache=self.cache).pencil(kx, kz)
+                self.tail0 = float(tails(p0, self.v[:, None], policy.tail_terms)[0])
+            tail_before = self.tail0
         self.mode = mode = make_mode(p, a, w, drift, n2, policy)
         self.alpha, self.v, self.n_from = complex(a), w, nn
         a_top, near = _top_continuum(flow, kx, kz)
@@ -551,9 +565,9 @@ def global_candidates(
     cache: OperatorCache,
     finer: list[int] | None = None,
     top: int | None = None,
-) -> list[tuple[complex, np.ndarray]]:
+) -> list[tuple[complex, np.ndarray, float]]:
     """Eigenpairs above ``answer`` from one dense eigensolve at ``policy.search.n``
-    (:func:`~.eigen.shifted_spectrum`), best first:
+    (:func:`~.eigen.shifted_spectrum`), best first, each with its eigenvector's tail:
     eigenvectors nearly resolved there (tail < ``policy.search.candidate_tail``), Re α above
     the answer's by more than its uncertainty (its drift, at least the drift threshold),
     neither the answer itself nor, in a real pencil (k_x = 0), the conjugate of one kept.
@@ -585,16 +599,16 @@ def global_candidates(
     finer = [m for m in (finer or []) if m > n]
     if finer and top is not None and np.any(slow):
         falls = slow & _tail_falls_in_time(flow, kx, kz, answer, policy, cache, w[above], t, n, finer, top)
-    out: list[tuple[complex, np.ndarray]] = []
+    out: list[tuple[complex, np.ndarray, float]] = []
     for j, tj, fj in zip(above, t, falls):
         a = complex(w[j])
         if tj >= search.candidate_tail and not fj:
             continue
         if answer is not None and abs(a - answer.alpha) <= 1e-3 * max(abs(answer.alpha), 1e-3):
             continue
-        if kx == 0 and any(abs(a - b.conjugate()) <= 1e-8 * max(abs(a), 1.0) for b, _ in out):
+        if kx == 0 and any(abs(a - b.conjugate()) <= 1e-8 * max(abs(a), 1.0) for b, _, _ in out):
             continue
-        out.append((a, V[:, j]))
+        out.append((a, V[:, j], float(tj)))
     return out
 
 
@@ -724,12 +738,14 @@ def _search_once(
         undecided.append(Followed(answer.alpha, answer, "undecided", ""))
     notes: list[str] = []
     active = [
-        _Candidate(flow, kx, kz, a, v, search.n, policy, cache) for a, v in cands[: search.max_candidates]
+        _Candidate(flow, kx, kz, a, v, search.n, policy, cache, tail=t)
+        for a, v, t in cands[: search.max_candidates]
     ]
     for c in active:
         c.answer = answer
     followed_all = list(active)
-    undecided += [Followed(a, None, "undecided", "not followed") for a, _ in cands[search.max_candidates :]]
+    rest = cands[search.max_candidates :]
+    undecided += [Followed(a, None, "undecided", "not followed") for a, _, _ in rest]
     # every candidate advances rung by rung (each operator is built once), best first; a
     # candidate below the least-stable mode that passes both tests needs no more solves
     for i, nn in enumerate(rungs):
