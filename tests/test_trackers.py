@@ -101,8 +101,8 @@ def test_the_monitor_resumes_from_its_checkpoint():
 
 
 class _Refinable(_Scripted):
-    def can_refine(self):
-        return True
+    def can_refine(self, direction="x"):
+        return direction == "x"
 
 
 def test_a_settling_monitor_leaves_the_starts_transient_alone():
@@ -115,7 +115,7 @@ def test_a_settling_monitor_leaves_the_starts_transient_alone():
         sim = _Refinable(xs, [1e-6] * len(xs))
         mon.initialize(sim, SimpleNamespace(y=None), 1.0)
         for i in range(1, len(xs)):
-            if mon.handle(sim, SimpleNamespace(number=i, y=None)) == "refine":
+            if mon.handle(sim, SimpleNamespace(number=i, y=None)) == "refine x":
                 return i
         return None
 
@@ -139,11 +139,11 @@ def test_a_refined_run_has_left_its_transient_behind_and_the_checkpoint_says_so(
     mon = ResolutionMonitor(1e-4, every=1, action="refine", settle=True)
     mon.initialize(sim, SimpleNamespace(y=None), 1.0)
     got = [mon.handle(sim, SimpleNamespace(number=i, y=None)) for i in range(1, 14)]
-    assert got[-1] == "refine"
+    assert got[-1] == "refine x"
     mon.refined(sim, SimpleNamespace(y=None))  # measures 1e-8
     saved = mon.checkpoint()
     again = ResolutionMonitor(1e-4, every=1, action="refine", settle=True)
     again.restore(saved)
     assert not again.settle
     assert again.handle(sim, SimpleNamespace(number=15, y=None)) is None  # 1e-7
-    assert again.handle(sim, SimpleNamespace(number=16, y=None)) == "refine"  # 3e-5
+    assert again.handle(sim, SimpleNamespace(number=16, y=None)) == "refine x"  # 3e-5

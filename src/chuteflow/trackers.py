@@ -20,8 +20,9 @@ simulation ``sim`` is duck-typed:
   (:class:`SaturationStop`);
 * ``sim.resolution(y)`` → dict with ``x_tail`` and ``y_tail``, the amplitude of the highest
   modes relative to the largest (:class:`ResolutionMonitor`);
-* ``sim.can_refine()`` → bool, whether its x grid may still grow (:class:`ResolutionMonitor`
-  with ``action="refine"``; the simulation then refines and calls :meth:`Tracker.refined`).
+* ``sim.can_refine(direction)`` → bool, whether its grid may still grow in ``"x"`` or ``"y"``
+  (:class:`ResolutionMonitor` with ``action="refine"`` returns ``"refine x"`` or ``"refine y"``;
+  the simulation then refines and calls :meth:`Tracker.refined`).
 
 and of a step ``step``: ``step.t_prev``, ``step.t``, ``step.number``, ``step.y`` (the state at
 its end) and ``step.state(t)`` (the state at ``t`` in [t_prev, t]).
@@ -85,8 +86,9 @@ class Tracker:
     def finalize(self, sim: Any, info: Any) -> None:
         """Called once at the end of the run."""
 
-    def refined(self, sim: Any, state: Any) -> None:
-        """Called after the simulation refined its grid (the state ``state.y`` has more modes)."""
+    def refined(self, sim: Any, state: Any, direction: str = "x") -> None:
+        """Called after the simulation refined its grid in ``direction`` (``"x"`` or ``"y"``;
+        the state ``state.y`` has more modes or nodes)."""
 
     def checkpoint(self) -> dict[str, np.ndarray]:
         """What the tracker has gathered, as arrays (saved with a resumable run's state)."""
@@ -333,21 +335,21 @@ class ResolutionMonitor(Tracker):
     direction), with ``"stop"`` the run stops with status ``"under-resolved"`` (its data
     kept: rerun finer).
 
-    With ``action="refine"`` the x grid follows the wave: once the x tail, rising, passes
-    ``tol / REFINE_MARGIN`` the monitor returns ``"refine"`` where ``sim.can_refine()``
-    says the grid may still grow, and the simulation doubles its modes (exactly: the state
-    is the same function, :meth:`chuteflow.dns.DnsSimulation.refine`) and calls
-    :meth:`Tracker.refined`, which starts the x series anew. Where the grid may not grow
-    (``max_modes`` reached) it warns as with ``"warn"``. The margin keeps the tail below
-    ``tol`` between two measurements while it rises (tenfold in ≈ 20 steps at P5's bore,
-    docs/dns.md). With ``settle=True`` (a broadband start: noise) the monitor neither
+    With ``action="refine"`` the grid follows the wave: once the x (or y) tail, rising,
+    passes ``tol / REFINE_MARGIN`` the monitor returns ``"refine x"`` (``"refine y"``) where
+    ``sim.can_refine(direction)`` says the grid may still grow that way, and the simulation
+    refines (exactly: the state is the same function, :meth:`chuteflow.dns.DnsSimulation.refine`)
+    and calls :meth:`Tracker.refined`, which starts that direction's series anew. Where the
+    grid may not grow (``max_modes`` or ``max_n`` reached) it warns as with ``"warn"``. The
+    margin keeps the tail below ``tol`` between two measurements while it rises (tenfold in
+    ≈ 20 steps at P5's bore, docs/dns.md). With ``settle=True`` (a broadband start: noise) the monitor neither
     refines nor warns before the start's own transient has died (:func:`run_tail`; at the end
     it warns all the same): noise of 1e-2 puts 4e-3 into the top modes at once, which
     decays a thousandfold within t ≈ 1000 at P5 and is no reason to run the whole linear
     phase on a finer grid.
     """
 
-    #: Refine when the x tail passes tol / REFINE_MARGIN (``action="refine"``).
+    #: Refine when a tail passes tol / REFINE_MARGIN (``action="refine"``).
     REFINE_MARGIN = 4.0
 
     def __init__(self, tol: float = 1e-4, *, every: int = 10, action: str = "warn", settle: bool = False):
@@ -381,16 +383,17 @@ class ResolutionMonitor(Tracker):
     def finalize(self, sim, info):
         self._measure(sim, info.y, end=True)
 
-    def refined(self, sim, state):
-        # the x spectrum of the finer grid: a new series (the coarse grid's tails are its own);
+    def refined(self, sim, state, direction="x"):
+        # the spectrum of the finer grid: a new series (the coarse grid's tails are its own);
         # a start's transient is behind a run that refined (it refines only after it)
-        self._series["x"] = []
-        self._warned.discard("x")
+        self._series[direction] = []
+        self._warned.discard(direction)
         self.settle = False
         self._measure(sim, state.y)
 
     def _measure(self, sim, y, end: bool = False) -> str | None:
         r = sim.resolution(y)
+        refine = None  # (both directions are measured; one refinement at a time)
         for d in ("x", "y"):
             series = self._series[d]
             series.append(float(r[f"{d}_tail"]))
@@ -400,16 +403,16 @@ class ResolutionMonitor(Tracker):
             rising = len(series) > 1 and bool(np.any(np.diff(series) >= 0))
             transient = self.settle and _transient_end(np.asarray(series)) is None
             if (
-                d == "x"
-                and self.action == "refine"
+                self.action == "refine"
                 and not end
                 and len(series) > 1
                 and series[-1] >= series[-2]
                 and v > self.tol / self.REFINE_MARGIN
                 and not transient
-                and sim.can_refine()
+                and sim.can_refine(d)
             ):
-                return "refine"
+                refine = refine or f"refine {d}"
+                continue
             if v > self.tol and (rising or end) and (end or not transient) and d not in self._warned:
                 self._warned.add(d)
                 if self.action == "stop":
@@ -420,7 +423,7 @@ class ResolutionMonitor(Tracker):
                     ResolutionWarning,
                     stacklevel=2,
                 )
-        return None
+        return refine
 
     def checkpoint(self):
         out = {f"tails_{d}": np.array(v) for d, v in self._series.items()}

@@ -15,6 +15,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -417,6 +418,101 @@ def test_a_refined_run_resumes_exactly(tmp_path, p1):
     assert ds.attrs["refined_at"] == ref.attrs["refined_at"]
     assert np.array_equal(ds["time"].values, ref["time"].values)
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+
+
+# -- the y grid that follows the wave (max_n, DnsSimulation.refine(..., "y")) ------------------------
+# P1 (L = 1000) from its mode at 1 %, M = 8: the first steps put structure near the dilute top into
+# the highest Chebyshev coefficients (y tail at the end 3.6e-6 at N = 64, 8.9e-5 at N = 48, 7.8e-4
+# at N = 40; measured 2026-12-06), so a y grid of N = 48 with a tolerance of 1e-4 must grow.
+YREF = dict(time=120.0, dt=4.0, init="mode", amplitude=0.01, modes=8)
+
+
+def test_refine_in_y_keeps_the_state_and_its_mass(p1):
+    """refine(state, "y") evaluates the Chebyshev interpolant of every field at the finer nodes
+    (N = 32 → 48 → 64 at most: ×1.5 to a multiple of 8): the coarse nodal values are recovered
+    from the fine ones to round-off, ln ν up to the uniform shift (the coarse Clenshaw–Curtis
+    error of ∫e^s dy) that keeps the total mass; the history level, C_init and the snapshots
+    move to the finer nodes."""
+    sim = DnsSimulation(p1, 1000.0, time=8.0, dt=4.0, init="mode", amplitude=0.01, n=32, modes=2, max_n=64)
+    st = sim.run()
+    old = sim.disc.grid
+    C, prev = st.C.copy(), st.prev.copy()
+    mass = sim.disc.total_mass(prev[0], prev[3][-1])
+    sim.refine(st, "y")
+    fine = sim.disc.grid
+    assert sim.disc.n == 48
+    assert st.C.shape == (4, 49, 3)
+    assert st.C_init.shape == (4, 49, 3)
+    back = np.moveaxis(fine.interpolate(np.moveaxis(st.C, 1, -1), old.y), -1, 1)
+    np.testing.assert_allclose(back[1:], C[1:], rtol=0, atol=1e-12)  # u, v, T: the same polynomials
+    np.testing.assert_allclose(back[0, :, 1:], C[0, :, 1:], rtol=0, atol=1e-12)
+    shift = back[0, :, 0] - C[0, :, 0]
+    assert np.ptp(shift.real) < 1e-12  # a uniform shift of ln ν …
+    assert abs(shift[0]) < 1e-6  # … of the coarse quadrature's size
+    nu, _, _, T = st.prev
+    assert abs(sim.disc.total_mass(nu, T[-1]) / mass - 1) < 1e-14  # the history level too
+    assert all(np.shape(v) == (4, 49, sim.disc.nxp) for v in st.records["snaps"])
+    assert sim.can_refine("y")
+    assert not sim.can_refine("x")
+    sim.refine(st, "y")
+    assert sim.disc.n == 64  # 72, capped
+    assert not sim.can_refine("y")
+    with pytest.raises(ParameterError, match="max_ny"):
+        sim.refine(st, "y")
+    with pytest.raises(ParameterError, match="max_ny"):
+        DnsSimulation(p1, 1000.0, n=32, modes=2, max_n=24)
+
+
+def test_a_run_refining_in_y_is_closer_to_the_fine_grid(p1):
+    """From N = 48 with a tolerance of 1e-4 (checked every step) the y grid grows to 64 after the
+    first step; at t = 120 its ρ̄ is within 1.5e-5 of ⟨ρ̄⟩ of the N = 64 run's (N = 48 kept: 5.1e-5;
+    the wave itself is 2.9e-3), the y tail at the end 3.7e-5 (N = 48 kept: 8.9e-5), mass to 1e-14.
+    What the first step made on the coarse grid stays (the refinement is exact, not a restart),
+    so the refined run does not reach the fine run's own error; bounds from those numbers."""
+
+    def run(n, max_n=None):
+        sim = DnsSimulation(p1, 1000.0, n=n, max_n=max_n, **YREF)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ResolutionWarning)
+            st = sim.run([ResolutionMonitor(1e-4, every=1, action="refine" if max_n else "warn")])
+        return sim.dataset(st), caught
+
+    fine, _ = run(64)
+    coarse, warned = run(48)
+    ds, caught = run(48, 64)
+    a = ds.attrs
+    assert any("y modes" in str(w.message) for w in warned)
+    assert not any("y modes" in str(w.message) for w in caught)
+    assert (a["ny_initial"], a["ny"], a["ny_max"], a["refinements"]) == (48, 64, 64, 1)
+    assert a["refined_at"] == "t = 4 (ny 64)"
+    assert ds["nu"].shape[1] == 65
+    assert np.array_equal(ds["y"].values, fine["y"].values)
+
+    def err(d):
+        return float(np.abs(d["rho_bar"].values[-1] - fine["rho_bar"].values[-1]).max() / p1.rho_bar)
+
+    assert err(coarse) > 4e-5
+    assert err(ds) < 2.5e-5
+    assert a["y_tail_end"] < 6e-5 < coarse.attrs["y_tail_end"]
+    assert a["mass_drift"] < 1e-13
+
+
+@pytest.mark.filterwarnings("ignore:the highest x modes")
+def test_a_run_refined_in_y_resumes_exactly(tmp_path, p1):
+    """N = 32 → 48 at t = 40 (the y tail past 1e-2 / 4 at the monitor's tenth step); paused after
+    it (step 15) and continued from the checkpoint on the finer y grid: the uninterrupted run
+    to 1e-13."""
+    kw = dict(modes=2, n=32, max_n=64, **{k: v for k, v in REFINE.items() if k != "n"})
+    ref = simulate(p1, 1000.0, **kw)
+    assert ref.attrs["refined_at"].startswith("t = 40 (ny 48)")
+    ck = tmp_path / "run.ck.npz"
+    first = simulate(p1, 1000.0, checkpoint=ck, trackers=[_PauseAt(15)], **kw)
+    assert first.attrs["ny"] == 48
+    ds = simulate(p1, 1000.0, checkpoint=ck, trackers=[_PauseAt(None)], **kw)
+    assert ds.attrs["refined_at"] == ref.attrs["refined_at"]
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+    # (the pause took a snapshot of its own; the last ones are the same time's)
+    assert np.allclose(ds["nu"].values[-1], ref["nu"].values[-1], rtol=0, atol=1e-12)
 
 
 def test_resample_is_trigonometric_interpolation():

@@ -39,6 +39,12 @@ def dns(
         "rise towards --resolution-tol (default: keep --nx).",
     ),
     ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
+    max_ny: int | None = typer.Option(
+        None,
+        "--max-ny",
+        help="Let the y grid follow the wave: grow N by half, up to this, where the highest "
+        "Chebyshev coefficients rise towards --resolution-tol (default: keep --ny).",
+    ),
     dt: float | None = typer.Option(None, "--dt", help="Time step (default: wave period / 100)."),
     init: str = typer.Option("mode", "--init", help="mode (least-stable eigenmode at k = 2π/L) or noise."),
     amplitude: float = typer.Option(
@@ -131,6 +137,7 @@ def dns(
                 n=ny,
                 modes=None if nx is None else (nx - 1) // 2,
                 max_modes=None if max_nx is None else (max_nx - 1) // 2,
+                max_n=max_ny,
                 dt=dt,
                 init=init,
                 amplitude=amplitude,
@@ -210,6 +217,12 @@ def waves(
         "modes rise towards the resolution tolerance (default: keep --nx).",
     ),
     ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
+    max_ny: int | None = typer.Option(
+        None,
+        "--max-ny",
+        help="Let each run's y grid follow its wave: grow N by half, up to this, where the "
+        "highest Chebyshev coefficients rise towards the resolution tolerance (default: keep --ny).",
+    ),
     amplitude: float = typer.Option(1e-3, "--amplitude", help="Size of the initial noise in ln ν."),
     seed: int = typer.Option(0, "--seed", help="Seed of the initial noise."),
     saturation_tol: float = typer.Option(
@@ -300,6 +313,7 @@ def waves(
         dt_tol=dt_tol,
         preconditioner=preconditioner,
         max_modes=None if max_nx is None else (max_nx - 1) // 2,
+        max_n=max_ny,
     )
     con = Console(stderr=True)
 

@@ -66,6 +66,7 @@ def simulate(
     initial: Callable[[np.ndarray], np.ndarray] | None = None,
     wall_limit: float | None = None,
     max_modes: int | None = None,
+    max_n: int | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -112,6 +113,10 @@ def simulate(
         up to this many, wherever the x tail rises past ``resolution_tol`` / 4, so that a
         steepening front (P5's bore) stays resolved; default: the grid is kept and a
         rising tail only warns. ``nx``, ``refinements`` and ``refined_at`` in the result.
+    max_n : int, optional
+        The same in y: the Chebyshev intervals grow by half (to a multiple of 8), up to this
+        many, wherever the y tail rises past ``resolution_tol`` / 4; ``ny``, ``ny_initial``
+        in the result.
     wall_limit : float, optional
         Seconds of wall time after which the run pauses
         (:class:`~chuteflow.trackers.WallTimeStop`): status ``"paused at t = …"``, the wave
@@ -150,6 +155,7 @@ def simulate(
         min_dt_fraction=min_dt_fraction,
         initial=initial,
         max_modes=max_modes,
+        max_n=max_n,
         wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []
@@ -160,7 +166,7 @@ def simulate(
     monitor = ResolutionMonitor(
         resolution_tol,
         every=max(1, 10 // sim.setup.record_every),
-        action="refine" if sim.can_refine() else "warn",
+        action="refine" if sim.can_refine("x") or sim.can_refine("y") else "warn",
         settle=sim.setup.init == "noise",  # (a custom start too)
     )
     tracking.append(monitor)
@@ -195,6 +201,7 @@ def summary(ds: xr.Dataset) -> dict:
         "nx",
         "ny",
         "nx_initial",
+        "ny_initial",
         "refinements",
         "dt",
         "time_end",

@@ -38,6 +38,36 @@ __all__ = ["DnsSimulation", "DnsState", "DnsStep"]
 
 #: The largest x grid a run may be refined to (nx = 2M + 1 = 1025).
 MAX_MODES = 512
+#: The most Chebyshev intervals a run may be refined to (the largest ``n``).
+MAX_N = 400
+#: A y refinement multiplies N by this (rounded up to a multiple of 8): the coupled blocks'
+#: factorisation grows as N³, so the y grid grows by half, not double, at each refinement.
+Y_REFINE = 1.5
+
+
+def _refined_n(n: int, max_n: int) -> int:
+    """Chebyshev intervals after one y refinement of ``n`` (at most ``max_n``)."""
+    return min(8 * math.ceil(Y_REFINE * n / 8), max_n)
+
+
+def _refined_at(records: dict, setup: DnsSetup) -> str:
+    """ "t = 40 (nx 9), t = 80 (ny 40)": when the grid grew, and to what."""
+    out, m0, n0 = [], setup.modes, setup.n
+    ns = list(records["refine_n"])
+    ns = [setup.n] * (len(records["refine_t"]) - len(ns)) + ns
+    for t, m, n in zip(records["refine_t"], records["refine_modes"], ns):
+        m, n = int(m), int(n)
+        grew = [f"nx {2 * m + 1}"] * (m != m0) + [f"ny {n}"] * (n != n0)
+        out.append(f"t = {t:.6g} ({', '.join(grew)})")
+        m0, n0 = m, n
+    return ", ".join(out)
+
+
+def _to_nodes(f: np.ndarray, old, new, axis: int) -> np.ndarray:
+    """Values at the nodes of ChebyshevGrid ``old`` along ``axis`` → the same polynomial at
+    the nodes of ``new`` (the same interval, more nodes: exact)."""
+    g = old.interpolate(np.moveaxis(np.asarray(f), axis, -1), new.y)
+    return np.moveaxis(g, -1, axis)
 
 
 def _pad_modes(C: np.ndarray, modes: int) -> np.ndarray:
@@ -88,8 +118,9 @@ class DnsState:
     records : dict of lists
         ``t``, ``rho``, ``Q``, ``x_tail``, ``y_tail`` every ``record_every`` steps;
         ``snap_t``, ``snaps`` the full fields; ``newton``, ``krylov`` per step;
-        ``refine_t``, ``refine_modes`` when and to how many x modes the grid was refined
-        (:meth:`DnsSimulation.refine`; the records before are resampled onto the finer grid).
+        ``refine_t``, ``refine_modes``, ``refine_n`` when and to how many x modes and
+        Chebyshev intervals the grid was refined (:meth:`DnsSimulation.refine`; the records
+        and snapshots before are interpolated onto the finer grid).
     """
 
     C: np.ndarray = field(repr=False)
@@ -117,6 +148,7 @@ class DnsState:
         "krylov",
         "refine_t",
         "refine_modes",
+        "refine_n",
     )
 
     def __post_init__(self):
@@ -251,6 +283,10 @@ class DnsSimulation:
         tolerance (:class:`~chuteflow.trackers.ResolutionMonitor` with ``action="refine"``)
         the modes are doubled, up to this many (:meth:`refine`). Default ``modes``: the grid
         is kept.
+    max_n : int, optional
+        Let the y grid follow the wave likewise: where the y tail rises, the Chebyshev
+        intervals grow by half (``Y_REFINE``, to a multiple of 8), up to this many. Default
+        ``n``: the y grid is kept.
     initial : callable, optional
         A start of the caller's: ``initial(x)`` → δ ln ν ≈ δν/ν0 at the points ``x`` in
         [0, L) of the padded grid at t = 0 (uniform in y, as the noise; projected onto the
@@ -284,6 +320,7 @@ class DnsSimulation:
         wave_policy: WavePolicy | None = None,
         initial: Callable[[np.ndarray], np.ndarray] | None = None,
         max_modes: int | None = None,
+        max_n: int | None = None,
     ):
         if initial is not None:
             if not callable(initial):
@@ -353,6 +390,15 @@ class DnsSimulation:
             )
         #: The most x modes :meth:`refine` may reach.
         self.max_modes = int(max_modes)
+        if max_n is None:
+            max_n = s.n
+        if int(max_n) != max_n or not s.n <= max_n <= MAX_N:
+            raise ParameterError(
+                f"max_ny = {max_n!r} must be a whole number in [ny = {s.n}, {MAX_N}]: "
+                "the most Chebyshev intervals the y grid may be refined to"
+            )
+        #: The most Chebyshev intervals :meth:`refine` may reach.
+        self.max_n = int(max_n)
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
@@ -389,53 +435,87 @@ class DnsSimulation:
         return h.hexdigest()[:16]
 
     # -- the grid that follows the wave ----------------------------------------------------------
-    def can_refine(self) -> bool:
-        """Whether :meth:`refine` may still add x modes (``max_modes`` not reached)."""
+    def can_refine(self, direction: str = "x") -> bool:
+        """Whether :meth:`refine` may still add x modes (``max_modes`` not reached) or, with
+        ``direction="y"``, Chebyshev intervals (``max_n`` not reached)."""
+        if direction == "y":
+            return self.disc.n < self.max_n
         return self.disc.modes < self.max_modes
 
-    def _set_modes(self, modes: int) -> None:
-        """The discretisation and the stepper at ``modes`` x modes (the preconditioner's kind
-        and the step control's switch kept: the same wave on a finer grid)."""
+    def _set_grid(self, n: int, modes: int) -> None:
+        """The discretisation and the stepper at ``n`` Chebyshev intervals and ``modes`` x
+        modes (the preconditioner's kind and the step control's switch kept: the same wave on
+        a finer grid)."""
         s, old = self.setup, self.stepper
         self.disc = Discretisation(
-            s.theta, s.model, s.length, self.flow.y_max, s.n, int(modes), frame=s.frame, top=s.top
+            s.theta, s.model, s.length, self.flow.y_max, int(n), int(modes), frame=s.frame, top=s.top
         )
         self.stepper = Stepper(self.disc, old.settings)
         if self.disc.modes >= 1:
             self.stepper.use(old.kind)  # the columns give way to the coupled blocks where too fine
         self.stepper.switch_dt = old.switch_dt
 
-    def refine(self, state: DnsState) -> None:
-        """Double the x modes of the run (at most ``max_modes``), in place.
+    def refine(self, state: DnsState, direction: str = "x") -> None:
+        """Refine the run's grid in place: double the x modes (at most ``max_modes``) or, with
+        ``direction="y"``, grow the Chebyshev intervals by half (at most ``max_n``).
 
-        The state is the same function on the finer grid (its coefficients padded with zeros;
-        the BDF2 history level likewise), so the run goes on as it was, only with room for a
-        steeper wave; the records so far (ρ̄, Q, the snapshots) are interpolated onto the
-        finer padded grid, so that the result has one x axis. ``refine_t`` and
-        ``refine_modes`` record it.
+        The state is the same function on the finer grid — its Fourier coefficients padded
+        with zeros, or its Chebyshev interpolant evaluated at the finer nodes; the BDF2
+        history level likewise — apart from a uniform shift of ln ν by the coarse
+        quadrature's error, which keeps the total mass the run conserved. So the run goes on
+        as it was, only with room for a steeper wave; the records so far (ρ̄, Q, the
+        snapshots) are interpolated onto the finer grid, so that the result has one grid.
+        ``refine_t``, ``refine_modes`` and ``refine_n`` record it.
         """
-        if not self.can_refine():
-            raise ParameterError(f"max_modes = {self.max_modes}: the grid has as many x modes already")
+        if direction not in ("x", "y"):
+            raise ParameterError(f"direction = {direction!r}: choose 'x' or 'y'")
+        if not self.can_refine(direction):
+            name = "max_modes" if direction == "x" else "max_ny"
+            raise ParameterError(
+                f"{name} = {self.max_modes if direction == 'x' else self.max_n}: "
+                f"the grid has as many {direction} points already"
+            )
         old, old_stepper = self.disc, self.stepper
-        modes = min(2 * max(old.modes, 1), self.max_modes)
+        modes, n = old.modes, old.n
+        if direction == "x":
+            modes = min(2 * max(old.modes, 1), self.max_modes)
+        else:
+            n = _refined_n(old.n, self.max_n)
         levels = [state.C] if state.prev is None else [state.C, history_coefficients(old, tuple(state.prev))]
         # the total mass of each level by the coarse grid's quadrature (what the run conserved)
         mass = [old.total_mass(*self._mass_fields(old_stepper, C)) for C in levels]
-        self._set_modes(modes)
-        fine = [_pad_modes(C, modes) for C in levels]
+        self._set_grid(n, modes)
+        new = self.disc
+        if direction == "x":
+            fine = [_pad_modes(C, modes) for C in levels]
+        else:
+            fine = [_to_nodes(C, old.grid, new.grid, axis=1) for C in levels]
         for C, m in zip(fine, mass):
-            # the finer quadrature of the same function differs by the coarse one's aliasing
-            # error: a uniform shift of ln ν of that size keeps the mass the run conserved
-            C[0, :, 0] += math.log(m / self.disc.total_mass(*self._mass_fields(self.stepper, C)))
+            # the finer quadrature of the same function differs by the coarse one's error (x:
+            # aliasing, y: Clenshaw–Curtis of e^s): a uniform shift of ln ν of that size keeps
+            # the mass the run conserved
+            C[0, :, 0] += math.log(m / new.total_mass(*self._mass_fields(self.stepper, C)))
         state.C = fine[0]
-        state.C_init = _pad_modes(state.C_init, modes)
         if len(fine) > 1:
             state.prev = np.array(self.stepper.physical(fine[1]))
         r = state.records
-        for k in ("rho", "Q", "snaps"):
-            r[k] = [_resample(v, self.disc.nxp) for v in r[k]]
+        if direction == "x":
+            state.C_init = _pad_modes(state.C_init, modes)
+            for k in ("rho", "Q", "snaps"):
+                r[k] = [_resample(v, new.nxp) for v in r[k]]
+        else:
+            state.C_init = _to_nodes(state.C_init, old.grid, new.grid, axis=1)
+            r["snaps"] = [_to_nodes(v, old.grid, new.grid, axis=1) for v in r["snaps"]]
+        self._pad_refine_records(state)
         r["refine_t"].append(state.t)
         r["refine_modes"].append(modes)
+        r["refine_n"].append(n)
+
+    def _pad_refine_records(self, state: DnsState) -> None:
+        """A checkpoint written before y refinement existed has no ``refine_n``: its
+        refinements were all in x, at the starting N."""
+        r = state.records
+        r["refine_n"] = [self.setup.n] * (len(r["refine_t"]) - len(r["refine_n"])) + list(r["refine_n"])
 
     @staticmethod
     def _mass_fields(stepper: Stepper, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -444,9 +524,10 @@ class DnsSimulation:
 
     def _follow(self, state: DnsState) -> None:
         """Put the discretisation at the grid of ``state`` (a checkpoint of a refined run)."""
-        modes = state.C.shape[-1] - 1
-        if modes != self.disc.modes:
-            self._set_modes(modes)
+        n, modes = state.C.shape[1] - 1, state.C.shape[-1] - 1
+        if (n, modes) != (self.disc.n, self.disc.modes):
+            self._set_grid(n, modes)
+        self._pad_refine_records(state)
 
     # -- the state ---------------------------------------------------------------------------
     def initial_state(self) -> DnsState:
@@ -608,12 +689,14 @@ class DnsSimulation:
                 self._snapshot(state)
             step = DnsStep(C, C_new, t_prev, state.t, state.step)
             stops = [r for r in [tr.handle(self, step) for tr in trackers] if r]
-            if "refine" in stops:
-                # the x grid follows the wave (ResolutionMonitor, action="refine")
-                stops = [r for r in stops if r != "refine"]
-                self.refine(state)
+            refine = [r for r in stops if r in ("refine x", "refine y")]
+            if refine:
+                # the grid follows the wave (ResolutionMonitor, action="refine")
+                stops = [r for r in stops if r not in refine]
+                direction = refine[0][-1]
+                self.refine(state, direction)
                 for tr in trackers:
-                    tr.refined(self, state)
+                    tr.refined(self, state, direction)
             if checkpoint is not None and _time.perf_counter() - last_ck > checkpoint_every:
                 last_ck = _time.perf_counter()
                 state.wall = wall0 + last_ck - start
@@ -683,17 +766,17 @@ class DnsSimulation:
             "nu0": setup.nu0,
             "length": setup.length,
             "k": k,
-            "ny": setup.n,
+            "ny": disc.n,
             "nx": 2 * disc.modes + 1,
             "modes": disc.modes,
             "nx_padded": disc.nxp,
-            # the grid that followed the wave (max_modes): where it started, when it doubled
+            # the grid that followed the wave (max_modes, max_n): where it started, when it grew
             "nx_initial": 2 * setup.modes + 1,
             "nx_max": 2 * self.max_modes + 1,
+            "ny_initial": setup.n,
+            "ny_max": self.max_n,
             "refinements": len(r["refine_t"]),
-            "refined_at": ", ".join(
-                f"t = {t_:.6g} (nx {2 * m_ + 1})" for t_, m_ in zip(r["refine_t"], r["refine_modes"])
-            ),
+            "refined_at": _refined_at(r, setup),
             "dt": setup.dt,
             "time_end": float(t[-1]) if len(t) else 0.0,
             "init": "custom" if self.initial is not None else setup.init,

@@ -52,6 +52,7 @@ WAVE_KEYS = (
     "x_tail",
     "y_tail",
     "nx",
+    "ny",
     "status",
     "steps",
     "wall_time",
@@ -89,6 +90,8 @@ class WaveMapSettings:
     max_modes : int, optional
         Let each run's x grid follow its wave, doubling up to this many modes
         (:meth:`~chuteflow.dns.DnsSimulation.refine`); default: ``modes`` throughout.
+    max_n : int, optional
+        The same in y: the Chebyshev intervals grow by half, up to this many; default ``n``.
     """
 
     length: float = 1000.0
@@ -103,6 +106,7 @@ class WaveMapSettings:
     dt_tol: float = 0.0
     preconditioner: str = "auto"
     max_modes: int | None = None
+    max_n: int | None = None
 
     def __post_init__(self):
         for name in ("length", "time", "dt"):
@@ -117,6 +121,11 @@ class WaveMapSettings:
             raise ParameterError(
                 f"max_modes = {self.max_modes!r} must be a whole number ≥ modes = {self.modes} "
                 "(the most x modes a run may refine to)"
+            )
+        if self.max_n is not None and (int(self.max_n) != self.max_n or not self.n <= self.max_n <= 400):
+            raise ParameterError(
+                f"max_ny = {self.max_n!r} must be a whole number in [ny = {self.n}, 400] "
+                "(the most Chebyshev intervals a run may refine to)"
             )
         self.newton()  # checks dt_tol and the preconditioner
 
@@ -183,6 +192,7 @@ def _one(
                 wall_limit=wall_limit,
                 checkpoint=ck,
                 max_modes=s.max_modes,
+                max_n=s.max_n,
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
