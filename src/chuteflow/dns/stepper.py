@@ -101,7 +101,9 @@ class NewtonSettings:
         0.16, 0.34, 0.75 GB of factors and 3, 6, 16 s, nx = 257 more than 4.9 GB and
         15 min, and a run refined to nx = 513 was killed for memory at 24 GB; the coupled
         blocks cost 1.0 GB and 5 s at nx = 257, 1.8 GB and 9 s at 513
-        (docs/dns.md, *The column preconditioner (large amplitude)*).
+        (docs/dns.md, *The column preconditioner (large amplitude)*). The factors grow as N²
+        too (nx = 65: 0.34 GB at N = 64, 0.74 GB at N = 96), which a y refinement
+        (``max_n``) should be sized by; the threshold is on nx alone.
     dt_tol : float
         Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
         :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
