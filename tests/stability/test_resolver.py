@@ -301,6 +301,25 @@ def test_a_slowly_converging_mode_beside_the_band_is_the_estimate():
     assert abs(m.alpha - (-0.000538047 - 0.014374555j)) < m.drift, (m.alpha, m.drift)
 
 
+def test_a_converging_eigenvalue_with_a_slow_tail_is_not_set_aside():
+    """θ = 12.092°, ν0(0) = 0.1675, φ = 0.0484, Φ = 0.31, (k_x, k_z) = (0.001702, 0.018843)
+    (``try_random_points --oblique 2 --check``, seed 603543): the search followed an
+    eigenvalue near −0.00243 − 0.00422i whose drift fell at every rung (2.4e-5, 1.0e-5,
+    4.1e-6, 2.4e-6 at N = 48 … 94) and whose tail fell at every rung (7.0e-5 … 2.7e-5), and
+    the stall rule (tail ×0.39 over three rungs) decided it "not a mode"; the answer was the
+    clean mode −1.31253 + 1.50712i, 540 times more damped, reported as converged. Dense QZ
+    has the eigenvalue at every N, its tail falling (−0.0023825 − 0.0042475i, tail 2.0e-6 at
+    N = 150; −0.0024790 − 0.0042046i, 6.9e-7 at 250; −0.0024351 − 0.0042402i, 1.5e-7 at 350):
+    a mode not resolved by the ladder. Now it is the answer, flagged, within the spread of the
+    dense solves (1e-4)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(12.092, 0.1675, ChuteModel(roughness=0.0484, wall_loss=0.31))
+    m = least_stable(flow, 0.001702, kz=0.018843)
+    assert not m.converged, m.note
+    assert abs(m.alpha - (-0.0024351 - 0.0042402j)) < 1e-4, (m.alpha, m.note)
+
+
 def test_a_slow_mode_at_a_paper_point_is_the_answer(flows):
     """P2 (θ = 16°, ν0(0) = 0.08), k = 0.5 (2D): the mode −0.51873938 − 4.66064670i passes
     both tests only at N = 256 (dense QZ on the mapped grid at N = 256 and 320: change 5e-9,

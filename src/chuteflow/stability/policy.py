@@ -72,7 +72,10 @@ class SearchPolicy:
         2.1e-5, 1.4e-5, 8.0e-6, 8.4e-6 at N = 48 … 94, 0.40 over three rungs, then 4e-6,
         1.4e-6, 1.5e-7 at N = 118, 148, 231), as fast as a band member of an unresolved
         band falls at times (16.5°, 0.13, φ = 0.08, Φ = 0.30, k = 0.005: 3.4e-4 … 1.5e-4,
-        0.44); their levels differ tenfold.
+        0.44); their levels differ tenfold. Nor does it judge a candidate whose eigenvalue
+        converges — its drift falling at every rung, fivefold over three, from well above
+        the drift threshold — while its tail falls at every rung
+        (:data:`~chuteflow.stability.resolver.CONVERGING_DRIFT_FALL`).
     hopeless : float
         A candidate whose tail fell at each of the last two rungs and whose drift,
         extrapolated to the top of the ladder at its own rate of

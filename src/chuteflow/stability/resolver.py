@@ -370,6 +370,7 @@ class _Candidate:
         self.tail0 = tail  # the tail of ``v`` at N = n_from, where the screen measured it
         self.mode: Mode | None = None
         self.tails: list[float] = []
+        self.drifts: list[float] = []  # the drift at each rung where the tail was recorded
         self.done: Followed | None = None
         self.answer: Mode | None = None  # the answer the search is above (search_above)
 
@@ -431,10 +432,25 @@ class _Candidate:
         if mode.alpha.real + mode.drift < floor:
             return self._decide("below", f"Re α = {mode.alpha.real:.6g} at N = {nn}")
         self.tails.append(mode.tail)
+        self.drifts.append(drift)
+        t, d = self.tails, self.drifts
+        decaying = len(t) >= 4 and t[-1] < t[-2] < t[-3]
+        # an eigenvalue whose drift falls at every rung, and by CONVERGING_DRIFT_FALL over
+        # three, while its eigenvector's tail falls at every rung converges, if slowly (an
+        # eigenfunction with a weak singularity): a mode not yet resolved, not a member of a
+        # band, whose drift is the band's spacing and shrinks no faster than it
+        converging = (
+            decaying
+            and len(d) >= 4
+            and d[-1] < d[-2] < d[-3] < d[-4]
+            and d[-1] <= CONVERGING_DRIFT_FALL * d[-4]
+            and d[-4] >= 10 * policy.drift_tol  # (a settled continuum's drift is round-off)
+        )
         if (
             len(self.tails) >= 4
             and mode.tail >= max(policy.tail_tol, policy.track_tail_tol)
             and mode.tail > search.stall * self.tails[-4]
+            and not converging
         ):
             return self._decide(
                 "not a mode",
@@ -442,8 +458,6 @@ class _Candidate:
                 f"rungs up to N = {nn}): no resolved eigenfunction (the dilute top's continuum, a "
                 "spurious eigenvalue, or one whose eigenfunction is singular)",
             )
-        t = self.tails
-        decaying = len(t) >= 4 and t[-1] < t[-2] < t[-3]
         if decaying and prev is not None and 0 < prev.drift < math.inf and math.isfinite(drift):
             # a candidate whose tail decays at every rung (the stall rule above has had three
             # rungs; the continuum's band wanders: Q2, (0.005, 0.1), tails 2.6e-4, 8.7e-5,
@@ -546,6 +560,19 @@ CONTINUUM_DRIFT = 1e-4
 #: at N = 48, 60, 75 (×0.04 a rung): it was decided the continuum, and −0.0834 − 0.2131i
 #: was answered, flagged.
 CONTINUUM_TAIL_FALL = 0.1
+
+
+#: The stall rule (:attr:`SearchPolicy.stall`) leaves alone a candidate whose tail falls at
+#: every rung and whose drift falls at every rung and by this factor or more over three
+#: rungs (N × 1.95): an eigenvalue converging at order ≥ 2.4 in N. A band's member moves by
+#: about the band's spacing, which shrinks as N⁻¹ … N⁻² (× 0.51 … 0.26 over three rungs).
+#: Measured: at θ 12.092, ν0 0.1675, φ 0.0484, Φ 0.31, (k_x, k_z) = (0.001702, 0.018843) the
+#: drift 2.4e-5, 1.0e-5, 4.1e-6, 2.4e-6 (× 0.10) and tail 7.0e-5 … 2.7e-5 at N = 48 … 94 of
+#: an eigenvalue that dense QZ finds at every N up to 350 with its tail falling to 1.5e-7
+#: (a mode; the stall rule had set it aside and a 540 times more damped mode was answered
+#: as converged); a member of the band at (16.5°, 0.13, φ 0.08, Φ 0.30), k = 0.005, drifts
+#: 4.1e-4, 2.9e-4, 1.7e-4, 1.4e-4 (× 0.34) with its eigenvalue swinging back and forth.
+CONVERGING_DRIFT_FALL = 0.2
 
 
 def _top_continuum(flow: SteadyFlow, kx: float, kz: float) -> tuple[complex, float]:
