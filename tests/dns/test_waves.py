@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import xarray as xr
 
 from chuteflow.dns import WaveMapSettings, map_waves
 from chuteflow.dns.waves import WAVE_KEYS
@@ -37,8 +38,14 @@ def serial():
     return map_waves(POINTS, SETTINGS, workers=1)
 
 
-def test_rows_follow_the_points(serial):
+def test_rows_follow_the_points(serial, tmp_path):
     assert list(serial["theta"].values) == [16.0, 16.5]
+    # the map is written as NetCDF with the default settings (max_modes, max_n left at None:
+    # `reproduce --full` failed on it) and read back the same
+    serial.to_netcdf(tmp_path / "map.nc", engine="h5netcdf")
+    back = xr.load_dataset(tmp_path / "map.nc", engine="h5netcdf")
+    assert "setting_max_modes" not in back.attrs
+    assert back.attrs["setting_n"] == 24
     assert list(serial["nu0"].values) == [0.05, 0.06]
     assert set(serial["verdict"].values) <= {"growing", "decaying"}  # a 1e-4 wave after 40 time units
     assert np.all(np.abs(serial["mass_drift"].values) < 1e-12)

@@ -91,3 +91,22 @@ def test_library_does_not_import_papers():
         if pat.search(f.read_text(encoding="utf-8")):
             bad.append(str(f.relative_to(SRC)))
     assert bad == []
+
+
+def test_the_full_wave_map_runs_each_point_where_it_is_unstable(flows):
+    """The full `dns` stage maps P1, P4, P5 each at a period where the fundamental grows
+    (§4.2: all three are unstable; at L = 1000 P4 decays, Re α = −2.3e-4): Re α > 0 of the
+    least-stable mode at k = 2π/L (P4 9.8e-6 at L ≈ 6283, P5 3.4e-4 at L = 2000, docs/dns.md),
+    and the settings are valid map settings."""
+    import math
+
+    from chuteflow.dns import WaveMapSettings
+    from chuteflow.papers.mitarai2004.stages import dns as stage
+    from chuteflow.stability import least_stable
+
+    WaveMapSettings(**stage.FULL_MAP)
+    WaveMapSettings(**stage.LONG_MAP)
+    runs = [("P1", stage.FULL_MAP["length"]), *stage.LONG_POINTS]
+    assert sorted(n for n, _ in runs) == sorted(stage.FULL_POINTS)
+    for name, length in runs:
+        assert least_stable(flows(name), 2 * math.pi / length).alpha.real > 0, name

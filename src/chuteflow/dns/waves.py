@@ -352,7 +352,9 @@ def map_waves(
         },
         attrs={
             "title": "saturated density waves of the full equations (chuteflow.dns.map_waves)",
-            **{f"setting_{k}": v for k, v in s.__dict__.items()},
+            # (a setting left at None, e.g. max_modes: the grid kept, is not an attribute:
+            # NetCDF has no None)
+            **{f"setting_{k}": v for k, v in s.__dict__.items() if v is not None},
             **{f"model_{k}": v for k, v in model.attrs().items()},
         },
     )

@@ -3,8 +3,9 @@
 The linear-phase verification — the least-stable eigenmode at k = 0.003 (L = 2π/0.003) of
 P1 grows and that of P3 decays at the eigenvalue of :mod:`chuteflow.stability`, the
 unperturbed flow stays steady, mass is conserved — and one density wave grown from noise to
-saturation at P1 on a coarse grid at ``--quick``; the full run maps the saturated waves at the
-paper's unstable points P1, P4, P5 (:func:`chuteflow.dns.map_waves`, L = 1000).
+saturation at P1 on a coarse grid at ``--quick``; the full run maps the waves at the paper's
+unstable points P1, P4, P5 (:func:`chuteflow.dns.map_waves`), each at a period where it is
+unstable (P1 L = 1000 to saturation; P4 L ≈ 6283 and P5 L = 2000 within a wall-time budget).
 """
 
 from __future__ import annotations
@@ -25,15 +26,38 @@ K_VERIFY = 0.003
 QUICK_WAVE = (3, 24, 20.0, 30000.0, 1e-2)
 #: The full stage's map of the saturated waves at the paper's unstable points.
 FULL_POINTS = ("P1", "P4", "P5")
-#: Its runs: L = 1000, nx = 65, N = 80 (the resolved reference grid of docs/dns.md), from
+#: P1's run: L = 1000, nx = 65, N = 80 (the resolved reference grid of docs/dns.md), from
 #: noise 1e-3 to saturation (2 %; P1 saturates at t ≈ 35000), with the step control and the
-#: mode coupling: the stage in 6.7 min on 2 cores (P1 −23.5 … +28.7 %, the reference wave;
-#: ≈ 26 min for P1 alone with a fixed Δt = 4 and the x-mean blocks). At L = 1000 P4 is stable
-#: (Re α = −2.3e-4) and P5 nearly neutral (1.2e-5): their notes say "decaying" and
-#: "growing"; their waves need L ≈ 6300 and ≥ 2000 (docs/dns.md, *Outcomes*), hours here.
+#: mode coupling: 6.7 min on 2 cores (−23.5 … +28.7 %, the reference wave; ≈ 26 min with a
+#: fixed Δt = 4 and the x-mean blocks).
 FULL_MAP: dict[str, Any] = dict(
     length=1000.0, time=45000.0, dt=4.0, modes=32, n=80, dt_tol=1e-3, preconditioner="coupled"
 )
+#: P4 and P5 at periods where they are unstable (at L = 1000 P4 is stable, Re α = −2.3e-4,
+#: and P5 nearly neutral, 1.2e-5): L = 2π/0.001 ≈ 6283, near P4's fastest growth (Re α =
+#: 9.8e-6 there: an e-folding takes 1e5), and L = 2000 (2.03 L_c of P5, Re α = 3.4e-4),
+#: docs/dns.md, *Outcomes in regimes A and C*.
+LONG_POINTS = (("P4", 2 * math.pi / 1e-3), ("P5", 2000.0))
+#: Their runs: noise 1e-2 (their growth is slow), the step control from Δt = 8, the coupling,
+#: x and y grids that follow the wave (P5's bore steepens: nx 65 → 257, N 64 → 96), and a
+#: wall-time budget per flow and call, :data:`LONG_WALL`: they do not saturate within it (P4
+#: needs t ≈ 5e5, P5's front narrows below what nx = 257 resolves), so each is reported as
+#: far as it got ("growing", paused) and a second ``reproduce --full`` into the same folder
+#: continues them from their checkpoints.
+LONG_MAP: dict[str, Any] = dict(
+    length=2000.0,
+    time=600000.0,
+    dt=8.0,
+    modes=32,
+    n=64,
+    amplitude=1e-2,
+    dt_tol=1e-3,
+    preconditioner="coupled",
+    max_modes=128,
+    max_n=96,
+)
+#: Seconds of wall time per flow and call for :data:`LONG_POINTS` (the two run side by side).
+LONG_WALL = 900.0
 
 
 @register_stage(
@@ -186,25 +210,52 @@ def _wave_map(ctx: StageContext) -> None:
     from ....closures import ChuteModel
     from ....dns import WaveMapSettings, map_waves
 
-    pts = [POINTS[n] for n in FULL_POINTS]
+    model = ChuteModel(roughness=POINTS["P1"].roughness)
     ctx.progress(f"DNS: saturated waves at {', '.join(FULL_POINTS)}")
-    settings = WaveMapSettings(**FULL_MAP)
-    ds = map_waves(
-        [(p.theta, p.nu0) for p in pts],
-        settings,
-        model=ChuteModel(roughness=pts[0].roughness),
+
+    def progress(i, n, r):
+        ctx.progress(f"DNS waves {i}/{n}: θ = {r['theta']:g}, {r['verdict']}")
+
+    p1 = POINTS["P1"]
+    first = map_waves(
+        [(p1.theta, p1.nu0)],
+        WaveMapSettings(**FULL_MAP),
+        model=model,
+        out_dir=ctx.path("waves"),
+        progress=progress,
+    )
+    assert all(POINTS[n].roughness == p1.roughness for n, _ in LONG_POINTS)
+    long = map_waves(
+        [(POINTS[n].theta, POINTS[n].nu0, L) for n, L in LONG_POINTS],
+        WaveMapSettings(**LONG_MAP),
+        model=model,
         out_dir=ctx.path("waves"),
         workers=2,
-        progress=lambda i, n, r: ctx.progress(f"DNS waves {i}/{n}: θ = {r['theta']:g}, {r['verdict']}"),
+        progress=progress,
+        wall_limit=LONG_WALL,
     )
-    ds.to_netcdf(ctx.path("waves_map.nc"), engine="h5netcdf")
-    for i, name in enumerate(FULL_POINTS):
+    first.to_netcdf(ctx.path("waves_map.nc"), engine="h5netcdf")
+    long.to_netcdf(ctx.path("waves_map_long.nc"), engine="h5netcdf")
+    rows = [("P1", first, 0, FULL_MAP)] + [(n, long, i, LONG_MAP) for i, (n, _) in enumerate(LONG_POINTS)]
+    for name, ds, i, grid in rows:
+        L = float(ds["length"].values[i])
+        status = str(ds["status"].values[i])
+        how = (
+            f"saturated at t ≈ {float(ds['t_saturation'][i]):.0f}"
+            if str(ds["verdict"].values[i]) == "saturated"
+            else f"t = {float(ds['time_end'][i]):.0f} reached, paused by the budget of {LONG_WALL:.0f} s "
+            "of wall time per flow and call (`reproduce --full` again continues it)"
+            if status.startswith("paused")
+            else f"t = {float(ds['time_end'][i]):.0f} reached ({status})"
+        )
         ctx.report.add_note(
-            f"DNS wave at {name} (L = 1000, nx = 65, ny = 80, from noise): {ds['verdict'].values[i]}; "
+            f"DNS wave at {name} (L = {L:.0f}, nx = {int(ds['nx'].values[i])}, "
+            f"ny = {int(ds['ny'].values[i])} at the end, from noise {grid.get('amplitude', 1e-3):g}): "
+            f"{ds['verdict'].values[i]}; "
             f"ρ̄ {100 * float(ds['rho_min_rel'][i]):+.1f} … {100 * float(ds['rho_max_rel'][i]):+.1f} %, "
             f"linear growth rate at k = 2π/L {float(ds['growth_rate_linear'][i]):.3g}, "
             f"c = {float(ds['wave_speed'][i]):.4g} (linear {float(ds['phase_velocity_linear'][i]):.4g}), "
-            f"λ = {float(ds['wavelength'][i]):.4g}, saturated at t ≈ {float(ds['t_saturation'][i]):.0f}; "
+            f"λ = {float(ds['wavelength'][i]):.4g}, {how}; "
             f"tails x {float(ds['x_tail'][i]):.1e}, y {float(ds['y_tail'][i]):.1e}; mass drift "
             f"{float(ds['mass_drift'][i]):.1e}."
         )
