@@ -45,6 +45,18 @@ MAX_N = 400
 Y_REFINE = 1.5
 
 
+def _ceiling(value, start: int, limit: int, name: str, start_name: str, what: str) -> int:
+    """The most ``what`` a run may be refined to: ``value`` (None: ``start``, the grid is
+    kept), a whole number in [``start``, ``limit``]."""
+    v = start if value is None else value
+    if int(v) != v or not start <= v <= limit:
+        raise ParameterError(
+            f"{name} = {v!r} must be a whole number in [{start_name} = {start}, {limit}]: "
+            f"the most {what} the grid may be refined to"
+        )
+    return int(v)
+
+
 def _refined_n(n: int, max_n: int) -> int:
     """Chebyshev intervals after one y refinement of ``n`` (at most ``max_n``)."""
     return min(8 * math.ceil(Y_REFINE * n / 8), max_n)
@@ -381,24 +393,9 @@ class DnsSimulation:
             s.theta, s.model, s.length, flow.y_max, s.n, s.modes, frame=s.frame, top=s.top
         )
         self.stepper = Stepper(self.disc, settings)
-        if max_modes is None:
-            max_modes = s.modes
-        if int(max_modes) != max_modes or not s.modes <= max_modes <= MAX_MODES:
-            raise ParameterError(
-                f"max_modes = {max_modes!r} must be a whole number in [modes = {s.modes}, {MAX_MODES}]: "
-                "the most x modes the grid may be refined to"
-            )
-        #: The most x modes :meth:`refine` may reach.
-        self.max_modes = int(max_modes)
-        if max_n is None:
-            max_n = s.n
-        if int(max_n) != max_n or not s.n <= max_n <= MAX_N:
-            raise ParameterError(
-                f"max_ny = {max_n!r} must be a whole number in [ny = {s.n}, {MAX_N}]: "
-                "the most Chebyshev intervals the y grid may be refined to"
-            )
-        #: The most Chebyshev intervals :meth:`refine` may reach.
-        self.max_n = int(max_n)
+        #: The most x modes and Chebyshev intervals :meth:`refine` may reach.
+        self.max_modes = _ceiling(max_modes, s.modes, MAX_MODES, "max_modes", "modes", "x modes")
+        self.max_n = _ceiling(max_n, s.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
