@@ -45,7 +45,7 @@ MAX_N = 400
 Y_REFINE = 1.5
 
 
-def _ceiling(value, start: int, limit: int, name: str, start_name: str, what: str) -> int:
+def ceiling(value, start: int, limit: int, name: str, start_name: str, what: str) -> int:
     """The most ``what`` a run may be refined to: ``value`` (None: ``start``, the grid is
     kept), a whole number in [``start``, ``limit``]."""
     v = start if value is None else value
@@ -62,12 +62,17 @@ def _refined_n(n: int, max_n: int) -> int:
     return min(8 * math.ceil(Y_REFINE * n / 8), max_n)
 
 
+def _refine_n(records: dict, n0: int) -> list:
+    """The N after each refinement; a checkpoint written before y refinement existed has no
+    ``refine_n``: its refinements were all in x, at the starting N ``n0``."""
+    ns = list(records["refine_n"])
+    return [n0] * (len(records["refine_t"]) - len(ns)) + ns
+
+
 def _refined_at(records: dict, setup: DnsSetup) -> str:
     """ "t = 40 (nx 9), t = 80 (ny 40)": when the grid grew, and to what."""
     out, m0, n0 = [], setup.modes, setup.n
-    ns = list(records["refine_n"])
-    ns = [setup.n] * (len(records["refine_t"]) - len(ns)) + ns
-    for t, m, n in zip(records["refine_t"], records["refine_modes"], ns):
+    for t, m, n in zip(records["refine_t"], records["refine_modes"], _refine_n(records, setup.n)):
         m, n = int(m), int(n)
         grew = [f"nx {2 * m + 1}"] * (m != m0) + [f"ny {n}"] * (n != n0)
         out.append(f"t = {t:.6g} ({', '.join(grew)})")
@@ -394,8 +399,8 @@ class DnsSimulation:
         )
         self.stepper = Stepper(self.disc, settings)
         #: The most x modes and Chebyshev intervals :meth:`refine` may reach.
-        self.max_modes = _ceiling(max_modes, s.modes, MAX_MODES, "max_modes", "modes", "x modes")
-        self.max_n = _ceiling(max_n, s.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
+        self.max_modes = ceiling(max_modes, s.modes, MAX_MODES, "max_modes", "modes", "x modes")
+        self.max_n = ceiling(max_n, s.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
@@ -467,11 +472,8 @@ class DnsSimulation:
         if direction not in ("x", "y"):
             raise ParameterError(f"direction = {direction!r}: choose 'x' or 'y'")
         if not self.can_refine(direction):
-            name = "max_modes" if direction == "x" else "max_ny"
-            raise ParameterError(
-                f"{name} = {self.max_modes if direction == 'x' else self.max_n}: "
-                f"the grid has as many {direction} points already"
-            )
+            name, ceil = ("max_modes", self.max_modes) if direction == "x" else ("max_ny", self.max_n)
+            raise ParameterError(f"{name} = {ceil}: the grid has as many {direction} points already")
         old, old_stepper = self.disc, self.stepper
         modes, n = old.modes, old.n
         if direction == "x":
@@ -503,16 +505,10 @@ class DnsSimulation:
         else:
             state.C_init = _to_nodes(state.C_init, old.grid, new.grid, axis=1)
             r["snaps"] = [_to_nodes(v, old.grid, new.grid, axis=1) for v in r["snaps"]]
-        self._pad_refine_records(state)
+        r["refine_n"] = _refine_n(r, self.setup.n)
         r["refine_t"].append(state.t)
         r["refine_modes"].append(modes)
         r["refine_n"].append(n)
-
-    def _pad_refine_records(self, state: DnsState) -> None:
-        """A checkpoint written before y refinement existed has no ``refine_n``: its
-        refinements were all in x, at the starting N."""
-        r = state.records
-        r["refine_n"] = [self.setup.n] * (len(r["refine_t"]) - len(r["refine_n"])) + list(r["refine_n"])
 
     @staticmethod
     def _mass_fields(stepper: Stepper, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -524,7 +520,7 @@ class DnsSimulation:
         n, modes = state.C.shape[1] - 1, state.C.shape[-1] - 1
         if (n, modes) != (self.disc.n, self.disc.modes):
             self._set_grid(n, modes)
-        self._pad_refine_records(state)
+        state.records["refine_n"] = _refine_n(state.records, self.setup.n)
 
     # -- the state ---------------------------------------------------------------------------
     def initial_state(self) -> DnsState:

@@ -31,7 +31,7 @@ import xarray as xr
 from ..closures import ChuteModel
 from ..errors import ParameterError
 from ..trackers import WallTimeStop
-from .simulation import _resample
+from .simulation import MAX_MODES, MAX_N, _resample, ceiling
 from .stepper import NewtonSettings, step_settings
 
 __all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
@@ -115,18 +115,9 @@ class WaveMapSettings:
                 raise ParameterError(f"{name} = {v!r} must be a positive number")
         if not 0 < self.saturation_tol < 1:
             raise ParameterError(f"saturation_tol = {self.saturation_tol!r} must be in (0, 1)")
-        if self.max_modes is not None and (
-            int(self.max_modes) != self.max_modes or self.max_modes < self.modes
-        ):
-            raise ParameterError(
-                f"max_modes = {self.max_modes!r} must be a whole number ≥ modes = {self.modes} "
-                "(the most x modes a run may refine to)"
-            )
-        if self.max_n is not None and (int(self.max_n) != self.max_n or not self.n <= self.max_n <= 400):
-            raise ParameterError(
-                f"max_ny = {self.max_n!r} must be a whole number in [ny = {self.n}, 400] "
-                "(the most Chebyshev intervals a run may refine to)"
-            )
+        # (the same rule as the simulation's: None keeps the grid)
+        ceiling(self.max_modes, self.modes, MAX_MODES, "max_modes", "modes", "x modes")
+        ceiling(self.max_n, self.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
         self.newton()  # checks dt_tol and the preconditioner
 
     def newton(self) -> NewtonSettings | None:

@@ -236,8 +236,8 @@ def _wave_map(ctx: StageContext) -> None:
     )
     first.to_netcdf(ctx.path("waves_map.nc"), engine="h5netcdf")
     long.to_netcdf(ctx.path("waves_map_long.nc"), engine="h5netcdf")
-    rows = [("P1", first, 0, FULL_MAP)] + [(n, long, i, LONG_MAP) for i, (n, _) in enumerate(LONG_POINTS)]
-    for name, ds, i, grid in rows:
+    rows = [("P1", first, 0)] + [(n, long, i) for i, (n, _) in enumerate(LONG_POINTS)]
+    for name, ds, i in rows:
         L = float(ds["length"].values[i])
         status = str(ds["status"].values[i])
         how = (
@@ -250,8 +250,8 @@ def _wave_map(ctx: StageContext) -> None:
         )
         ctx.report.add_note(
             f"DNS wave at {name} (L = {L:.0f}, nx = {int(ds['nx'].values[i])}, "
-            f"ny = {int(ds['ny'].values[i])} at the end, from noise {grid.get('amplitude', 1e-3):g}): "
-            f"{ds['verdict'].values[i]}; "
+            f"ny = {int(ds['ny'].values[i])} at the end, from noise "
+            f"{float(ds.attrs['setting_amplitude']):g}): {ds['verdict'].values[i]}; "
             f"ρ̄ {100 * float(ds['rho_min_rel'][i]):+.1f} … {100 * float(ds['rho_max_rel'][i]):+.1f} %, "
             f"linear growth rate at k = 2π/L {float(ds['growth_rate_linear'][i]):.3g}, "
             f"c = {float(ds['wave_speed'][i]):.4g} (linear {float(ds['phase_velocity_linear'][i]):.4g}), "
