@@ -263,8 +263,30 @@ def test_an_eigenvalue_set_aside_above_the_answer_is_named():
     m = least_stable(flow, 0.006465, kz=0.132867)
     assert m.converged, (m.alpha, m.note)
     assert abs(m.alpha - (-0.800705 - 0.026639j)) < 1e-5
-    assert "1 eigenvalue(s) above it decided not modes, the least damped -0.339" in m.note
-    assert "tail does not decay" in m.note
+    assert "1 eigenvalue(s) above it decided not modes: -0.339" in m.note
+    assert "tail does not converge" in m.note
+
+
+def test_a_point_of_a_continuous_spectrum_is_set_aside_and_named():
+    """θ = 16.772°, ν0(0) = 0.1103, φ = 0.0952, Φ = 0.312, (k_x, k_z) = (0.001165, 0.052268)
+    (try_random_points seed 267358): −0.23833 − 0.00179i settles at every N (dense QZ on the
+    mapped grid: −0.238326 at N = 94, −0.238341 at 150, −0.238333 at 250, −0.238325 at 350,
+    −0.238316 at 450) while its tail falls as 1/N (9e-6, 4e-6, 2e-6, 2e-6, 1e-6): a singular
+    eigenfunction. Pairs of eigenvalues close in on its line Im α = −0.001787 from both sides
+    at 5/N (0.0201, 0.0141, 0.0117 at N = 250, 350, 450) with spacing along it ∝ 1/N (0.028,
+    0.020, 0.016): in the limit the line is a continuous spectrum and the eigenvalue one of
+    its points, not a mode (the contract of ``chuteflow.stability.resolver``). The answer is
+    the least-stable mode, −1.5191956 + 0.3050300i, converged (tail 9e-14 at N = 75), and
+    the note names the eigenvalue set aside, with the evidence (before, it named only the
+    least damped of the two set aside, the dilute top's continuum near −0.0064 − 0.0018i)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(16.772, 0.1103, ChuteModel(roughness=0.0952, wall_loss=0.312))
+    m = least_stable(flow, 0.001165, kz=0.052268)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-1.5191956 + 0.3050300j)) < 1e-6, m.alpha
+    assert "2 eigenvalue(s) above it decided not modes: -0.0064" in m.note
+    assert "; -0.2383" in m.note
 
 
 def test_a_fast_mode_near_the_top_continuum_is_a_mode():

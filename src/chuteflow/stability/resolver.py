@@ -6,9 +6,9 @@ Contract
     tail below 1e-7, :class:`~.policy.RejectionPolicy`). An eigenvalue above the answer
     that fails a test is not discarded while its drift and tail keep falling: it is followed
     up the ladder of resolutions until it is decided — a mode (it passes both tests, and
-    then it is the answer), or not one (the near-neutral continuum of the dilute top, or a
-    spurious eigenvalue: its drift or tail stops falling, or no eigenvalue at the next N
-    continues it), or below the answer. Where the ladder ends with such a candidate
+    then it is the answer), or not one (the near-neutral continuum of the dilute top, a
+    point of a continuous spectrum, or a spurious eigenvalue: its drift or tail stops
+    falling, or no eigenvalue at the next N continues it), or below the answer. Where the ladder ends with such a candidate
     undecided, the answer is that candidate, flagged ``converged = False`` with its drift
     and tail, and the note names the least-stable resolved mode below it. A damped mode is
     never reported as converged while a less damped one that passes the tests exists at
@@ -454,9 +454,10 @@ class _Candidate:
         ):
             return self._decide(
                 "not a mode",
-                f"its eigenvector's tail does not decay ({self.tails[-4]:.1e} → {mode.tail:.1e} over three "
-                f"rungs up to N = {nn}): no resolved eigenfunction (the dilute top's continuum, a "
-                "spurious eigenvalue, or one whose eigenfunction is singular)",
+                f"its eigenvector's tail does not converge ({self.tails[-4]:.1e} → {mode.tail:.1e} over "
+                f"three rungs up to N = {nn}: ×{mode.tail / self.tails[-4]:.2g}, above ×{search.stall:g}): "
+                "no resolved eigenfunction (the dilute top's continuum, a point of a continuous "
+                "spectrum, or a spurious eigenvalue)",
             )
         if decaying and prev is not None and 0 < prev.drift < math.inf and math.isfinite(drift):
             # a candidate whose tail decays at every rung (the stall rule above has had three
@@ -859,9 +860,11 @@ def _search_once(
 
 def _rejected_above(followed: list[_Candidate], best: Mode) -> str:
     """The note that names the eigenvalues above the answer decided "not a mode" (the least
-    damped of them, with the evidence): by the contract they are no modes — the dilute top's
-    continuum, an eigenvalue whose eigenvector's tail does not decay —, and a researcher sees
-    what was set aside (e.g. an eigenvalue that settles while its eigenvector does not)."""
+    damped first, at most :data:`REJECTED_NAMED`, each with the evidence): by the contract
+    they are no modes — the dilute top's continuum, an eigenvalue whose eigenvector's tail
+    does not converge —, and a researcher sees what was set aside (e.g. an eigenvalue that
+    settles while its eigenvector does not: a point of a continuous spectrum, which a band
+    fills in as N grows)."""
     out = [
         c.done
         for c in followed
@@ -872,10 +875,15 @@ def _rejected_above(followed: list[_Candidate], best: Mode) -> str:
     ]
     if not out:
         return ""
-    top = max(out, key=lambda f: f.mode.alpha.real)  # type: ignore[union-attr]
-    m = top.mode
-    assert m is not None
-    return (
-        f"{len(out)} eigenvalue(s) above it decided not modes, the least damped {m.alpha:.6g} "
-        f"(N = {m.n}, drift {m.drift:.1e}, tail {m.tail:.1e}): {top.why}"
-    )
+    out.sort(key=lambda f: -f.mode.alpha.real)  # type: ignore[union-attr]
+    named = []
+    for f in out[:REJECTED_NAMED]:
+        m = f.mode
+        assert m is not None
+        named.append(f"{m.alpha:.6g} (N = {m.n}, drift {m.drift:.1e}, tail {m.tail:.1e}): {f.why}")
+    more = f"; and {len(out) - REJECTED_NAMED} more" if len(out) > REJECTED_NAMED else ""
+    return f"{len(out)} eigenvalue(s) above it decided not modes: " + "; ".join(named) + more
+
+
+#: How many of the eigenvalues set aside above the answer its note names (the least damped).
+REJECTED_NAMED = 3
