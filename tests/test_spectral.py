@@ -154,3 +154,44 @@ def test_end_nodes_off_by_round_off_are_the_ends():
     assert bary.call_count == 1
     assert out[0] == f[0]
     assert out[-1] == f[-1]
+
+
+def test_fd_weights_are_exact_for_polynomials_below_their_degree():
+    """Fornberg's weights from four uneven points: the derivatives of orders 0–2 of a cubic
+    exactly (to round-off), at a point inside and at an end (an analytic identity)."""
+    from chuteflow.spectral import fd_weights
+
+    x = np.array([0.0, 0.3, 0.45, 1.1])
+    p = np.polynomial.Polynomial([0.7, -1.3, 2.1, 0.9])
+    for z in (0.3, 0.0, 1.1):
+        w = fd_weights(z, x, 2)
+        for k in range(3):
+            assert w[k] @ p(x) == pytest.approx(p.deriv(k)(z), abs=1e-12)
+
+
+def test_fd_matrices_on_chebyshev_nodes_are_second_order():
+    """fd_matrices: exact for quadratics on any nodes; on Chebyshev nodes the error for sin(3y)
+    falls as N⁻² (ratio ≈ 4 at every doubling of N, both matrices) — the order of the
+    three-point stencils."""
+    from chuteflow.spectral import fd_matrices
+
+    g = ChebyshevGrid(16, 0.0, 2.0)
+    D, D2 = fd_matrices(g.y)
+    q = 1.0 - 0.5 * g.y + 0.75 * g.y**2
+    assert np.abs(D @ q - (-0.5 + 1.5 * g.y)).max() < 1e-11
+    assert np.abs(D2 @ q - 1.5).max() < 1e-10
+    errs = []
+    for n in (32, 64, 128):
+        y = ChebyshevGrid(n, 0.0, 2.0).y
+        D, D2 = fd_matrices(y)
+        errs.append(
+            (
+                np.abs(D @ np.sin(3 * y) - 3 * np.cos(3 * y)).max(),
+                np.abs(D2 @ np.sin(3 * y) + 9 * np.sin(3 * y)).max(),
+            )
+        )
+    for (a1, a2), (b1, b2) in zip(errs, errs[1:]):
+        assert 3.0 < a1 / b1 < 5.0
+        assert 3.0 < a2 / b2 < 5.0
+    with pytest.raises(ValueError, match="at least 4"):
+        fd_matrices(np.array([0.0, 1.0, 2.0]))

@@ -22,6 +22,12 @@ tolerance), and before them how far the coefficients of the Jacobian are from th
 R x-harmonics (R = 1: the coupled preconditioner). The machine is shared: compare the
 seconds only within one run.
 
+``--span T`` (with ``--state``): instead of the fixed steps, continue the state for T time
+units with the step control (``dt_tol`` = 1e-3, as the run that made it) once per variant
+(``coupled`` and ``coupled_chebyshev`` there go over to the columns as a run does), and print
+the wall time, steps, factorisations and the end state's distance to the first variant's —
+the end-to-end comparison of docs/dns.md, *Finite differences in y*.
+
 Run: ``python benchmarks/probes/dns_krylov.py --make-state /tmp/p1_41x64.npz --nx 41 --ny 64``
 then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64
 --dt 16,32,64 --variants mean,coupled`` (the table of docs/dns.md).
@@ -55,6 +61,9 @@ VARIANTS = {
     "coupled": dict(preconditioner="coupled", coupled_krylov=0),
     # the coupled blocks alone, never the columns (switch_krylov out of reach)
     "coupled_only": dict(preconditioner="coupled", coupled_krylov=0, switch_krylov=10**9),
+    # the columns with the exact (Chebyshev) y-derivatives instead of finite differences
+    "columns_chebyshev": dict(preconditioner="columns", column_y="chebyshev"),
+    "coupled_chebyshev": dict(preconditioner="coupled", coupled_krylov=0, column_y="chebyshev"),
 }
 
 
@@ -80,10 +89,19 @@ def harmonics(sim: DnsSimulation, C: np.ndarray, prev: tuple, dt: float) -> str:
 
 
 def simulation(
-    nx: int, ny: int, t_end: float, preconditioner: str = "auto", *, theta=16.0, nu0=0.05, length=1000.0
+    nx: int,
+    ny: int,
+    t_end: float,
+    preconditioner: str = "auto",
+    *,
+    theta=16.0,
+    nu0=0.05,
+    length=1000.0,
+    **solver,
 ) -> DnsSimulation:
+    """The run of ``--make-state`` (``solver``: further NewtonSettings, e.g. ``column_y``)."""
     flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
-    settings = NewtonSettings(dt_tol=1e-3, preconditioner=preconditioner)
+    settings = NewtonSettings(**{"dt_tol": 1e-3, "preconditioner": preconditioner, **solver})
     return DnsSimulation(
         flow, length, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
         init="noise", amplitude=1e-3, snapshots=2, settings=settings,
@@ -170,6 +188,7 @@ def main(argv=None):
     ap.add_argument("--dt", default="16", help="comma-separated Δt of the measured steps")
     ap.add_argument("--steps", type=int, default=4)
     ap.add_argument("--variants", default=None, help="comma-separated names (default: all)")
+    ap.add_argument("--span", type=float, default=0.0, help="continue the state this long per variant")
     args = ap.parse_args(argv)
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
@@ -195,8 +214,11 @@ def main(argv=None):
         f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}",
         flush=True,
     )
-    print(harmonics(sim, C, prev, float(args.dt.split(",")[0])), flush=True)
     names = args.variants.split(",") if args.variants else list(VARIANTS)
+    if args.span > 0:
+        span(args, where, names)
+        return
+    print(harmonics(sim, C, prev, float(args.dt.split(",")[0])), flush=True)
     for dt in (float(v) for v in args.dt.split(",")):
         first = None
         for name in names:
@@ -220,6 +242,38 @@ def main(argv=None):
                 "max_dC_vs_first": float(np.abs(C_end - first).max()),
             }
             print(json.dumps(row), flush=True)
+
+
+def span(args, where: dict, names: list[str]) -> None:
+    """``--span``: the saved state continued for ``args.span`` time units per variant."""
+    from chuteflow.dns.simulation import DnsState
+
+    first = None
+    for name in names:
+        with np.load(args.state) as ck:
+            t, step, dt, h_prev, restart, _, amp = (float(v) for v in ck["scalars"])
+            state = DnsState(
+                C=ck["C"], prev=ck["prev"], t=t, step=int(step), dt=dt, h_prev=h_prev,
+                restart=bool(restart), C_init=ck["C_init"], status="running", wall=0.0,
+                amplitude=amp, records={},
+            )  # fmt: skip
+        sim = simulation(args.nx, args.ny, t + args.span, **where, **VARIANTS[name])
+        t0 = time.perf_counter()
+        end = sim.run(state=state)
+        wall = time.perf_counter() - t0
+        first = end.C if first is None else first
+        row = {
+            "variant": name,
+            "span": args.span,
+            "wall_s": round(wall, 1),
+            "s_per_unit_t": round(wall / args.span, 3),
+            "steps": end.step - int(step),
+            "factorisations": sim.stepper.factorisations,
+            "dt_end": end.dt,
+            "wave": wave(sim, end.C),
+            "max_dC_vs_first": float(np.abs(end.C - first).max()),
+        }
+        print(json.dumps(row, ensure_ascii=False), flush=True)
 
 
 if __name__ == "__main__":

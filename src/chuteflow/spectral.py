@@ -368,3 +368,55 @@ def tail(f: np.ndarray, m: int = 10) -> float:
     c = np.abs(coefficients(f))
     scale = c.max()
     return float(c[..., -m:].max() / scale) if scale > 0 else 0.0
+
+
+def fd_weights(z: float, x: np.ndarray, m: int) -> np.ndarray:
+    """Finite-difference weights ``w[k, j]`` of the derivatives of order k = 0 … ``m`` at
+    ``z`` from values at the points ``x`` (any spacing; Fornberg 1988, Math. Comp. 51, 699):
+    f^(k)(z) ≈ Σ_j w[k, j] f(x_j), exact for polynomials of degree < len(x)."""
+    x = np.asarray(x, dtype=float)
+    n = len(x) - 1
+    w = np.zeros((m + 1, n + 1))
+    w[0, 0] = 1.0
+    c1, c4 = 1.0, x[0] - z
+    for i in range(1, n + 1):
+        mn = min(i, m)
+        c2, c5, c4 = 1.0, c4, x[i] - z
+        for j in range(i):
+            c3 = x[i] - x[j]
+            c2 *= c3
+            if j == i - 1:
+                for k in range(mn, 0, -1):
+                    w[k, i] = c1 * (k * w[k - 1, i - 1] - c5 * w[k, i - 1]) / c2
+                w[0, i] = -c1 * c5 * w[0, i - 1] / c2
+            for k in range(mn, 0, -1):
+                w[k, j] = (c4 * w[k, j] - k * w[k - 1, j]) / c3
+            w[0, j] = c4 * w[0, j] / c3
+        c1 = c2
+    return w
+
+
+def fd_matrices(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Second-order finite-difference matrices (d/dy, d²/dy²) on the nodes ``y`` (ascending,
+    at least 4): three-point stencils inside, one-sided at the ends (three points for d/dy,
+    four for d²/dy²), so both are exact for quadratics. Tridiagonal but for the end rows: the
+    banded stand-in for a grid's dense Chebyshev matrices in a preconditioner (finite
+    differences on the Chebyshev nodes precondition collocation uniformly in N; Orszag 1980,
+    J. Comput. Phys. 37, 70)."""
+    y = np.asarray(y, dtype=float)
+    n = len(y)
+    if n < 4:
+        raise ValueError(f"{n} nodes: need at least 4")
+    D = np.zeros((n, n))
+    D2 = np.zeros((n, n))
+    for j in range(n):
+        if 0 < j < n - 1:
+            idx = np.arange(j - 1, j + 2)
+            w = fd_weights(y[j], y[idx], 2)
+            D[j, idx], D2[j, idx] = w[1], w[2]
+            continue
+        idx = np.arange(4) if j == 0 else np.arange(n - 4, n)
+        D2[j, idx] = fd_weights(y[j], y[idx], 2)[2]
+        idx3 = idx[:3] if j == 0 else idx[1:]
+        D[j, idx3] = fd_weights(y[j], y[idx3], 1)[1]
+    return D, D2

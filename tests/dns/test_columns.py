@@ -45,15 +45,16 @@ def _wave(d, flow, amplitude):
 
 
 def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
-    """At an x-independent state the column matrix is diagonal in the modes, and its block of
-    mode m is the per-mode Jacobian (linear_blocks) with ik → i sin(kh)/h and (ik)² →
-    −(2 − 2cos kh)/h² (central differences), |k| of the top rows exact."""
+    """At an x-independent state the column matrix with exact y-derivatives is diagonal in
+    the modes, and its block of mode m is the per-mode Jacobian (linear_blocks) with
+    ik → i sin(kh)/h and (ik)² → −(2 − 2cos kh)/h² (central differences), |k| of the top rows
+    exact."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 2, frame=7.8)
     C = _steady(d, p1)
     st = Stepper(d)
     hist = (st.physical(C), st.physical(C))
     dt = 3.0
-    J = column_matrix(d, column_coefficients(d, C, hist, dt, BDF2))
+    J = column_matrix(d, column_coefficients(d, C, hist, dt, BDF2), y="chebyshev")
     P = ColumnPreconditioner(d, J)
     blocks = d.linear_blocks(C)
     m, nx = d.n + 1, 2 * d.modes + 1
@@ -100,14 +101,39 @@ def test_column_preconditioner_is_the_inverse_of_its_matrix(p1):
     assert np.allclose(P.to_modes(P.to_points(R)), R, rtol=0, atol=1e-13)
 
 
-def test_newton_with_columns_reaches_the_same_steps(p1):
-    """Three BDF2 steps at a ±20 % wave: the column and the x-mean preconditioners give the
-    same solution to the Newton tolerance (max-norm of the scaled residual 1e-10)."""
+def test_the_column_matrix_in_y_is_the_finite_difference_one(p1):
+    """``y="fd"`` replaces the Chebyshev matrices by fd_matrices and nothing else: the two
+    matrices differ by the coefficients times (D_fd − D) — checked on a field quadratic in y,
+    where both derivatives are exact, so the two matrices agree on it to round-off — and
+    the finite-difference matrix is sparse in y (a banded block per x point)."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 3, frame=7.8)
+    C = _wave(d, p1, 0.2)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    coefs = column_coefficients(d, C, hist, 4.0, BDF2)
+    fd, cheb = column_matrix(d, coefs, y="fd"), column_matrix(d, coefs, y="chebyshev")
+    y = d.grid.y
+    V = np.zeros(d.shape, complex)
+    V[1, :, 1] = 0.3 - 0.1 * y + 0.02 * y**2  # u, mode 1: a quadratic in y
+    V[3, :, 0] = 1.0 + 0.05 * y**2  # T, mode 0
+    P = ColumnPreconditioner(d, cheb)
+    a, b = fd @ P.to_points(V), cheb @ P.to_points(V)
+    assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
+    assert fd.nnz < 0.3 * cheb.nnz
+    with pytest.raises(ValueError, match="column_y"):
+        NewtonSettings(column_y="spline")
+
+
+@pytest.mark.parametrize("column_y", ["fd", "chebyshev"])
+def test_newton_with_columns_reaches_the_same_steps(p1, column_y):
+    """Three BDF2 steps at a ±20 % wave: the column (y-derivatives either way) and the x-mean
+    preconditioners give the same solution to the Newton tolerance (max-norm of the scaled
+    residual 1e-10)."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
     C0 = _wave(d, p1, 0.1)
     out = {}
     for name in ("mean", "columns"):
-        st = Stepper(d, NewtonSettings(preconditioner=name))
+        st = Stepper(d, NewtonSettings(preconditioner=name, column_y=column_y))
         C, hist_first = C0.copy(), True
         hist = (st.physical(C), st.physical(C))
         krylov = []
@@ -139,9 +165,10 @@ def test_auto_switches_to_columns(p1):
 
 
 def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
-    """``NewtonSettings.columns_max_nx``: the column LU fills in with nx (P5, N = 64: 0.75 GB
-    and 16 s at nx = 129, > 4.9 GB and 15 min at 257; a run refined to 513 was killed at
-    24 GB). On a finer grid ``"auto"`` goes over to the coupled blocks where it would take
+    """``NewtonSettings.columns_max_nx``: the column LU fills in with nx (Chebyshev blocks,
+    P5, N = 64: 0.75 GB and 16 s at nx = 129, > 4.9 GB and 15 min at 257; a run refined to
+    513 was killed at 24 GB; finite differences in y: 0.48 GB at 257, 1.15 GB at 513). The
+    default limit follows the y-derivatives (257 and 129). On a finer grid ``"auto"`` goes over to the coupled blocks where it would take
     the columns, ``"columns"`` starts with them, and the coupled blocks stay; the step still
     converges."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)  # nx = 13
@@ -158,5 +185,8 @@ def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
     st = Stepper(d, coupled)
     st.step(C, hist, 4.0, first=True)
     assert st.kind == "coupled"
+    assert NewtonSettings().columns_nx_limit == 257
+    assert NewtonSettings(column_y="chebyshev").columns_nx_limit == 129
+    assert NewtonSettings(column_y="chebyshev", columns_max_nx=65).columns_nx_limit == 65
     with pytest.raises(ValueError, match="columns_max_nx"):
         NewtonSettings(columns_max_nx=0)

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError, ParameterError
-from .columns import ColumnPreconditioner
+from .columns import Y_DERIVATIVES, ColumnPreconditioner
 from .coupled import CoupledPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
@@ -93,17 +93,27 @@ class NewtonSettings:
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
         (:func:`~chuteflow.dns.columns.column_matrix`).
-    columns_max_nx : int
+    column_y : {"fd", "chebyshev"}
+        Its y-derivatives: second-order finite differences on the Chebyshev nodes (a banded
+        block per x point: at P1, L = 2000, nx = 97, N = 64, an LU 3.5 times smaller, built
+        in 1.7 s instead of 11–17 s and applied in 16–19 ms instead of 39–47, for 82 GMRES
+        iterations per step at Δt = 4 instead of 55: 1.8–2.1 times less wall time per unit
+        of simulated time at ±80 %) or the exact Chebyshev matrices (docs/dns.md, *Finite
+        differences in y*).
+    columns_max_nx : int or None
         Largest x grid (2M + 1 points) on which the column preconditioner is built; on a
         finer one the coupled blocks serve instead (``"columns"`` and ``"auto"`` included).
-        The sparse LU of the columns fills in (the top conditions couple every column
-        through |k|): at P5's ±6 … 18 % wave (L = 2000, N = 64) nx = 33, 65, 129 cost
-        0.16, 0.34, 0.75 GB of factors and 3, 6, 16 s, nx = 257 more than 4.9 GB and
-        15 min, and a run refined to nx = 513 was killed for memory at 24 GB; the coupled
-        blocks cost 1.0 GB and 5 s at nx = 257, 1.8 GB and 9 s at 513
-        (docs/dns.md, *The column preconditioner (large amplitude)*). The factors grow as N²
-        too (nx = 65: 0.34 GB at N = 64, 0.74 GB at N = 96), which a y refinement
-        (``max_n``) should be sized by; the threshold is on nx alone.
+        None (default): 257 with ``column_y="fd"``, 129 with ``"chebyshev"``
+        (:attr:`columns_nx_limit`). The sparse LU of the columns fills in (the top conditions
+        couple every column through |k|). With the Chebyshev blocks, at P5's ±6 … 18 % wave
+        (L = 2000, N = 64) nx = 33, 65, 129 cost 0.16, 0.34, 0.75 GB of factors and 3, 6,
+        16 s, nx = 257 more than 4.9 GB and 15 min, and a run refined to nx = 513 was killed
+        for memory at 24 GB; with the finite differences in y (a ±20 % wave of P1,
+        L = 2000) nx = 97, 129, 257, 513 cost 0.15, 0.21, 0.48, 1.15 GB and 1.6, 2.3, 5.7,
+        20 s at N = 64, and 0.33, 0.78, 1.76 GB and 4.4, 12, 35 s at N = 96 (nx = 129, 257,
+        513); the coupled blocks cost 1.0 GB and 5 s at nx = 257, 1.8 GB and 9 s at 513
+        (docs/dns.md, *The column preconditioner (large amplitude)*). The threshold is on
+        nx alone.
     dt_tol : float
         Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
         :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
@@ -135,7 +145,8 @@ class NewtonSettings:
     switch_krylov: int = 60
     coupled_krylov: int = 20
     column_order: int = 2
-    columns_max_nx: int = 129
+    column_y: str = "fd"
+    columns_max_nx: int | None = None
     dt_tol: float = 0.0
     dt_max: float = 0.0
     dt_krylov: int = 60
@@ -152,12 +163,17 @@ class NewtonSettings:
             )
         if self.column_order not in (2, 4):
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
+        if self.column_y not in Y_DERIVATIVES:
+            raise ParameterError(
+                f"column_y = {self.column_y!r}: choose 'fd' (finite differences in y) or 'chebyshev' "
+                "(the exact y-derivatives) for the column preconditioner"
+            )
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(
                 f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
                 "(0 keeps Δt fixed; e.g. 1e-3)"
             )
-        if self.columns_max_nx < 1:
+        if self.columns_max_nx is not None and self.columns_max_nx < 1:
             raise ParameterError(f"columns_max_nx = {self.columns_max_nx!r}: ≥ 1 x points")
         if self.coupled_krylov < 0:
             raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
@@ -165,6 +181,14 @@ class NewtonSettings:
             raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
         if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
             raise ParameterError(f"dt_max = {self.dt_max!r}: ≥ 0 (0: 64 times the run's Δt)")
+
+    @property
+    def columns_nx_limit(self) -> int:
+        """The largest x grid of the column preconditioner: ``columns_max_nx``, by default
+        257 with the finite differences in y and 129 with the Chebyshev blocks."""
+        if self.columns_max_nx is not None:
+            return self.columns_max_nx
+        return 257 if self.column_y == "fd" else 129
 
 
 def step_settings(dt_tol: float = 0.0, preconditioner: str = "auto") -> NewtonSettings | None:
@@ -233,8 +257,8 @@ class Stepper:
     @property
     def columns_fit(self) -> bool:
         """Whether the grid is coarse enough for the column preconditioner
-        (``NewtonSettings.columns_max_nx``: its LU fills in beyond)."""
-        return 2 * self.disc.modes + 1 <= self.settings.columns_max_nx
+        (``NewtonSettings.columns_nx_limit``: its LU fills in beyond)."""
+        return 2 * self.disc.modes + 1 <= self.settings.columns_nx_limit
 
     def use(self, kind: str) -> None:
         """Go over to the preconditioner ``kind`` (``"columns"`` becomes ``"coupled"`` on a
@@ -289,7 +313,9 @@ class Stepper:
         if self.kind == "coupled":
             self._lus = CoupledPreconditioner.build(self.disc, C, history, dt, bdf)
         elif self.kind == "columns":
-            self._lus = ColumnPreconditioner.build(self.disc, C, history, dt, bdf, self.settings.column_order)
+            self._lus = ColumnPreconditioner.build(
+                self.disc, C, history, dt, bdf, self.settings.column_order, self.settings.column_y
+            )
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
         self._lu_key = (dt, bdf[0])

@@ -8,11 +8,11 @@ Contract
     up the ladder of resolutions until it is decided — a mode (it passes both tests, and
     then it is the answer), or not one (the near-neutral continuum of the dilute top, a
     point of a continuous spectrum, or a spurious eigenvalue: its drift or tail stops
-    falling, or no eigenvalue at the next N continues it), or below the answer. Where the ladder ends with such a candidate
-    undecided, the answer is that candidate, flagged ``converged = False`` with its drift
-    and tail, and the note names the least-stable resolved mode below it. A damped mode is
-    never reported as converged while a less damped one that passes the tests exists at
-    the resolutions tried.
+    falling, or no eigenvalue at the next N continues it), or below the answer. Where the
+    ladder ends with such a candidate undecided, the answer is that candidate, flagged
+    ``converged = False`` with its drift and tail, and the note names the least-stable
+    resolved mode below it. A damped mode is never reported as converged while a less
+    damped one that passes the tests exists at the resolutions tried.
 
 Resolver (:func:`least_stable`)
     1. *Tracked or direct answer*: the α(0) = 0 branch (the kinematic-wave mode of
