@@ -326,7 +326,8 @@ def run_tail(series) -> float:
 class ResolutionMonitor(Tracker):
     """Watch the amplitude of the highest resolved modes, ``sim.resolution(y)``.
 
-    Every ``every`` steps (and at the start and the end) the ``x_tail`` and ``y_tail``
+    Every ``every`` steps (and at the start, after the first step and at the end) the
+    ``x_tail`` and ``y_tail``
     (amplitude of the highest modes relative to the largest, see the simulation's
     ``resolution``) are measured; :attr:`x_tail` and :attr:`y_tail` are the run's tails by
     :func:`run_tail` (the largest from the first minimum on: the initial condition's own
@@ -376,7 +377,9 @@ class ResolutionMonitor(Tracker):
         self._measure(sim, initial.y)
 
     def handle(self, sim, step):
-        if step.number % self.every:
+        # (and after the first step: a tail the first step raises — a mode started at a
+        # finite amplitude — is refined then, not ``every`` steps later)
+        if step.number % self.every and step.number != 1:
             return None
         return self._measure(sim, step.y)
 

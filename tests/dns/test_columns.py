@@ -168,9 +168,9 @@ def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
     """``NewtonSettings.columns_max_nx``: the column LU fills in with nx (Chebyshev blocks,
     P5, N = 64: 0.75 GB and 16 s at nx = 129, > 4.9 GB and 15 min at 257; a run refined to
     513 was killed at 24 GB; finite differences in y: 0.48 GB at 257, 1.15 GB at 513). The
-    default limit follows the y-derivatives (257 and 129). On a finer grid ``"auto"`` goes over to the coupled blocks where it would take
-    the columns, ``"columns"`` starts with them, and the coupled blocks stay; the step still
-    converges."""
+    default limit follows the y-derivatives (257 and 129). On a finer grid ``"auto"`` goes
+    over to the coupled blocks where it would take the columns, ``"columns"`` starts with
+    them, and the coupled blocks stay; the step still converges."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)  # nx = 13
     C = _wave(d, p1, 0.1)
     st = Stepper(d, NewtonSettings(switch_krylov=0, columns_max_nx=11))

@@ -369,21 +369,23 @@ def test_refine_keeps_the_state_and_its_mass(p1):
 @Y_COARSE
 def test_a_refining_run_stays_resolved_and_matches_the_fine_grid(p1):
     """On M = 2 the run is not resolved (x tail 0.37 at the end); with max_modes = 8 it doubles
-    twice and ends with the tail of the M = 8 run (3.6e-4 against 3.1e-4), ρ̄ within 1e-3 of
-    it (the difference is the coarse grid's first 40 time units), mass to 1e-13."""
+    twice — after the first step (the monitor looks then too) and at t = 40 — and ends with
+    the tail of the M = 8 run (3.0e-4 against 3.1e-4), ρ̄ within 1.6e-4 of it (the
+    difference is the coarse grid's first steps; 1e-3 while the monitor first looked at
+    step 10, refining at t = 40 and 80), mass to 1e-13."""
     with pytest.warns(ResolutionWarning, match="x modes"):
         coarse = simulate(p1, 1000.0, modes=2, **REFINE)
     fine = simulate(p1, 1000.0, modes=8, **REFINE)
     ds = simulate(p1, 1000.0, modes=2, max_modes=8, **REFINE)
     a = ds.attrs
     assert (a["nx_initial"], a["nx"], a["nx_max"], a["refinements"]) == (5, 17, 17, 2)
-    assert a["refined_at"].startswith("t = 40 (nx 9), t = 80 (nx 17)")
+    assert a["refined_at"].startswith("t = 4 (nx 9), t = 40 (nx 17)")
     assert ds["rho_bar"].shape == fine["rho_bar"].shape
     assert coarse.attrs["x_tail_end"] > 0.3
     assert a["x_tail_end"] < 1e-3
     assert a["x_tail_end"] == pytest.approx(fine.attrs["x_tail_end"], rel=0.3)
     err = np.abs(ds["rho_bar"].values[-1] - fine["rho_bar"].values[-1]).max() / float(p1.rho_bar)
-    assert err < 1e-3
+    assert err < 3e-4
     assert a["mass_drift"] < 1e-13
     assert "not resolved in x" not in a["resolution_warnings"]
     s = summary(ds)
@@ -404,12 +406,12 @@ class _PauseAt(Tracker):
 
 @Y_COARSE
 def test_a_refined_run_resumes_exactly(tmp_path, p1):
-    """Paused after the first refinement (step 15; M = 4), the same call continues from the
+    """Paused after the first refinement (step 5; M = 4), the same call continues from the
     checkpoint on the refined grid and refines once more: the uninterrupted run to 1e-13."""
     ref = simulate(p1, 1000.0, modes=2, max_modes=8, **REFINE)
     ck = tmp_path / "run.ck.npz"
-    first = simulate(p1, 1000.0, modes=2, max_modes=8, checkpoint=ck, trackers=[_PauseAt(15)], **REFINE)
-    assert first.attrs["status"] == "paused at step 15"
+    first = simulate(p1, 1000.0, modes=2, max_modes=8, checkpoint=ck, trackers=[_PauseAt(5)], **REFINE)
+    assert first.attrs["status"] == "paused at step 5"
     assert first.attrs["nx"] == 9
     assert ck.exists()
     ds = simulate(p1, 1000.0, modes=2, max_modes=8, checkpoint=ck, trackers=[_PauseAt(None)], **REFINE)
@@ -499,18 +501,18 @@ def test_a_run_refining_in_y_is_closer_to_the_fine_grid(p1):
 
 @pytest.mark.filterwarnings("ignore:the highest x modes")
 def test_a_run_refined_in_y_resumes_exactly(tmp_path, p1):
-    """N = 32 → 48 at t = 40 (the y tail past 1e-2 / 4 at the monitor's tenth step); paused after
-    it (step 15) and continued from the checkpoint on the finer y grid: the uninterrupted run
-    to 1e-13."""
+    """N = 32 → 48 at t = 4 (the y tail past 1e-2 / 4 after the first step, where the monitor
+    looks too); paused after it (step 5) and continued from the checkpoint on the finer y grid:
+    the uninterrupted run to round-off (measured 2.0e-13 of ρ̄ ≈ 0.26; 1.0e-13 paused at step 15)."""
     kw = dict(modes=2, n=32, max_n=64, **{k: v for k, v in REFINE.items() if k != "n"})
     ref = simulate(p1, 1000.0, **kw)
-    assert ref.attrs["refined_at"].startswith("t = 40 (ny 48)")
+    assert ref.attrs["refined_at"].startswith("t = 4 (ny 48)")
     ck = tmp_path / "run.ck.npz"
-    first = simulate(p1, 1000.0, checkpoint=ck, trackers=[_PauseAt(15)], **kw)
+    first = simulate(p1, 1000.0, checkpoint=ck, trackers=[_PauseAt(5)], **kw)
     assert first.attrs["ny"] == 48
     ds = simulate(p1, 1000.0, checkpoint=ck, trackers=[_PauseAt(None)], **kw)
     assert ds.attrs["refined_at"] == ref.attrs["refined_at"]
-    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-12)
     # (the pause took a snapshot of its own; the last ones are the same time's)
     assert np.allclose(ds["nu"].values[-1], ref["nu"].values[-1], rtol=0, atol=1e-12)
 
