@@ -46,6 +46,7 @@ __all__ = [
     "ColumnPreconditioner",
     "PRIMITIVE_JETS",
     "column_coefficients",
+    "check_column_y",
     "column_matrix",
     "jet_coefficients",
     "y_matrices",
@@ -113,15 +114,21 @@ def jet_coefficients(
     return out
 
 
+def check_column_y(y: str) -> str:
+    """``y`` if it names a way of :func:`y_matrices`, else a one-line ParameterError."""
+    if y not in Y_DERIVATIVES:
+        raise ParameterError(
+            f"column_y = {y!r}: choose 'fd' (finite differences in y, a sparse LU) or 'chebyshev' "
+            "(the exact y-derivatives, a dense block per x point) for the column preconditioner"
+        )
+    return y
+
+
 def y_matrices(disc: Discretisation, y: str = "fd") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(1, d/dy, d²/dy²) on the Chebyshev nodes of ``disc``: second-order finite differences
     (``y="fd"``, :func:`~chuteflow.spectral.fd_matrices`) or the grid's Chebyshev matrices
     (``"chebyshev"``)."""
-    if y not in Y_DERIVATIVES:
-        raise ParameterError(
-            f"column_y = {y!r}: choose 'fd' (finite differences in y, a sparse LU) or 'chebyshev' "
-            "(the exact y-derivatives, a dense block per x point)"
-        )
+    check_column_y(y)
     g = disc.grid
     D, D2 = fd_matrices(g.y) if y == "fd" else (g.D, g.D2)
     return np.eye(disc.n + 1), D, D2

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError, ParameterError
-from .columns import Y_DERIVATIVES, ColumnPreconditioner
+from .columns import ColumnPreconditioner, check_column_y
 from .coupled import CoupledPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
@@ -163,11 +163,7 @@ class NewtonSettings:
             )
         if self.column_order not in (2, 4):
             raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
-        if self.column_y not in Y_DERIVATIVES:
-            raise ParameterError(
-                f"column_y = {self.column_y!r}: choose 'fd' (finite differences in y) or 'chebyshev' "
-                "(the exact y-derivatives) for the column preconditioner"
-            )
+        check_column_y(self.column_y)
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(
                 f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
