@@ -477,7 +477,10 @@ def wave_measures(
     Returns ``rho_min_rel``, ``rho_max_rel`` (min and max of ρ̄ over its mean, minus 1, at the
     end), ``amplitude_rel`` (their difference), ``wavelength`` (L over the number of the
     dominant Fourier mode of ρ̄ at the end), ``wave_speed`` (lab speed of that mode's phase
-    over the last window of the run), ``t_saturation`` (the first time after which the
+    over the last window of the run), ``amplitude_growth`` (d ln A/dt of the amplitude
+    A = ``amplitude_rel`` over that window, least squares: the linear growth rate Re α of the
+    dominant mode in the linear phase, → 0 as the wave saturates; how fast a run that ended
+    ``growing`` still grew), ``t_saturation`` (the first time after which the
     amplitude stays within ``tol`` of its end value; NaN unless settled) and ``verdict``:
     ``saturated`` (amplitude settled — changed by less than ``tol`` over the window, or the
     run was ended by :class:`SaturationStop`, ``status="saturated"`` — and the dominant mode
@@ -499,6 +502,7 @@ def wave_measures(
         "amplitude_rel": nan,
         "wave_speed": nan,
         "wavelength": nan,
+        "amplitude_growth": nan,
         "t_saturation": nan,
     }
     if rho.ndim != 2 or len(t) == 0 or rho.shape[1] < 3:
@@ -518,6 +522,8 @@ def wave_measures(
         phase = np.unwrap(np.angle(spec[win, m]))
         omega = np.polyfit(t[win], phase, 1)[0]
         out["wave_speed"] = float(frame - omega / k)
+        if np.all(amp[win] > 0):
+            out["amplitude_growth"] = float(np.polyfit(t[win], np.log(amp[win]), 1)[0])
     if status in ("left_family", "left_validity") or "non-finite" in status:
         out["verdict"] = "left_validity"
         return out

@@ -63,8 +63,13 @@ def test_wave_measures_of_a_travelling_wave():
     assert w["rho_min_rel"] == pytest.approx(-0.25, abs=1e-3)
     assert w["rho_max_rel"] == pytest.approx(0.25, abs=1e-3)
     assert w["t_saturation"] == pytest.approx(59.5, abs=1.0)
-    # still growing, linear, decaying
-    assert wave_measures(t, _wave(t, x, L, c, 1e-3 * np.exp(t / 50)), L, 0.0)["verdict"] == "growing"
+    # settled over the window (up to the sampling of the moving crest on 64 points: 6e-7)
+    assert w["amplitude_growth"] == pytest.approx(0.0, abs=1e-5)
+    # still growing (at d ln A/dt = 1/50: the amplitude 2a over the mean 1, up to the crest's
+    # sampling: 3e-5), linear, decaying
+    grow = wave_measures(t, _wave(t, x, L, c, 1e-3 * np.exp(t / 50)), L, 0.0)
+    assert grow["verdict"] == "growing"
+    assert grow["amplitude_growth"] == pytest.approx(1 / 50, rel=1e-4)
     assert wave_measures(t, _wave(t, x, L, c, 1e-5 * np.exp(t / 50)), L, 0.0)["verdict"] == "growing"
     assert wave_measures(t, _wave(t, x, L, c, 1e-4 * np.exp(-t / 50)), L, 0.0)["verdict"] == "decaying"
     assert math.isnan(wave_measures(t, _wave(t, x, L, c, 0.1 * np.exp(t / 50)), L, 0.0)["t_saturation"])

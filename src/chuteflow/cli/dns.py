@@ -176,6 +176,14 @@ def dns(
     if str(ds.attrs["status"]).startswith(("stopped", "paused")):
         kept = f"; the run so far is in {out} and its checkpoint" if out is not None else ""
         con.print(f"warning: {ds.attrs['status']}{kept}", style="yellow", highlight=False)
+    growth, alpha_re = float(ds.attrs["amplitude_growth"]), float(ds.attrs["alpha_re"])
+    if ds.attrs["verdict"] == "growing" and math.isfinite(growth) and alpha_re > 0:
+        con.print(
+            f"not saturated at t = {float(ds.attrs['time_end']):g}: the wave's amplitude still grows at "
+            f"d ln A/dt = {growth:.3g}, {growth / alpha_re:.2f} of the linear rate Re α = {alpha_re:.3g}",
+            style="yellow",
+            highlight=False,
+        )
     if out is not None:
         con.print(f"wrote {out}", highlight=False)
     if plot is not None:

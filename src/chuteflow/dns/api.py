@@ -133,7 +133,8 @@ def simulate(
         eigenvalue (``alpha_dns_re``, ``alpha_dns_im``), ``mode_phase_velocity`` = −Im α/k,
         ``kinematic_wave_speed`` = dQ0/dρ̄0 (eq. (B 6)), the wave at the end
         (:func:`~chuteflow.dns.diagnostics.wave_measures`: ``verdict``, ``rho_min_rel``,
-        ``rho_max_rel``, ``wave_speed``, ``wavelength``, ``t_saturation``), the largest tails
+        ``rho_max_rel``, ``wave_speed``, ``wavelength``, ``t_saturation``,
+        ``amplitude_growth``), the largest tails
         ``x_tail``, ``y_tail``, ``mass_drift``, ``status``, timings and the model.
     """
     sim = DnsSimulation(
@@ -225,6 +226,7 @@ def summary(ds: xr.Dataset) -> dict:
         "wave_speed",
         "wavelength",
         "t_saturation",
+        "amplitude_growth",
         "x_tail",
         "y_tail",
         "resolved",

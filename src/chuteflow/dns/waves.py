@@ -44,6 +44,7 @@ WAVE_KEYS = (
     "wave_speed",
     "wavelength",
     "t_saturation",
+    "amplitude_growth",
     "time_end",
     "growth_rate_linear",
     "phase_velocity_linear",
