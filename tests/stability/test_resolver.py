@@ -289,6 +289,48 @@ def test_a_point_of_a_continuous_spectrum_is_set_aside_and_named():
     assert "; -0.2383" in m.note
 
 
+def test_a_mode_near_the_top_continuum_is_not_set_aside_at_its_first_rung():
+    """θ = 16.651°, ν0(0) = 0.1948, φ = 0.0547, Φ = 0.322, (k_x, k_z) = (0.001763, 0.022022)
+    (try_random_points seed 292615): dense QZ on the mapped grid
+    resolves −0.0033976811 − 0.0294615993i (N = 200, tail 3e-9) and −0.0033976871 −
+    0.0294616097i (N = 300): a mode 3.8e-3 from α_top = −0.0311261i, inside the continuum
+    radius 3.9e-3. The continuum rule decided it at the first rung it was followed on (N =
+    48: drift 1.3e-5, tail 1.1e-4, no coarser tail to see it fall) and again at the repeated
+    screen's N = 118 (drift 4.3e-8, tail 4.7e-7), and −0.0101237 − 0.0782398i, three times
+    more damped, was answered as converged. Now the continuum is decided only from a second
+    rung and never for a candidate that passes both tests (at N = 148: drift 1.4e-8, tail
+    8.6e-8): the answer is the mode, converged, within 1e-8 of the dense solves."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(16.651, 0.1948, ChuteModel(roughness=0.0547, wall_loss=0.322))
+    m = least_stable(flow, 0.001763, kz=0.022022)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.0033976841 - 0.0294616045j)) < 3e-8, m.alpha
+
+
+def test_the_fallback_answer_is_searched_above_too():
+    """θ = 12.682°, ν0(0) = 0.0376, φ = 0.0403, Φ = 0.353, (k_x, k_z) = (0.001868, 0.028688)
+    (the same seed): the continuation loses the branch, the search from scratch finds no mode
+    (the least-stable mode −0.6532333 − 0.0067635i passes the tests only at N = 156, and its
+    tail at the screen's N = 48 is no candidate's), and the direct fallback's answer was
+    returned as converged without the repeated screen at N = 156 that any other answer needing
+    N > 96 gets. That screen finds −0.0962 − 0.0086i (dense QZ: −0.096310 at N = 94, −0.096146
+    at 150, −0.096188 at 250, −0.096219 at 350; tail falling as 1/N, 8e-6 … 6e-7), which the
+    ladder does not decide by N = 256: the answer is that candidate, flagged, and the note
+    names the resolved mode below it. (The first screen had set it aside by the stall rule at
+    N = 94; it lies on a line onto which a band of pairs closes in as N grows, 0.012 … 0.005
+    away at N = 94 … 350, like the points of a continuous spectrum of
+    test_a_point_of_a_continuous_spectrum_is_set_aside_and_named — undecided here, so
+    flagged, not answered past.)"""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(12.682, 0.0376, ChuteModel(roughness=0.0403, wall_loss=0.353))
+    m = least_stable(flow, 0.001868, kz=0.028688)
+    assert not m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.09619 - 0.00861j)) < 2e-4, m.alpha
+    assert "-0.653233-0.00676351j" in m.note
+
+
 def test_a_fast_mode_near_the_top_continuum_is_a_mode():
     """θ = 19.166°, ν0(0) = 0.0103, φ = 0.049, Φ = 0.399, (k_x, k_z) = (0.003284, 0.070959)
     (try_random_points seed 53879): dense QZ at N = 250 resolves −0.002201971641 −
