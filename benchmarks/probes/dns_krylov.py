@@ -251,13 +251,12 @@ def span(args, where: dict, names: list[str]) -> None:
     first = None
     for name in names:
         with np.load(args.state) as ck:
-            t, step, dt, h_prev, restart, _, amp = (float(v) for v in ck["scalars"])
-            state = DnsState(
-                C=ck["C"], prev=ck["prev"], t=t, step=int(step), dt=dt, h_prev=h_prev,
-                restart=bool(restart), C_init=ck["C_init"], status="running", wall=0.0,
-                amplitude=amp, records={},
-            )  # fmt: skip
-        sim = simulation(args.nx, args.ny, t + args.span, **where, **VARIANTS[name])
+            key = str(ck["key"])  # the state's own run: read by the simulation's loader
+        state = DnsState.load(args.state, key)
+        if state is None:
+            raise SystemExit(f"{args.state}: not a saved DNS state")
+        step = state.step
+        sim = simulation(args.nx, args.ny, state.t + args.span, **where, **VARIANTS[name])
         t0 = time.perf_counter()
         end = sim.run(state=state)
         wall = time.perf_counter() - t0
@@ -267,7 +266,7 @@ def span(args, where: dict, names: list[str]) -> None:
             "span": args.span,
             "wall_s": round(wall, 1),
             "s_per_unit_t": round(wall / args.span, 3),
-            "steps": end.step - int(step),
+            "steps": end.step - step,
             "factorisations": sim.stepper.factorisations,
             "dt_end": end.dt,
             "wave": wave(sim, end.C),
