@@ -124,6 +124,15 @@ def test_the_column_matrix_in_y_is_the_finite_difference_one(p1):
         NewtonSettings(column_y="spline")
 
 
+def test_bad_column_settings_name_the_parameter_and_the_choices():
+    """A one-line error naming the parameter and what it may be (the guide's bad input)."""
+    with pytest.raises(ValueError, match=r"column_order = 3: choose 2 or 4 \(the order"):
+        NewtonSettings(column_order=3)
+    assert NewtonSettings().columns_nx_limit == 257
+    assert NewtonSettings(column_y="chebyshev").columns_nx_limit == 129
+    assert NewtonSettings(columns_max_nx=65).columns_nx_limit == 65
+
+
 @pytest.mark.parametrize("column_y", ["fd", "chebyshev"])
 def test_newton_with_columns_reaches_the_same_steps(p1, column_y):
     """Three BDF2 steps at a ±20 % wave: the column (y-derivatives either way) and the x-mean

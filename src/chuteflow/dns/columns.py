@@ -46,6 +46,7 @@ __all__ = [
     "ColumnPreconditioner",
     "PRIMITIVE_JETS",
     "column_coefficients",
+    "check_column_order",
     "check_column_y",
     "column_matrix",
     "jet_coefficients",
@@ -71,6 +72,22 @@ _STENCIL4 = {
 ORDERS = (2, 4)
 #: How the column preconditioner differentiates in y (:func:`column_matrix`).
 Y_DERIVATIVES = ("fd", "chebyshev")
+#: The largest x grid of the column preconditioner by default, per way of differentiating
+#: in y (:attr:`~chuteflow.dns.NewtonSettings.columns_nx_limit`): beyond it the sparse LU
+#: fills in. Measured at P1, L = 2000, N = 64: with "fd" nx = 257 costs 0.48 GB of factors
+#: and 5.7 s to build (513: 1.15 GB, 20 s); with "chebyshev" nx = 129 costs 0.75 GB and
+#: 16 s, nx = 257 more than 4.9 GB and 15 min (docs/dns.md, *Finite differences in y*).
+NX_LIMIT = {"fd": 257, "chebyshev": 129}
+
+
+def check_column_order(order: int) -> int:
+    """``order`` if it is one of :data:`ORDERS`, else a one-line ParameterError."""
+    if order not in ORDERS:
+        raise ParameterError(
+            f"column_order = {order!r}: choose {' or '.join(map(str, ORDERS))} "
+            "(the order of the x-differences of the column preconditioner)"
+        )
+    return order
 
 
 def _at_points(disc: Discretisation, values: np.ndarray) -> np.ndarray:

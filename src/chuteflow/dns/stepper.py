@@ -26,7 +26,7 @@ import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError, ParameterError
-from .columns import ColumnPreconditioner, check_column_y
+from .columns import NX_LIMIT, ColumnPreconditioner, check_column_order, check_column_y
 from .coupled import CoupledPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
@@ -161,8 +161,7 @@ class NewtonSettings:
                 f"atol = {self.atol!r}, floor_atol = {self.floor_atol!r}: need 0 < atol <= floor_atol "
                 "(the residual accepted at the round-off floor is at most floor_atol)"
             )
-        if self.column_order not in (2, 4):
-            raise ParameterError(f"column_order = {self.column_order!r}: choose 2 or 4 (x-difference order)")
+        check_column_order(self.column_order)
         check_column_y(self.column_y)
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(
@@ -181,10 +180,11 @@ class NewtonSettings:
     @property
     def columns_nx_limit(self) -> int:
         """The largest x grid of the column preconditioner: ``columns_max_nx``, by default
-        257 with the finite differences in y and 129 with the Chebyshev blocks."""
+        :data:`~.columns.NX_LIMIT` by ``column_y`` (257 with the finite differences
+        in y, 129 with the Chebyshev blocks)."""
         if self.columns_max_nx is not None:
             return self.columns_max_nx
-        return 257 if self.column_y == "fd" else 129
+        return NX_LIMIT[self.column_y]
 
 
 def step_settings(dt_tol: float = 0.0, preconditioner: str = "auto") -> NewtonSettings | None:
