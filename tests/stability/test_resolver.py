@@ -350,6 +350,24 @@ def test_a_mode_slower_than_the_ladder_leaves_the_answer_flagged():
     assert not m.converged, (m.alpha, m.note)
 
 
+def test_a_resolved_eigenvector_near_the_top_continuum_is_a_mode():
+    """θ = 25.066°, ν0(0) = 0.021, φ = 0.1022, Φ = 0.488, (k_x, k_z) = (0.004359, 0.02695)
+    (try_random_points seed 102136): dense QZ resolves −0.008952 − 0.193824i (tails 2e-6,
+    4e-9, 3e-12 at N = 48, 94, 150; the same eigenvalue to 1e-6 at N = 48 … 350), 4.8e-3
+    from α_top = −0.18940i, inside the continuum radius 1.2e-2. Its tail fell ×0.18 from
+    N = 48 to 60 (3.8e-7), short of the tenfold that exempts a mode, so the continuum rule
+    decided it at N = 60, and −0.0101821 − 0.1048210i was reported as converged. A tail
+    below ``resolver.CONTINUUM_RESOLVED`` (1e-6; the continuum's smoothest measured 7e-6)
+    is a mode's: now the answer, converged at N = 118 (drift 3.3e-8), 2.9e-9 from dense QZ
+    at N = 150 and 200 (−0.0089524252 − 0.1938241612i; tolerance 1e-7, the drift's order)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(25.066, 0.021, ChuteModel(roughness=0.1022, wall_loss=0.488))
+    m = least_stable(flow, 0.004359, kz=0.02695)
+    assert m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.0089524252 - 0.1938241612j)) < 1e-7
+
+
 def test_a_fast_mode_near_the_top_continuum_is_a_mode():
     """θ = 19.166°, ν0(0) = 0.0103, φ = 0.049, Φ = 0.399, (k_x, k_z) = (0.003284, 0.070959)
     (try_random_points seed 53879): dense QZ at N = 250 resolves −0.002201971641 −
