@@ -26,6 +26,13 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
   baseline of the exact Chebyshev blocks (``column_y="chebyshev"``) in the same run; the
   note has GMRES per step and the end states' distance (docs/dns.md, *Finite differences in
   y*).
+- ``dns_coupled_apply``: one application of the mode-coupled preconditioner
+  (:class:`~chuteflow.dns.CoupledPreconditioner`) at P1, L = 1000, nx = 41, N = 80 (the grid
+  of the 3-minute target) at a ±20 % wave, averaged over 100: the couplings applied from
+  their factors (two products with S_m⁻¹ per mode) against the baseline of the same
+  elimination with the couplings as dense blocks (S_m⁻¹, K_m = S_m⁻¹ L_m and
+  W_m = U_{m−1} S_m⁻¹: three dense products per mode, as before 2026-12-07) in the same run;
+  the note has the distance of the two corrections.
 - ``dns_step_L1000_nonlinear`` (full mode): the same grid over 50 steps from the eigenmode at
   amplitude 0.2 (ρ̄ within ±6 %, a finite-amplitude start): the nonlinear phase's time per
   step, Newton–Krylov with GMRES. No baseline; the docs compare with the earlier solver.
@@ -115,6 +122,7 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     rows.append(_columns_row(model))
+    rows.append(_coupled_apply_row(model))
     if not quick:
         kw = dict(time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
         a, t_a = _timed(lambda: simulate(flow, 1000.0, **kw))
@@ -182,6 +190,66 @@ def _columns_row(model) -> dict:
         f"{rho.max() / rho.mean() - 1:+.2f}, "
         f"65 × 64, build included: GMRES {k_fd:.1f}/step (finite differences in y) against "
         f"{k_ch:.1f} (baseline: the Chebyshev blocks); end states {np.abs(C_fd - C_ch).max():.1e} apart",
+    }
+
+
+def _coupled_apply_row(model) -> dict:
+    """``dns_coupled_apply`` (module docstring)."""
+    import numpy as np
+
+    from chuteflow.dns import CoupledPreconditioner, Discretisation, Stepper
+    from chuteflow.dns.columns import jet_coefficients
+    from chuteflow.dns.coupled import coupled_blocks
+    from chuteflow.dns.discretisation import BDF2
+    from chuteflow.steady import solve_steady
+
+    flow = solve_steady(16.0, 0.05, model)
+    d = Discretisation(16.0, model, 1000.0, flow.y_max, 80, 20, frame=7.8)
+    p = flow.profiles(d.grid.y)
+    C = np.zeros(d.shape, complex)
+    C[0, :, 0], C[1, :, 0], C[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
+    C[0, :, 1] += 0.2 * (1 + 0.5j)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    P = CoupledPreconditioner.build(d, C, hist, 4.0, BDF2)
+    # the plain baseline: the same elimination with U_m dense, W_m = U_m S_{m+1}⁻¹ stored
+    B = coupled_blocks(d, jet_coefficients(d, C, hist, 4.0, BDF2), np.arange(d.modes + 1), 1)
+    M, size = d.modes, 4 * (d.n + 1)
+    W = [None] + [B[m - 1, 0] @ P._sinv[m] for m in range(1, M + 1)]
+    K = [None] + [P._sinv[m] @ B[m, 2] for m in range(1, M + 1)]
+
+    def plain(R):
+        r = R.reshape(size, M + 1).T
+        rho = r.astype(complex)
+        for m in range(M - 1, 0, -1):
+            rho[m] -= W[m + 1] @ rho[m + 1]
+        x = np.empty_like(rho)
+        x[0] = P._sinv[0] @ (r[0].real - 2.0 * (W[1] @ rho[1]).real)
+        for m in range(1, M + 1):
+            x[m] = P._sinv[m] @ rho[m] - K[m] @ x[m - 1]
+        out = x.T.reshape(R.shape)
+        out[..., 0] = out[..., 0].real
+        return out
+
+    rng = np.random.default_rng(1)
+    R = rng.normal(size=d.shape) + 1j * rng.normal(size=d.shape)
+    R[..., 0] = R[..., 0].real
+    times = {}
+    for name, fn in (("factored", P.apply), ("plain", plain)):
+        fn(R)
+        t0 = time.perf_counter()
+        for _ in range(100):
+            x = fn(R)
+        times[name] = ((time.perf_counter() - t0) / 100, x)
+    (t_f, x_f), (t_p, x_p) = times["factored"], times["plain"]
+    return {
+        "name": "dns_coupled_apply",
+        "seconds": t_f,
+        "baseline_seconds": t_p,
+        "ratio": t_p / t_f,
+        "note": f"one application at 41 × 80 (M = 20, blocks {size} square), ±20 % wave: "
+        f"{1e3 * t_f:.2f} ms against {1e3 * t_p:.2f} ms with the couplings as dense blocks; "
+        f"corrections {np.abs(x_f - x_p).max() / np.abs(x_p).max():.1e} apart (relative)",
     }
 
 

@@ -29,7 +29,38 @@ import scipy.sparse as sps
 from .columns import PRIMITIVE_JETS, jet_coefficients
 from .discretisation import BDF2, UNKNOWNS, Discretisation
 
-__all__ = ["CoupledPreconditioner", "coupled_matrix"]
+__all__ = ["CoupledPreconditioner", "coupled_blocks", "coupled_matrix", "coupling_factors"]
+
+
+def coupling_factors(
+    disc: Discretisation, coefficients: dict[str, np.ndarray], ms: np.ndarray, reach: int = 1
+) -> np.ndarray:
+    """The mode-coupled Jacobian in factored form: E (len(ms), 2 reach + 1, 4 fields,
+    3 y-orders, 4 equations, N+1) with
+
+        block [i, q + reach] = Σ_{f, c} diag(E[i, q + reach, f, c]) D^c   (columns of field f),
+
+    i.e. Σ over the jets of field f with y-order c of the harmonic ĉ_q(y) of their
+    coefficients times (i k_{m'})^b, m' = ``ms[i]`` − q (zero beyond ±M); ``coefficients``
+    on the padded grid (:func:`~chuteflow.dns.columns.jet_coefficients`). The top rows of
+    u, v, T are zero here (:func:`coupled_blocks` puts the per-mode conditions there)."""
+    mm, M = disc.n + 1, disc.modes
+    ms = np.asarray(ms)
+    qs = range(-reach, reach + 1)
+    E = np.zeros((len(ms), len(qs), 4, 3, 4, mm), dtype=complex)
+    for name, f, b, c in PRIMITIVE_JETS:
+        A = coefficients[name].copy()
+        A[1:, -1] = 0.0  # the top rows of u, v, T are the per-mode conditions
+        if not np.any(A):
+            continue
+        nxp = A.shape[-1]
+        H = np.fft.fft(A, axis=-1) / nxp  # harmonics ĉ_q of the coefficients
+        fc = UNKNOWNS.index(f)
+        for qi, q in enumerate(qs):
+            src = ms - q  # m' = m − q
+            fac = np.where(np.abs(src) <= M, (1j * 2.0 * np.pi * src / disc.length) ** b, 0.0)
+            E[:, qi, fc, c] += fac[:, None, None] * H[..., q % nxp][None]
+    return E
 
 
 def coupled_blocks(
@@ -37,29 +68,20 @@ def coupled_blocks(
 ) -> np.ndarray:
     """Blocks (len(ms), 2 reach + 1, 4(N+1), 4(N+1)) of the mode-coupled Jacobian: entry
     [i, q + reach] couples row mode ``ms[i]`` to column mode ``ms[i] − q`` (zero where that
-    is beyond ±M); ``coefficients`` on the padded grid
-    (:func:`~chuteflow.dns.columns.jet_coefficients`). Rows of the top node of u, v, T are the
-    per-mode top conditions (eq. (4.5))."""
-    mm, M = disc.n + 1, disc.modes
+    is beyond ±M); the dense form of :func:`coupling_factors`. Rows of the top node of u, v,
+    T are the per-mode top conditions (eq. (4.5))."""
+    return _blocks_of(disc, coupling_factors(disc, coefficients, ms, reach), np.asarray(ms), reach)
+
+
+def _blocks_of(disc: Discretisation, E: np.ndarray, ms: np.ndarray, reach: int) -> np.ndarray:
+    """The dense blocks of the factors ``E`` (:func:`coupling_factors`) with the per-mode
+    top conditions of u, v, T in the diagonal blocks."""
+    mm = disc.n + 1
     size = 4 * mm
     g = disc.grid
-    dy = (np.eye(mm), g.D, g.D2)
-    ms = np.asarray(ms)
-    qs = range(-reach, reach + 1)
-    blocks = np.zeros((len(ms), len(qs), size, size), dtype=complex)
-    for name, f, b, c in PRIMITIVE_JETS:
-        A = coefficients[name].copy()
-        A[1:, -1] = 0.0  # the top rows of u, v, T are the per-mode conditions below
-        if not np.any(A):
-            continue
-        nxp = A.shape[-1]
-        H = np.fft.fft(A, axis=-1) / nxp  # harmonics ĉ_q of the coefficients
-        fc = UNKNOWNS.index(f)
-        for qi, q in enumerate(qs):
-            G = (H[..., q % nxp][:, :, None] * dy[c][None]).reshape(size, mm)
-            src = ms - q  # m' = m − q
-            fac = np.where(np.abs(src) <= M, (1j * 2.0 * np.pi * src / disc.length) ** b, 0.0)
-            blocks[:, qi, :, fc * mm : (fc + 1) * mm] += fac[:, None, None] * G[None]
+    dy = np.stack((np.eye(mm), g.D, g.D2))
+    # block[(r, j), (f, l)] = Σ_c E[f, c, r, j] D^c[j, l]
+    blocks = np.einsum("iqfcrj,cjl->iqrjfl", E, dy).reshape(len(ms), 2 * reach + 1, size, size)
     kabs = 2.0 * np.pi * np.abs(ms) / disc.length
     for r, f in enumerate(UNKNOWNS[1:], start=1):
         for c, kpow, coef in disc._top_terms[f]:
@@ -101,33 +123,40 @@ class CoupledPreconditioner:
     so only m = 0 … M are unknowns: row 0 reads D_0 x_0 + 2 Re(U_0 x_1) = r_0 (x_0 real),
     row m ≥ 1 L_m x_{m−1} + D_m x_m + U_m x_{m+1} = r_m. Eliminating from m = M down,
     S_M = D_M, S_m = D_m − U_m S_{m+1}⁻¹ L_{m+1}, S_0 = D_0 − 2 Re(U_0 S_1⁻¹ L_1); stored
-    are S_m⁻¹, K_m = S_m⁻¹ L_m and W_m = U_{m−1} S_m⁻¹, so that an application is 3M dense
-    products of 4(N+1)-square blocks (the x-mean preconditioner: M + 1).
+    are S_m⁻¹ (dense, 4(N+1)-square) and U_m, L_m in their factored form
+    (:func:`coupling_factors`: one harmonic of the coefficients per field and y-order times
+    the shared Chebyshev matrices), so that an application is 2M products with the S_m⁻¹ —
+    read down and then up again, so that the last read are still in cache — plus 2M with the
+    factors, which read a few vectors per mode instead of a dense block. The products are
+    bound by the memory traffic of the blocks: at P1, L = 1000, 41 × 80, the earlier three
+    dense blocks per mode (S_m⁻¹, S_m⁻¹ L_m, U_{m−1} S_m⁻¹) made the application 55 % of a
+    run's time (``benchmarks/bench_dns.py``, ``dns_coupled_apply``).
     """
 
     disc: Discretisation
     blocks: InitVar[np.ndarray]  # (M + 1, 3, size, size) of coupled_blocks; not kept
+    upper: np.ndarray  # (M + 1, 4, 3, 4, N+1): the factors of U_m (q = −1)
+    lower: np.ndarray  # (M + 1, 4, 3, 4, N+1): the factors of L_m (q = +1)
     _sinv: list = field(init=False, repr=False)
-    _k: list = field(init=False, repr=False)
-    _w: list = field(init=False, repr=False)
+    _dy: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self, blocks):
         B = blocks  # q = −1 (U), 0 (D), +1 (L)
         M = B.shape[0] - 1
         U, D, L = B[:, 0], B[:, 1], B[:, 2]
         sinv: list = [None] * (M + 1)
-        k: list = [None] * (M + 1)
-        w: list = [None] * (M + 1)
         S = D[M]
         for m in range(M, 0, -1):
             si = np.linalg.inv(S)
             sinv[m] = si
-            k[m] = si @ L[m]
-            w[m] = U[m - 1] @ si
-            S = D[m - 1] - w[m] @ L[m]
-        S0 = D[0].real - 2.0 * (w[1] @ L[1]).real if M else D[0].real
+            UK = U[m - 1] @ (si @ L[m])  # U_{m−1} S_m⁻¹ L_m
+            S = D[m - 1] - UK
+        S0 = D[0].real - 2.0 * UK.real if M else D[0].real
         sinv[0] = np.linalg.inv(S0)
-        self._sinv, self._k, self._w = sinv, k, w
+        self._sinv = sinv
+        g = self.disc.grid
+        mm = self.disc.n + 1
+        self._dy = np.ascontiguousarray(np.concatenate((np.eye(mm), g.D.T, g.D2.T), axis=1))
 
     @classmethod
     def build(
@@ -136,7 +165,19 @@ class CoupledPreconditioner:
         """Coefficients at the state ``C`` (:func:`~chuteflow.dns.columns.jet_coefficients`),
         blocks of the modes m = 0 … M, elimination."""
         coefs = jet_coefficients(disc, C, history, dt, bdf)
-        return cls(disc, coupled_blocks(disc, coefs, np.arange(disc.modes + 1), 1))
+        ms = np.arange(disc.modes + 1)
+        E = coupling_factors(disc, coefs, ms, 1)
+        return cls(disc, _blocks_of(disc, E, ms, 1), E[:, 0], E[:, 2])
+
+    def _factored(self, E: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """A coupling block times y from its factors E (:func:`coupling_factors`):
+        Σ_{f, c} E[f, c] ⊙ (D^c y_f) (real products with the stacked [1 | Dᵀ | D²ᵀ], the
+        real and imaginary parts apart: three times faster than one complex product at
+        N = 80)."""
+        mm = self.disc.n + 1
+        Y = y.reshape(4, mm)
+        d = (Y.real @ self._dy + 1j * (Y.imag @ self._dy)).reshape(4, 3, 1, mm)  # (f, c, ·, j)
+        return (E * d).sum(axis=(0, 1)).reshape(-1)
 
     def apply(self, R: np.ndarray) -> np.ndarray:
         """The preconditioned correction (4, N+1, M+1) of the residual ``R``."""
@@ -144,15 +185,18 @@ class CoupledPreconditioner:
         size = 4 * (self.disc.n + 1)
         r = R.reshape(size, M + 1).T  # (M + 1, size)
         rho = r.astype(complex)
-        for m in range(M - 1, 0, -1):
-            rho[m] -= self._w[m + 1] @ rho[m + 1]
+        for m in range(M, 1, -1):
+            rho[m - 1] -= self._factored(self.upper[m - 1], self._sinv[m] @ rho[m])
         x = np.empty_like(rho)
         if M:
-            x[0] = self._sinv[0] @ (r[0].real - 2.0 * (self._w[1] @ rho[1]).real)
+            x[0] = self._sinv[0] @ (
+                r[0].real - 2.0 * self._factored(self.upper[0], self._sinv[1] @ rho[1]).real
+            )
         else:
             x[0] = self._sinv[0] @ r[0].real
+        # (the blocks S_m⁻¹ in the reverse order of the sweep above: the last read are in cache)
         for m in range(1, M + 1):
-            x[m] = self._sinv[m] @ rho[m] - self._k[m] @ x[m - 1]
+            x[m] = self._sinv[m] @ (rho[m] - self._factored(self.lower[m], x[m - 1]))
         out = x.T.reshape(R.shape)
         out[..., 0] = out[..., 0].real
         return out
