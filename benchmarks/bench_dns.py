@@ -152,20 +152,31 @@ def run(quick: bool = False) -> list[dict]:
     return rows
 
 
+def _p1_wave(model, length: float, n: int, modes: int, lnnu: dict[int, complex]):
+    """(Discretisation, coefficients) of P1's steady flow on an L = ``length`` period with
+    ln ν perturbed by ``lnnu[m]`` in mode m (a large-amplitude state without a run)."""
+    import numpy as np
+
+    from chuteflow.dns import Discretisation
+    from chuteflow.steady import solve_steady
+
+    flow = solve_steady(16.0, 0.05, model)
+    d = Discretisation(16.0, model, length, flow.y_max, n, modes, frame=7.8)
+    p = flow.profiles(d.grid.y)
+    C = np.zeros(d.shape, complex)
+    C[0, :, 0], C[1, :, 0], C[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
+    for m, a in lnnu.items():
+        C[0, :, m] += a
+    return d, C
+
+
 def _columns_row(model) -> dict:
     """``dns_columns_large_wave`` (module docstring)."""
     import numpy as np
 
-    from chuteflow.dns import Discretisation, NewtonSettings, Stepper
-    from chuteflow.steady import solve_steady
+    from chuteflow.dns import NewtonSettings, Stepper
 
-    flow = solve_steady(16.0, 0.05, model)
-    d = Discretisation(16.0, model, 2000.0, flow.y_max, 64, 32, frame=7.8)
-    p = flow.profiles(d.grid.y)
-    C0 = np.zeros(d.shape, complex)
-    C0[0, :, 0], C0[1, :, 0], C0[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
-    C0[0, :, 1] += 0.25 * (1 + 0.5j)
-    C0[0, :, 2] += 0.08 * (0.2 - 1j)
+    d, C0 = _p1_wave(model, 2000.0, 64, 32, {1: 0.25 * (1 + 0.5j), 2: 0.08 * (0.2 - 1j)})
     rho = d.depth_integrals(C0)[0]
     out = {}
     for y in ("fd", "chebyshev"):
@@ -197,18 +208,12 @@ def _coupled_apply_row(model) -> dict:
     """``dns_coupled_apply`` (module docstring)."""
     import numpy as np
 
-    from chuteflow.dns import CoupledPreconditioner, Discretisation, Stepper
+    from chuteflow.dns import CoupledPreconditioner, Stepper
     from chuteflow.dns.columns import jet_coefficients
     from chuteflow.dns.coupled import coupled_blocks
     from chuteflow.dns.discretisation import BDF2
-    from chuteflow.steady import solve_steady
 
-    flow = solve_steady(16.0, 0.05, model)
-    d = Discretisation(16.0, model, 1000.0, flow.y_max, 80, 20, frame=7.8)
-    p = flow.profiles(d.grid.y)
-    C = np.zeros(d.shape, complex)
-    C[0, :, 0], C[1, :, 0], C[3, :, 0] = np.log(p["nu"]), p["u"], p["T"]
-    C[0, :, 1] += 0.2 * (1 + 0.5j)
+    d, C = _p1_wave(model, 1000.0, 80, 20, {1: 0.2 * (1 + 0.5j)})
     st = Stepper(d)
     hist = (st.physical(C), st.physical(C))
     P = CoupledPreconditioner.build(d, C, hist, 4.0, BDF2)
