@@ -162,12 +162,7 @@ class Discretisation:
         the arithmetic, are what a residual of a small grid costs)."""
         ik = 1j * self.k
         D, D2 = self.grid.D, self.grid.D2
-        full = np.zeros((3,) + C.shape[:-1] + (self.nxp // 2 + 1,), dtype=complex)
-        M = self.modes
-        full[0, ..., : M + 1] = C
-        full[1, ..., : M + 1] = C * ik
-        full[2, ..., : M + 1] = C * ik**2
-        v = np.fft.irfft(full * self.nxp, n=self.nxp, axis=-1)  # (x-order, field, y, x)
+        v = self.to_physical(np.stack((C, C * ik, C * ik**2)))  # (x-order, field, y, x)
         dv = D @ v[:2]  # ∂_y of the values and of their x-derivatives
         d2 = D2 @ v[0]
         out = {}
