@@ -33,6 +33,10 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
   elimination with the couplings as dense blocks (S_m⁻¹, K_m = S_m⁻¹ L_m and
   W_m = U_{m−1} S_m⁻¹: three dense products per mode, as before 2026-12-07) in the same run;
   the note has the distance of the two corrections.
+- ``dns_residual_padding``: one residual evaluation at the same ±20 % wave and grid (41 × 80)
+  on the default padded x grid (:func:`~chuteflow.dns.discretisation.padded_points`: 64
+  points) against the baseline of 3M + 1 = 61 points (a prime FFT length, the default before
+  2026-12-07) in the same run, averaged over 200; the note has the residuals' distance.
 - ``dns_step_L1000_nonlinear`` (full mode): the same grid over 50 steps from the eigenmode at
   amplitude 0.2 (ρ̄ within ±6 %, a finite-amplitude start): the nonlinear phase's time per
   step, Newton–Krylov with GMRES. No baseline; the docs compare with the earlier solver.
@@ -123,6 +127,7 @@ def run(quick: bool = False) -> list[dict]:
     )
     rows.append(_columns_row(model))
     rows.append(_coupled_apply_row(model))
+    rows.append(_padding_row(model))
     if not quick:
         kw = dict(time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
         a, t_a = _timed(lambda: simulate(flow, 1000.0, **kw))
@@ -168,6 +173,37 @@ def _p1_wave(model, length: float, n: int, modes: int, lnnu: dict[int, complex])
     for m, a in lnnu.items():
         C[0, :, m] += a
     return d, C
+
+
+def _padding_row(model) -> dict:
+    """``dns_residual_padding`` (module docstring)."""
+    import dataclasses
+
+    import numpy as np
+
+    from chuteflow.dns import Stepper
+
+    d, C = _p1_wave(model, 1000.0, 80, 20, {1: 0.2 * (1 + 0.5j)})
+    plain = dataclasses.replace(d, nxp=3 * d.modes + 1)
+    times = {}
+    for name, disc in (("fast", d), ("plain", plain)):
+        st = Stepper(disc)
+        hist = (st.physical(C), st.physical(C))
+        r = disc.residual(C, hist, 4.0)
+        t0 = time.perf_counter()
+        for _ in range(200):
+            r = disc.residual(C, hist, 4.0)
+        times[name] = ((time.perf_counter() - t0) / 200, r)
+    (t_f, r_f), (t_p, r_p) = times["fast"], times["plain"]
+    return {
+        "name": "dns_residual_padding",
+        "seconds": t_f,
+        "baseline_seconds": t_p,
+        "ratio": t_p / t_f,
+        "note": f"one residual at 41 × 80, ±20 % wave: {d.nxp} padded points {1e3 * t_f:.2f} ms "
+        f"against {plain.nxp} points {1e3 * t_p:.2f} ms; residuals {np.abs(r_f - r_p).max():.1e} "
+        f"apart (of {np.abs(r_p).max():.2f})",
+    }
 
 
 def _columns_row(model) -> dict:

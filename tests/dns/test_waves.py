@@ -14,6 +14,7 @@ import pytest
 import xarray as xr
 
 from chuteflow.dns import WaveMapSettings, map_waves
+from chuteflow.dns.discretisation import padded_points
 from chuteflow.dns.waves import WAVE_KEYS
 from chuteflow.errors import ParameterError
 
@@ -121,9 +122,10 @@ def test_the_map_lets_each_grid_follow_its_wave(monkeypatch):
     """WaveMapSettings(max_modes=): each run refines its x grid where its tail rises towards
     the tolerance (noise of 1e-2 on M = 2: the tails reach 1e-3 against a tolerance of 2e-3,
     refined at a quarter of it); the row says the nx it ended with and the shapes lie on
-    that grid (13 padded points for M = 4, against 7 for M = 2). The map's plumbing only:
-    these 30 steps are all the noise's transient, which a run from noise waits out before it
-    refines (test_trackers.py), so here the transient counts as over from the start."""
+    that grid (15 padded points for M = 4, against 8 for M = 2: :func:`padded_points`). The
+    map's plumbing only: these 30 steps are all the noise's transient, which a run from noise
+    waits out before it refines (test_trackers.py), so here the transient counts as over from
+    the start."""
     import chuteflow.trackers
 
     monkeypatch.setattr(chuteflow.trackers, "_transient_end", lambda v: 0)
@@ -131,9 +133,9 @@ def test_the_map_lets_each_grid_follow_its_wave(monkeypatch):
     kept = map_waves(POINTS, base)
     got = map_waves(POINTS, dataclasses.replace(base, max_modes=8))
     assert list(kept["nx"].values) == [5, 5]
-    assert kept["shape"].shape == (2, 7)
+    assert kept["shape"].shape == (2, padded_points(2)) == (2, 8)
     assert list(got["nx"].values) == [9, 9]
-    assert got["shape"].shape == (2, 13)
+    assert got["shape"].shape == (2, padded_points(4)) == (2, 15)
     # the same waves, one grid finer: their size agrees to the coarse grid's tail (1e-3)
     np.testing.assert_allclose(got["rho_max_rel"].values, kept["rho_max_rel"].values, rtol=0.05)
     with pytest.raises(ParameterError, match="max_modes"):

@@ -30,7 +30,7 @@ __all__ = [
 #: Initial conditions: the least-stable eigenmode at k = 2π/L, or small random noise.
 INITS = ("mode", "noise")
 #: Version of the checkpoint's content (part of the run's key).
-FORMAT = 4
+FORMAT = 5
 
 
 @dataclass(frozen=True)
