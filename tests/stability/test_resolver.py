@@ -331,23 +331,59 @@ def test_the_fallback_answer_is_searched_above_too():
     assert "-0.653233-0.00676351j" in m.note
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open (docs/numerics.md, 'a mode slower than the ladder'): a mode that passes "
-    "the tests only at N ≈ 450-550 is not told from the continuum at N <= 256",
-)
 def test_a_mode_slower_than_the_ladder_leaves_the_answer_flagged():
     """θ = 19.79°, ν0(0) = 0.164, φ = 0.0901, Φ = 0.442, (k_x, k_z) = (0.005189, 0.156833)
     (try_random_points seed 906686): dense QZ resolves −0.079620 − 0.023865i only at
     N ≈ 450–550 (−0.079704, −0.079627, −0.079620 at N = 350, 450, 550; tails 9e-8, 5e-9,
-    3e-10), above the answer −0.106954 − 0.225388i, which is reported as converged. The
-    contract's answer at the default ladder (N ≤ 256) — but a less damped mode exists, so
-    the answer should be flagged. Strict xfail: it passes once the resolver flags it."""
+    3e-10), above −0.106954 − 0.225388i, which passes both tests at N = 118 and was reported
+    as converged. At the repeated screen (N = 118) the mode's tail, 7.8e-5, lies below the
+    band beside it (≥ 2.9e-4); followed beyond the ladder it resolves
+    (``resolver.beyond_the_ladder``: tail 3.6e-7 at N = 367, 8.6e-9 at 512) while the band's
+    tails stall: the answer is the mode, flagged (drift 9.7e-6 at N = 512 against 1e-6),
+    measured 3.3e-6 from the dense QZ value at N = 550 (tolerance 1e-4: its drift between
+    the last two rungs is 1e-5)."""
     from chuteflow import ChuteModel, solve_steady
 
     flow = solve_steady(19.79, 0.164, ChuteModel(roughness=0.0901, wall_loss=0.442))
     m = least_stable(flow, 0.005189, kz=0.156833)
     assert not m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.079620 - 0.023865j)) < 1e-4, (m.alpha, m.note)
+    assert "beyond the ladder" in m.note
+
+
+def test_beyond_the_ladder_a_band_member_stalls_and_the_mode_resolves():
+    """The rule of ``resolver.beyond_the_ladder`` at the point above (N = 118, the repeated
+    screen's): followed on from their eigenvectors there, the mode −0.0781 − 0.0201i (tail
+    7.8e-5) resolves (its tail below ``CONTINUUM_RESOLVED`` = 1e-6 by N = 367: measured
+    3.6e-7, then 3.4e-8 at 459) while its neighbour in the band, −0.0975 − 0.0200i (tail
+    2.9e-4, above ``SUSPECT_TAIL``: no suspect, followed here only for the rule), stalls —
+    2.6e-4, 2.2e-4, 1.5e-4 at N = 148, 185, 231 (×0.52 over three rungs, against
+    ``STALL_FALL`` = 0.2): not a mode."""
+    from chuteflow import ChuteModel, solve_steady
+    from chuteflow.stability import resolver
+    from chuteflow.stability.modes import stability_operator
+    from chuteflow.stability.policy import RejectionPolicy
+
+    flow = solve_steady(19.79, 0.164, ChuteModel(roughness=0.0901, wall_loss=0.442))
+    kx, kz = 0.005189, 0.156833
+    cache = cache_for(kz, None)
+    p = stability_operator(flow, 118, True, cache=cache).pencil(kx, kz)
+    A, B = p.equilibrated()
+    w, V = qz(A, B)
+    t = tails(p, V)
+    policy = RejectionPolicy()
+
+    def follow(near):
+        j = int(np.argmin(np.where(np.isfinite(w), np.abs(w - near), np.inf)))
+        return resolver._follow_beyond(
+            flow, kx, kz, complex(w[j]), V[:, j], float(t[j]), 118, policy, cache, 512
+        )
+
+    mode = follow(-0.0781 - 0.0201j)
+    assert mode is not None
+    assert mode.tail < resolver.CONTINUUM_RESOLVED
+    assert abs(mode.alpha - (-0.079620 - 0.023865j)) < 1e-4
+    assert follow(-0.0975 - 0.0200j) is None
 
 
 def test_a_resolved_eigenvector_near_the_top_continuum_is_a_mode():

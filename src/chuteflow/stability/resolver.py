@@ -12,7 +12,8 @@ Contract
     ladder ends with such a candidate undecided, the answer is that candidate, flagged
     ``converged = False`` with its drift and tail, and the note names the least-stable
     resolved mode below it. A damped mode is never reported as converged while a less
-    damped one that passes the tests exists at the resolutions tried.
+    damped one that passes the tests exists at the resolutions tried — or, where its
+    eigenvector resolves only beyond them, while it is found there (step 3).
 
 Resolver (:func:`least_stable`)
     1. *Tracked or direct answer*: the α(0) = 0 branch (the kinematic-wave mode of
@@ -29,6 +30,11 @@ Resolver (:func:`least_stable`)
        α(N') is the rung below) until decided (:func:`follow_candidate`); one that settles
        at the dilute top's continuum, α = −i k_x u0(y_max), is not a mode
        (:data:`CONTINUUM_NEAR`).
+    3. *Beyond the ladder* (:func:`beyond_the_ladder`): where the answer needed more than
+       twice the screen's N, the screen is repeated there, and the eigenvalues above the
+       answer whose tails are below the band beside them (:data:`SUSPECT_TAIL`) are
+       followed past the ladder's top: one whose eigenvector resolves there is a mode, and
+       the answer, flagged unless it passes both tests.
 
     Finite wavevectors, 2D and 3D, are solved on the sinh-mapped grid
     (:func:`~.modes.cache_for`, the one place where the grid is chosen).
@@ -630,6 +636,7 @@ def global_candidates(
     cache: OperatorCache,
     finer: list[int] | None = None,
     top: int | None = None,
+    suspects: list | None = None,
 ) -> list[tuple[complex, np.ndarray, float]]:
     """Eigenpairs above ``answer`` from one dense eigensolve at ``policy.search.n``
     (:func:`~.eigen.shifted_spectrum`), best first, each with its eigenvector's tail:
@@ -642,7 +649,9 @@ def global_candidates(
     too where its tail falls fast enough (:data:`SCREEN_RATE_RUNGS`): it continues as the
     mutually nearest eigenvalue of a dense solve at each of them, its tail falls at each,
     and at the slowest of those geometric rates it reaches ``policy.tail_tol`` by
-    N = ``top``."""
+    N = ``top``. With a list ``suspects``, the eigenpairs above the answer that are not
+    candidates but whose tail is below :data:`SUSPECT_TAIL`, away from the dilute top's
+    continuum, are appended to it (for :func:`beyond_the_ladder`)."""
     search = policy.search
     n = search.n
     p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
@@ -665,9 +674,12 @@ def global_candidates(
     if finer and top is not None and np.any(slow):
         falls = slow & _tail_falls_in_time(flow, kx, kz, answer, policy, cache, w[above], t, n, finer, top)
     out: list[tuple[complex, np.ndarray, float]] = []
+    at, radius = _top_continuum(flow, kx, kz)
     for j, tj, fj in zip(above, t, falls):
         a = complex(w[j])
         if tj >= search.candidate_tail and not fj:
+            if suspects is not None and tj < SUSPECT_TAIL and abs(a - at) > radius:
+                suspects.append((a, V[:, j], float(tj)))
             continue
         if answer is not None and abs(a - answer.alpha) <= 1e-3 * max(abs(answer.alpha), 1e-3):
             continue
@@ -775,9 +787,102 @@ def search_above(
             policy,
             search=dataclasses.replace(search, n=n2, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER),
         )
-        found = _search_once(flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2])
+        suspects: list = []
+        found = _search_once(
+            flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2], suspects=suspects
+        )
         screened = n2
+        if found is not None and found.physical and suspects:
+            beyond = beyond_the_ladder(flow, kx, kz, found, suspects, n2, policy, cache, rungs[-1])
+            if beyond is not found:
+                return beyond  # (no screen is repeated beyond the ladder)
     return found
+
+
+#: Beyond the ladder (:func:`beyond_the_ladder`). At the repeated screen (:data:`SCREEN_REPEAT`)
+#: the near-neutral band and the arcs of the dilute top's continuum have tails ~1e-4 … 1e-3
+#: that stall (×0.8 … 0.9 a rung up to N ≈ 370), while a mode whose eigenvector needs
+#: N ≈ 400–500 has a tail just below them that then falls ever faster. Measured: θ = 19.79°,
+#: ν0(0) = 0.164, φ = 0.0901, Φ = 0.442 at (k_x, k_z) = (0.005189, 0.156833)
+#: (try_random_points seed 906686; docs/numerics.md "A mode slower than the ladder"): at
+#: the repeated screen's N = 118 the mode −0.0781 − 0.0201i has tail 7.8e-5, the band beside
+#: it 2.9e-4, 3.1e-4 …; followed on at N = 150, 188, 235, 294, 367 the mode's tail is 6.4e-5,
+#: 2.0e-5, 8.1e-6, 2.1e-6, 3.6e-7 (its eigenvalue −0.079675 − 0.023845i at 367, dense QZ
+#: −0.079620 − 0.023865i at N = 550), the band members' 2.6e-4 … 8.8e-5 and 3.4e-4 …
+#: 1.1e-4; the arc along Im α_top 1.8e-3 → 5.4e-4. The answer −0.106954 − 0.225388i had been
+#: reported as converged. SUSPECT_TAIL: the eigenvalues above the answer (outside the
+#: continuum's radius) with a tail below it at the repeated screen are followed on, at most
+#: SUSPECTS of them, the smallest tails first, on rungs × ``policy.n_growth`` up to
+#: BEYOND × the ladder's top; one whose tail falls below CONTINUUM_RESOLVED is a mode (the
+#: answer, flagged unless it passes both tests there), one whose tail has not fallen by
+#: STALL_FALL over three rungs is not. Never beyond N = BEYOND_MAX (a dense 3D pencil of
+#: 5 × 513 rows: 0.1 GB a matrix, 1.2 s a build and 1.8 s a shift-invert solve here).
+SUSPECT_TAIL = 1e-4
+SUSPECTS = 2
+BEYOND = 2.0
+BEYOND_MAX = 512
+STALL_FALL = 0.2
+
+
+def beyond_the_ladder(
+    flow: SteadyFlow,
+    kx: float,
+    kz: float,
+    best: Mode,
+    suspects: list,
+    n_from: int,
+    policy: RejectionPolicy,
+    cache: OperatorCache,
+    top: int,
+) -> Mode:
+    """The answer ``best`` (a mode that passes both tests), or a less damped mode found by
+    following the repeated screen's ``suspects`` (eigenpairs at N = ``n_from`` with their
+    tails, :func:`global_candidates`) past the ladder's ``top`` (:data:`SUSPECT_TAIL`): a
+    mode whose eigenvector resolves only there, flagged unless it passes both tests."""
+    floor = best.alpha.real + max(best.drift, policy.drift_tol)
+    picks = sorted((s for s in suspects if s[0].real > floor), key=lambda s: s[2])[:SUSPECTS]
+    found: list[Mode] = []
+    for a, v, t in picks:
+        m = _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, min(int(BEYOND * top), BEYOND_MAX))
+        if m is not None and m.alpha.real > best.alpha.real + max(best.drift, m.drift):
+            found.append(m)
+    if not found:
+        return best
+    m = max(found, key=lambda f: f.alpha.real)
+    note = (
+        f"a mode above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) resolves only "
+        f"beyond the ladder (N ≤ {top}): followed from {picks[0][0]:.6g} at N = {n_from} to N = {m.n} "
+        f"(drift {m.drift:.1e}, tail {m.tail:.1e})"
+    )
+    return dataclasses.replace(m, method="global", note=join_notes(m.note, note))
+
+
+def _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach) -> Mode | None:
+    """The eigenpair (``a``, ``v``) at N = ``n_from`` (tail ``t``) followed by shift-invert on
+    rungs × ``policy.n_growth`` up to ``reach``: the mode at the last rung once its tail has
+    fallen below :data:`CONTINUUM_RESOLVED` (its drift against the rung before); None where
+    its tail stalls (:data:`STALL_FALL`) or it is never resolved."""
+    seen, n_prev, mode = [t], n_from, None
+    n = n_from
+    while True:
+        n = min(reach, round(n * policy.n_growth))
+        if n <= n_prev:
+            break
+        p = stability_operator(flow, n, bool(kz), cache=cache).pencil(kx, kz)
+        try:
+            b, w = nearest_eigenpair(p, a, v0=interp_vector(v, len(p.fields), n_prev, n))
+        except ConvergenceError:
+            return mode
+        m = make_mode(p, b, w, abs(b - a), n_prev, policy)
+        seen.append(m.tail)
+        if m.tail < CONTINUUM_RESOLVED:
+            mode = m
+            if m.physical:
+                return m
+        elif mode is not None or (len(seen) >= 4 and seen[-1] > STALL_FALL * seen[-4]):
+            return mode
+        a, v, n_prev = b, w, n
+    return mode
 
 
 def _search_once(
@@ -789,11 +894,13 @@ def _search_once(
     cache: OperatorCache,
     rungs: list[int],
     finer: list[int] | None = None,
+    suspects: list | None = None,
 ) -> Mode | None:
     """One screen at ``policy.search.n`` (with the rate rule's ``finer`` resolutions, see
-    :func:`global_candidates`) and its candidates followed (:func:`search_above`)."""
+    :func:`global_candidates`, which appends to ``suspects``) and its candidates followed
+    (:func:`search_above`)."""
     search = policy.search
-    cands = global_candidates(flow, kx, kz, answer, policy, cache, finer, rungs[-1])
+    cands = global_candidates(flow, kx, kz, answer, policy, cache, finer, rungs[-1], suspects)
     if not cands:
         return answer
     # the least-stable mode that passes both tests, and the candidates not decided
