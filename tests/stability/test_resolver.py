@@ -351,6 +351,24 @@ def test_a_mode_slower_than_the_ladder_leaves_the_answer_flagged():
     assert "beyond the ladder" in m.note
 
 
+def test_an_eigenvalue_undecided_beyond_the_ladder_leaves_the_answer_flagged():
+    """θ = 20.575°, ν0(0) = 0.041, φ = 0.0748, Φ = 0.452, (k_x, k_z) = (0.004504, 0.107621)
+    (try_random_points seed 663316): −0.167924 − 0.260349i passes both tests at N = 118
+    and was reported as converged; above it dense QZ has −0.12706 − 0.04797i at N = 250
+    (tail 5e-6) and −0.12817 − 0.04924i at 350 (1e-6). Followed from the repeated screen
+    to N = 512 its tail falls to 2.7e-6, below every band's (``resolver.BAND_TAIL``), while
+    its eigenvalue still moves by 3.6e-3 a rung: not decided, so the answer is flagged,
+    with that eigenvalue (−0.1264 − 0.0547i at N = 512) as its estimate — within 0.01 of
+    the dense QZ values, which move by as much."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(20.575, 0.041, ChuteModel(roughness=0.0748, wall_loss=0.452))
+    m = least_stable(flow, 0.004504, kz=0.107621)
+    assert not m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.12706 - 0.04797j)) < 1e-2, (m.alpha, m.note)
+    assert "not decided" in m.note
+
+
 def test_beyond_the_ladder_a_band_member_stalls_and_the_mode_resolves():
     """The rule of ``resolver.beyond_the_ladder`` at the point above (N = 118, the repeated
     screen's): followed on from their eigenvectors there, the mode −0.0781 − 0.0201i (tail
@@ -358,7 +376,7 @@ def test_beyond_the_ladder_a_band_member_stalls_and_the_mode_resolves():
     3.6e-7, then 3.4e-8 at 459) while its neighbour in the band, −0.0975 − 0.0200i (tail
     2.9e-4, above ``SUSPECT_TAIL``: no suspect, followed here only for the rule), stalls —
     2.6e-4, 2.2e-4, 1.5e-4 at N = 148, 185, 231 (×0.52 over three rungs, against
-    ``STALL_FALL`` = 0.2): not a mode."""
+    ``STALL_FALL`` = 0.2, at a band's level: above ``BAND_TAIL`` = 1e-5): not a mode."""
     from chuteflow import ChuteModel, solve_steady
     from chuteflow.stability import resolver
     from chuteflow.stability.modes import stability_operator
@@ -379,11 +397,12 @@ def test_beyond_the_ladder_a_band_member_stalls_and_the_mode_resolves():
             flow, kx, kz, complex(w[j]), V[:, j], float(t[j]), 118, policy, cache, 512
         )
 
-    mode = follow(-0.0781 - 0.0201j)
+    verdict, mode = follow(-0.0781 - 0.0201j)
+    assert verdict == "mode"
     assert mode is not None
     assert mode.tail < resolver.CONTINUUM_RESOLVED
     assert abs(mode.alpha - (-0.079620 - 0.023865j)) < 1e-4
-    assert follow(-0.0975 - 0.0200j) is None
+    assert follow(-0.0975 - 0.0200j) == ("not a mode", None)
 
 
 def test_a_resolved_eigenvector_near_the_top_continuum_is_a_mode():

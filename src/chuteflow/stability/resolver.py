@@ -815,9 +815,17 @@ def search_above(
 #: SUSPECTS of them, the smallest tails first, on rungs × ``policy.n_growth`` up to
 #: BEYOND × the ladder's top; one whose tail falls below CONTINUUM_RESOLVED is a mode (the
 #: answer, flagged unless it passes both tests there), one whose tail has not fallen by
-#: STALL_FALL over three rungs is not. Never beyond N = BEYOND_MAX (a dense 3D pencil of
+#: STALL_FALL over three rungs, at a band's level, is not. Never beyond N = BEYOND_MAX (a dense 3D pencil of
 #: 5 × 513 rows: 0.1 GB a matrix, 1.2 s a build and 1.8 s a shift-invert solve here).
+#: A suspect that stalls with its tail below BAND_TAIL is below every band member measured
+#: (8.8e-5 … 5.4e-4 at N = 367 above) and not decided: θ = 20.575°, ν0(0) = 0.041,
+#: φ = 0.0748, Φ = 0.452 at (0.004504, 0.107621) (try_random_points seed 663316), from
+#: −0.12653 − 0.04291i (tail 6.2e-5 at N = 118) the tail is 4.7e-5, 1.4e-5, 1.2e-5, 5.8e-6,
+#: 6.8e-6, 5.0e-6, 2.7e-6 at N = 148 … 512 (×0.4 … 0.5 over three rungs, a band's fall)
+#: while the eigenvalue moves by 1.4e-3 … 7e-3 a rung (dense QZ −0.12706 − 0.04797i at
+#: N = 250, −0.12817 − 0.04924i at 350): the answer −0.167924 − 0.260349i is flagged.
 SUSPECT_TAIL = 1e-4
+BAND_TAIL = 1e-5
 SUSPECTS = 2
 BEYOND = 2.0
 BEYOND_MAX = 512
@@ -835,35 +843,44 @@ def beyond_the_ladder(
     cache: OperatorCache,
     top: int,
 ) -> Mode:
-    """The answer ``best`` (a mode that passes both tests), or a less damped mode found by
-    following the repeated screen's ``suspects`` (eigenpairs at N = ``n_from`` with their
-    tails, :func:`global_candidates`) past the ladder's ``top`` (:data:`SUSPECT_TAIL`): a
-    mode whose eigenvector resolves only there, flagged unless it passes both tests."""
+    """The answer ``best`` (a mode that passes both tests), or what lies above it past the
+    ladder's ``top``: the repeated screen's ``suspects`` (eigenpairs at N = ``n_from`` with
+    their tails, :func:`global_candidates`) followed on (:data:`SUSPECT_TAIL`). A suspect
+    whose eigenvector resolves is a mode, the answer, flagged unless it passes both tests;
+    one left undecided (its tail below every band's, :data:`BAND_TAIL`, but not resolved)
+    is the answer flagged, as a candidate undecided at the ladder's end is."""
     floor = best.alpha.real + max(best.drift, policy.drift_tol)
     picks = sorted((s for s in suspects if s[0].real > floor), key=lambda s: s[2])[:SUSPECTS]
-    found: list[Mode] = []
+    reach = min(int(BEYOND * top), BEYOND_MAX)
+    found: list[tuple[Mode, str, complex]] = []
     for a, v, t in picks:
-        m = _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, min(int(BEYOND * top), BEYOND_MAX))
-        if m is not None and m.alpha.real > best.alpha.real + max(best.drift, m.drift):
-            found.append(m)
+        verdict, m = _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach)
+        if (
+            m is not None
+            and verdict != "not a mode"
+            and m.alpha.real > best.alpha.real + max(best.drift, m.drift)
+        ):
+            found.append((m, verdict, a))
     if not found:
         return best
-    m = max(found, key=lambda f: f.alpha.real)
+    m, verdict, start = max(found, key=lambda f: f[0].alpha.real)
+    what = "a mode" if verdict == "mode" else "an eigenvalue, not decided,"
     note = (
-        f"a mode above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) resolves only "
-        f"beyond the ladder (N ≤ {top}): followed from {picks[0][0]:.6g} at N = {n_from} to N = {m.n} "
+        f"{what} above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) beyond the "
+        f"ladder (N ≤ {top}): followed from {start:.6g} at N = {n_from} to N = {m.n} "
         f"(drift {m.drift:.1e}, tail {m.tail:.1e})"
     )
     return dataclasses.replace(m, method="global", note=join_notes(m.note, note))
 
 
-def _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach) -> Mode | None:
+def _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach) -> tuple[str, Mode | None]:
     """The eigenpair (``a``, ``v``) at N = ``n_from`` (tail ``t``) followed by shift-invert on
-    rungs × ``policy.n_growth`` up to ``reach``: the mode at the last rung once its tail has
-    fallen below :data:`CONTINUUM_RESOLVED` (its drift against the rung before); None where
-    its tail stalls (:data:`STALL_FALL`) or it is never resolved."""
+    rungs × ``policy.n_growth`` up to ``reach``: ("mode", its Mode at the last rung) once its
+    tail has fallen below :data:`CONTINUUM_RESOLVED` (drift against the rung before);
+    ("not a mode", None) where its tail stalls (:data:`STALL_FALL`) at a band's level
+    (≥ :data:`BAND_TAIL`); otherwise ("undecided", its Mode at the last rung)."""
     seen, n_prev, mode = [t], n_from, None
-    n = n_from
+    n, last = n_from, None
     while True:
         n = min(reach, round(n * policy.n_growth))
         if n <= n_prev:
@@ -872,17 +889,22 @@ def _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach) -> Mode 
         try:
             b, w = nearest_eigenpair(p, a, v0=interp_vector(v, len(p.fields), n_prev, n))
         except ConvergenceError:
-            return mode
+            break
         m = make_mode(p, b, w, abs(b - a), n_prev, policy)
         seen.append(m.tail)
+        last = m
         if m.tail < CONTINUUM_RESOLVED:
             mode = m
             if m.physical:
-                return m
-        elif mode is not None or (len(seen) >= 4 and seen[-1] > STALL_FALL * seen[-4]):
-            return mode
+                return "mode", m
+        elif mode is not None:
+            return "mode", mode
+        elif len(seen) >= 4 and seen[-1] > STALL_FALL * seen[-4] and m.tail >= BAND_TAIL:
+            return "not a mode", None
         a, v, n_prev = b, w, n
-    return mode
+    if mode is not None:
+        return "mode", mode
+    return "undecided", last
 
 
 def _search_once(
