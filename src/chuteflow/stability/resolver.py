@@ -680,7 +680,7 @@ def global_candidates(
         a = complex(w[j])
         if tj >= search.candidate_tail and not fj:
             if abs(a - at) > radius:
-                unresolved.append((a, j, float(tj)))
+                unresolved.append((a, int(j), float(tj)))
             continue
         if answer is not None and abs(a - answer.alpha) <= 1e-3 * max(abs(answer.alpha), 1e-3):
             continue
@@ -689,10 +689,10 @@ def global_candidates(
         out.append((a, V[:, j], float(tj)))
     if suspects is not None:
         # below the bands' tails, and alone there (a band's members have like tails)
-        for i, (a, j, tj) in enumerate(unresolved):
+        for i, (a_u, j_u, t_u) in enumerate(unresolved):
             others = [u[2] for k, u in enumerate(unresolved) if k != i]
-            if tj < SUSPECT_TAIL and tj < SUSPECT_ALONE * min(others, default=math.inf):
-                suspects.append((a, V[:, j], tj))
+            if t_u < SUSPECT_TAIL and t_u < SUSPECT_ALONE * min(others, default=math.inf):
+                suspects.append((a_u, V[:, j_u], t_u))
     return out
 
 
