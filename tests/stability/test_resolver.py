@@ -369,6 +369,25 @@ def test_an_eigenvalue_undecided_beyond_the_ladder_leaves_the_answer_flagged():
     assert "not decided" in m.note
 
 
+def test_a_flagged_answer_decided_at_a_coarse_n_is_screened_again():
+    """θ = 15.654°, ν0(0) = 0.0358, φ = 0.0649, Φ = 0.343, (k_x, k_z) = (0.009377, 0.055339)
+    (try_random_points seed 663316): dense QZ has the mode −0.022456 − 0.032307i at N = 250
+    and −0.022472 − 0.032295i at 350 (tails 2e-7, 6e-9). Its candidate, followed from
+    N = 48, hopped at N = 94 onto a neighbour with a larger tail and was rejected; the
+    answer was −0.0867 − 0.0505i, an undecided candidate at N = 94, flagged — 0.064 more
+    damped. A flagged answer of the search is screened again at the rung of twice its N
+    (``resolver.search_above``), where the mode's tail is below the repeated screen's
+    threshold: now the answer is that mode, flagged (not decided by N = 256), measured
+    1.9e-5 from the dense QZ value at N = 350 (tolerance 1e-4: its drift at N = 256 is
+    6.9e-5)."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(15.654, 0.0358, ChuteModel(roughness=0.0649, wall_loss=0.343))
+    m = least_stable(flow, 0.009377, kz=0.055339)
+    assert not m.converged, (m.alpha, m.note)
+    assert abs(m.alpha - (-0.022472 - 0.032295j)) < 1e-4, (m.alpha, m.note)
+
+
 def test_beyond_the_ladder_a_band_member_stalls_and_the_mode_resolves():
     """The rule of ``resolver.beyond_the_ladder`` at the point above (N = 118, the repeated
     screen's): followed on from their eigenvectors there, the mode −0.0781 − 0.0201i (tail

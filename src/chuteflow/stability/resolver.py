@@ -29,7 +29,8 @@ Resolver (:func:`least_stable`)
        candidate, followed by shift-invert on the rungs 48, 60, 75, 94, … (each rung's
        α(N') is the rung below) until decided (:func:`follow_candidate`); one that settles
        at the dilute top's continuum, α = −i k_x u0(y_max), is not a mode
-       (:data:`CONTINUUM_NEAR`).
+       (:data:`CONTINUUM_NEAR`). Where the answer needed more than twice the screen's N,
+       or is flagged, the screen is repeated at that N (twice the flagged answer's).
     3. *Beyond the ladder* (:func:`beyond_the_ladder`): where the answer needed more than
        twice the screen's N, the screen is repeated there, and the eigenvalues above the
        answer whose tails are below the band beside them (:data:`SUSPECT_TAIL`) are
@@ -758,6 +759,16 @@ def _tail_falls_in_time(
 #: tails 2e-7, 4e-9) had tails 2e-3 … 7e-3 at N = 48 and was no candidate.
 SCREEN_REPEAT = 2.0
 SCREEN_TAIL_POWER = 0.7
+# The same for a flagged answer of the search (an undecided candidate at N_a, in
+# search_above): the screen is repeated at the first rung ≥ SCREEN_REPEAT × N_a, and a less
+# damped answer from there replaces it. Measured (try_random_points seeds 663316, 755525):
+# at θ = 15.654°, ν0(0) = 0.0358, φ = 0.0649, Φ = 0.343, (0.009377, 0.055339) the mode
+# −0.022472 − 0.032295i (dense QZ at N = 350, tail 6e-9) was lost by its follow at N = 94
+# and −0.0867 − 0.0505i (undecided at N = 94) answered, flagged; now −0.0224719 −
+# 0.0323141i, flagged (drift 6.9e-5 at N = 256), in 7.5 s instead of 0.6. At θ = 16.043°,
+# ν0(0) = 0.009, φ = 0.0548, Φ = 0.4, (0.031534, 0.064652): −0.2202 − 0.3230i (N = 94) →
+# −0.0890105 − 0.3291142i (N = 256, drift 1.6e-4; dense QZ at N = 250: −0.0890619 −
+# 0.329074i), 7.2 s.
 
 
 def search_above(
@@ -803,6 +814,19 @@ def search_above(
             beyond = beyond_the_ladder(flow, kx, kz, found, suspects, n2, policy, cache, rungs[-1])
             if beyond is not found:
                 return beyond  # (no screen is repeated beyond the ladder)
+    if found is not None and not found.physical and found.method == "global":
+        # a flagged answer of the search, decided at a coarse N: screened once more at the rung
+        # of twice its N, where a mode that resolves slowly has a tail a mode as fine has
+        # (SCREEN_REPEAT)
+        n2 = next((r for r in rungs if r >= SCREEN_REPEAT * found.n), rungs[-1])
+        if n2 > found.n:
+            finer = dataclasses.replace(
+                policy,
+                search=dataclasses.replace(search, n=n2, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER),
+            )
+            again = _search_once(flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2])
+            if again is not None and again.alpha.real > found.alpha.real + max(found.drift, again.drift):
+                return again
     return found
 
 
