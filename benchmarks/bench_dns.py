@@ -60,6 +60,16 @@ def _timed(fn):
     return out, time.perf_counter() - t0
 
 
+def _per_call(fn, repeats: int):
+    """(mean seconds per call, the last result) of ``repeats`` calls of ``fn`` after one
+    warm-up call."""
+    out = fn()
+    t0 = time.perf_counter()
+    for _ in range(repeats):
+        out = fn()
+    return (time.perf_counter() - t0) / repeats, out
+
+
 def run(quick: bool = False) -> list[dict]:
     from chuteflow._threads import limit_blas_threads
     from chuteflow.closures import ChuteModel
@@ -189,11 +199,7 @@ def _padding_row(model) -> dict:
     for name, disc in (("fast", d), ("plain", plain)):
         st = Stepper(disc)
         hist = (st.physical(C), st.physical(C))
-        r = disc.residual(C, hist, 4.0)
-        t0 = time.perf_counter()
-        for _ in range(200):
-            r = disc.residual(C, hist, 4.0)
-        times[name] = ((time.perf_counter() - t0) / 200, r)
+        times[name] = _per_call(lambda disc=disc, hist=hist: disc.residual(C, hist, 4.0), 200)
     (t_f, r_f), (t_p, r_p) = times["fast"], times["plain"]
     return {
         "name": "dns_residual_padding",
@@ -277,11 +283,7 @@ def _coupled_apply_row(model) -> dict:
     R[..., 0] = R[..., 0].real
     times = {}
     for name, fn in (("factored", P.apply), ("plain", plain)):
-        fn(R)
-        t0 = time.perf_counter()
-        for _ in range(100):
-            x = fn(R)
-        times[name] = ((time.perf_counter() - t0) / 100, x)
+        times[name] = _per_call(lambda fn=fn: fn(R), 100)
     (t_f, x_f), (t_p, x_p) = times["factored"], times["plain"]
     return {
         "name": "dns_coupled_apply",
