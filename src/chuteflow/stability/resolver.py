@@ -841,13 +841,26 @@ def search_above(
 #: 2.0e-5, 8.1e-6, 2.1e-6, 3.6e-7 (its eigenvalue −0.079675 − 0.023845i at 367, dense QZ
 #: −0.079620 − 0.023865i at N = 550), the band members' 2.6e-4 … 8.8e-5 and 3.4e-4 …
 #: 1.1e-4; the arc along Im α_top 1.8e-3 → 5.4e-4. The answer −0.106954 − 0.225388i had been
-#: reported as converged. SUSPECT_TAIL: the eigenvalues above the answer (outside the
-#: continuum's radius) with a tail below it at the repeated screen are followed on, at most
-#: SUSPECTS of them, the smallest tails first, on rungs × ``policy.n_growth`` up to
-#: BEYOND × the ladder's top; one whose tail falls below CONTINUUM_RESOLVED is a mode (the
-#: answer, flagged unless it passes both tests there), one whose tail has not fallen by
-#: STALL_FALL over three rungs, at a band's level, is not. Never beyond N = BEYOND_MAX (a dense 3D pencil of
-#: 5 × 513 rows: 0.1 GB a matrix, 1.2 s a build and 1.8 s a shift-invert solve here).
+#: reported as converged. So the eigenvalues above the answer (outside the continuum's
+#: radius) with a tail below SUSPECT_TAIL at the repeated screen are suspects, followed on
+#: (at most SUSPECTS of them, the smallest tails first) on rungs × ``policy.n_growth`` up
+#: to BEYOND × the ladder's top, never beyond N = BEYOND_MAX (a dense 3D pencil of 5 × 513
+#: rows: 0.1 GB a matrix, 1.2 s a build and 1.8 s a shift-invert solve here). One whose
+#: tail falls below CONTINUUM_RESOLVED is a mode (the answer, flagged unless it passes both
+#: tests there); one whose tail has not fallen by STALL_FALL over three rungs while at a
+#: band's level (BAND_TAIL) is not; the others are not decided (the answer flagged).
+SUSPECT_TAIL = 1e-4
+SUSPECTS = 2
+BEYOND = 2.0
+BEYOND_MAX = 512
+STALL_FALL = 0.2
+#: ... and only one whose tail is below SUSPECT_ALONE × every other unresolved eigenvalue's
+#: above the answer (outside the continuum's radius) is a suspect: the mode above has
+#: 7.8e-5 against 2.9e-4 (0.27), the suspect of BAND_TAIL 6.2e-5 against 1.5e-4 (0.41),
+#: while at P1, (k_x, k_z) = (0.002, 0.02), N = 156 four members of one band have 6.5e-5,
+#: 6.8e-5, 8.4e-5, 9.0e-5 (0.95): followed, they stall (not modes) at a cost of 2.7 s, which
+#: made the question 5.0 s instead of 2.2 (benchmarks/bench_oblique.py).
+SUSPECT_ALONE = 0.5
 #: A suspect that stalls with its tail below BAND_TAIL is below every band member measured
 #: (8.8e-5 … 5.4e-4 at N = 367 above) and not decided: θ = 20.575°, ν0(0) = 0.041,
 #: φ = 0.0748, Φ = 0.452 at (0.004504, 0.107621) (try_random_points seed 663316), from
@@ -855,19 +868,7 @@ def search_above(
 #: 6.8e-6, 5.0e-6, 2.7e-6 at N = 148 … 512 (×0.4 … 0.5 over three rungs, a band's fall)
 #: while the eigenvalue moves by 1.4e-3 … 7e-3 a rung (dense QZ −0.12706 − 0.04797i at
 #: N = 250, −0.12817 − 0.04924i at 350): the answer −0.167924 − 0.260349i is flagged.
-SUSPECT_TAIL = 1e-4
-#: ... and only one whose tail is below SUSPECT_ALONE × every other unresolved eigenvalue's
-#: above the answer (outside the continuum's radius) is followed: the mode above has 7.8e-5
-#: against 2.9e-4 (0.27), the suspect of BAND_TAIL 6.2e-5 against 1.5e-4 (0.41), while at
-#: P1, (k_x, k_z) = (0.002, 0.02), N = 156 four members of one band have 6.5e-5, 6.8e-5,
-#: 8.4e-5, 9.0e-5 (0.95): followed, they stall (not modes) at a cost of 2.7 s, which made
-#: the question 5.0 s instead of 2.2 (benchmarks/bench_oblique.py).
-SUSPECT_ALONE = 0.5
 BAND_TAIL = 1e-5
-SUSPECTS = 2
-BEYOND = 2.0
-BEYOND_MAX = 512
-STALL_FALL = 0.2
 
 
 def beyond_the_ladder(
