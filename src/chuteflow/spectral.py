@@ -420,3 +420,18 @@ def fd_matrices(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         idx3 = idx[:3] if j == 0 else idx[1:]
         D[j, idx3] = fd_weights(y[j], y[idx3], 1)[1]
     return D, D2
+
+
+def fourier_resample(f: np.ndarray, n: int) -> np.ndarray:
+    """Periodic samples (…, n_old) trigonometrically interpolated onto ``n`` equispaced points
+    along the last axis (the Fourier modes a grid of ``n`` points holds; the Nyquist mode of
+    an even grid split between ±n_old/2)."""
+    f = np.asarray(f, dtype=float)
+    n_old = f.shape[-1]
+    F = np.fft.rfft(f, axis=-1) / n_old
+    if n_old % 2 == 0:
+        F[..., -1] *= 0.5  # the Nyquist mode is shared by ±n_old/2 on the finer grid
+    G = np.zeros((*f.shape[:-1], n // 2 + 1), dtype=complex)
+    m = min(F.shape[-1], G.shape[-1])
+    G[..., :m] = F[..., :m]
+    return np.fft.irfft(G * n, n=n, axis=-1)

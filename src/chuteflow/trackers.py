@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ParameterError
+from .spectral import fourier_resample
 
 __all__ = [
     "Tracker",
@@ -481,8 +482,8 @@ def wave_measures(
 
     Returns ``rho_min_rel``, ``rho_max_rel`` (min and max of ρ̄ over its mean, minus 1, at the
     end; of the trigonometric interpolant of the samples on :data:`EXTREMA_POINTS` points
-    where they are fewer), ``amplitude_rel`` (their difference), ``wavelength`` (L over the number of the
-    dominant Fourier mode of ρ̄ at the end), ``wave_speed`` (lab speed of that mode's phase
+    where they are fewer), ``amplitude_rel`` (their difference), ``wavelength`` (L over the
+    number of the dominant Fourier mode of ρ̄ at the end), ``wave_speed`` (lab speed of that mode's phase
     over the last window of the run), ``amplitude_growth`` (d ln A/dt of the amplitude
     A = ``amplitude_rel`` over that window, least squares: the linear growth rate Re α of the
     dominant mode in the linear phase, → 0 as the wave saturates; how fast a run that ended
@@ -517,10 +518,7 @@ def wave_measures(
     if rho.shape[1] < EXTREMA_POINTS:
         # the extrema of the trigonometric interpolant, not of the samples: on a coarse
         # grid (8 points at nx = 5) the samples miss the crest by up to 1 − cos(π/8) = 8 %
-        half = spec.copy()
-        if rho.shape[1] % 2 == 0:
-            half[:, -1] *= 0.5  # (the Nyquist term of an even grid, split between ±N/2)
-        rho = np.fft.irfft(half, n=EXTREMA_POINTS, axis=1) * (EXTREMA_POINTS / rho.shape[1])
+        rho = fourier_resample(rho, EXTREMA_POINTS)
     mean = rho.mean(axis=1)
     amp = (rho.max(axis=1) - rho.min(axis=1)) / mean
     out["rho_min_rel"] = float(rho[-1].min() / mean[-1] - 1.0)

@@ -523,9 +523,10 @@ def test_a_run_refined_in_y_resumes_exactly(tmp_path, p1):
 
 
 def test_resample_is_trigonometric_interpolation():
-    """_resample: a trigonometric polynomial of degree 3 sampled on 7 (odd) or 8 (even, with its
+    """spectral.fourier_resample (the refined grid's records, the wave map's shapes, the wave's
+    extrema): a trigonometric polynomial of degree 3 sampled on 7 (odd) or 8 (even, with its
     Nyquist term) points is reproduced exactly on 13 points."""
-    from chuteflow.dns.simulation import _resample
+    from chuteflow.spectral import fourier_resample as _resample
 
     def f(x):
         return 1.0 + 0.3 * np.cos(x) - 0.2 * np.sin(2 * x) + 0.1 * np.cos(3 * x + 0.4)

@@ -26,6 +26,7 @@ import xarray as xr
 
 from .._files import atomic_write
 from ..errors import ConvergenceError, ParameterError
+from ..spectral import fourier_resample
 from ..stability import OperatorCache, least_stable
 from ..steady import SteadyFlow, steady_tangent
 from ..trackers import WavePolicy, run_tail
@@ -92,19 +93,6 @@ def _pad_modes(C: np.ndarray, modes: int) -> np.ndarray:
     out = np.zeros((*C.shape[:-1], modes + 1), dtype=C.dtype)
     out[..., : C.shape[-1]] = C
     return out
-
-
-def _resample(f: np.ndarray, n: int) -> np.ndarray:
-    """Periodic samples (…, n_old) of a record trigonometrically interpolated onto ``n`` points."""
-    f = np.asarray(f, dtype=float)
-    n_old = f.shape[-1]
-    F = np.fft.rfft(f, axis=-1) / n_old
-    if n_old % 2 == 0:
-        F[..., -1] *= 0.5  # the Nyquist mode is shared by ±n_old/2 on the finer grid
-    G = np.zeros((*f.shape[:-1], n // 2 + 1), dtype=complex)
-    m = min(F.shape[-1], G.shape[-1])
-    G[..., :m] = F[..., :m]
-    return np.fft.irfft(G * n, n=n, axis=-1)
 
 
 @dataclass
@@ -501,7 +489,7 @@ class DnsSimulation:
         if direction == "x":
             state.C_init = _pad_modes(state.C_init, modes)
             for k in ("rho", "Q", "snaps"):
-                r[k] = [_resample(v, new.nxp) for v in r[k]]
+                r[k] = [fourier_resample(v, new.nxp) for v in r[k]]
         else:
             state.C_init = _to_nodes(state.C_init, old.grid, new.grid, axis=1)
             r["snaps"] = [_to_nodes(v, old.grid, new.grid, axis=1) for v in r["snaps"]]

@@ -30,8 +30,9 @@ import xarray as xr
 
 from ..closures import ChuteModel
 from ..errors import ParameterError
+from ..spectral import fourier_resample
 from ..trackers import WallTimeStop
-from .simulation import MAX_MODES, MAX_N, _resample, ceiling
+from .simulation import MAX_MODES, MAX_N, ceiling
 from .stepper import NewtonSettings, step_settings
 
 __all__ = ["WaveMapSettings", "map_waves", "WAVE_KEYS"]
@@ -327,7 +328,7 @@ def map_waves(
     # runs whose grids refined differently: the shapes on the finest grid among them
     n_phase = max(len(r["shape"]) for r in ordered)
     shapes = np.array(
-        [r["shape"] if len(r["shape"]) == n_phase else _resample(r["shape"], n_phase) for r in ordered]
+        [r["shape"] if len(r["shape"]) == n_phase else fourier_resample(r["shape"], n_phase) for r in ordered]
     )
     data["shape"] = (("point", "phase"), shapes, {"long_name": "ρ̄/⟨ρ̄⟩ − 1"})
     return xr.Dataset(

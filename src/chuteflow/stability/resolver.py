@@ -801,13 +801,16 @@ def search_above(
     screened = search.n
     while found is not None and found.physical and found.n > SCREEN_REPEAT * screened:
         n2 = found.n
-        finer = dataclasses.replace(
-            policy,
-            search=dataclasses.replace(search, n=n2, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER),
-        )
         suspects: list = []
         found = _search_once(
-            flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2], suspects=suspects
+            flow,
+            kx,
+            kz,
+            found,
+            _repeated(policy, n2),
+            cache,
+            [r for r in rungs if r >= n2] or [n2],
+            suspects=suspects,
         )
         screened = n2
         if found is not None and found.physical and suspects:
@@ -820,11 +823,9 @@ def search_above(
         # (SCREEN_REPEAT)
         n2 = next((r for r in rungs if r >= SCREEN_REPEAT * found.n), rungs[-1])
         if n2 > found.n:
-            finer = dataclasses.replace(
-                policy,
-                search=dataclasses.replace(search, n=n2, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER),
+            again = _search_once(
+                flow, kx, kz, found, _repeated(policy, n2), cache, [r for r in rungs if r >= n2]
             )
-            again = _search_once(flow, kx, kz, found, finer, cache, [r for r in rungs if r >= n2] or [n2])
             if again is not None and again.alpha.real > found.alpha.real + max(found.drift, again.drift):
                 return again
     return found
@@ -944,6 +945,13 @@ def _follow_beyond(flow, kx, kz, a, v, t, n_from, policy, cache, reach) -> tuple
     if mode is not None:
         return "mode", mode
     return "undecided", last
+
+
+def _repeated(policy: RejectionPolicy, n: int) -> RejectionPolicy:
+    """The policy of the screen repeated at N = ``n`` (:data:`SCREEN_REPEAT`): candidates are
+    the eigenvalues whose tail there is below tail_tol^SCREEN_TAIL_POWER."""
+    search = dataclasses.replace(policy.search, n=n, candidate_tail=policy.tail_tol**SCREEN_TAIL_POWER)
+    return dataclasses.replace(policy, search=search)
 
 
 def _search_once(
