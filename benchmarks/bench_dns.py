@@ -27,12 +27,19 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
   note has GMRES per step and the end states' distance (docs/dns.md, *Finite differences in
   y*).
 - ``dns_coupled_apply``: one application of the mode-coupled preconditioner
-  (:class:`~chuteflow.dns.CoupledPreconditioner`) at P1, L = 1000, nx = 41, N = 80 (the grid
-  of the 3-minute target) at a ±20 % wave, averaged over 100: the couplings applied from
-  their factors (two products with S_m⁻¹ per mode) against the baseline of the same
+  (:class:`~chuteflow.dns.CoupledPreconditioner`) at P1, L = 1000, nx = 41, N = 80 (the
+  grid of the 3-minute target) at a ±20 % wave, averaged over 100: the couplings applied
+  from their factors (two products with S_m⁻¹ per mode) against the baseline of the same
   elimination with the couplings as dense blocks (S_m⁻¹, K_m = S_m⁻¹ L_m and
-  W_m = U_{m−1} S_m⁻¹: three dense products per mode, as before 2026-12-07) in the same run;
-  the note has the distance of the two corrections.
+  W_m = U_{m−1} S_m⁻¹: three dense products per mode, as before 2026-12-07) in the same
+  run; the note has the distance of the two corrections.
+- ``dns_coupled_build``: one build of the same preconditioner (coefficients, harmonics,
+  elimination) with U_m S_m⁻¹ L_m from the couplings' factors (real products with the
+  Chebyshev matrices) against the baseline of the dense elimination as before 2026-12-07
+  (U_m, D_m, L_m assembled dense, :func:`~chuteflow.dns.coupled.coupled_blocks`; S_m⁻¹ L_m
+  and U_m (S_m⁻¹ L_m) as complex products), averaged over 2; the note has the distance of
+  the S_m⁻¹. On a finer grid than the other rows: P1, L = 2000, nx = 129, N = 96 (ln ν
+  perturbed by 0.25 in mode 1), the grid P5's bore is refined through.
 - ``dns_residual_padding``: one residual evaluation at the same ±20 % wave and grid (41 × 80)
   on the default padded x grid (:func:`~chuteflow.dns.discretisation.padded_points`: 64
   points) against the baseline of 3M + 1 = 61 points (a prime FFT length, the default before
@@ -136,7 +143,7 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     rows.append(_columns_row(model))
-    rows.append(_coupled_apply_row(model))
+    rows.extend(_coupled_rows(model))
     rows.append(_padding_row(model))
     if not quick:
         kw = dict(time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
@@ -246,24 +253,41 @@ def _columns_row(model) -> dict:
     }
 
 
-def _coupled_apply_row(model) -> dict:
-    """``dns_coupled_apply`` (module docstring)."""
+def _coupled_rows(model) -> list[dict]:
+    """``dns_coupled_apply`` and ``dns_coupled_build`` (module docstring)."""
     import numpy as np
 
     from chuteflow.dns import CoupledPreconditioner, Stepper
     from chuteflow.dns.columns import jet_coefficients
-    from chuteflow.dns.coupled import coupled_blocks
+    from chuteflow.dns.coupled import _dense, coupled_blocks, coupling_factors
     from chuteflow.dns.discretisation import BDF2
 
     d, C = _p1_wave(model, 1000.0, 80, 20, {1: 0.2 * (1 + 0.5j)})
     st = Stepper(d)
     hist = (st.physical(C), st.physical(C))
     P = CoupledPreconditioner.build(d, C, hist, 4.0, BDF2)
-    # the plain baseline: the same elimination with U_m dense, W_m = U_m S_{m+1}⁻¹ stored
+    # the plain baselines: the same elimination from the dense blocks, U_m dense,
+    # W_m = U_m S_{m+1}⁻¹ and K_m = S_m⁻¹ L_m stored (as before 2026-12-07)
     B = coupled_blocks(d, jet_coefficients(d, C, hist, 4.0, BDF2), np.arange(d.modes + 1), 1)
     M, size = d.modes, 4 * (d.n + 1)
     W = [None] + [B[m - 1, 0] @ P._sinv[m] for m in range(1, M + 1)]
     K = [None] + [P._sinv[m] @ B[m, 2] for m in range(1, M + 1)]
+
+    def dense_build(d, C, hist):
+        # as before 2026-12-07: the three blocks of every mode assembled dense in one einsum
+        M, mm = d.modes, d.n + 1
+        E = coupling_factors(d, jet_coefficients(d, C, hist, 4.0, BDF2), np.arange(M + 1), 1)
+        dy = np.stack((np.eye(mm), d.grid.D, d.grid.D2))
+        Bd = np.einsum("iqfcrj,cjl->iqrjfl", E, dy).reshape(M + 1, 3, 4 * mm, 4 * mm)
+        Bd[:, 1] = [_dense(d, E[m, 1], m) for m in range(M + 1)]  # (the top conditions)
+        sinv = [None] * (M + 1)
+        S = Bd[M, 1]
+        for m in range(M, 0, -1):
+            sinv[m] = np.linalg.inv(S)
+            UK = Bd[m - 1, 0] @ (sinv[m] @ Bd[m, 2])
+            S = Bd[m - 1, 1] - UK
+        sinv[0] = np.linalg.inv(Bd[0, 1].real - 2.0 * UK.real)
+        return sinv
 
     def plain(R):
         r = R.reshape(size, M + 1).T
@@ -285,15 +309,35 @@ def _coupled_apply_row(model) -> dict:
     for name, fn in (("factored", P.apply), ("plain", plain)):
         times[name] = _per_call(lambda fn=fn: fn(R), 100)
     (t_f, x_f), (t_p, x_p) = times["factored"], times["plain"]
-    return {
-        "name": "dns_coupled_apply",
-        "seconds": t_f,
-        "baseline_seconds": t_p,
-        "ratio": t_p / t_f,
-        "note": f"one application at 41 × 80 (M = 20, blocks {size} square), ±20 % wave: "
-        f"{1e3 * t_f:.2f} ms against {1e3 * t_p:.2f} ms with the couplings as dense blocks; "
-        f"corrections {np.abs(x_f - x_p).max() / np.abs(x_p).max():.1e} apart (relative)",
-    }
+    # the build on a finer grid (129 × 96, L = 2000: where P5's bore is refined to), where the
+    # dense blocks' assembly and products weigh more
+    d, C = _p1_wave(model, 2000.0, 96, 64, {1: 0.25 * (1 + 0.5j)})
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    t_b, P_b = _per_call(lambda: CoupledPreconditioner.build(d, C, hist, 4.0, BDF2), 2)
+    t_d, sinv_d = _per_call(lambda: dense_build(d, C, hist), 2)
+    build_diff = max(np.abs(a - b).max() / np.abs(b).max() for a, b in zip(P_b._sinv, sinv_d))
+    grid = f"at 41 × 80 (M = 20, blocks {size} square), ±20 % wave"
+    return [
+        {
+            "name": "dns_coupled_apply",
+            "seconds": t_f,
+            "baseline_seconds": t_p,
+            "ratio": t_p / t_f,
+            "note": f"one application {grid}: {1e3 * t_f:.2f} ms against "
+            f"{1e3 * t_p:.2f} ms with the couplings as dense blocks; corrections "
+            f"{np.abs(x_f - x_p).max() / np.abs(x_p).max():.1e} apart (relative)",
+        },
+        {
+            "name": "dns_coupled_build",
+            "seconds": t_b,
+            "baseline_seconds": t_d,
+            "ratio": t_d / t_b,
+            "note": f"one build at 129 × 96 (M = 64, L = 2000), ±25 % wave: U S⁻¹ L from the couplings' "
+            f"factors {t_b:.2f} s against the three dense blocks per mode and their products "
+            f"{t_d:.2f} s; S_m⁻¹ {build_diff:.1e} apart",
+        },
+    ]
 
 
 if __name__ == "__main__":

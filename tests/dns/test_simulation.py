@@ -32,6 +32,7 @@ from chuteflow.trackers import (
     SaturationStop,
     SnapshotTracker,
     Tracker,
+    run_tail,
     wave_measures,
 )
 
@@ -389,6 +390,11 @@ def test_a_refining_run_stays_resolved_and_matches_the_fine_grid(p1):
     assert coarse.attrs["x_tail_end"] > 0.3
     assert a["x_tail_end"] < 1e-3
     assert a["x_tail_end"] == pytest.approx(fine.attrs["x_tail_end"], rel=0.3)
+    # the run's tail is that of the grid it ends on (the monitor's series after the last
+    # refinement, t > 40): the M = 2 and M = 4 records before carry their own grids' tails
+    tails, t = ds["x_tail"].values, ds["time"].values
+    assert a["x_tail"] == run_tail(tails[t > 40])
+    assert a["x_tail"] < 1e-3 < run_tail(tails)
     err = np.abs(ds["rho_bar"].values[-1] - fine["rho_bar"].values[-1]).max() / float(p1.rho_bar)
     assert err < 3e-4
     assert a["mass_drift"] < 1e-13

@@ -81,6 +81,23 @@ def _refined_at(records: dict, setup: DnsSetup) -> str:
     return ", ".join(out)
 
 
+def _on_last_grid(records: dict, setup: DnsSetup, direction: str) -> int:
+    """Index of the first record on the grid the run ends on in ``direction`` (``"x"``: the
+    Fourier modes, ``"y"``: the Chebyshev intervals): the first after the last refinement
+    that way, 0 if there was none. The tails recorded before it are the coarser grid's, to
+    which the refinement answered (:meth:`ResolutionMonitor.refined` starts that direction's
+    series anew there)."""
+    last, m0, n0 = None, setup.modes, setup.n
+    for t, m, n in zip(records["refine_t"], records["refine_modes"], _refine_n(records, setup.n)):
+        if (m != m0) if direction == "x" else (n != n0):
+            last = t
+        m0, n0 = int(m), int(n)
+    if last is None:
+        return 0
+    after = np.nonzero(np.asarray(records["t"], dtype=float) > last)[0]
+    return int(after[0]) if after.size else len(records["t"]) - 1
+
+
 def _to_nodes(f: np.ndarray, old, new, axis: int) -> np.ndarray:
     """Values at the nodes of ChebyshevGrid ``old`` along ``axis`` → the same polynomial at
     the nodes of ``new`` (the same interval, more nodes: exact)."""
@@ -787,8 +804,9 @@ class DnsSimulation:
             "mode_phase_velocity": float(mode.wave_speed),
             "rho_bar0": flow.rho_bar,
             "Q0": flow.Q,
-            "x_tail": run_tail(x_tail),
-            "y_tail": run_tail(y_tail),
+            # the run's tails on the grid it ends on (the monitor's series, run_tail)
+            "x_tail": run_tail(x_tail[_on_last_grid(r, setup, "x") :]),
+            "y_tail": run_tail(y_tail[_on_last_grid(r, setup, "y") :]),
             "x_tail_end": float(x_tail[-1]) if x_tail.size else 0.0,
             "y_tail_end": float(y_tail[-1]) if y_tail.size else 0.0,
             "steady_relaxation": self.relax_change,
