@@ -134,6 +134,35 @@ def test_coupled_falls_back_to_columns_where_fresh_blocks_do_not_serve(p1):
     assert not st.columns
 
 
+def test_coupled_returns_from_columns_that_serve_worse(p1):
+    """The rule of ``Stepper._escalation`` between the coupled blocks and the columns, by the
+    GMRES iterations of the first solve after each build (at P5's steepening bore, L = 2000,
+    257 × 96, Δt = 8, measured 77 a step with the coupled blocks against 259 … 286 with the
+    columns, docs/dns.md): fresh coupled blocks above ``switch_krylov`` go over to the
+    columns; fresh columns that need more than those coupled blocks did go back; and the
+    coupled blocks go to the columns again only once they need more than the columns did."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
+    st = Stepper(d, NewtonSettings(preconditioner="coupled", coupled_krylov=0))
+    st.switch_dt = 4.0
+
+    def fresh(kind):
+        st.kind, st._age, st._base_krylov = kind, 1, None
+
+    fresh("coupled")
+    assert st._escalation(40, 4.0) is None  # below switch_krylov = 60
+    assert st._escalation(77, 8.0) is None  # Δt above the run's: no columns
+    assert st._escalation(77, 4.0) == "columns"
+    fresh("columns")
+    assert st._escalation(70, 4.0) is None  # better than the coupled blocks' 77: kept
+    assert st._escalation(270, 4.0) == "coupled"
+    fresh("coupled")
+    assert st._escalation(77, 4.0) is None  # the columns needed 270
+    assert st._escalation(300, 4.0) == "columns"
+    st._age = 5  # not fresh: no switch either way
+    st.kind = "columns"
+    assert st._escalation(1000, 4.0) is None
+
+
 def test_cli_preconditioner_coupled():
     """``chuteflow dns --preconditioner coupled`` runs from noise with the step control and
     conserves mass as the default does; an unknown name is a one-line error."""

@@ -507,6 +507,9 @@ def test_a_run_refining_in_y_is_closer_to_the_fine_grid(p1):
     assert err(coarse) > 4e-5
     assert err(ds) < 2.5e-5
     assert a["y_tail_end"] < 6e-5 < coarse.attrs["y_tail_end"]
+    # the run's y tail is the N = 64 grid's (the records after the refinement at t = 4)
+    t = ds["time"].values
+    assert a["y_tail"] == run_tail(ds["y_tail"].values[t > 4]) < run_tail(ds["y_tail"].values)
     assert a["mass_drift"] < 1e-13
 
 

@@ -81,8 +81,12 @@ class NewtonSettings:
         the seconds per application (docs/dns.md, *Where a nonlinear step's time goes*);
         where even freshly built coupled blocks leave one GMRES solve above
         ``switch_krylov`` iterations (at Δt ≤ the run's Δt under the step control), the
-        columns from then on: at a ±40 … 80 % wave the first harmonics miss 30 % of the
-        coefficients and Newton with the coupled blocks alone does not converge.
+        columns: at a ±40 … 80 % wave the first harmonics miss 30 % of the coefficients and
+        Newton with the coupled blocks alone does not converge. Where the freshly built
+        columns need more iterations than the coupled blocks they replaced, back to these,
+        and to the columns again only once fresh coupled blocks need more than the columns
+        did (at P5's steepening bore, L = 2000, 257 × 96, Δt = 8: 77 GMRES iterations a
+        step with the coupled blocks, 259 … 286 with the columns).
     coupled_krylov : int
         GMRES iterations of one solve that make ``"coupled"`` leave the x-mean blocks (at any
         Δt: the coupled build costs about three x-mean builds); 0: the coupled blocks from
@@ -249,6 +253,10 @@ class Stepper:
         #: ``"auto"`` switches to the columns only at steps Δt ≤ this (set by the step
         #: control of :class:`~chuteflow.dns.DnsSimulation` to the run's Δt).
         self.switch_dt = math.inf
+        #: GMRES iterations of the first solve after the last build of the coupled blocks
+        #: and of the columns where ``"coupled"`` went from one to the other
+        #: (:meth:`_escalation`).
+        self.fresh_krylov: dict[str, int] = {}
 
     @property
     def columns_fit(self) -> bool:
@@ -293,7 +301,14 @@ class Stepper:
         fresh = self._age <= 1 and self._base_krylov is None
         # (where the columns do not fit, the coupled blocks are already the last resort)
         if self.kind == "coupled" and fresh and krylov > s.switch_krylov and at_run_dt and self.columns_fit:
+            if krylov <= self.fresh_krylov.get("columns", 0):
+                return None  # the columns needed more when last built
+            self.fresh_krylov["coupled"] = krylov
             return "columns"
+        if self.kind == "columns" and fresh and krylov > self.fresh_krylov.get("coupled", math.inf):
+            # the columns serve worse than the coupled blocks they replaced: back to these
+            self.fresh_krylov["columns"] = krylov
+            return "coupled"
         return None
 
     def reset(self) -> None:
