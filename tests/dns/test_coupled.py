@@ -18,6 +18,7 @@ from chuteflow.dns.columns import jet_coefficients
 from chuteflow.dns.coupled import CoupledPreconditioner, coupled_blocks, coupled_matrix
 from chuteflow.dns.discretisation import BDF2
 from chuteflow.dns.stepper import NewtonSettings
+from chuteflow.errors import ConvergenceError
 from chuteflow.steady import solve_steady
 
 from .test_columns import _steady, _wave
@@ -139,8 +140,9 @@ def test_coupled_returns_from_columns_that_serve_worse(p1):
     GMRES iterations of the first solve after each build (at P5's steepening bore, L = 2000,
     257 × 96, Δt = 8, measured 77 a step with the coupled blocks against 259 … 286 with the
     columns, docs/dns.md): fresh coupled blocks above ``switch_krylov`` go over to the
-    columns; fresh columns that need more than those coupled blocks did go back; and the
-    coupled blocks go to the columns again only once they need more than the columns did."""
+    columns; fresh columns that need more than those coupled blocks did go back; the
+    coupled blocks go to the columns again only once they need more than the columns did;
+    and a step whose Newton solve fails forgets the comparison."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)
     st = Stepper(d, NewtonSettings(preconditioner="coupled", coupled_krylov=0))
     st.switch_dt = 4.0
@@ -161,6 +163,14 @@ def test_coupled_returns_from_columns_that_serve_worse(p1):
     st._age = 5  # not fresh: no switch either way
     st.kind = "columns"
     assert st._escalation(1000, 4.0) is None
+    # a failed Newton solve forgets the comparison (the coupled blocks may not converge)
+    st = Stepper(d, NewtonSettings(preconditioner="coupled", coupled_krylov=0, max_iter=1))
+    st.fresh_krylov["columns"] = 270
+    C = _wave(d, p1, 0.1)
+    hist = (st.physical(C), st.physical(C))
+    with pytest.raises(ConvergenceError, match="Newton residual"):
+        st.step(C, hist, 64.0, first=True)
+    assert st.fresh_krylov == {}
 
 
 def test_cli_preconditioner_coupled():

@@ -471,6 +471,7 @@ class Stepper:
         if rn < s.floor_atol:  # at atol, or at the round-off floor below floor_atol
             return self._conserve(d.unpack(z), history, bdf), StepInfo(s.max_iter, krylov, rn)
         self._lus = None
+        self.fresh_krylov.clear()  # (what served before is no guide where Newton failed)
         raise ConvergenceError(
             f"implicit step (Δt = {dt:g}): Newton residual {rn:.2e} after {s.max_iter} iterations"
         )
