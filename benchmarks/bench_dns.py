@@ -44,6 +44,12 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
   on the default padded x grid (:func:`~chuteflow.dns.discretisation.padded_points`: 64
   points) against the baseline of 3M + 1 = 61 points (a prime FFT length, the default before
   2026-12-07) in the same run, averaged over 200; the note has the residuals' distance.
+- ``dns_newton_rtol``: P1, L = 1000 from noise (amplitude 1e-3) to saturation (2 %) at
+  nx = 33, N = 48 with ``"coupled"`` and the step control (``dt_tol`` = 1e-3): Newton stopped
+  at 1e-3 of its guess's residual (``NewtonSettings.newton_rtol``, the default) against the
+  baseline of ``newton_rtol = 0`` (every step to ``atol`` = 1e-10, as before 2026-12-07) in
+  the same run; the note has the steps, GMRES per step and how far the two waves' ρ̄ ranges
+  are apart (docs/dns.md, *Newton's tolerance relative to the step*).
 - ``dns_step_L1000_nonlinear`` (full mode): the same grid over 50 steps from the eigenmode at
   amplitude 0.2 (ρ̄ within ±6 %, a finite-amplitude start): the nonlinear phase's time per
   step, Newton–Krylov with GMRES. No baseline; the docs compare with the earlier solver.
@@ -145,6 +151,7 @@ def run(quick: bool = False) -> list[dict]:
     rows.append(_columns_row(model))
     rows.extend(_coupled_rows(model))
     rows.append(_padding_row(model))
+    rows.append(_newton_rtol_row(flow))
     if not quick:
         kw = dict(time=800.0, dt=4.0, modes=32, init="noise", amplitude=1e-3, n=80)
         a, t_a = _timed(lambda: simulate(flow, 1000.0, **kw))
@@ -172,6 +179,35 @@ def run(quick: bool = False) -> list[dict]:
             }
         )
     return rows
+
+
+def _newton_rtol_row(flow) -> dict:
+    """``dns_newton_rtol`` (module docstring)."""
+    from chuteflow.dns import NewtonSettings, simulate, summary
+
+    out = {}
+    for rtol in (1e-3, 0.0):
+        settings = NewtonSettings(dt_tol=1e-3, preconditioner="coupled", newton_rtol=rtol)
+        ds, t = _timed(
+            lambda settings=settings: simulate(
+                flow, 1000.0, time=40000.0, dt=4.0, modes=16, n=48, init="noise", amplitude=1e-3,
+                saturation_tol=0.02, settings=settings,
+            )
+        )  # fmt: skip
+        out[rtol] = (t, summary(ds))
+    (t_r, s_r), (t_0, s_0) = out[1e-3], out[0.0]
+    apart = max(abs(s_r["rho_min_rel"] - s_0["rho_min_rel"]), abs(s_r["rho_max_rel"] - s_0["rho_max_rel"]))
+    return {
+        "name": "dns_newton_rtol",
+        "seconds": t_r,
+        "baseline_seconds": t_0,
+        "ratio": t_0 / t_r,
+        "note": f"33 × 48 from noise to {s_r['verdict']} at t = {s_r['time_end']:.0f}: "
+        f"{s_r['steps']} steps, GMRES {s_r['krylov_mean']:.1f}/step with newton_rtol = 1e-3 against "
+        f"{s_0['steps']} steps, {s_0['krylov_mean']:.1f}/step to atol alone (baseline); "
+        f"ρ̄ {100 * s_r['rho_min_rel']:+.3f} … {100 * s_r['rho_max_rel']:+.3f} %, the ranges "
+        f"{apart:.1e} apart; mass drift {s_r['mass_drift']:.1e}",
+    }
 
 
 def _p1_wave(model, length: float, n: int, modes: int, lnnu: dict[int, complex]):

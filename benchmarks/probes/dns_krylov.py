@@ -22,6 +22,11 @@ tolerance), and before them how far the coefficients of the Jacobian are from th
 R x-harmonics (R = 1: the coupled preconditioner). The machine is shared: compare the
 seconds only within one run.
 
+``--newton-rtol R1,R2,…`` (with ``--state``): each variant once per value of
+:attr:`~chuteflow.dns.NewtonSettings.newton_rtol` (Newton's tolerance relative to the
+residual of the extrapolated guess; 0: ``atol`` alone), the first the reference of
+``max_dC_vs_first`` (docs/dns.md, *Newton's tolerance relative to the step*).
+
 ``--span T`` (with ``--state``): instead of the fixed steps, continue the state for T time
 units with the step control (``dt_tol`` = 1e-3, as the run that made it) once per variant
 (``coupled`` and ``coupled_chebyshev`` there go over to the columns as a run does), and print
@@ -51,6 +56,7 @@ from chuteflow._threads import limit_blas_threads
 from chuteflow.closures import ChuteModel
 from chuteflow.dns import DnsSimulation, NewtonSettings, Stepper
 from chuteflow.dns.setup import history_coefficients
+from chuteflow.spectral import fourier_resample
 from chuteflow.steady import solve_steady
 
 VARIANTS = {
@@ -189,6 +195,9 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=4)
     ap.add_argument("--variants", default=None, help="comma-separated names (default: all)")
     ap.add_argument("--span", type=float, default=0.0, help="continue the state this long per variant")
+    ap.add_argument(
+        "--newton-rtol", default=None, help="comma-separated NewtonSettings.newton_rtol, each per variant"
+    )
     args = ap.parse_args(argv)
     limit_blas_threads(1)
     warnings.simplefilter("ignore", RuntimeWarning)
@@ -210,6 +219,8 @@ def main(argv=None):
         C, prev, h_prev, t = ck["C"], tuple(ck["prev"]), float(ck["scalars"][3]), float(ck["scalars"][0])
     with np.load(args.state) as ck:
         dt_run = float(ck["scalars"][2])
+    if prev[0].shape[-1] != sim.disc.nxp:  # a state of an earlier padded grid
+        prev = tuple(fourier_resample(np.array(prev), sim.disc.nxp))
     print(
         f"nx = {args.nx}, ny = {args.ny}, t = {t:.0f}, Δt {dt_run:g} (last {h_prev:g}): {wave(sim, C)}",
         flush=True,
@@ -219,15 +230,18 @@ def main(argv=None):
         span(args, where, names)
         return
     print(harmonics(sim, C, prev, float(args.dt.split(",")[0])), flush=True)
+    rtols = [float(v) for v in args.newton_rtol.split(",")] if args.newton_rtol else [None]
     for dt in (float(v) for v in args.dt.split(",")):
         first = None
-        for name in names:
-            settings = NewtonSettings(**VARIANTS[name])
+        for name, rtol in ((n, r) for n in names for r in rtols):
+            extra = {} if rtol is None else {"newton_rtol": rtol}
+            settings = NewtonSettings(**{**VARIANTS[name], **extra})
             r, cnt, fact, C_end = measure(sim, settings, C, prev, h_prev, dt, args.steps)
             first = C_end if first is None else first
             n = len(r)
             row = {
                 "variant": name,
+                "newton_rtol": settings.newton_rtol,
                 "dt": dt,
                 "gmres_per_step": float(r[:, 2].mean()),
                 "newton_per_step": float(r[:, 1].mean()),

@@ -31,6 +31,7 @@ from chuteflow.dns import (
 from chuteflow.dns.residual import DNS_FIELDS, JETS, evaluate_residuals, jet_name
 from chuteflow.equations import compiled_equations
 from chuteflow.errors import ParameterError
+from chuteflow.spectral import fourier_resample
 from chuteflow.stability import least_stable
 from chuteflow.stability.operator import base_on_grid
 from chuteflow.steady import solve_steady
@@ -218,6 +219,33 @@ def test_checkpoint_resume(tmp_path, p1):
     assert not ck.exists()
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
     assert np.array_equal(ds["time"].values, ref["time"].values)
+
+
+def test_a_checkpoint_of_another_padded_grid_continues(tmp_path, p1):
+    """A checkpoint whose history level lies on a padded grid of another length (the default
+    ``nxp`` changed on 2026-12-07; such a file made the continued run fail on a shape) is
+    continued with that level interpolated onto the run's grid: exact, since it holds only the
+    modes m ≤ M, so the run ends where the uninterrupted one does."""
+    kw = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
+    ref = simulate(p1, 1000.0, **kw)
+    ck = tmp_path / "run.ck.npz"
+
+    class Stop(Exception):
+        pass
+
+    def stop(t, _end):
+        if t > 18:
+            raise Stop
+
+    with pytest.raises(Stop):
+        simulate(p1, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **kw)
+    with np.load(ck) as f:
+        data = dict(f)
+    nxp = data["prev"].shape[-1]
+    data["prev"] = fourier_resample(data["prev"], nxp + 5)  # as an earlier grid wrote it
+    np.savez(ck, **data)
+    ds = simulate(p1, 1000.0, checkpoint=ck, **kw)
+    assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-12)
 
 
 def test_relax_conserves_mass(p1):

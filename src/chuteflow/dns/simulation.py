@@ -143,6 +143,9 @@ class DnsState:
         ``refine_t``, ``refine_modes``, ``refine_n`` when and to how many x modes and
         Chebyshev intervals the grid was refined (:meth:`DnsSimulation.refine`; the records
         and snapshots before are interpolated onto the finer grid).
+    solver : dict of arrays
+        The stepper's :meth:`~chuteflow.dns.Stepper.snapshot` when the state was saved (a
+        resumed run restores it and takes the same steps as the uninterrupted one).
     """
 
     C: np.ndarray = field(repr=False)
@@ -157,6 +160,7 @@ class DnsState:
     wall: float = 0.0
     amplitude: float = 0.0
     records: dict = field(default_factory=dict, repr=False)
+    solver: dict = field(default_factory=dict, repr=False)
 
     RECORDS = (
         "t",
@@ -198,6 +202,8 @@ class DnsState:
         }
         for k, v in self.records.items():
             payload[f"rec_{k}"] = np.array(v)
+        for k, v in self.solver.items():
+            payload[f"solver_{k}"] = np.asarray(v)
         for i, tr in enumerate(trackers):
             for k, v in tr.checkpoint().items():
                 payload[f"tracker{i}_{k}"] = np.asarray(v)
@@ -230,6 +236,7 @@ class DnsState:
                     amplitude=amp,
                     # (a checkpoint from before a record existed has none of it)
                     records={k: list(ck[f"rec_{k}"]) for k in cls.RECORDS if f"rec_{k}" in ck.files},
+                    solver={k[7:]: ck[k] for k in ck.files if k.startswith("solver_")},
                 )
                 names = [str(n) for n in ck["trackers"]]
                 if names == [type(tr).__name__ for tr in trackers]:
@@ -602,6 +609,8 @@ class DnsSimulation:
                 tr.initialize(self, probe, s.time)
             state = DnsState.load(checkpoint, key, trackers) or probe
             self._follow(state)
+            if state.solver:
+                self.stepper.restore(state.solver)
         elif state is None:
             state = self.initial_state()
             for tr in trackers:
@@ -624,6 +633,9 @@ class DnsSimulation:
         dt_lo, dt_hi = s.dt, max(ctl.dt_max or 64.0 * s.dt, s.dt)
         if ctl.dt_tol > 0:
             self.stepper.switch_dt = dt_lo
+        if state.prev is not None and state.prev.shape[-1] != self.disc.nxp:
+            # a checkpoint of an earlier padded grid (the default nxp changed on 2026-12-07)
+            state.prev = fourier_resample(state.prev, self.disc.nxp)
         while state.t < s.time * (1 - 1e-12):
             disc, stepper = self.disc, self.stepper  # (refine replaces them)
             h = min(state.dt, s.time - state.t)
@@ -698,6 +710,7 @@ class DnsSimulation:
             if checkpoint is not None and _time.perf_counter() - last_ck > checkpoint_every:
                 last_ck = _time.perf_counter()
                 state.wall = wall0 + last_ck - start
+                state.solver = self.stepper.snapshot()
                 state.save(checkpoint, key, trackers)
             if stops:
                 stop = stops[0]
@@ -713,6 +726,7 @@ class DnsSimulation:
             tr.finalize(self, state)
         if checkpoint is not None:
             if state.status.startswith(("stopped", "paused")):
+                state.solver = self.stepper.snapshot()
                 state.save(checkpoint, key, trackers)  # the partial run is kept
             elif Path(checkpoint).exists():
                 Path(checkpoint).unlink()
