@@ -100,9 +100,26 @@ def test_cli_dt_tol_takes_fewer_steps_and_rejects_bad_values():
 
 
 def test_newton_rtol_is_checked():
+    """A relative Newton tolerance outside [0, 1) is a one-line error naming it: in the
+    settings, the wave map's settings and both commands."""
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+    from chuteflow.dns import WaveMapSettings
+
     for bad in (-1e-3, 1.0, float("nan")):
         with pytest.raises(ParameterError, match="newton_rtol"):
             NewtonSettings(newton_rtol=bad)
+    with pytest.raises(ParameterError, match="newton_rtol"):
+        WaveMapSettings(newton_rtol=2.0)
+    assert WaveMapSettings(newton_rtol=0.0).newton() == NewtonSettings(newton_rtol=0.0)
+    runner = CliRunner()
+    flow = ["--theta", "16", "--nu0", "0.05", "--length", "1000", "--newton-rtol", "2"]
+    for cmd in (["dns", "--nx", "5", "--ny", "16", "--time", "8"], ["waves", "--nx", "5", "--ny", "16"]):
+        r = runner.invoke(app, [*cmd, *flow])
+        assert r.exit_code == 2, r.output
+        assert "newton_rtol" in r.output
+        assert "Traceback" not in r.output
 
 
 def test_newton_rtol_stops_at_a_fraction_of_the_guess_residual(p1):

@@ -82,6 +82,12 @@ def dns(
         help="Newton–Krylov preconditioner (docs/dns.md): auto, mean, columns or coupled "
         "(neighbouring Fourier modes coupled: fewer GMRES iterations at large amplitude).",
     ),
+    newton_rtol: float | None = typer.Option(
+        None,
+        "--newton-rtol",
+        help="Newton stops at this fraction of its extrapolated guess's residual (docs/dns.md, "
+        "Newton's tolerance relative to the step); default 1e-3, 0: every step to 1e-10.",
+    ),
     wall_limit: float | None = typer.Option(
         None,
         "--wall-limit",
@@ -150,7 +156,7 @@ def dns(
                 resolution_tol=resolution_tol,
                 out=out,
                 progress=progress,
-                settings=step_settings(dt_tol, preconditioner),
+                settings=step_settings(dt_tol, preconditioner, newton_rtol),
                 wall_limit=wall_limit,
             )
     if plot is not None:
@@ -247,6 +253,12 @@ def waves(
         "--preconditioner",
         help="Newton–Krylov preconditioner (docs/dns.md): auto, mean, columns or coupled.",
     ),
+    newton_rtol: float | None = typer.Option(
+        None,
+        "--newton-rtol",
+        help="Newton stops at this fraction of its extrapolated guess's residual (docs/dns.md, "
+        "Newton's tolerance relative to the step); default 1e-3, 0: every step to 1e-10.",
+    ),
     wall_limit: float | None = typer.Option(
         None,
         "--wall-limit",
@@ -320,6 +332,7 @@ def waves(
         saturation_tol=saturation_tol,
         dt_tol=dt_tol,
         preconditioner=preconditioner,
+        newton_rtol=newton_rtol,
         max_modes=None if max_nx is None else (max_nx - 1) // 2,
         max_n=max_ny,
     )

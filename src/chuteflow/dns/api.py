@@ -233,6 +233,7 @@ def summary(ds: xr.Dataset) -> dict:
         "steps",
         "newton_mean",
         "krylov_mean",
+        "newton_rtol",
         "time_per_step",
         "wall_time",
         "status",

@@ -810,6 +810,8 @@ class DnsSimulation:
             "steps": len(newton),
             "newton_mean": float(np.mean(newton)) if newton else 0.0,
             "krylov_mean": float(np.mean(r["krylov"])) if r["krylov"] else 0.0,
+            # what Newton solved each step to (NewtonSettings.newton_rtol; 0: atol alone)
+            "newton_rtol": float(self.stepper.settings.newton_rtol),
             "wall_time": float(state.wall),
             "time_per_step": float(state.wall / max(len(newton), 1)),
             # dQ0/dρ̄0 of the steady family at fixed θ (eq. (B 6), the k → 0 limit of the phase

@@ -20,7 +20,7 @@ its neighbours through the first x-harmonics of the local Jacobian
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
@@ -208,12 +208,16 @@ class NewtonSettings:
         return NX_LIMIT[self.column_y]
 
 
-def step_settings(dt_tol: float = 0.0, preconditioner: str = "auto") -> NewtonSettings | None:
-    """The Newton settings of a run's time-step control and preconditioner, checked; None
-    where both are the defaults (the solver's own settings, a fixed Δt). The one rule behind
-    ``chuteflow dns --dt-tol --preconditioner`` and
-    :meth:`~chuteflow.dns.waves.WaveMapSettings.newton`."""
+def step_settings(
+    dt_tol: float = 0.0, preconditioner: str = "auto", newton_rtol: float | None = None
+) -> NewtonSettings | None:
+    """The Newton settings of a run's time-step control, preconditioner and Newton tolerance
+    relative to the step (None: the default), checked; None where all are the defaults (the
+    solver's own settings, a fixed Δt). The one rule behind ``chuteflow dns --dt-tol
+    --preconditioner --newton-rtol`` and :meth:`~chuteflow.dns.waves.WaveMapSettings.newton`."""
     settings = NewtonSettings(dt_tol=dt_tol, preconditioner=preconditioner)
+    if newton_rtol is not None:
+        settings = replace(settings, newton_rtol=newton_rtol)
     return None if settings == NewtonSettings() else settings
 
 

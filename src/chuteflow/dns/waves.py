@@ -89,6 +89,9 @@ class WaveMapSettings:
     preconditioner : str
         Newton–Krylov preconditioner of the runs
         (:attr:`~chuteflow.dns.stepper.NewtonSettings.preconditioner`, docs/dns.md).
+    newton_rtol : float, optional
+        Newton's tolerance relative to the step
+        (:attr:`~chuteflow.dns.stepper.NewtonSettings.newton_rtol`); None: its default, 1e-3.
     max_modes : int, optional
         Let each run's x grid follow its wave, doubling up to this many modes
         (:meth:`~chuteflow.dns.DnsSimulation.refine`); default: ``modes`` throughout.
@@ -107,6 +110,7 @@ class WaveMapSettings:
     resolution_tol: float = 1e-4
     dt_tol: float = 0.0
     preconditioner: str = "auto"
+    newton_rtol: float | None = None
     max_modes: int | None = None
     max_n: int | None = None
 
@@ -120,12 +124,12 @@ class WaveMapSettings:
         # (the same rule as the simulation's: None keeps the grid)
         ceiling(self.max_modes, self.modes, MAX_MODES, "max_modes", "modes", "x modes")
         ceiling(self.max_n, self.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
-        self.newton()  # checks dt_tol and the preconditioner
+        self.newton()  # checks dt_tol, the preconditioner and newton_rtol
 
     def newton(self) -> NewtonSettings | None:
         """The runs' Newton settings (:func:`~chuteflow.dns.stepper.step_settings`; None:
         the solver's defaults)."""
-        return step_settings(self.dt_tol, self.preconditioner)
+        return step_settings(self.dt_tol, self.preconditioner, self.newton_rtol)
 
 
 def _name(theta: float, nu0: float, length: float, s: WaveMapSettings) -> str:
