@@ -199,11 +199,13 @@ def test_linear_phase_p1_p3(nu0, sign):
     assert s["mass_drift"] < 1e-12
 
 
-def test_checkpoint_resume(tmp_path, p1):
-    """A run interrupted after a checkpoint continues with the same call to the same end."""
-    kw = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
-    ref = simulate(p1, 1000.0, **kw)
-    ck = tmp_path / "run.ck.npz"
+RESUME_RUN = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
+
+
+def _interrupted(p1, ck):
+    """The run of RESUME_RUN (uninterrupted, as the reference) and the same run with a
+    checkpoint at every step, interrupted after t = 18 (the checkpoint left at ``ck``)."""
+    ref = simulate(p1, 1000.0, **RESUME_RUN)
 
     class Stop(Exception):
         pass
@@ -213,9 +215,16 @@ def test_checkpoint_resume(tmp_path, p1):
             raise Stop
 
     with pytest.raises(Stop):
-        simulate(p1, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **kw)
+        simulate(p1, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **RESUME_RUN)
     assert ck.exists()
-    ds = simulate(p1, 1000.0, checkpoint=ck, **kw)
+    return ref
+
+
+def test_checkpoint_resume(tmp_path, p1):
+    """A run interrupted after a checkpoint continues with the same call to the same end."""
+    ck = tmp_path / "run.ck.npz"
+    ref = _interrupted(p1, ck)
+    ds = simulate(p1, 1000.0, checkpoint=ck, **RESUME_RUN)
     assert not ck.exists()
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-13)
     assert np.array_equal(ds["time"].values, ref["time"].values)
@@ -226,25 +235,14 @@ def test_a_checkpoint_of_another_padded_grid_continues(tmp_path, p1):
     ``nxp`` changed on 2026-12-07; such a file made the continued run fail on a shape) is
     continued with that level interpolated onto the run's grid: exact, since it holds only the
     modes m ≤ M, so the run ends where the uninterrupted one does."""
-    kw = dict(time=40.0, dt=4.0, modes=2, init="noise", amplitude=1e-4)
-    ref = simulate(p1, 1000.0, **kw)
     ck = tmp_path / "run.ck.npz"
-
-    class Stop(Exception):
-        pass
-
-    def stop(t, _end):
-        if t > 18:
-            raise Stop
-
-    with pytest.raises(Stop):
-        simulate(p1, 1000.0, checkpoint=ck, checkpoint_every=0.0, progress=stop, **kw)
+    ref = _interrupted(p1, ck)
     with np.load(ck) as f:
         data = dict(f)
     nxp = data["prev"].shape[-1]
     data["prev"] = fourier_resample(data["prev"], nxp + 5)  # as an earlier grid wrote it
     np.savez(ck, **data)
-    ds = simulate(p1, 1000.0, checkpoint=ck, **kw)
+    ds = simulate(p1, 1000.0, checkpoint=ck, **RESUME_RUN)
     assert np.allclose(ds["rho_bar"].values, ref["rho_bar"].values, rtol=0, atol=1e-12)
 
 
