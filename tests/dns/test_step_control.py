@@ -163,3 +163,35 @@ def test_newton_rtol_stops_at_a_fraction_of_the_guess_residual(p1):
     assert out[1e-3][1] < out[0.0][1]
     dist = float(np.abs(out[1e-3][0] - out[0.0][0]).max())
     assert dist <= 2e-3 * out[0.0][2]
+
+
+def test_a_snapshot_restores_the_stepper_it_was_taken_of(p1):
+    """Stepper.snapshot/restore (what a checkpoint keeps of the solver): a stepper with the
+    same settings on the same grid gets the kind, the counters and a preconditioner rebuilt
+    from the same state — its next step equals the original's to round-off; with other
+    settings (a run continued with another preconditioner) the snapshot is ignored."""
+    from chuteflow.dns import Discretisation
+
+    from .test_columns import _wave
+
+    d = Discretisation(16.0, ChuteModel(roughness=0.05), 1000.0, p1.y_max, 16, 4, frame=7.8)
+    C0 = _wave(d, p1, 0.2)
+    settings = NewtonSettings(preconditioner="coupled", coupled_krylov=0)
+    st = Stepper(d, settings)
+    hist = (st.physical(C0), st.physical(C0))
+    C1, _ = st.step(C0, hist, 4.0)  # a BDF2 step: the next one reuses its preconditioner
+    hist = (st.physical(C1), hist[0])
+    snap = st.snapshot()
+    again = Stepper(d, settings)
+    again.restore(snap)
+    assert again.kind == st.kind == "coupled"
+    assert (again._age, again.factorisations) == (st._age, st.factorisations)
+    guess = 2 * C1 - C0
+    a, ia = st.step(C1, hist, 4.0, guess=guess)
+    b, ib = again.step(C1, hist, 4.0, guess=guess)
+    assert ia.krylov == ib.krylov
+    assert np.abs(a - b).max() <= 1e-13 * np.abs(a).max()
+    other = Stepper(d, NewtonSettings(preconditioner="mean"))
+    other.restore(snap)
+    assert other.kind == "mean"
+    assert other.factorisations == 0

@@ -349,6 +349,7 @@ class Stepper:
         a resumed run takes the same steps as the uninterrupted one."""
         fresh = self.fresh_krylov
         out = {
+            "settings": np.array(repr(self.settings)),
             "kind": np.array(self.kind),
             "counters": np.array(
                 [
@@ -367,9 +368,13 @@ class Stepper:
         return out
 
     def restore(self, snap: dict[str, np.ndarray]) -> None:
-        """Return to a :meth:`snapshot` of a stepper on the same grid (the preconditioner
-        rebuilt from the state it was built at); a snapshot of another grid is ignored."""
+        """Return to a :meth:`snapshot` of a stepper on the same grid with the same settings
+        (the preconditioner rebuilt from the state it was built at); a snapshot of another
+        grid, or of other settings (a run continued with another ``--preconditioner``), is
+        ignored: the stepper starts afresh."""
         if "C" in snap and snap["C"].shape != self.disc.shape:
+            return
+        if str(snap.get("settings", "")) != repr(self.settings):
             return
         self.kind = str(snap["kind"])
         self._lus = None
