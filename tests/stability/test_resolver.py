@@ -505,3 +505,31 @@ def test_a_slow_mode_at_a_paper_point_is_the_answer(flows):
     assert m.converged, (m.alpha, m.note)
     assert m.n == 256
     assert abs(m.alpha - (-0.51873938 - 4.66064670j)) < 1e-7, m.alpha
+
+
+def test_a_flagged_answer_says_how_to_go_further():
+    """An answer flagged at the ladder's top (N ≤ 256) says so in its note, with the way on
+    (raise n_max): try_random_points seed 341362, θ 18.269°, ν0(0) 0.0579, φ 0.0853,
+    Φ 0.381, (kx, kz) = (0.001347, 0.006783): drift 1.9e-7 at N = 244 (threshold 1e-7), the
+    note was empty. At N = 300 the same mode passes both tests (drift 9.5e-8, tail 1.6e-8;
+    Re α within 3e-9 of the flagged estimate)."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from chuteflow.cli import app
+
+    args = ["eig", "--theta", "18.269", "--nu0", "0.0579", "--roughness", "0.0853", "--wall-loss", "0.381"]
+    args += ["--kx", "0.001347", "--kz", "0.006783", "--json"]
+    runner = CliRunner()
+    out = []
+    for extra in ([], ["--n", "300"]):
+        r = runner.invoke(app, [*args, *extra])
+        assert r.exit_code == 0, r.output
+        out.append(json.loads(r.stdout.strip().splitlines()[-1]))
+    flagged, fine = out
+    assert not flagged["converged"]
+    assert "raise n_max" in flagged["note"]
+    assert fine["converged"]
+    assert fine["drift"] < 1e-7
+    assert abs(fine["alpha_re"] - flagged["alpha_re"]) < 1e-8

@@ -210,6 +210,13 @@ def least_stable(
                 found = search_above(flow, k, kz, found, policy, cache, rungs)
     elif sigma is None and found is not None:
         found = search_above(flow, k, kz, found, policy, cache, rungs)
+    if found is not None and not found.physical and not strict and not found.note:
+        # the flag says why: the tests' numbers against the thresholds at the ladder's top
+        found = dataclasses.replace(
+            found,
+            note=f"the tests' thresholds not reached up to N = {ns[-1]}: raise n_max (chuteflow eig "
+            "--n) to go further",
+        )
     if found is not None and (found.physical or not strict):
         return found
     what = (
