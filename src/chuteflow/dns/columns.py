@@ -117,7 +117,7 @@ def jet_coefficients(
     prim = disc.primitive_jets(C)
     inflow = ~(prim["v"][-1] > 0)  # the upwind choice at the top, kept while differentiating
     R0 = disc.pointwise_rows(disc.state_jets(prim), history, dt, bdf, inflow)
-    nubar = np.exp(C[0, :, 0].real)
+    nubar = disc.mass_scale(C)
     last = disc.n if disc.top == "transport" else disc.n - 1
     out = {}
     for name, *_ in PRIMITIVE_JETS:
@@ -128,7 +128,26 @@ def jet_coefficients(
         A = (disc.pointwise_rows(disc.state_jets(pert), history, dt, bdf, inflow) - R0) / h
         A[0, 1 : last + 1] /= nubar[1 : last + 1, None]
         out[name] = A
+    if disc.x_map is not None:
+        _to_s_jets(disc, out, last)
     return out
+
+
+def _to_s_jets(disc: Discretisation, out: dict[str, np.ndarray], last: int) -> None:
+    """On a mapped grid (:mod:`chuteflow.dns.xmap`): the coefficients of the x-jets → those of
+    the s-jets the unknowns are differentiated by (f_x = a f_s, f_xx = a² f_ss + b f_s,
+    f_xy = a f_sy: :meth:`Discretisation.map_metric`), and the mass rows times g' as
+    :meth:`Discretisation.residual` weights them. The names stay ``"s_x"``, … (b = 1 is then
+    ∂_s)."""
+    a, b = disc.map_metric()
+    gp = disc.x_weights
+    for f in UNKNOWNS:
+        ax, axx, axy = out[f + "_x"], out[f + "_xx"], out[f + "_xy"]
+        out[f + "_x"] = a * ax + b * axx
+        out[f + "_xx"] = a * a * axx
+        out[f + "_xy"] = a * axy
+    for A in out.values():
+        A[0, 1 : last + 1] *= gp
 
 
 def check_column_y(y: str) -> str:
@@ -180,7 +199,9 @@ def column_matrix(
             blk = W.transpose(2, 0, 1)[..., None] * dy[c][None, None]  # (nx, 4, m, m)
             blocks[o][:, :, fc * m : (fc + 1) * m] += blk.reshape(nx, 4 * m, m)
     # top conditions of u, v, T: Σ coef |k|^p (D^c f)(y_max), |k|^p the circulant of its symbol
+    # (on a mapped grid (1/g') |∂_s|: Discretisation.abs_dx)
     kabs = np.abs(disc.k)
+    a_pts = np.ones(nx) if disc.x_map is None else 1.0 / disc.x_map.dx_ds(np.arange(nx) * hx)
     rows, cols, vals = [], [], []
     for r, f in enumerate(UNKNOWNS[1:], start=1):
         for c, kpow, coef in disc._top_terms[f]:
@@ -193,7 +214,7 @@ def column_matrix(
             ii, kk, jj = np.nonzero(np.ones((nx, nx, m)) * (dtop != 0)[None, None])
             rows.append((ii * 4 + r) * m + m - 1)
             cols.append((kk * 4 + r) * m + jj)
-            vals.append(coef * H[ii, kk] * dtop[jj])
+            vals.append(coef * a_pts[ii] * H[ii, kk] * dtop[jj])
     n_tot = 4 * m * nx
     size = 4 * m
     for o, blk in blocks.items():

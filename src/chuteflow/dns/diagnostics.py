@@ -14,6 +14,7 @@ from .discretisation import Discretisation
 
 __all__ = [
     "bdf2_eigenvalue",
+    "fourier_tail",
     "measure_mode",
     "resolution_tails",
     "wave_measures",
@@ -49,6 +50,25 @@ def measure_mode(t: np.ndarray, amplitude: np.ndarray, k: float) -> dict[str, fl
     return {"growth_rate": float(gr), "omega": float(om), "phase_velocity": float(-om / k) if k else math.nan}
 
 
+def fourier_tail(C: np.ndarray) -> float:
+    """The x tail of :func:`resolution_tails` of coefficients C (fields, nodes, M + 1): for each
+    field the largest |Ĉ_m(y_j)| of the top eighth of the modes m ≥ 1 (at least M) over the
+    largest of all m ≥ 1, the largest over the fields; 0 for M = 0 or a field whose modes
+    m ≥ 1 are below 1e-12 of its mean."""
+    M = C.shape[-1] - 1
+    x_tail = 0.0
+    if M >= 1:
+        a = np.abs(C[:, :, 1:]).max(axis=1)  # (fields, M): the largest over the nodes
+        top = max(1, M // 8)
+        scale = np.abs(C[:, :, 0]).max(axis=1) + 1.0
+        for f in range(C.shape[0]):
+            peak = a[f].max()
+            # a wave at the round-off level (an unperturbed run) has no spectrum to judge
+            if peak > 1e-12 * scale[f]:
+                x_tail = max(x_tail, float(a[f, -top:].max() / peak))
+    return x_tail
+
+
 def resolution_tails(disc: Discretisation, C: np.ndarray) -> dict[str, float]:
     """Amplitude of the highest resolved modes relative to the largest, in x and in y.
 
@@ -60,17 +80,7 @@ def resolution_tails(disc: Discretisation, C: np.ndarray) -> dict[str, float]:
     (at least two) over the largest coefficient; the largest over fields and x. A spectrum
     that has decayed by 1e-4 over the resolved modes has tails ≤ 1e-4.
     """
-    M = disc.modes
-    x_tail = 0.0
-    if M >= 1:
-        a = np.abs(C[:, :, 1:]).max(axis=1)  # (4, M): the largest over the nodes
-        top = max(1, M // 8)
-        scale = np.abs(C[:, :, 0]).max(axis=1) + 1.0
-        for f in range(4):
-            peak = a[f].max()
-            # a wave at the round-off level (an unperturbed run) has no spectrum to judge
-            if peak > 1e-12 * scale[f]:
-                x_tail = max(x_tail, float(a[f, -top:].max() / peak))
+    x_tail = fourier_tail(C)
     phys = np.stack([disc.to_physical(C[f]) for f in range(4)])  # (4, N+1, nxp)
     c = np.abs(chebyshev_coefficients(np.moveaxis(phys, 1, -1)))  # (4, nxp, N+1)
     top = max(2, (disc.n + 1) // 10)

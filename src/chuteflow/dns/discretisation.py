@@ -26,7 +26,8 @@ stability operator's row). Both are the same linear problem up to the O(ν(y_max
 at finite amplitude the constraint over-determines ln ν where the flow leaves the domain
 (docs/dns.md, *The dilute top*).
 
-(a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(ŝ_0(y_j)),
+(a) The mass rows are projected onto the modes first and then divided by ν̄_j = exp(⟨s⟩(y_j))
+(⟨·⟩ the x-average: ŝ_0 on the uniform grid),
 plus a uniform source λ in mode 0 (:meth:`Discretisation.mass_source`), so that the total
 mass is conserved at any amplitude (docs/dns.md, *Mass*).
 """
@@ -44,6 +45,7 @@ from ..closures import ChuteModel
 from ..equations import TOP_OF, compiled_equations
 from ..spectral import ChebyshevGrid
 from .residual import DNS_FIELDS, evaluate_residuals
+from .xmap import TanMap
 
 #: Unknown of each block (s = ln ν).
 UNKNOWNS = ("s", "u", "v", "T")
@@ -93,6 +95,14 @@ class Discretisation:
         Speed c of the frame ξ = x − c t the unknowns move with (velocities stay those in
         the floor's frame): ∂_t at fixed x is ∂_t − c ∂_ξ. With c near the wave speed the
         waves are nearly steady in ξ and BDF2's damping of fast phases (∝ (ωΔt)⁴) is small.
+    x_map : TanMap or None
+        A mapped x (:mod:`chuteflow.dns.xmap`): the Fourier modes are in s, the points of the
+        padded grid at x = g(s_i), x-derivatives by the chain rule, the mass rows and the
+        x-averages weighted by g', and the top conditions' |k| exactly as (1/g') |∂_s| (the
+        tan map is a Möbius map of the circle, under which the Hilbert transform is
+        invariant). None (default): the uniform grid. The residual and the mass are mapped;
+        the preconditioners and :class:`~chuteflow.dns.simulation.DnsSimulation` do not use
+        maps yet (docs/dns.md, *A grid that follows the front*).
     """
 
     theta: float
@@ -104,6 +114,7 @@ class Discretisation:
     nxp: int = 0
     frame: float = 0.0
     top: str = "transport"
+    x_map: TanMap | None = None
     grid: ChebyshevGrid = field(init=False, repr=False)
 
     def __post_init__(self):
@@ -112,6 +123,8 @@ class Discretisation:
         if self.nxp < 3 * self.modes + 1:
             object.__setattr__(self, "nxp", padded_points(self.modes))
         object.__setattr__(self, "grid", ChebyshevGrid(self.n, 0.0, self.y_max))
+        if self.x_map is not None and self.x_map.length != self.length:
+            raise ValueError(f"x_map has period {self.x_map.length}, the discretisation {self.length}")
 
     # -- sizes and packing --------------------------------------------------------------
     @property
@@ -130,9 +143,26 @@ class Discretisation:
         return 2.0 * math.pi * np.arange(self.modes + 1) / self.length
 
     @cached_property
-    def x(self) -> np.ndarray:
-        """Points of the padded x grid."""
+    def s(self) -> np.ndarray:
+        """Points of the padded grid in the computational coordinate (uniform)."""
         return np.arange(self.nxp) * self.length / self.nxp
+
+    @cached_property
+    def x(self) -> np.ndarray:
+        """Points of the padded x grid (x = g(s) with a map)."""
+        return self.s if self.x_map is None else self.x_map.x(self.s)
+
+    @cached_property
+    def x_weights(self) -> np.ndarray:
+        """g'(s_i) on the padded grid, the weights of an x-average over the s points (ones on
+        the uniform grid)."""
+        return np.ones(self.nxp) if self.x_map is None else self.x_map.dx_ds(self.s)
+
+    def x_mean(self, f: np.ndarray) -> np.ndarray:
+        """The x-average (1/L)∫ f dx of values on the padded grid (last axis)."""
+        if self.x_map is None:
+            return f.mean(axis=-1)
+        return (f * self.x_weights).mean(axis=-1)
 
     @cached_property
     def sin_cos(self) -> tuple[float, float]:
@@ -177,6 +207,11 @@ class Discretisation:
         v = self.to_physical(np.stack((C, C * ik, C * ik**2)))  # (x-order, field, y, x)
         dv = D @ v[:2]  # ∂_y of the values and of their x-derivatives
         d2 = D2 @ v[0]
+        if self.x_map is not None:
+            # s-derivatives → x-derivatives: ∂_x = a ∂_s, ∂_xx = a² ∂_ss − (g''/g'³) ∂_s
+            a, b = self.map_metric()
+            v = np.stack((v[0], a * v[1], a * a * v[2] + b * v[1]))
+            dv = np.stack((dv[0], a * dv[1]))
         out = {}
         for i, f in enumerate(UNKNOWNS):
             out[f] = v[0, i]
@@ -225,15 +260,26 @@ class Discretisation:
         else:
             out = self.to_modes(R)
             out[0, 1:] = self._mass_rows(C, R[0], nu, st["T"][-1], history, dt, bdf, top=True)
-        ik = self.k
         top = self._top_terms
         for i, f in enumerate(UNKNOWNS[1:], start=1):
             acc = np.zeros(self.modes + 1, dtype=complex)
             for c, kpow, coef in top[f]:
                 d = C[i, -1] if c == 0 else self._Dtop[c] @ C[i]
-                acc += coef * ik**kpow * d
+                acc += coef * self.abs_dx(d, kpow)
             out[i, -1] = acc
         return out
+
+    def abs_dx(self, c: np.ndarray, power: int = 1) -> np.ndarray:
+        """Coefficients of |∂_x|^power f for f of coefficients ``c`` (…, M + 1): |k_m|^power
+        per mode; with a map (power 0 or 1) (1/g') |∂_s| f, projected — exact, because the
+        tan map is a Möbius map of the circle (a dilation in the Cayley coordinate tan(πs/L)),
+        under which the Hilbert transform H is invariant up to a constant, and
+        |∂_x| = H ∂_x."""
+        if self.x_map is None or power == 0:
+            return self.k**power * c
+        if power != 1:
+            raise NotImplementedError(f"|∂_x|^{power} on a mapped grid")
+        return self.to_modes(self.to_physical(self.k * c) / self.x_weights)
 
     def pointwise_rows(
         self, st: dict, history: tuple, dt: float, bdf=BDF2, inflow: np.ndarray | None = None
@@ -295,7 +341,7 @@ class Discretisation:
         """Interior rows of eq. (2.1), mode by mode, projected before they are scaled.
 
         ``mass`` is the derived residual −(∂_t ν + ∇·(ν u)) at the padded points. Its modes
-        m ≤ M are divided by ν̄_j = exp(ŝ_0(y_j)) only after the projection, so that the
+        m ≤ M are divided by ν̄_j = exp(⟨s⟩_j) only after the projection, so that the
         mode-0 row states ⟨∂_t ν⟩_j = −⟨∇·(νu)⟩_j for the x-mean itself (projecting the
         pointwise mass/ν, the s-equation, does not, and mass drifted ∝ amplitude²). The floor
         and top nodes carry boundary rows instead of eq. (2.1), the x-mean of the pointwise
@@ -304,11 +350,31 @@ class Discretisation:
         these leave, as a uniform relative source λ of the interior mode-0 rows, so that the
         total mass ∫∫ν dx dy (with the tail) changes by the Newton residual only.
         """
-        nubar = np.exp(C[0, :, 0].real)
-        modes = self.to_modes(mass)
+        nubar = self.mass_scale(C)
+        # with a map the rows are g' times eq. (2.1): their mode 0 is the x-average
+        modes = self.to_modes(mass if self.x_map is None else mass * self.x_weights)
         rows = modes / nubar[:, None]
-        rows[1:-1, 0] -= self.mass_source(nubar, modes[:, 0].real, nu, T_top, history, dt, bdf)
+        lam = self.mass_source(nubar, modes[:, 0].real, nu, T_top, history, dt, bdf)
+        if self.x_map is None:
+            rows[1:-1, 0] -= lam
+        else:
+            # the source uniform in x, as on the uniform grid: g' λ ν̄ in every mode
+            rows[1:-1] -= lam * self.to_modes(self.x_weights)
         return rows[1:] if top else rows[1:-1]
+
+    def mass_scale(self, C: np.ndarray) -> np.ndarray:
+        """ν̄_j = exp(⟨s⟩_j), the x-average of ln ν at each node (ŝ_0 on the uniform grid; on
+        a mapped one the s-average is not the x-average), by which the mass rows are divided."""
+        s0 = C[0, :, 0].real if self.x_map is None else self.x_mean(self.to_physical(C[0]))
+        return np.exp(s0)
+
+    def map_metric(self) -> tuple[np.ndarray, np.ndarray]:
+        """(a, b) = (1/g', −g''/g'³) on the padded grid: ∂_x = a ∂_s, ∂_xx = a² ∂_ss + b ∂_s
+        (a = 1, b = 0 on the uniform grid)."""
+        if self.x_map is None:
+            return np.ones(self.nxp), np.zeros(self.nxp)
+        gp = self.x_weights
+        return 1.0 / gp, -np.asarray(self.x_map.d2x_ds2(self.s)) / gp**3
 
     def mass_source(self, nubar, mass0, nu, T_top, history: tuple, dt: float, bdf) -> float:
         """The uniform relative mass source λ of the interior mode-0 mass rows.
@@ -329,8 +395,8 @@ class Discretisation:
         if a2:
             B = B + a2 * history[1][0]
             tau = tau + a2 * history[1][0][-1] * history[1][3][-1]
-        Bm = B.mean(axis=-1) / dt
-        tail_t = float(np.mean(tau)) / (dt * cos)
+        Bm = self.x_mean(B) / dt
+        tail_t = float(self.x_mean(tau)) / (dt * cos)
         D = -mass0 - Bm
         defect = w[0] * Bm[0] + w[-1] * Bm[-1] + tail_t - w[1:-1] @ D[1:-1]
         return float(defect / (w[1:-1] @ nubar[1:-1]))
@@ -503,12 +569,12 @@ class Discretisation:
     def total_mass(self, nu: np.ndarray, T_top: np.ndarray) -> float:
         """Mass per unit length ⟨∫ν dy⟩ + ⟨ν(y_max) T(y_max)⟩/cos θ of ν, T on the padded grid
         (the x-mean of :meth:`depth_integrals`' ρ̄)."""
-        return float(self.grid.weights @ nu.mean(axis=-1) + np.mean(nu[-1] * T_top) / self.sin_cos[1])
+        return float(self.grid.weights @ self.x_mean(nu) + self.x_mean(nu[-1] * T_top) / self.sin_cos[1])
 
     # -- diagnostics --------------------------------------------------------------------
     def depth_integrals(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """ρ̄(x) = ∫ν dy and Q(x) = ∫νu dy on the padded grid, with the isothermal tail above
-        y_max (ν(y_max) T(y_max)/cos θ, and u(y_max) times it)."""
+        """ρ̄(x) = ∫ν dy and Q(x) = ∫νu dy on the padded grid (at :attr:`x`), with the
+        isothermal tail above y_max (ν(y_max) T(y_max)/cos θ, and u(y_max) times it)."""
         s = self.to_physical(C[0])
         u = self.to_physical(C[1])
         T = self.to_physical(C[3])
