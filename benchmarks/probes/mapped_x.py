@@ -175,7 +175,7 @@ def main(argv=None) -> int:
     L = a.length
     M = C.shape[-1] - 1
     # beyond the state's own M the uniform series is zero: truncations up to M only
-    modes = sorted(int(m) for m in a.modes.split(",") if int(m) <= M)
+    modes = sorted(int(m) for m in a.modes.split(",") if int(m) <= M) or [M]
     nfine = 2 * max(8 * M, 2 * max(modes) + 2)
     # the front: where |∂_x ln ν| is largest over the nodes
     xu = np.arange(nfine) * L / nfine
