@@ -49,24 +49,6 @@ VARIANTS = {
 }
 
 
-def tan_map(s: np.ndarray, x0: float, length: float, beta: float) -> np.ndarray:
-    """x = g(s) of the periodic tan map centred at ``x0`` (g(x0) = x0, g(s + L) = g(s) + L)."""
-    w = np.mod(s - x0 + 0.5 * length, length) - 0.5 * length  # in [−L/2, L/2)
-    return x0 + (length / math.pi) * np.arctan(beta * np.tan(math.pi * w / length))
-
-
-def evaluate(C: np.ndarray, x: np.ndarray, length: float, chunk: int = 256) -> np.ndarray:
-    """f(x) = C_0 + 2 Re Σ_{m ≥ 1} C_m e^{i k_m x} at arbitrary points (…, len(x)); exact for
-    the modes of C (a direct sum)."""
-    k = 2.0 * math.pi * np.arange(C.shape[-1]) / length
-    out = np.empty(C.shape[:-1] + (x.size,))
-    for a in range(0, x.size, chunk):
-        E = np.exp(1j * np.outer(k, x[a : a + chunk]))  # (M+1, chunk)
-        E[1:] *= 2.0
-        out[..., a : a + chunk] = (C @ E).real
-    return out
-
-
 def rho_range(d, C: np.ndarray) -> tuple[float, float]:
     """min and max of ρ̄ over its x-average, minus 1 (on the padded grid's points)."""
     rho = d.depth_integrals(C)[0]
@@ -84,6 +66,7 @@ def steps(a, C: np.ndarray, prev: np.ndarray, h_prev: float, x0: float) -> list[
     from chuteflow.dns.diagnostics import fourier_tail
     from chuteflow.dns.setup import history_coefficients
     from chuteflow.dns.xmap import TanMap
+    from chuteflow.spectral import fourier_evaluate
     from chuteflow.steady import solve_steady
 
     L = a.length
@@ -97,7 +80,7 @@ def steps(a, C: np.ndarray, prev: np.ndarray, h_prev: float, x0: float) -> list[
     for nx in (int(v) for v in a.mapped_nx.split(",")):
         for beta in (float(b) for b in a.betas.split(",") if float(b) < 1):
             dm = dataclasses.replace(du, modes=(nx - 1) // 2, nxp=0, x_map=TanMap(x0, beta, L))
-            Cm, Pm = (dm.to_modes(evaluate(X, dm.x, L)) for X in (C, C_prev))
+            Cm, Pm = (dm.to_modes(fourier_evaluate(X, dm.x, L)) for X in (C, C_prev))
             grids.extend((f"nx {nx}, β {beta:g}", dm, pc, Cm, Pm) for pc in a.preconditioners.split(","))
     rows, ref = [], None
     for name, d, pc, C0, P0 in grids:
@@ -117,7 +100,7 @@ def steps(a, C: np.ndarray, prev: np.ndarray, h_prev: float, x0: float) -> list[
         if ref is None and refs:
             ref = X
         dmax = (
-            np.abs(evaluate(ref, d.x, L) - d.to_physical(X)).max(axis=(1, 2))
+            np.abs(fourier_evaluate(ref, d.x, L) - d.to_physical(X)).max(axis=(1, 2))
             if ref is not None
             else np.full(4, math.nan)
         )
@@ -166,6 +149,8 @@ def main(argv=None) -> int:
     )
     a = p.parse_args(argv)
     from chuteflow.dns.diagnostics import fourier_tail
+    from chuteflow.dns.xmap import TanMap
+    from chuteflow.spectral import fourier_evaluate
 
     with np.load(a.state, allow_pickle=False) as ck:
         C = np.asarray(ck["C"])
@@ -180,13 +165,13 @@ def main(argv=None) -> int:
     # the front: where |∂_x ln ν| is largest over the nodes
     xu = np.arange(nfine) * L / nfine
     k = 2.0 * math.pi * np.arange(M + 1) / L
-    sx = evaluate(C[0] * 1j * k, xu, L)  # (nodes, nfine)
+    sx = fourier_evaluate(C[0] * 1j * k, xu, L)  # (nodes, nfine)
     x0 = float(xu[np.argmax(np.abs(sx).max(axis=0))])
     rows = []
     s = np.arange(nfine) * L / nfine
     for beta in (float(b) for b in a.betas.split(",")):
-        x = tan_map(s, x0, L, beta)
-        f = evaluate(C, x, L)  # (4, nodes, nfine): the state at the mapped points
+        x = TanMap(x0, beta, L).x(s)
+        f = fourier_evaluate(C, x, L)  # (4, nodes, nfine): the state at the mapped points
         coeffs = np.fft.rfft(f, axis=-1) / nfine
         tl = {m: fourier_tail(coeffs[..., : m + 1]) for m in modes}
         need = next((m for m in modes if tl[m] <= a.tol), None)

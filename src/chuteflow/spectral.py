@@ -435,3 +435,19 @@ def fourier_resample(f: np.ndarray, n: int) -> np.ndarray:
     m = min(F.shape[-1], G.shape[-1])
     G[..., :m] = F[..., :m]
     return np.fft.irfft(G * n, n=n, axis=-1)
+
+
+def fourier_evaluate(C: np.ndarray, x: np.ndarray, length: float, chunk: int = 256) -> np.ndarray:
+    """The real series C_0 + 2 Re Σ_{m ≥ 1} C_m e^{i k_m x}, k_m = 2π m / ``length``, of the
+    coefficients C (…, M + 1) at arbitrary points ``x``: values (…, len(x)), exact for the
+    modes of C (a direct sum, in chunks of points). The points of a mapped grid
+    (:mod:`chuteflow.dns.xmap`) or any other non-uniform ones."""
+    C = np.asarray(C)
+    x = np.asarray(x, dtype=float).ravel()
+    k = 2.0 * np.pi * np.arange(C.shape[-1]) / length
+    out = np.empty(C.shape[:-1] + (x.size,))
+    for a in range(0, x.size, chunk):
+        E = np.exp(1j * np.outer(k, x[a : a + chunk]))  # (M + 1, chunk)
+        E[1:] *= 2.0
+        out[..., a : a + chunk] = (C @ E).real
+    return out

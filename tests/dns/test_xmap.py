@@ -19,6 +19,7 @@ from chuteflow.closures import ChuteModel
 from chuteflow.dns import Discretisation, NewtonSettings, Stepper
 from chuteflow.dns.xmap import TanMap
 from chuteflow.errors import ParameterError
+from chuteflow.spectral import fourier_evaluate as _evaluate
 from chuteflow.steady import solve_steady
 
 MODEL = ChuteModel(roughness=0.05)
@@ -30,12 +31,18 @@ def p1():
     return solve_steady(16.0, 0.05, MODEL)
 
 
-def _evaluate(C: np.ndarray, x: np.ndarray, length: float) -> np.ndarray:
-    """Real series C_0 + 2 Re Σ C_m e^{i k_m x} at arbitrary x (a direct sum)."""
-    k = 2 * math.pi * np.arange(C.shape[-1]) / length
-    E = np.exp(1j * np.outer(k, x))
-    E[1:] *= 2
-    return (C @ E).real
+def test_fourier_evaluate_is_the_series_at_any_point():
+    """spectral.fourier_evaluate (the series at arbitrary points, used to put a state on a
+    mapped grid) against the analytic sum of two modes."""
+    C = np.zeros((2, 5), complex)
+    C[0, 0], C[0, 1], C[1, 3] = 0.5, 0.25 - 0.1j, 0.2j
+    x = np.random.default_rng(0).uniform(-L, 2 * L, 37)
+    k = 2 * math.pi / L
+    ref0 = 0.5 + 0.5 * np.cos(k * x) + 0.2 * np.sin(k * x)
+    ref1 = -0.4 * np.sin(3 * k * x)
+    got = _evaluate(C, x, L)
+    assert np.abs(got[0] - ref0).max() < 1e-13
+    assert np.abs(got[1] - ref1).max() < 1e-13
 
 
 def test_the_map_inverts_and_differentiates():
@@ -208,7 +215,14 @@ def test_the_preconditioners_jacobian_on_a_mapped_grid(p1):
     scale = np.abs(fd[keep]).max()
     assert np.abs(Jd - fd)[keep].max() < 1e-5 * scale
     # the interior mass rows differ by the derivative of λ times the modes of g' only
-    gmodes = dm.to_modes(dm.x_weights)
+    gmodes = dm.x_weight_modes
     E = (fd - Jd)[0, 1:-1]
     c = np.vdot(np.broadcast_to(gmodes, E.shape), E) / (E.shape[0] * np.vdot(gmodes, gmodes))
     assert np.abs(E - c * gmodes).max() < 1e-5 * np.abs(fd[0, 1:-1]).max()
+
+
+def test_a_map_of_another_period_is_refused(p1):
+    with pytest.raises(
+        ParameterError, match="x_map: its period 500 must be the discretisation's length 1000"
+    ):
+        Discretisation(16.0, MODEL, L, p1.y_max, 8, 4, x_map=TanMap(0.0, 0.5, 500.0))

@@ -139,7 +139,7 @@ def _to_s_jets(disc: Discretisation, out: dict[str, np.ndarray], last: int) -> N
     f_xy = a f_sy: :meth:`Discretisation.map_metric`), and the mass rows times g' as
     :meth:`Discretisation.residual` weights them. The names stay ``"s_x"``, … (b = 1 is then
     ∂_s)."""
-    a, b = disc.map_metric()
+    a, b = disc.map_metric
     gp = disc.x_weights
     for f in UNKNOWNS:
         ax, axx, axy = out[f + "_x"], out[f + "_xx"], out[f + "_xy"]

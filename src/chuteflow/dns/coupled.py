@@ -104,7 +104,7 @@ def _dense(disc: Discretisation, E: np.ndarray, m: int | None = None) -> np.ndar
         kabs = 2.0 * np.pi * abs(m) / disc.length
         if disc.x_map is not None:
             # (1/g') |∂_s| couples the modes through the harmonics of 1/g': kept to its mean
-            kabs *= float(np.mean(1.0 / disc.x_weights))
+            kabs *= float(np.mean(disc.map_metric[0]))
         dy = (np.eye(mm), g.D, g.D2)
         for r, f in enumerate(UNKNOWNS[1:], start=1):
             for c, kpow, coef in disc._top_terms[f]:

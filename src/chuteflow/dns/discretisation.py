@@ -43,6 +43,7 @@ import scipy.fft
 
 from ..closures import ChuteModel
 from ..equations import TOP_OF, compiled_equations
+from ..errors import ParameterError
 from ..spectral import ChebyshevGrid
 from .residual import DNS_FIELDS, evaluate_residuals
 from .xmap import TanMap
@@ -100,9 +101,10 @@ class Discretisation:
         padded grid at x = g(s_i), x-derivatives by the chain rule, the mass rows and the
         x-averages weighted by g', and the top conditions' |k| exactly as (1/g') |∂_s| (the
         tan map is a Möbius map of the circle, under which the Hilbert transform is
-        invariant). None (default): the uniform grid. The residual and the mass are mapped;
-        the preconditioners and :class:`~chuteflow.dns.simulation.DnsSimulation` do not use
-        maps yet (docs/dns.md, *A grid that follows the front*).
+        invariant). None (default): the uniform grid. The residual, the mass and the
+        preconditioners' coefficients (:func:`~chuteflow.dns.columns.jet_coefficients`) are
+        mapped; :class:`~chuteflow.dns.simulation.DnsSimulation` does not use maps yet
+        (docs/dns.md, *A grid that follows the front*).
     """
 
     theta: float
@@ -124,7 +126,9 @@ class Discretisation:
             object.__setattr__(self, "nxp", padded_points(self.modes))
         object.__setattr__(self, "grid", ChebyshevGrid(self.n, 0.0, self.y_max))
         if self.x_map is not None and self.x_map.length != self.length:
-            raise ValueError(f"x_map has period {self.x_map.length}, the discretisation {self.length}")
+            raise ParameterError(
+                f"x_map: its period {self.x_map.length:g} must be the discretisation's length {self.length:g}"
+            )
 
     # -- sizes and packing --------------------------------------------------------------
     @property
@@ -157,6 +161,11 @@ class Discretisation:
         """g'(s_i) on the padded grid, the weights of an x-average over the s points (ones on
         the uniform grid)."""
         return np.ones(self.nxp) if self.x_map is None else self.x_map.dx_ds(self.s)
+
+    @cached_property
+    def x_weight_modes(self) -> np.ndarray:
+        """The modes m ≤ M of g' (1 in mode 0 only on the uniform grid)."""
+        return self.to_modes(self.x_weights)
 
     def x_mean(self, f: np.ndarray) -> np.ndarray:
         """The x-average (1/L)∫ f dx of values on the padded grid (last axis)."""
@@ -209,7 +218,7 @@ class Discretisation:
         d2 = D2 @ v[0]
         if self.x_map is not None:
             # s-derivatives → x-derivatives: ∂_x = a ∂_s, ∂_xx = a² ∂_ss − (g''/g'³) ∂_s
-            a, b = self.map_metric()
+            a, b = self.map_metric
             v = np.stack((v[0], a * v[1], a * a * v[2] + b * v[1]))
             dv = np.stack((dv[0], a * dv[1]))
         out = {}
@@ -279,7 +288,7 @@ class Discretisation:
             return self.k**power * c
         if power != 1:
             raise NotImplementedError(f"|∂_x|^{power} on a mapped grid")
-        return self.to_modes(self.to_physical(self.k * c) / self.x_weights)
+        return self.to_modes(self.to_physical(self.k * c) * self.map_metric[0])
 
     def pointwise_rows(
         self, st: dict, history: tuple, dt: float, bdf=BDF2, inflow: np.ndarray | None = None
@@ -359,7 +368,7 @@ class Discretisation:
             rows[1:-1, 0] -= lam
         else:
             # the source uniform in x, as on the uniform grid: g' λ ν̄ in every mode
-            rows[1:-1] -= lam * self.to_modes(self.x_weights)
+            rows[1:-1] -= lam * self.x_weight_modes
         return rows[1:] if top else rows[1:-1]
 
     def mass_scale(self, C: np.ndarray) -> np.ndarray:
@@ -368,6 +377,7 @@ class Discretisation:
         s0 = C[0, :, 0].real if self.x_map is None else self.x_mean(self.to_physical(C[0]))
         return np.exp(s0)
 
+    @cached_property
     def map_metric(self) -> tuple[np.ndarray, np.ndarray]:
         """(a, b) = (1/g', −g''/g'³) on the padded grid: ∂_x = a ∂_s, ∂_xx = a² ∂_ss + b ∂_s
         (a = 1, b = 0 on the uniform grid)."""

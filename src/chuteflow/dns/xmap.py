@@ -61,8 +61,9 @@ class TanMap:
         g(s + L) = g(s) + L elsewhere)."""
         s = np.asarray(s, dtype=float)
         L = self.length
-        shift = s - self.centre - (self._phase(s) * L / math.pi)  # the multiple of L
-        return self.centre + shift + (L / math.pi) * np.arctan(self.beta * np.tan(self._phase(s)))
+        p = self._phase(s)
+        shift = s - self.centre - p * L / math.pi  # the multiple of L
+        return self.centre + shift + (L / math.pi) * np.arctan(self.beta * np.tan(p))
 
     def s(self, x: np.ndarray) -> np.ndarray:
         """The inverse s = g⁻¹(x) (the same map with 1/β)."""
