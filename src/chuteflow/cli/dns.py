@@ -38,6 +38,13 @@ def dns(
         help="Let the x grid follow the wave: double nx, up to this, where the highest x modes "
         "rise towards --resolution-tol (default: keep --nx).",
     ),
+    x_map: bool = typer.Option(
+        False,
+        "--x-map/--no-x-map",
+        help="Let the x grid follow the front: where the highest x modes rise, a tan map "
+        "centred at the steepest point of ln ν (at the same nx where that suffices, else "
+        "nx doubled up to --max-nx), re-centred as the front moves (docs/dns.md).",
+    ),
     ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
     max_ny: int | None = typer.Option(
         None,
@@ -144,6 +151,7 @@ def dns(
                 modes=None if nx is None else (nx - 1) // 2,
                 max_modes=None if max_nx is None else (max_nx - 1) // 2,
                 max_n=max_ny,
+                x_map=x_map,
                 dt=dt,
                 init=init,
                 amplitude=amplitude,

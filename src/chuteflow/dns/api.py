@@ -67,6 +67,7 @@ def simulate(
     wall_limit: float | None = None,
     max_modes: int | None = None,
     max_n: int | None = None,
+    x_map: bool = False,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -117,6 +118,11 @@ def simulate(
         The same in y: the Chebyshev intervals grow by half (to a multiple of 8), up to this
         many, wherever the y tail rises past ``resolution_tol`` / 4; ``ny``, ``ny_initial``
         in the result.
+    x_map : bool
+        Let the x grid follow the front with a tan map (:class:`DnsSimulation`): where the x
+        tail rises the run goes to a map centred at the steepest point of ln ν, at the
+        run's modes where that suffices, and re-centres it as the front moves; ``x_map_beta``,
+        ``x_map_centre`` and ``refined_at`` in the result (the records stay on a uniform x).
     wall_limit : float, optional
         Seconds of wall time after which the run pauses
         (:class:`~chuteflow.trackers.WallTimeStop`): status ``"paused at t = …"``, the wave
@@ -157,6 +163,7 @@ def simulate(
         initial=initial,
         max_modes=max_modes,
         max_n=max_n,
+        x_map=x_map,
         wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []
@@ -167,7 +174,8 @@ def simulate(
     monitor = ResolutionMonitor(
         resolution_tol,
         every=max(1, 10 // sim.setup.record_every),
-        action="refine" if sim.can_refine("x") or sim.can_refine("y") else "warn",
+        # (with a map the run may re-centre it at the most modes)
+        action="refine" if sim.x_map or sim.can_refine("x") or sim.can_refine("y") else "warn",
         settle=sim.setup.init == "noise",  # (a custom start too)
     )
     tracking.append(monitor)
@@ -204,6 +212,8 @@ def summary(ds: xr.Dataset) -> dict:
         "nx_initial",
         "ny_initial",
         "refinements",
+        "x_map_beta",
+        "x_map_centre",
         "dt",
         "time_end",
         "init",

@@ -103,8 +103,9 @@ class Discretisation:
         tan map is a Möbius map of the circle, under which the Hilbert transform is
         invariant). None (default): the uniform grid. The residual, the mass and the
         preconditioners' coefficients (:func:`~chuteflow.dns.columns.jet_coefficients`) are
-        mapped; :class:`~chuteflow.dns.simulation.DnsSimulation` does not use maps yet
-        (docs/dns.md, *A grid that follows the front*).
+        mapped; :class:`~chuteflow.dns.simulation.DnsSimulation` goes to a map with
+        ``x_map=True`` (:mod:`chuteflow.dns.remap`; docs/dns.md, *A grid that follows the
+        front*).
     """
 
     theta: float

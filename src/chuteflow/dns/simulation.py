@@ -22,18 +22,21 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+import scipy.fft
 import xarray as xr
 
 from .._files import atomic_write
 from ..errors import ConvergenceError, ParameterError
-from ..spectral import fourier_resample
+from ..spectral import fourier_evaluate, fourier_resample
 from ..stability import OperatorCache, least_stable
 from ..steady import SteadyFlow, steady_tangent
 from ..trackers import WavePolicy, run_tail
 from .diagnostics import bdf2_eigenvalue, measure_mode, resolution_tails, wave_measures
 from .discretisation import Discretisation
+from .remap import best_grid, remap_coefficients
 from .setup import INITS, DnsSetup, _check_valid, check_setup, history_coefficients, initial_coefficients
 from .stepper import NewtonSettings, Stepper
+from .xmap import TanMap
 
 __all__ = ["DnsSimulation", "DnsState", "DnsStep"]
 
@@ -66,18 +69,37 @@ def _refined_n(n: int, max_n: int) -> int:
 def _refine_n(records: dict, n0: int) -> list:
     """The N after each refinement; a checkpoint written before y refinement existed has no
     ``refine_n``: its refinements were all in x, at the starting N ``n0``."""
-    ns = list(records["refine_n"])
-    return [n0] * (len(records["refine_t"]) - len(ns)) + ns
+    return _backfilled(records, "refine_n", n0)
+
+
+def _backfilled(records: dict, name: str, start) -> list:
+    """The record ``name`` of each refinement, ``start`` for the refinements of a checkpoint
+    written before it was recorded (the y grid and the uniform x grid: what they had)."""
+    got = list(records[name])
+    return [start] * (len(records["refine_t"]) - len(got)) + got
+
+
+def _grids(records: dict, setup: DnsSetup):
+    """(t, modes, N, β, x0) after each refinement (β = 1, x0 = 0: the uniform x grid)."""
+    return zip(
+        records["refine_t"],
+        records["refine_modes"],
+        _refine_n(records, setup.n),
+        _backfilled(records, "refine_beta", 1.0),
+        _backfilled(records, "refine_centre", 0.0),
+    )
 
 
 def _refined_at(records: dict, setup: DnsSetup) -> str:
     """ "t = 40 (nx 9), t = 80 (ny 40)": when the grid grew, and to what."""
-    out, m0, n0 = [], setup.modes, setup.n
-    for t, m, n in zip(records["refine_t"], records["refine_modes"], _refine_n(records, setup.n)):
-        m, n = int(m), int(n)
+    out, m0, n0, map0 = [], setup.modes, setup.n, (1.0, 0.0)
+    for t, m, n, beta, x0 in _grids(records, setup):
+        m, n, mp = int(m), int(n), (float(beta), float(x0))
         grew = [f"nx {2 * m + 1}"] * (m != m0) + [f"ny {n}"] * (n != n0)
+        if mp != map0:
+            grew.append("uniform x" if mp[0] == 1.0 else f"x mapped, β {mp[0]:g} at ξ = {mp[1]:.5g}")
         out.append(f"t = {t:.6g} ({', '.join(grew)})")
-        m0, n0 = m, n
+        m0, n0, map0 = m, n, mp
     return ", ".join(out)
 
 
@@ -87,11 +109,12 @@ def _on_last_grid(records: dict, setup: DnsSetup, direction: str) -> int:
     that way, 0 if there was none. The tails recorded before it are the coarser grid's, to
     which the refinement answered (:meth:`ResolutionMonitor.refined` starts that direction's
     series anew there)."""
-    last, m0, n0 = None, setup.modes, setup.n
-    for t, m, n in zip(records["refine_t"], records["refine_modes"], _refine_n(records, setup.n)):
-        if (m != m0) if direction == "x" else (n != n0):
+    last, m0, n0, map0 = None, setup.modes, setup.n, (1.0, 0.0)
+    for t, m, n, beta, x0 in _grids(records, setup):
+        mp = (float(beta), float(x0))
+        if (m != m0 or mp != map0) if direction == "x" else (n != n0):
             last = t
-        m0, n0 = int(m), int(n)
+        m0, n0, map0 = int(m), int(n), mp
     if last is None:
         return 0
     after = np.nonzero(np.asarray(records["t"], dtype=float) > last)[0]
@@ -142,7 +165,12 @@ class DnsState:
         ``snap_t``, ``snaps`` the full fields; ``newton``, ``krylov`` per step;
         ``refine_t``, ``refine_modes``, ``refine_n`` when and to how many x modes and
         Chebyshev intervals the grid was refined (:meth:`DnsSimulation.refine`; the records
-        and snapshots before are interpolated onto the finer grid).
+        and snapshots before are interpolated onto the finer grid); ``refine_beta``,
+        ``refine_centre`` the x map after it (β = 1: uniform). The records and snapshots
+        are on the uniform x grid of ``nxp`` points, mapped or not.
+    x_map : tuple or None
+        (x0, β) of the tan map of the x grid the state is on (None: uniform;
+        :class:`~chuteflow.dns.xmap.TanMap`).
     solver : dict of arrays
         The stepper's :meth:`~chuteflow.dns.Stepper.snapshot` when the state was saved (a
         resumed run restores it and takes the same steps as the uninterrupted one).
@@ -161,6 +189,7 @@ class DnsState:
     amplitude: float = 0.0
     records: dict = field(default_factory=dict, repr=False)
     solver: dict = field(default_factory=dict, repr=False)
+    x_map: tuple[float, float] | None = None
 
     RECORDS = (
         "t",
@@ -175,6 +204,9 @@ class DnsState:
         "refine_t",
         "refine_modes",
         "refine_n",
+        "refine_beta",
+        "refine_centre",
+        "rho_mean",
     )
 
     def __post_init__(self):
@@ -198,6 +230,7 @@ class DnsState:
                 [self.t, self.step, self.dt, self.h_prev, float(self.restart), self.wall, self.amplitude]
             ),
             "status": np.array(self.status),
+            "x_map": np.array(self.x_map if self.x_map is not None else (), dtype=float),
             "trackers": np.array([type(tr).__name__ for tr in trackers]),
         }
         for k, v in self.records.items():
@@ -237,6 +270,11 @@ class DnsState:
                     # (a checkpoint from before a record existed has none of it)
                     records={k: list(ck[f"rec_{k}"]) for k in cls.RECORDS if f"rec_{k}" in ck.files},
                     solver={k[7:]: ck[k] for k in ck.files if k.startswith("solver_")},
+                    x_map=(
+                        (float(ck["x_map"][0]), float(ck["x_map"][1]))
+                        if "x_map" in ck.files and ck["x_map"].size
+                        else None
+                    ),
                 )
                 names = [str(n) for n in ck["trackers"]]
                 if names == [type(tr).__name__ for tr in trackers]:
@@ -316,6 +354,16 @@ class DnsSimulation:
         Let the y grid follow the wave likewise: where the y tail rises, the Chebyshev
         intervals grow by half (``Y_REFINE``, to a multiple of 8), up to this many. Default
         ``n``: the y grid is kept.
+    x_map : bool
+        Let the x grid follow the front (docs/dns.md, *A grid that follows the front*):
+        where the x tail rises, the run goes first to a tan map centred at the steepest point
+        of ln ν (:func:`~chuteflow.dns.remap.best_grid`: the β of
+        :data:`~chuteflow.dns.remap.BETAS` that minimises the tail, taken at the run's modes
+        where it lowers the tail :data:`~chuteflow.dns.remap.REMAP_GAIN` times, else with
+        the modes doubled up to ``max_modes``); later rises re-centre the map on the moved
+        front the same way. The records, snapshots and the dataset stay on the uniform x
+        grid (evaluated exactly from the mapped series). Default False: refinement doubles
+        the uniform modes.
     initial : callable, optional
         A start of the caller's: ``initial(x)`` → δ ln ν ≈ δν/ν0 at the points ``x`` in
         [0, L) of the padded grid at t = 0 (uniform in y, as the noise; projected onto the
@@ -350,6 +398,7 @@ class DnsSimulation:
         initial: Callable[[np.ndarray], np.ndarray] | None = None,
         max_modes: int | None = None,
         max_n: int | None = None,
+        x_map: bool = False,
     ):
         if initial is not None:
             if not callable(initial):
@@ -413,6 +462,9 @@ class DnsSimulation:
         #: The most x modes and Chebyshev intervals :meth:`refine` may reach.
         self.max_modes = ceiling(max_modes, s.modes, MAX_MODES, "max_modes", "modes", "x modes")
         self.max_n = ceiling(max_n, s.n, MAX_N, "max_ny", "ny", "Chebyshev intervals")
+        #: Whether the x grid follows the front with a tan map (``x_map``).
+        self.x_map = bool(x_map)
+        self._last_C: np.ndarray | None = None  # the state :meth:`resolution` saw last
         self.min_dt_fraction = float(min_dt_fraction)
         self.wave_policy = wave_policy or WavePolicy()
         #: Re α of the least-stable mode at k = 2π/L (the fundamental; the sign decides
@@ -435,10 +487,11 @@ class DnsSimulation:
     def wave_amplitude(self, C: np.ndarray) -> float:
         """(max − min of ρ̄) over its mean: the size of the wave."""
         rho = self.disc.depth_integrals(C)[0]
-        return float((rho.max() - rho.min()) / rho.mean())
+        return float((rho.max() - rho.min()) / self.disc.x_mean(rho))
 
     def resolution(self, C: np.ndarray) -> dict[str, float]:
         """Tails of the x and y spectra (:func:`~chuteflow.dns.diagnostics.resolution_tails`)."""
+        self._last_C = C
         return resolution_tails(self.disc, C)
 
     def key(self) -> str:
@@ -454,15 +507,32 @@ class DnsSimulation:
         ``direction="y"``, Chebyshev intervals (``max_n`` not reached)."""
         if direction == "y":
             return self.disc.n < self.max_n
-        return self.disc.modes < self.max_modes
+        if self.disc.modes < self.max_modes:
+            return True
+        # (the modes at their ceiling: a map re-centred on the moved front may still help)
+        C = self._last_C
+        if not self.x_map or C is None or C.shape != self.disc.shape:
+            return False
+        return self._grid_choice(C) is not None
 
-    def _set_grid(self, n: int, modes: int) -> None:
-        """The discretisation and the stepper at ``n`` Chebyshev intervals and ``modes`` x
-        modes (the preconditioner's kind and the step control's switch kept: the same wave on
-        a finer grid)."""
+    def _grid_choice(self, C: np.ndarray):
+        return best_grid(self.disc, C, self.max_modes)
+
+    def _set_grid(self, n: int, modes: int, x_map: TanMap | None) -> None:
+        """The discretisation and the stepper at ``n`` Chebyshev intervals, ``modes`` x
+        modes and the x map ``x_map`` (the preconditioner's kind and the step control's
+        switch kept: the same wave on a finer grid)."""
         s, old = self.setup, self.stepper
         self.disc = Discretisation(
-            s.theta, s.model, s.length, self.flow.y_max, int(n), int(modes), frame=s.frame, top=s.top
+            s.theta,
+            s.model,
+            s.length,
+            self.flow.y_max,
+            int(n),
+            int(modes),
+            frame=s.frame,
+            top=s.top,
+            x_map=x_map,
         )
         self.stepper = Stepper(self.disc, old.settings)
         if self.disc.modes >= 1:
@@ -471,7 +541,10 @@ class DnsSimulation:
 
     def refine(self, state: DnsState, direction: str = "x") -> None:
         """Refine the run's grid in place: double the x modes (at most ``max_modes``) or, with
-        ``direction="y"``, grow the Chebyshev intervals by half (at most ``max_n``).
+        ``direction="y"``, grow the Chebyshev intervals by half (at most ``max_n``). With
+        ``x_map``, an x refinement goes to the grid :func:`~chuteflow.dns.remap.best_grid`
+        chooses (a tan map centred at the front, at the run's modes or twice as many; the
+        state evaluated exactly at the new points, :func:`~chuteflow.dns.remap.remap_coefficients`).
 
         The state is the same function on the finer grid — its Fourier coefficients padded
         with zeros, or its Chebyshev interpolant evaluated at the finer nodes; the BDF2
@@ -487,17 +560,27 @@ class DnsSimulation:
             name, ceil = ("max_modes", self.max_modes) if direction == "x" else ("max_ny", self.max_n)
             raise ParameterError(f"{name} = {ceil}: the grid has as many {direction} points already")
         old, old_stepper = self.disc, self.stepper
-        modes, n = old.modes, old.n
-        if direction == "x":
+        modes, n, x_map = old.modes, old.n, old.x_map
+        remap = direction == "x" and self.x_map
+        if remap:
+            choice = self._grid_choice(state.C)
+            if choice is None:
+                raise ParameterError(
+                    f"max_modes = {self.max_modes}: no map at these modes resolves the front better"
+                )
+            modes, x_map = choice.modes, choice.x_map
+        elif direction == "x":
             modes = min(2 * max(old.modes, 1), self.max_modes)
         else:
             n = _refined_n(old.n, self.max_n)
         levels = [state.C] if state.prev is None else [state.C, history_coefficients(old, tuple(state.prev))]
         # the total mass of each level by the coarse grid's quadrature (what the run conserved)
         mass = [old.total_mass(*self._mass_fields(old_stepper, C)) for C in levels]
-        self._set_grid(n, modes)
+        self._set_grid(n, modes, x_map)
         new = self.disc
-        if direction == "x":
+        if remap:
+            fine = [remap_coefficients(C, old, new) for C in levels]
+        elif direction == "x":
             fine = [_pad_modes(C, modes) for C in levels]
         else:
             fine = [_to_nodes(C, old.grid, new.grid, axis=1) for C in levels]
@@ -511,16 +594,24 @@ class DnsSimulation:
             state.prev = np.array(self.stepper.physical(fine[1]))
         r = state.records
         if direction == "x":
-            state.C_init = _pad_modes(state.C_init, modes)
-            for k in ("rho", "Q", "snaps"):
-                r[k] = [fourier_resample(v, new.nxp) for v in r[k]]
+            # (the records are on the uniform x grid of nxp points, mapped or not)
+            C0 = state.C_init
+            state.C_init = remap_coefficients(C0, old, new) if remap else _pad_modes(C0, modes)
+            if new.nxp != old.nxp:
+                for k in ("rho", "Q", "snaps"):
+                    r[k] = [fourier_resample(v, new.nxp) for v in r[k]]
         else:
             state.C_init = _to_nodes(state.C_init, old.grid, new.grid, axis=1)
             r["snaps"] = [_to_nodes(v, old.grid, new.grid, axis=1) for v in r["snaps"]]
         r["refine_n"] = _refine_n(r, self.setup.n)
+        r["refine_beta"] = _backfilled(r, "refine_beta", 1.0)
+        r["refine_centre"] = _backfilled(r, "refine_centre", 0.0)
         r["refine_t"].append(state.t)
         r["refine_modes"].append(modes)
         r["refine_n"].append(n)
+        r["refine_beta"].append(1.0 if x_map is None else x_map.beta)
+        r["refine_centre"].append(0.0 if x_map is None else x_map.centre)
+        state.x_map = None if x_map is None else (x_map.centre, x_map.beta)
 
     @staticmethod
     def _mass_fields(stepper: Stepper, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -530,9 +621,13 @@ class DnsSimulation:
     def _follow(self, state: DnsState) -> None:
         """Put the discretisation at the grid of ``state`` (a checkpoint of a refined run)."""
         n, modes = state.C.shape[1] - 1, state.C.shape[-1] - 1
-        if (n, modes) != (self.disc.n, self.disc.modes):
-            self._set_grid(n, modes)
-        state.records["refine_n"] = _refine_n(state.records, self.setup.n)
+        x_map = None if state.x_map is None else TanMap(state.x_map[0], state.x_map[1], self.setup.length)
+        if (n, modes, x_map) != (self.disc.n, self.disc.modes, self.disc.x_map):
+            self._set_grid(n, modes, x_map)
+        r = state.records
+        r["refine_n"] = _refine_n(r, self.setup.n)
+        r["refine_beta"] = _backfilled(r, "refine_beta", 1.0)
+        r["refine_centre"] = _backfilled(r, "refine_centre", 0.0)
 
     # -- the state ---------------------------------------------------------------------------
     def initial_state(self) -> DnsState:
@@ -564,10 +659,25 @@ class DnsSimulation:
         self._snapshot(st)
         return st
 
+    def _uniform(self, f: np.ndarray) -> np.ndarray:
+        """Values on the padded grid → the same function at the uniform x points
+        ``disc.s`` (the records' grid): itself without a map; with one, its series in s (all
+        the padded grid's modes below Nyquist) evaluated exactly at s = g⁻¹(x)."""
+        d = self.disc
+        if d.x_map is None:
+            return f
+        c = scipy.fft.rfft(f, axis=-1, norm="forward")[..., : (d.nxp - 1) // 2 + 1]
+        return fourier_evaluate(c, d.x_map.s(d.s), d.length)
+
     def _record(self, st: DnsState) -> None:
         rho, Q = self.disc.depth_integrals(st.C)
         tails = self.resolution(st.C)
         r = st.records
+        # (the mean by the run's own quadrature, g'-weighted on a mapped grid: the mass it
+        # conserves; the uniform samples of a mapped run's ρ̄ differ from it by their
+        # interpolation error)
+        r["rho_mean"].append(float(self.disc.x_mean(rho)))
+        rho, Q = self._uniform(rho), self._uniform(Q)
         r["t"].append(st.t)
         r["rho"].append(rho)
         r["Q"].append(Q)
@@ -575,7 +685,11 @@ class DnsSimulation:
         r["y_tail"].append(tails["y_tail"])
 
     def _snapshot(self, st: DnsState) -> None:
-        s = np.stack([self.disc.to_physical(st.C[i]) for i in range(4)])
+        d = self.disc
+        if d.x_map is None:
+            s = np.stack([d.to_physical(st.C[i]) for i in range(4)])
+        else:  # (on the uniform x grid: the series evaluated exactly there)
+            s = fourier_evaluate(st.C, d.x_map.s(d.s), d.length)
         s[0] = np.exp(s[0])
         st.records["snap_t"].append(st.t)
         st.records["snaps"].append(s)
@@ -741,14 +855,17 @@ class DnsSimulation:
         rho = np.asarray(r["rho"])
         Q = np.asarray(r["Q"])
         newton = r["newton"]
-        x = disc.x
+        x = disc.s  # (the records' uniform grid, also where the run ends mapped)
         # mode-1 coefficient of ρ̄(x): amplitude of the wave e^{ikx}
         A = (
             np.fft.rfft(rho, axis=-1)[:, 1] / disc.nxp
             if disc.nxp > 2 and rho.size
             else np.zeros(len(t), complex)
         )
-        mass = rho.mean(axis=-1) * setup.length if rho.size else np.zeros(0)
+        if len(r["rho_mean"]) == len(t):
+            mass = np.asarray(r["rho_mean"], dtype=float) * setup.length
+        else:  # (a checkpoint from before the record: the uniform grid's mean)
+            mass = rho.mean(axis=-1) * setup.length if rho.size else np.zeros(0)
         k = 2.0 * math.pi / setup.length
         # linear phase: the records while the wave is below 1e-3 of the mean ρ̄ (all, from a mode)
         if setup.init == "mode":
@@ -789,6 +906,10 @@ class DnsSimulation:
             "ny_max": self.max_n,
             "refinements": len(r["refine_t"]),
             "refined_at": _refined_at(r, setup),
+            # the tan map of the x grid the run ends on (β 1: uniform; x_map)
+            "x_map": int(self.x_map),
+            "x_map_beta": 1.0 if disc.x_map is None else disc.x_map.beta,
+            "x_map_centre": 0.0 if disc.x_map is None else disc.x_map.centre,
             "dt": setup.dt,
             "time_end": float(t[-1]) if len(t) else 0.0,
             "init": "custom" if self.initial is not None else setup.init,
@@ -834,7 +955,7 @@ class DnsSimulation:
             {
                 "rho_bar": (("time", "x"), rho, {"long_name": "ρ̄ = ∫ν dy (with the isothermal tail)"}),
                 "Q": (("time", "x"), Q, {"long_name": "Q = ∫νu dy"}),
-                "mass": (("time",), mass, {"long_name": "∫∫ν dy dx"}),
+                "mass": (("time",), mass, {"long_name": "∫∫ν dy dx (by the run's quadrature)"}),
                 "amplitude_re": (("time",), A.real, {"long_name": "Re of the k = 2π/L coefficient of ρ̄"}),
                 "amplitude_im": (("time",), A.imag, {"long_name": "Im of the k = 2π/L coefficient of ρ̄"}),
                 "x_tail": (
