@@ -140,3 +140,23 @@ def test_the_map_lets_each_grid_follow_its_wave(monkeypatch):
     np.testing.assert_allclose(got["rho_max_rel"].values, kept["rho_max_rel"].values, rtol=0.05)
     with pytest.raises(ParameterError, match="max_modes"):
         WaveMapSettings(modes=4, max_modes=2)
+
+
+def test_a_map_with_x_map_reruns_what_was_run_without(serial, tmp_path):
+    """WaveMapSettings(x_map=True): its repr is the same as without (so that the runs of a map
+    made before x_map existed are read back), the runs' ``x_map`` attribute tells them apart: a
+    flow run without the map is rerun with it (the wall time differs) and read back after; the
+    setting is stored as 0/1 (NetCDF has no bool). A smooth 1e-4 wave on nx = 5 is never
+    mapped (x_map_beta 1), so the numbers are the serial map's."""
+    mapped = dataclasses.replace(SETTINGS, x_map=True)
+    assert repr(mapped) == repr(SETTINGS)
+    first = map_waves(POINTS[:1], SETTINGS, out_dir=tmp_path)
+    got = map_waves(POINTS[:1], mapped, out_dir=tmp_path)
+    assert got["wall_time"].values[0] != first["wall_time"].values[0]  # rerun, not read back
+    again = map_waves(POINTS[:1], mapped, out_dir=tmp_path)
+    np.testing.assert_array_equal(again["wall_time"].values, got["wall_time"].values)
+    assert got.attrs["setting_x_map"] == 1
+    for k in ("rho_min_rel", "rho_max_rel", "mass_drift"):
+        np.testing.assert_allclose(got[k].values, serial[k].values[:1], rtol=1e-9, atol=1e-15)
+    (one,) = tmp_path.glob("*.nc")
+    assert xr.load_dataset(one, engine="h5netcdf").attrs["x_map_beta"] == 1.0

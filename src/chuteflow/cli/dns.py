@@ -238,6 +238,11 @@ def waves(
         help="Let each run's x grid follow its wave: double nx, up to this, where the highest x "
         "modes rise towards the resolution tolerance (default: keep --nx).",
     ),
+    x_map: bool = typer.Option(
+        False,
+        "--x-map/--no-x-map",
+        help="Let each run's x grid follow its front with a tan map (as chuteflow dns --x-map).",
+    ),
     ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
     max_ny: int | None = typer.Option(
         None,
@@ -343,6 +348,7 @@ def waves(
         newton_rtol=newton_rtol,
         max_modes=None if max_nx is None else (max_nx - 1) // 2,
         max_n=max_ny,
+        x_map=x_map,
     )
     con = Console(stderr=True)
 

@@ -22,7 +22,7 @@ import uuid
 import warnings
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -97,6 +97,11 @@ class WaveMapSettings:
         (:meth:`~chuteflow.dns.DnsSimulation.refine`); default: ``modes`` throughout.
     max_n : int, optional
         The same in y: the Chebyshev intervals grow by half, up to this many; default ``n``.
+    x_map : bool
+        Let each run's x grid follow its front with a tan map
+        (:class:`~chuteflow.dns.DnsSimulation`, docs/dns.md *In the runs*). Not in the
+        settings' repr (a run is read back where its ``x_map`` attribute agrees), so that the
+        runs of a map made before it existed are read back.
     """
 
     length: float = 1000.0
@@ -113,6 +118,7 @@ class WaveMapSettings:
     newton_rtol: float | None = None
     max_modes: int | None = None
     max_n: int | None = None
+    x_map: bool = field(default=False, repr=False)
 
     def __post_init__(self):
         for name in ("length", "time", "dt"):
@@ -161,6 +167,7 @@ def _one(
             assert ds is not None
             done = (
                 ds.attrs.get("map_settings") == repr(s)
+                and int(ds.attrs.get("x_map", 0)) == int(s.x_map)
                 and float(ds.attrs["length"]) == length
                 and not str(ds.attrs["status"]).startswith(("stopped", "paused"))
             )
@@ -190,6 +197,7 @@ def _one(
                 checkpoint=ck,
                 max_modes=s.max_modes,
                 max_n=s.max_n,
+                x_map=s.x_map,
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
@@ -351,7 +359,12 @@ def map_waves(
             "title": "saturated density waves of the full equations (chuteflow.dns.map_waves)",
             # (a setting left at None, e.g. max_modes: the grid kept, is not an attribute:
             # NetCDF has no None)
-            **{f"setting_{k}": v for k, v in s.__dict__.items() if v is not None},
+            # (and a bool as 0/1: NetCDF has no bool)
+            **{
+                f"setting_{k}": int(v) if isinstance(v, bool) else v
+                for k, v in s.__dict__.items()
+                if v is not None
+            },
             **{f"model_{k}": v for k, v in model.attrs().items()},
         },
     )
