@@ -43,7 +43,8 @@ def coupling_factors(
     i.e. Σ over the jets of field f with y-order c of the harmonic ĉ_q(y) of their
     coefficients times (i k_{m'})^b, m' = ``ms[i]`` − q (zero beyond ±M); ``coefficients``
     on the padded grid (:func:`~chuteflow.dns.columns.jet_coefficients`). The top rows of
-    u, v, T are zero here (:func:`coupled_blocks` puts the per-mode conditions there)."""
+    u, v, T hold only, on a mapped grid, the off-diagonal part of their (1/g')|∂_s| terms
+    (:func:`coupled_blocks` puts the per-mode conditions in the diagonal blocks)."""
     mm, M = disc.n + 1, disc.modes
     ms = np.asarray(ms)
     qs = range(-reach, reach + 1)
@@ -60,6 +61,21 @@ def coupling_factors(
             src = ms - q  # m' = m − q
             fac = np.where(np.abs(src) <= M, (1j * 2.0 * np.pi * src / disc.length) ** b, 0.0)
             E[:, qi, fc, c] += fac[:, None, None] * H[..., q % nxp][None]
+    if disc.x_map is not None:
+        # the top conditions' |∂_x| = (1/g')|∂_s| (eq. (4.5)): row mode m, column mode m − q
+        # through the harmonic â_q of 1/g' — a first harmonic of s for the tan map, so the
+        # blocks q = ±1 hold it exactly (q = 0, its mean: the diagonal blocks, _dense)
+        nxp = disc.nxp
+        ahat = np.fft.fft(disc.map_metric[0]) / nxp
+        for qi, q in enumerate(qs):
+            if q == 0:
+                continue
+            src = ms - q
+            kab = np.where(np.abs(src) <= M, 2.0 * np.pi * np.abs(src) / disc.length, 0.0)
+            for r, f in enumerate(UNKNOWNS[1:], start=1):
+                for c, kpow, coef in disc._top_terms[f]:
+                    if kpow == 1:
+                        E[:, qi, r, c, r, -1] += coef * ahat[q % nxp] * kab
     return E
 
 
@@ -103,7 +119,8 @@ def _dense(disc: Discretisation, E: np.ndarray, m: int | None = None) -> np.ndar
     if m is not None:
         kabs = 2.0 * np.pi * abs(m) / disc.length
         if disc.x_map is not None:
-            # (1/g') |∂_s| couples the modes through the harmonics of 1/g': kept to its mean
+            # (1/g') |∂_s|: its mean here, the first harmonics in the neighbouring blocks
+            # (coupling_factors)
             kabs *= float(np.mean(disc.map_metric[0]))
         dy = (np.eye(mm), g.D, g.D2)
         for r, f in enumerate(UNKNOWNS[1:], start=1):
