@@ -64,6 +64,7 @@ def steps(a, C: np.ndarray, prev: np.ndarray, h_prev: float, x0: float) -> list[
     from chuteflow.closures import ChuteModel
     from chuteflow.dns import DnsSimulation, NewtonSettings, Stepper
     from chuteflow.dns.diagnostics import fourier_tail
+    from chuteflow.dns.remap import remap_coefficients
     from chuteflow.dns.setup import history_coefficients
     from chuteflow.dns.xmap import TanMap
     from chuteflow.spectral import fourier_evaluate
@@ -80,7 +81,8 @@ def steps(a, C: np.ndarray, prev: np.ndarray, h_prev: float, x0: float) -> list[
     for nx in (int(v) for v in a.mapped_nx.split(",")):
         for beta in (float(b) for b in a.betas.split(",") if float(b) < 1):
             dm = dataclasses.replace(du, modes=(nx - 1) // 2, nxp=0, x_map=TanMap(x0, beta, L))
-            Cm, Pm = (dm.to_modes(fourier_evaluate(X, dm.x, L)) for X in (C, C_prev))
+            # (the run's own rule: DnsSimulation.refine with x_map)
+            Cm, Pm = (remap_coefficients(X, du, dm) for X in (C, C_prev))
             grids.extend((f"nx {nx}, β {beta:g}", dm, pc, Cm, Pm) for pc in a.preconditioners.split(","))
     rows, ref = [], None
     for name, d, pc, C0, P0 in grids:
