@@ -15,6 +15,7 @@ from .discretisation import Discretisation
 __all__ = [
     "bdf2_eigenvalue",
     "fourier_tail",
+    "spectrum_share",
     "measure_mode",
     "resolution_tails",
     "wave_measures",
@@ -50,23 +51,30 @@ def measure_mode(t: np.ndarray, amplitude: np.ndarray, k: float) -> dict[str, fl
     return {"growth_rate": float(gr), "omega": float(om), "phase_velocity": float(-om / k) if k else math.nan}
 
 
+def spectrum_share(S: np.ndarray, first: int) -> float:
+    """The share of the modes m ≥ ``first`` in a spectrum S (fields, nodes, modes 0 …): for each
+    field the largest |Ŝ_m(y_j)|, m ≥ ``first``, over the largest of all m ≥ 1; the largest
+    over the fields; 0 where there are no such modes or for a field whose modes m ≥ 1 are below
+    1e-12 of its mean (a wave at the round-off level, an unperturbed run, has no spectrum to
+    judge). :func:`fourier_tail` (the top eighth) and
+    :func:`~chuteflow.dns.remap.lost_fraction` (beyond a grid's modes) are this."""
+    if S.shape[-1] < 2 or first >= S.shape[-1]:
+        return 0.0
+    a = np.abs(S[:, :, 1:]).max(axis=1)  # (fields, modes − 1): the largest over the nodes
+    peak = a.max(axis=1)
+    ok = peak > 1e-12 * (np.abs(S[:, :, 0]).max(axis=1) + 1.0)
+    if not ok.any():
+        return 0.0
+    return float((a[ok, max(first, 1) - 1 :].max(axis=1) / peak[ok]).max())
+
+
 def fourier_tail(C: np.ndarray) -> float:
     """The x tail of :func:`resolution_tails` of coefficients C (fields, nodes, M + 1): for each
     field the largest |Ĉ_m(y_j)| of the top eighth of the modes m ≥ 1 (at least M) over the
     largest of all m ≥ 1, the largest over the fields; 0 for M = 0 or a field whose modes
-    m ≥ 1 are below 1e-12 of its mean."""
+    m ≥ 1 are below 1e-12 of its mean (:func:`spectrum_share`)."""
     M = C.shape[-1] - 1
-    x_tail = 0.0
-    if M >= 1:
-        a = np.abs(C[:, :, 1:]).max(axis=1)  # (fields, M): the largest over the nodes
-        top = max(1, M // 8)
-        scale = np.abs(C[:, :, 0]).max(axis=1) + 1.0
-        for f in range(C.shape[0]):
-            peak = a[f].max()
-            # a wave at the round-off level (an unperturbed run) has no spectrum to judge
-            if peak > 1e-12 * scale[f]:
-                x_tail = max(x_tail, float(a[f, -top:].max() / peak))
-    return x_tail
+    return spectrum_share(C, M - max(1, M // 8) + 1) if M >= 1 else 0.0
 
 
 def resolution_tails(disc: Discretisation, C: np.ndarray) -> dict[str, float]:

@@ -19,7 +19,7 @@ import numpy as np
 import scipy.fft
 
 from ..spectral import fourier_evaluate
-from .diagnostics import fourier_tail
+from .diagnostics import fourier_tail, spectrum_share
 from .discretisation import Discretisation
 from .xmap import TanMap
 
@@ -108,13 +108,7 @@ def lost_fraction(S: np.ndarray, modes: int) -> float:
     """What a grid of ``modes`` modes cannot carry of a spectrum S (fields, nodes, modes): for
     each field the largest |Ŝ_m|, m > ``modes``, over the largest of all m ≥ 1; the largest
     over the fields (0 for a field without a wave, as :func:`fourier_tail`)."""
-    if S.shape[-1] <= modes + 1:
-        return 0.0
-    a = np.abs(S[:, :, 1:]).max(axis=1)
-    peak = a.max(axis=1)
-    scale = np.abs(S[:, :, 0]).max(axis=1) + 1.0
-    ok = peak > 1e-12 * scale
-    return float((a[ok, modes:].max(axis=1) / peak[ok]).max()) if ok.any() else 0.0
+    return spectrum_share(S, modes + 1)
 
 
 def _candidate(disc: Discretisation, C: np.ndarray, modes: int, x_map: TanMap | None) -> GridChoice:
