@@ -3,7 +3,8 @@
 References: the per-mode linearisation :meth:`Discretisation.linear_blocks` (built from
 :func:`chuteflow.equations.compiled_equations`, itself checked against the finite-difference
 Jacobian in test_dns.py) for the coefficients, the algebraic identity P⁻¹ P = 1 for the
-factorisation, and the step of the x-mean preconditioner for the Newton solution.
+factorisations (the periodic block-tridiagonal LU against a dense solve), and the step of the
+x-mean preconditioner for the Newton solution.
 """
 
 from __future__ import annotations
@@ -14,8 +15,9 @@ import numpy as np
 import pytest
 
 from chuteflow.closures import ChuteModel
-from chuteflow.dns import Discretisation, Stepper
-from chuteflow.dns.columns import ColumnPreconditioner, column_coefficients, column_matrix
+from chuteflow.dns import Discretisation, Stepper, cyclic
+from chuteflow.dns.columns import ColumnPreconditioner, column_blocks, column_coefficients, column_matrix
+from chuteflow.dns.cyclic import CyclicBlockLU
 from chuteflow.dns.discretisation import BDF2
 from chuteflow.dns.stepper import NewtonSettings
 from chuteflow.steady import solve_steady
@@ -48,23 +50,25 @@ def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
     """At an x-independent state the column matrix with exact y-derivatives is diagonal in
     the modes, and its block of mode m is the per-mode Jacobian (linear_blocks) with
     ik → i sin(kh)/h and (ik)² → −(2 − 2cos kh)/h² (central differences), |k| of the top rows
-    exact."""
+    by its circulant's three middle diagonals, h_0 + 2 h_1 cos kh."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 2, frame=7.8)
     C = _steady(d, p1)
     st = Stepper(d)
     hist = (st.physical(C), st.physical(C))
     dt = 3.0
-    J = column_matrix(d, column_coefficients(d, C, hist, dt, BDF2), y="chebyshev")
-    P = ColumnPreconditioner(d, J)
+    coefs = column_coefficients(d, C, hist, dt, BDF2)
+    J = column_matrix(d, coefs, y="chebyshev")
+    P = ColumnPreconditioner(d, column_blocks(d, coefs, y="chebyshev"), "cyclic")
     blocks = d.linear_blocks(C)
     m, nx = d.n + 1, 2 * d.modes + 1
     h = d.length / nx
+    circ = np.fft.irfft(np.abs(d.k), n=nx)
     for mode in (1, 2):
         k = d.k[mode]
         d1 = 1j * math.sin(k * h) / h
         d2 = -(2 - 2 * math.cos(k * h)) / h**2
         ref = (
-            blocks["K"] * k
+            blocks["K"] * (circ[0] + 2 * circ[1] * math.cos(k * h))
             + blocks["Bt"] * (1.5 / dt - d.frame * d1)
             + blocks["pieces"].get(0, 0)
             + d1 * blocks["pieces"].get(1, 0)
@@ -83,20 +87,25 @@ def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
             assert np.abs(out[:, :, mode].ravel() - ref[:, j]).max() <= 1e-5 * scale + 1e-6, (mode, j)
 
 
-def test_column_preconditioner_is_the_inverse_of_its_matrix(p1):
-    """apply(R) solves the assembled matrix exactly (to round-off) at a finite-amplitude state."""
+@pytest.mark.parametrize(("order", "y"), [(2, "fd"), (2, "chebyshev"), (4, "fd")])
+def test_column_preconditioner_is_the_inverse_of_its_matrix(p1, order, y):
+    """apply(R) solves the assembled matrix exactly (to round-off) at a finite-amplitude state:
+    by the periodic block-tridiagonal LU (order 2) and by the sparse LU (order 4)."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 16, 4, frame=7.8)
     C = _wave(d, p1, 0.2)
     st = Stepper(d)
     hist = (st.physical(C), st.physical(C))
-    P = ColumnPreconditioner.build(d, C, hist, 4.0, BDF2)
+    P = ColumnPreconditioner.build(d, C, hist, 4.0, BDF2, order, y)
+    assert isinstance(P._lu, CyclicBlockLU) == (order == 2 and y == "chebyshev")
+    J = column_matrix(d, column_coefficients(d, C, hist, 4.0, BDF2), order, y)
     rng = np.random.default_rng(1)
     R = rng.normal(size=d.shape) + 1j * rng.normal(size=d.shape)
     R[..., 0] = R[..., 0].real
     x = P.apply(R)
-    lhs = P.matrix @ P.to_points(x)
+    lhs = J @ P.to_points(x)
     rhs = P.to_points(R)
     assert np.abs(lhs - rhs).max() <= 1e-9 * np.abs(rhs).max()
+    assert P.nbytes > 0
     # and the points ↔ modes maps are inverse to each other
     assert np.allclose(P.to_modes(P.to_points(R)), R, rtol=0, atol=1e-13)
 
@@ -116,7 +125,7 @@ def test_the_column_matrix_in_y_is_the_finite_difference_one(p1):
     V = np.zeros(d.shape, complex)
     V[1, :, 1] = 0.3 - 0.1 * y + 0.02 * y**2  # u, mode 1: a quadratic in y
     V[3, :, 0] = 1.0 + 0.05 * y**2  # T, mode 0
-    P = ColumnPreconditioner(d, cheb)
+    P = ColumnPreconditioner(d, column_blocks(d, coefs, y="chebyshev"))
     a, b = fd @ P.to_points(V), cheb @ P.to_points(V)
     assert np.abs(a - b).max() <= 1e-9 * np.abs(b).max()
     assert fd.nnz < 0.3 * cheb.nnz
@@ -124,12 +133,74 @@ def test_the_column_matrix_in_y_is_the_finite_difference_one(p1):
         NewtonSettings(column_y="spline")
 
 
+def test_the_two_factorisations_give_the_same_correction(p1):
+    """The block-tridiagonal and the sparse LU of the same blocks (finite differences in y,
+    a ±20 % wave) apply the same inverse to round-off; a wrong choice is a one-line error."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 16, 4, frame=7.8)
+    C = _wave(d, p1, 0.2)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    blocks = column_blocks(d, column_coefficients(d, C, hist, 4.0, BDF2))
+    R = np.random.default_rng(2).normal(size=d.shape) + 0j
+    a = ColumnPreconditioner(d, blocks, "cyclic").apply(R)
+    b = ColumnPreconditioner(d, blocks, "sparse").apply(R)
+    assert np.abs(a - b).max() <= 1e-10 * np.abs(b).max()
+    with pytest.raises(ValueError, match="factorisation = 'lu'"):
+        ColumnPreconditioner(d, blocks, "lu")
+    with pytest.raises(ValueError, match="three blocks per point"):
+        ColumnPreconditioner(d, column_blocks(d, column_coefficients(d, C, hist, 4.0, BDF2), 4), "cyclic")
+
+
+def _cyclic(rng, n, b, coupling):
+    """Random periodic block-tridiagonal blocks, diagonally dominant, and the dense matrix."""
+    D = rng.normal(size=(n, b, b)) + 4 * b**0.5 * np.eye(b)
+    lower, upper = coupling * rng.normal(size=(2, n, b, b))
+    A = np.zeros((n * b, n * b))
+    for i in range(n):
+        for o, blk in ((0, D), (-1, lower), (1, upper)):
+            j = (i + o) % n
+            A[i * b : (i + 1) * b, j * b : (j + 1) * b] += blk[i]
+    return D, lower, upper, A
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 40])
+def test_cyclic_block_lu_solves_the_periodic_matrix(n):
+    """CyclicBlockLU against a dense solve (LAPACK): every n from the degenerate ones (the
+    offsets coincide for n ≤ 2) to one long enough that the border's fill is dropped."""
+    rng = np.random.default_rng(n)
+    D, lower, upper, A = _cyclic(rng, n, 6, 1.0)
+    lu = CyclicBlockLU(D, lower, upper)
+    rhs = rng.normal(size=n * 6)
+    x = lu.solve(rhs)
+    assert np.abs(x - np.linalg.solve(A, rhs)).max() <= 1e-12 * np.abs(x).max()
+    assert lu.nbytes > 0
+
+
+def test_cyclic_block_lu_drops_only_negligible_border_blocks(monkeypatch):
+    """The periodic corner's fill decays along x; blocks below BORDER_DROP of the largest are
+    dropped (fewer kept than there are rows), and the solve moves by less than BORDER_DROP
+    relative to keeping them all."""
+    rng = np.random.default_rng(3)
+    D, lower, upper, A = _cyclic(rng, 60, 5, 0.5)
+    rhs = rng.normal(size=60 * 5)
+    lu = CyclicBlockLU(D, lower, upper)
+    assert 2 <= len(lu._rows_r) < 59
+    assert 2 <= len(lu._rows_b) < 59
+    drop = cyclic.BORDER_DROP
+    monkeypatch.setattr(cyclic, "BORDER_DROP", 0.0)
+    full = CyclicBlockLU(D, lower, upper)
+    assert len(full._rows_r) == 59
+    x, y = lu.solve(rhs), full.solve(rhs)
+    assert np.abs(y - np.linalg.solve(A, rhs)).max() <= 1e-13 * np.abs(y).max()
+    assert np.abs(x - y).max() <= drop * np.abs(y).max()
+
+
 def test_bad_column_settings_name_the_parameter_and_the_choices():
     """A one-line error naming the parameter and what it may be (the guide's bad input)."""
     with pytest.raises(ValueError, match=r"column_order = 3: choose 2 or 4 \(the order"):
         NewtonSettings(column_order=3)
     assert NewtonSettings().columns_nx_limit == 257
-    assert NewtonSettings(column_y="chebyshev").columns_nx_limit == 129
+    assert NewtonSettings(column_y="fd").columns_nx_limit == 257
     assert NewtonSettings(columns_max_nx=65).columns_nx_limit == 65
 
 
@@ -174,10 +245,10 @@ def test_auto_switches_to_columns(p1):
 
 
 def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
-    """``NewtonSettings.columns_max_nx``: the column LU fills in with nx (Chebyshev blocks,
-    P5, N = 64: 0.75 GB and 16 s at nx = 129, > 4.9 GB and 15 min at 257; a run refined to
-    513 was killed at 24 GB; finite differences in y: 0.48 GB at 257, 1.15 GB at 513). The
-    default limit follows the y-derivatives (257 and 129). On a finer grid ``"auto"`` goes
+    """``NewtonSettings.columns_max_nx``: the column factors grow with nx (the block LU of
+    the Chebyshev blocks at P5's mapped bore, N = 96: 0.66 GB at nx = 129, 1.28 GB at 257;
+    the general sparse LU of the same matrix filled 2.2 GB at 129, and a run refined to 513
+    on it was killed at 24 GB); the default limit is 257. On a finer grid ``"auto"`` goes
     over to the coupled blocks where it would take the columns, ``"columns"`` starts with
     them, and the coupled blocks stay; the step still converges."""
     d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 24, 6, frame=7.8)  # nx = 13
@@ -195,7 +266,6 @@ def test_a_grid_too_fine_for_the_columns_takes_the_coupled_blocks(p1):
     st.step(C, hist, 4.0, first=True)
     assert st.kind == "coupled"
     assert NewtonSettings().columns_nx_limit == 257
-    assert NewtonSettings(column_y="chebyshev").columns_nx_limit == 129
-    assert NewtonSettings(column_y="chebyshev", columns_max_nx=65).columns_nx_limit == 65
+    assert NewtonSettings(column_y="fd", columns_max_nx=65).columns_nx_limit == 65
     with pytest.raises(ValueError, match="columns_max_nx"):
         NewtonSettings(columns_max_nx=0)

@@ -13,26 +13,26 @@ Jacobian of the pointwise rows (:meth:`Discretisation.pointwise_rows`) with
   differences, so nothing of the physics is restated here — projected onto the modes m ≤ M
   and evaluated at the x_i;
 * x-derivatives by the second-order periodic central differences on the x_i, y-derivatives
-  by second-order finite differences on the Chebyshev nodes (``y="fd"``, the default:
+  exact (``y="chebyshev"``, the dense Chebyshev matrices; the stepper's default) or by
+  second-order finite differences on the Chebyshev nodes (``y="fd"``:
   :func:`~chuteflow.spectral.fd_matrices`; finite differences precondition collocation
-  uniformly in N, Orszag 1980) or exact (``y="chebyshev"``, the dense Chebyshev matrices) —
-  the approximations of this preconditioner;
-* the per-mode top conditions of u, v, T (eq. (4.5)) exact: |k| as the circulant matrix of
-  its symbol on the x_i.
+  uniformly in N, Orszag 1980) — the approximations of this preconditioner;
+* the per-mode top conditions of u, v, T (eq. (4.5)), |k| by its circulant matrix on the x_i
+  restricted to the neighbours the x-differences reach (the whole circulant served no better:
+  :func:`column_blocks`).
 
 The matrix is block tridiagonal and periodic in x (blocks 4(N+1) square: dense with the
-Chebyshev matrices, banded with the finite differences) plus the coupling of the top nodes by
-|k|; it is factorised once by :func:`scipy.sparse.linalg.splu` and reused across steps
-(docs/dns.md, *Solver*). With the finite differences in y its LU is 3.5 times smaller and
-seven to ten times faster to build at P1, L = 2000 (nx = 97, N = 64), for 1.5 times the GMRES
-iterations: 1.8–2.1 times less wall time per unit of simulated time at ±80 % (docs/dns.md,
-*Finite differences in y*). The uniform mass source λ of the mode-0 mass rows is left out,
+Chebyshev matrices, banded with the finite differences), factorised once and reused across
+steps (docs/dns.md, *Solver*): the dense blocks by the periodic block-tridiagonal LU
+(:class:`~chuteflow.dns.cyclic.CyclicBlockLU`: at P5's mapped bore, 129 × 96, 5.5 s where the
+general sparse LU took 290 s and 2.2 GB), the banded ones by :func:`scipy.sparse.linalg.splu`.
+The uniform mass source λ of the mode-0 mass rows is left out,
 as in the per-mode preconditioner.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import InitVar, dataclass, field
 
 import numpy as np
 import scipy.sparse as sps
@@ -40,11 +40,13 @@ from scipy.sparse.linalg import splu
 
 from ..errors import ParameterError
 from ..spectral import fd_matrices
+from .cyclic import CyclicBlockLU
 from .discretisation import BDF2, UNKNOWNS, Discretisation
 
 __all__ = [
     "ColumnPreconditioner",
     "PRIMITIVE_JETS",
+    "column_blocks",
     "column_coefficients",
     "check_column_order",
     "check_column_y",
@@ -70,14 +72,16 @@ _STENCIL4 = {
 }
 #: Orders of the x-differences of the column preconditioner.
 ORDERS = (2, 4)
-#: How the column preconditioner differentiates in y (:func:`column_matrix`).
-Y_DERIVATIVES = ("fd", "chebyshev")
-#: The largest x grid of the column preconditioner by default, per way of differentiating
-#: in y (:attr:`~chuteflow.dns.NewtonSettings.columns_nx_limit`): beyond it the sparse LU
-#: fills in. Measured at P1, L = 2000, N = 64: with "fd" nx = 257 costs 0.48 GB of factors
-#: and 5.7 s to build (513: 1.15 GB, 20 s); with "chebyshev" nx = 129 costs 0.75 GB and
-#: 16 s, nx = 257 more than 4.9 GB and 15 min (docs/dns.md, *Finite differences in y*).
-NX_LIMIT = {"fd": 257, "chebyshev": 129}
+#: How the column preconditioner differentiates in y (:func:`column_blocks`).
+Y_DERIVATIVES = ("chebyshev", "fd")
+#: How :class:`ColumnPreconditioner` factorises its matrix.
+FACTORISATIONS = ("cyclic", "sparse")
+#: The largest x grid of the column preconditioner by default
+#: (:attr:`~chuteflow.dns.NewtonSettings.columns_nx_limit`), either way of differentiating in
+#: y: the factors grow with nx (at N = 96, Chebyshev blocks at P5's mapped bore: 0.66 GB and
+#: 5.3 s at nx = 129, 1.28 GB and 8.5 s at 257, peak 2.4 GB; finite differences, a ±20 % wave
+#: of P1: 0.78 GB and 12 s at 257, 1.76 GB and 35 s at 513; docs/dns.md, *Solver*).
+NX_LIMIT = 257
 
 
 def check_column_order(order: int) -> int:
@@ -154,30 +158,35 @@ def check_column_y(y: str) -> str:
     """``y`` if it names a way of :func:`y_matrices`, else a one-line ParameterError."""
     if y not in Y_DERIVATIVES:
         raise ParameterError(
-            f"column_y = {y!r}: choose 'fd' (finite differences in y, a sparse LU) or 'chebyshev' "
-            "(the exact y-derivatives, a dense block per x point) for the column preconditioner"
+            f"column_y = {y!r}: choose 'chebyshev' (the exact y-derivatives, a dense block per x point) "
+            "or 'fd' (finite differences in y, a sparse LU) for the column preconditioner"
         )
     return y
 
 
-def y_matrices(disc: Discretisation, y: str = "fd") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(1, d/dy, d²/dy²) on the Chebyshev nodes of ``disc``: second-order finite differences
-    (``y="fd"``, :func:`~chuteflow.spectral.fd_matrices`) or the grid's Chebyshev matrices
-    (``"chebyshev"``)."""
+def y_matrices(disc: Discretisation, y: str = "chebyshev") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(1, d/dy, d²/dy²) on the Chebyshev nodes of ``disc``: the grid's Chebyshev matrices
+    (``y="chebyshev"``) or second-order finite differences (``"fd"``,
+    :func:`~chuteflow.spectral.fd_matrices`)."""
     check_column_y(y)
     g = disc.grid
     D, D2 = fd_matrices(g.y) if y == "fd" else (g.D, g.D2)
     return np.eye(disc.n + 1), D, D2
 
 
-def column_matrix(
-    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2, y: str = "fd"
-) -> sps.csc_matrix:
-    """The sparse matrix of the preconditioner, unknowns ordered (x_i, field, y_j).
+def column_blocks(
+    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2, y: str = "chebyshev"
+) -> dict[int, np.ndarray]:
+    """The blocks of the preconditioner's matrix by x-offset: ``blocks[o][i]`` (4(N+1) square,
+    unknowns (field, y_j)) couples the point x_i to x_{i+o} (indices modulo 2M + 1), o = −1, 0, 1
+    for ``order`` 2 (and −2 … 2 for 4).
 
     ``coefficients`` as from :func:`column_coefficients`; x-differences of ``order`` 2 or 4,
     y-derivatives by :func:`y_matrices` (``y``). Rows of the top node of u, v, T are the
-    per-mode top conditions (with |k| as a circulant matrix on the x_i).
+    per-mode top conditions, |k| (on a mapped grid (1/g') |∂_s|) as its circulant on the x_i
+    restricted to the offsets the x-differences reach: at P5's mapped bore (129 × 96, Δt 8)
+    the fd-y columns took 145, 156, 156 GMRES iterations with the whole circulant and with its
+    nearest neighbours alone (docs/dns.md, *Solver*), so the matrix keeps the block structure.
     """
     m, nx = disc.n + 1, 2 * disc.modes + 1
     hx = disc.length / nx
@@ -198,30 +207,39 @@ def column_matrix(
             # block[i][(r, j), (fc, j')] += W[r, j, i] · dy[c][j, j']
             blk = W.transpose(2, 0, 1)[..., None] * dy[c][None, None]  # (nx, 4, m, m)
             blocks[o][:, :, fc * m : (fc + 1) * m] += blk.reshape(nx, 4 * m, m)
-    # top conditions of u, v, T: Σ coef |k|^p (D^c f)(y_max), |k|^p the circulant of its symbol
-    # (on a mapped grid (1/g') |∂_s|: Discretisation.abs_dx)
+    # top conditions of u, v, T: Σ coef |k|^p (D^c f)(y_max), |k|^p by its circulant h_{i − i'}
     kabs = np.abs(disc.k)
     a_pts = np.ones(nx) if disc.x_map is None else 1.0 / disc.x_map.dx_ds(np.arange(nx) * hx)
-    rows, cols, vals = [], [], []
     for r, f in enumerate(UNKNOWNS[1:], start=1):
+        top = r * m + m - 1
         for c, kpow, coef in disc._top_terms[f]:
             dtop = dy[c][-1]
             if kpow == 0:
-                blocks[0][:, r * m + m - 1, r * m : (r + 1) * m] += coef * dtop
+                blocks[0][:, top, r * m : (r + 1) * m] += coef * dtop
                 continue
-            circ = np.fft.irfft(kabs**kpow, n=nx)  # h_{i − i'}
-            H = circ[(np.arange(nx)[:, None] - np.arange(nx)[None, :]) % nx]
-            ii, kk, jj = np.nonzero(np.ones((nx, nx, m)) * (dtop != 0)[None, None])
-            rows.append((ii * 4 + r) * m + m - 1)
-            cols.append((kk * 4 + r) * m + jj)
-            vals.append(coef * a_pts[ii] * H[ii, kk] * dtop[jj])
-    n_tot = 4 * m * nx
-    size = 4 * m
+            circ = np.fft.irfft(kabs**kpow, n=nx)
+            for o in blocks:
+                blocks[o][:, top, r * m : (r + 1) * m] += (coef * a_pts * circ[-o % nx])[:, None] * dtop
+    return blocks
+
+
+def column_matrix(
+    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2, y: str = "chebyshev"
+) -> sps.csc_matrix:
+    """The sparse matrix of the preconditioner, unknowns ordered (x_i, field, y_j): the blocks
+    of :func:`column_blocks` (the same arguments) assembled."""
+    return _assemble(column_blocks(disc, coefficients, order, y))
+
+
+def _assemble(blocks: dict[int, np.ndarray]) -> sps.csc_matrix:
+    nx, size, _ = blocks[0].shape
+    rows, cols, vals = [], [], []
     for o, blk in blocks.items():
         bi, br, bc = np.nonzero(blk)
         rows.append(bi * size + br)
         cols.append(((bi + o) % nx) * size + bc)
         vals.append(blk[bi, br, bc])
+    n_tot = size * nx
     J = sps.csc_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_tot, n_tot)
     )
@@ -238,16 +256,42 @@ class ColumnPreconditioner:
     ----------
     disc : Discretisation
         Grid and equations.
-    matrix : scipy.sparse.csc_matrix
-        The assembled matrix (:func:`column_matrix`).
+    blocks : dict of int to ndarray
+        The blocks by x-offset (:func:`column_blocks`; an init-only argument: the factors
+        alone are kept).
+    factorisation : {"cyclic", "sparse"}
+        ``"cyclic"``: the periodic block-tridiagonal LU
+        (:class:`~chuteflow.dns.cyclic.CyclicBlockLU`; three blocks per point, i.e.
+        second-order x-differences); ``"sparse"``: the sparse LU of the assembled matrix
+        (``scipy.sparse.linalg.splu``, COLAMD). :meth:`build` takes the first for dense
+        blocks (exact Chebyshev y-derivatives; at P5's mapped bore, 129 × 96: 5.5 s and
+        0.6 GB where ``splu`` took 290 s and 2.2 GB) and the second for the banded blocks of
+        the finite differences (there ``splu``'s solve reads less: 44 against 58 ms per GMRES
+        iteration on the same state; docs/dns.md, *Solver*).
     """
 
     disc: Discretisation
-    matrix: sps.csc_matrix
+    blocks: InitVar[dict[int, np.ndarray]]
+    factorisation: str = "sparse"
     _lu: object = field(init=False, repr=False)
+    _nnz: int = field(init=False, repr=False, default=0)
 
-    def __post_init__(self):
-        self._lu = splu(self.matrix, permc_spec="COLAMD")
+    def __post_init__(self, blocks: dict[int, np.ndarray]):
+        if self.factorisation not in FACTORISATIONS:
+            raise ParameterError(
+                f"factorisation = {self.factorisation!r}: choose 'cyclic' (block-tridiagonal) or 'sparse'"
+            )
+        if self.factorisation == "cyclic":
+            if set(blocks) != {-1, 0, 1}:
+                raise ParameterError(
+                    "factorisation = 'cyclic' needs three blocks per point (second-order x-differences, "
+                    "column_order = 2)"
+                )
+            self._lu = CyclicBlockLU(blocks[0], blocks[-1], blocks[1])
+        else:
+            matrix = _assemble(blocks)
+            self._nnz = int(matrix.data.nbytes + matrix.indices.nbytes)
+            self._lu = splu(matrix, permc_spec="COLAMD")
 
     @classmethod
     def build(
@@ -258,19 +302,22 @@ class ColumnPreconditioner:
         dt: float,
         bdf=BDF2,
         order: int = 2,
-        y: str = "fd",
+        y: str = "chebyshev",
     ) -> ColumnPreconditioner:
-        """Coefficients at the state ``C`` (:func:`column_coefficients`), matrix (x-differences
-        of ``order`` 2 or 4, y-derivatives by ``y``: :func:`y_matrices`), factorisation."""
-        return cls(disc, column_matrix(disc, column_coefficients(disc, C, history, dt, bdf), order, y))
+        """Coefficients at the state ``C`` (:func:`column_coefficients`), blocks (x-differences
+        of ``order`` 2 or 4, y-derivatives by ``y``: :func:`column_blocks`), factorisation
+        (``"cyclic"`` for the dense blocks of ``y="chebyshev"`` at ``order`` 2, else
+        ``"sparse"``)."""
+        blocks = column_blocks(disc, column_coefficients(disc, C, history, dt, bdf), order, y)
+        return cls(disc, blocks, "cyclic" if order == 2 and y == "chebyshev" else "sparse")
 
     @property
     def nbytes(self) -> int:
-        """Memory of the matrix and its LU factors (bytes)."""
+        """Memory of the factors (bytes)."""
         lu = self._lu
-        return int(
-            self.matrix.data.nbytes + self.matrix.indices.nbytes + 12 * (lu.L.nnz + lu.U.nnz)  # type: ignore[attr-defined]
-        )
+        if isinstance(lu, CyclicBlockLU):
+            return lu.nbytes
+        return self._nnz + 12 * int(lu.L.nnz + lu.U.nnz)  # type: ignore[attr-defined]
 
     def to_points(self, R: np.ndarray) -> np.ndarray:
         """Coefficients (4, N+1, M+1) → vector of values at (x_i, field, y_j)."""

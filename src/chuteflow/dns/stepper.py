@@ -107,28 +107,28 @@ class NewtonSettings:
         ``"coupled"``, after a solve right after its blocks were built).
     column_order : {2, 4}
         Order of the x-differences of the column preconditioner
-        (:func:`~chuteflow.dns.columns.column_matrix`).
-    column_y : {"fd", "chebyshev"}
-        Its y-derivatives: second-order finite differences on the Chebyshev nodes (a banded
-        block per x point: at P1, L = 2000, nx = 97, N = 64, an LU 3.5 times smaller, built
-        in 1.7 s instead of 11–17 s and applied in 16–19 ms instead of 39–47, for 82 GMRES
-        iterations per step at Δt = 4 instead of 55: 1.8–2.1 times less wall time per unit
-        of simulated time at ±80 %) or the exact Chebyshev matrices (docs/dns.md, *Finite
-        differences in y*).
+        (:func:`~chuteflow.dns.columns.column_blocks`).
+    column_y : {"chebyshev", "fd"}
+        Its y-derivatives: the exact Chebyshev matrices (default; a dense block per x point,
+        factorised by the periodic block-tridiagonal LU,
+        :class:`~chuteflow.dns.cyclic.CyclicBlockLU`) or second-order finite differences on
+        the Chebyshev nodes (a banded block per x point, the sparse LU). Continuing a state
+        for a span of time under the step control: at P5's mapped bore (L = 2000, 129 × 96)
+        96 time units in 31 s against 100 s (Δt 8 held against falling to 4); at P1's
+        ±80 % wave (L = 2000, 97 × 64) 200 in 41 s against 37 (docs/dns.md, *The
+        block-tridiagonal LU*).
     columns_max_nx : int or None
         Largest x grid (2M + 1 points) on which the column preconditioner is built; on a
         finer one the coupled blocks serve instead (``"columns"`` and ``"auto"`` included).
-        None (default): 257 with ``column_y="fd"``, 129 with ``"chebyshev"``
-        (:attr:`columns_nx_limit`). The sparse LU of the columns fills in (the top conditions
-        couple every column through |k|). With the Chebyshev blocks, at P5's ±6 … 18 % wave
-        (L = 2000, N = 64) nx = 33, 65, 129 cost 0.16, 0.34, 0.75 GB of factors and 3, 6,
-        16 s, nx = 257 more than 4.9 GB and 15 min, and a run refined to nx = 513 was killed
-        for memory at 24 GB; with the finite differences in y (a ±20 % wave of P1,
-        L = 2000) nx = 97, 129, 257, 513 cost 0.15, 0.21, 0.48, 1.15 GB and 1.6, 2.3, 5.7,
-        20 s at N = 64, and 0.33, 0.78, 1.76 GB and 4.4, 12, 35 s at N = 96 (nx = 129, 257,
-        513); the coupled blocks cost 1.0 GB and 5 s at nx = 257, 1.8 GB and 9 s at 513
-        (docs/dns.md, *The column preconditioner (large amplitude)*). The threshold is on
-        nx alone.
+        None (default): 257 (:data:`~.columns.NX_LIMIT`, :attr:`columns_nx_limit`). The
+        factors grow with nx: with the Chebyshev blocks (block-tridiagonal LU, P5's mapped
+        bore, N = 96) 0.66 GB and 5.3 s at nx = 129, 1.28 GB and 8.5 s at 257 (linear in
+        nx; the general sparse LU of the same matrix took 2.2 GB and 290 s at 129); with the
+        finite differences in y (a ±20 % wave of P1, L = 2000) nx = 97, 129, 257, 513 cost
+        0.15, 0.21, 0.48, 1.15 GB and 1.6, 2.3, 5.7, 20 s at N = 64, and 0.33, 0.78, 1.76 GB
+        and 4.4, 12, 35 s at N = 96 (nx = 129, 257, 513); the coupled blocks cost 1.0 GB and
+        5 s at nx = 257, 1.8 GB and 9 s at 513 (docs/dns.md, *The column preconditioner
+        (large amplitude)*). The threshold is on nx alone.
     dt_tol : float
         Time-step control (docs/dns.md, *Solver*): 0 (default) keeps the run's Δt; > 0 lets
         :class:`~chuteflow.dns.DnsSimulation` double and halve Δt by the size of the step's
@@ -161,7 +161,7 @@ class NewtonSettings:
     switch_krylov: int = 60
     coupled_krylov: int = 20
     column_order: int = 2
-    column_y: str = "fd"
+    column_y: str = "chebyshev"
     columns_max_nx: int | None = None
     dt_tol: float = 0.0
     dt_max: float = 0.0
@@ -201,11 +201,10 @@ class NewtonSettings:
     @property
     def columns_nx_limit(self) -> int:
         """The largest x grid of the column preconditioner: ``columns_max_nx``, by default
-        :data:`~.columns.NX_LIMIT` by ``column_y`` (257 with the finite differences
-        in y, 129 with the Chebyshev blocks)."""
+        :data:`~.columns.NX_LIMIT` (257)."""
         if self.columns_max_nx is not None:
             return self.columns_max_nx
-        return NX_LIMIT[self.column_y]
+        return NX_LIMIT
 
 
 def step_settings(
