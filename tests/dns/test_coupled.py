@@ -193,3 +193,21 @@ def test_cli_preconditioner_coupled():
     assert r.exit_code == 2
     assert "preconditioner" in r.output
     assert "Traceback" not in r.output
+
+
+def test_a_diverging_iterate_fails_the_step_without_warnings(p1):
+    """An iterate that overflows (ln ν = 800: ν = e^800) makes a non-finite residual, which
+    fails the step with a ConvergenceError (the run's control repeats it with a shorter Δt);
+    the overflow itself is not reported as a RuntimeWarning (a P5 run printed 19 of them)."""
+    import warnings
+
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 16, 4, frame=7.8)
+    C = _wave(d, p1, 0.1)
+    st = Stepper(d, NewtonSettings(preconditioner="mean"))
+    hist = (st.physical(C), st.physical(C))
+    bad = C.copy()
+    bad[0, :, 0] = 800.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ConvergenceError):
+            st.step(C, hist, 4.0, guess=bad)

@@ -441,7 +441,24 @@ class Stepper:
         :meth:`Discretisation.mass_source`), so this changes the residual by less than the
         tolerance and makes the conservation hold to round-off.
         Raises :class:`~chuteflow.errors.ConvergenceError` if Newton does not converge.
+        Floating-point overflow in a diverging iterate is not reported as a warning: the
+        iterate's non-finite residual is what fails the step (and the caller's control
+        repeats it with a shorter Δt).
         """
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            return self._newton(C_now, history, dt, first=first, guess=guess, ratio=ratio)
+
+    def _newton(
+        self,
+        C_now: np.ndarray,
+        history: tuple,
+        dt: float,
+        *,
+        first: bool,
+        guess: np.ndarray | None,
+        ratio: float,
+    ):
+
         d, s = self.disc, self.settings
         w = float(ratio)
         bdf = BDF1 if first else ((1 + 2 * w) / (1 + w), -(1 + w), w * w / (1 + w))
