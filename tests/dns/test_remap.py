@@ -126,6 +126,18 @@ def test_a_smooth_wave_stays_uniform(p1):
     assert (ch.modes, ch.x_map) == (8, None)
 
 
+def test_the_modes_grow_by_half(p1):
+    """Where no map at the run's modes helps (a resolved sinusoid at M = 16), the next grid
+    has half as many modes again (24, to a multiple of 8), not twice (32): the doubling had
+    taken P1's x tail at L = 2000 to 1.7e-7 on a costly 193-point grid; capped by max_modes."""
+    sim = DnsSimulation(p1, L, time=4.0, dt=4.0, n=16, modes=16, init="mode", amplitude=0.01, x_map=True)
+    st = sim.run()
+    ch = best_grid(sim.disc, st.C, 64)
+    assert (ch.modes, ch.x_map) == (24, None)
+    assert ch.tail < 1e-10  # (the band-limited state, carried whole)
+    assert best_grid(sim.disc, st.C, 20).modes == 20
+
+
 def test_refine_to_a_map_keeps_the_mass_and_the_records(p1):
     """refine() with x_map: the state and its history level on the mapped grid, the total
     mass of both kept to round-off (a uniform shift of ln ν, as for the uniform refinement),

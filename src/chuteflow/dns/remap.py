@@ -4,8 +4,8 @@ and the state carried over to that grid.
 :class:`~chuteflow.dns.DnsSimulation` with ``x_map=True`` answers a rising x tail (the
 :class:`~chuteflow.trackers.ResolutionMonitor`'s ``"refine x"``) with :func:`best_grid`: the
 state re-represented on tan maps (:class:`~chuteflow.dns.xmap.TanMap`) centred at the
-front, with g'(x0) = β from :data:`BETAS`, at the run's modes first and at twice as many
-where no map at the run's modes lowers the tail enough. The re-representation
+front, with g'(x0) = β from :data:`BETAS`, at the run's modes first, and with half as many
+modes again where no map at the run's modes lowers the tail enough. The re-representation
 (:func:`remap_coefficients`) evaluates the run's Fourier series exactly at the new grid's
 points and projects onto its modes: the same function, apart from what the new grid cannot
 carry (its own tail, which is what the choice minimises).
@@ -13,6 +13,7 @@ carry (its own tail, which is what the choice minimises).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -123,21 +124,24 @@ def best_grid(disc: Discretisation, C: np.ndarray, max_modes: int, betas=BETAS) 
     """The x grid the run's state ``C`` (on ``disc``) goes to where its x tail rises.
 
     Candidates: the tan maps of strengths ``betas`` centred at :func:`front_position` (β = 1:
-    the uniform grid), at the run's modes and, where ``max_modes`` allows, at twice as many.
-    The best at the run's modes is taken where it lowers the tail at least
-    :data:`REMAP_GAIN` times below the run's; else the best at twice the modes; None where
-    neither exists (the modes at ``max_modes`` and no map helps: the run warns).
+    the uniform grid). The best at the run's modes M is taken where it lowers the tail at
+    least :data:`REMAP_GAIN` times below the run's; else the best at half as many modes again
+    (3M/2 to a multiple of 8, at most ``max_modes``; as the y grid grows, ``Y_REFINE``) —
+    there the run's own grid with more modes carries the band-limited state whole, so the
+    choice keeps it; None where neither exists (the modes at ``max_modes`` and no map helps:
+    the run warns). Until 2026-12-07 the modes doubled: at P1, L = 2000 (±68 %) that took
+    the x tail from 2.5e-5 to 1.7e-7, far below the 1e-4 the run asks for, on a 193 × 96
+    grid that cost 150 GMRES iterations a step (docs/dns.md).
     """
     centre = front_position(disc, C)
     now = fourier_tail(C)
-    choices = []
-    for modes in (disc.modes, 2 * disc.modes):
-        if modes > max_modes or modes < 1:
+    m = disc.modes
+    maps = [None if b == 1.0 else TanMap(centre, b, disc.length) for b in betas]
+    grown = min(8 * math.ceil(1.5 * m / 8), max_modes)
+    for modes in (m, grown) if grown > m else (m,):
+        if not 1 <= modes <= max_modes:
             continue
-        maps = [None if b == 1.0 else TanMap(centre, b, disc.length) for b in betas]
-        best = min((_candidate(disc, C, modes, m) for m in maps), key=lambda c: c.tail)
-        if modes == disc.modes and not best.tail * REMAP_GAIN <= now:
-            continue  # (the run's own grid, or one no better)
-        choices.append(best)
-        break
-    return choices[0] if choices else None
+        best = min((_candidate(disc, C, modes, mp) for mp in maps), key=lambda c: c.tail)
+        if modes > m or best.tail * REMAP_GAIN <= now:
+            return best
+    return None

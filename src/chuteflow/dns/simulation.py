@@ -360,7 +360,7 @@ class DnsSimulation:
         of ln ν (:func:`~chuteflow.dns.remap.best_grid`: the β of
         :data:`~chuteflow.dns.remap.BETAS` that minimises the tail, taken at the run's modes
         where it lowers the tail :data:`~chuteflow.dns.remap.REMAP_GAIN` times, else with
-        the modes doubled up to ``max_modes``); later rises re-centre the map on the moved
+        half as many modes again, up to ``max_modes``); later rises re-centre the map on the moved
         front the same way. The records, snapshots and the dataset stay on the uniform x
         grid (evaluated exactly from the mapped series). Default False: refinement doubles
         the uniform modes.
@@ -543,7 +543,7 @@ class DnsSimulation:
         """Refine the run's grid in place: double the x modes (at most ``max_modes``) or, with
         ``direction="y"``, grow the Chebyshev intervals by half (at most ``max_n``). With
         ``x_map``, an x refinement goes to the grid :func:`~chuteflow.dns.remap.best_grid`
-        chooses (a tan map centred at the front, at the run's modes or twice as many; the
+        chooses (a tan map centred at the front, at the run's modes or 3/2 as many; the
         state evaluated exactly at the new points, :func:`~chuteflow.dns.remap.remap_coefficients`).
 
         The state is the same function on the finer grid — its Fourier coefficients padded

@@ -285,7 +285,7 @@ class Stepper:
     @property
     def columns_fit(self) -> bool:
         """Whether the grid is coarse enough for the column preconditioner
-        (``NewtonSettings.columns_nx_limit``: its LU fills in beyond)."""
+        (``NewtonSettings.columns_nx_limit``: its factors grow with nx)."""
         return 2 * self.disc.modes + 1 <= self.settings.columns_nx_limit
 
     def use(self, kind: str) -> None:
