@@ -274,7 +274,7 @@ class ColumnPreconditioner:
     blocks: InitVar[dict[int, np.ndarray]]
     factorisation: str = "sparse"
     _lu: object = field(init=False, repr=False)
-    _nnz: int = field(init=False, repr=False, default=0)
+    _matrix_bytes: int = field(init=False, repr=False, default=0)
 
     def __post_init__(self, blocks: dict[int, np.ndarray]):
         if self.factorisation not in FACTORISATIONS:
@@ -290,7 +290,7 @@ class ColumnPreconditioner:
             self._lu = CyclicBlockLU(blocks[0], blocks[-1], blocks[1])
         else:
             matrix = _assemble(blocks)
-            self._nnz = int(matrix.data.nbytes + matrix.indices.nbytes)
+            self._matrix_bytes = int(matrix.data.nbytes + matrix.indices.nbytes)
             self._lu = splu(matrix, permc_spec="COLAMD")
 
     @classmethod
@@ -317,7 +317,7 @@ class ColumnPreconditioner:
         lu = self._lu
         if isinstance(lu, CyclicBlockLU):
             return lu.nbytes
-        return self._nnz + 12 * int(lu.L.nnz + lu.U.nnz)  # type: ignore[attr-defined]
+        return self._matrix_bytes + 12 * int(lu.L.nnz + lu.U.nnz)  # type: ignore[attr-defined]
 
     def to_points(self, R: np.ndarray) -> np.ndarray:
         """Coefficients (4, N+1, M+1) → vector of values at (x_i, field, y_j)."""
