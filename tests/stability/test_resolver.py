@@ -458,6 +458,44 @@ def test_a_fast_mode_near_the_top_continuum_is_a_mode():
     assert abs(m.alpha - (-0.002201971641 - 0.215659192228j)) < 1e-8
 
 
+def test_an_unstable_mode_whose_tail_falls_as_a_modes_near_the_top_continuum_is_a_mode():
+    """θ = 22.393°, ν0(0) = 0.0947, φ = 0.094, Φ = 0.436, (k_x, k_z) = (0.001278, 0.00738)
+    (``try_random_points --oblique 2 --check``, seed 645549): dense QZ on the mapped grid at
+    N = 118 and 150 (the independent method) has the unstable mode +0.001522197032 −
+    0.062702621945i (1e-12 apart; tails 1.5e-11, 1.8e-13). It lies 2.5e-3 from α_top =
+    −0.0646412i, inside the continuum radius 3.8e-3, and its tail fell ×0.125 from N = 48 to
+    60 (1.7e-5 → 2.1e-6), short of the tenfold of ``resolver.CONTINUUM_TAIL_FALL``: it was
+    decided the continuum and the stable −0.0068978 − 0.0722538i was reported as converged.
+    A tail that, falling on at the power of N it fell by (N^-9.3), passes the test by the
+    ladder's top is a mode's (the continuum's fall as N^-4.5): now the answer, converged at
+    N = 75 (drift 6.9e-8), within the drift threshold 1e-7 of the dense solves."""
+    from chuteflow import ChuteModel, solve_steady
+
+    flow = solve_steady(22.393, 0.0947, ChuteModel(roughness=0.094, wall_loss=0.436))
+    m = least_stable(flow, 0.001278, kz=0.00738)
+    assert m.converged, (m.alpha, m.note)
+    assert m.alpha.real > 0
+    assert abs(m.alpha - (0.001522197032 - 0.062702621945j)) < 1e-7, (m.alpha, m.note)
+
+
+def test_tail_converges_separates_a_modes_fall_from_the_continuums():
+    """``resolver._tail_converges`` on measured tails: the dilute top's continuum at θ =
+    21.373°, ν0(0) = 0.0082, (0.001326, 0.061321) (1.2e-2, 4.8e-3, 1.7e-3 at N = 48, 60, 75:
+    ×0.4 a rung, N^-4.1; 7e-6 at N = 256) does not converge by the ladder's top 256; the
+    mode of seed 645549 (1.7e-5 → 2.1e-6, N^-9.3) does; a tenfold fall always does; a tail
+    that rises, or no finer rung left, does not."""
+    from chuteflow.stability.resolver import _tail_converges
+
+    tol = 1e-7
+    assert not _tail_converges(1.2e-2, 48, 4.8e-3, 60, 256, tol)
+    assert not _tail_converges(4.8e-3, 60, 1.7e-3, 75, 256, tol)
+    assert _tail_converges(1.7e-5, 48, 2.1e-6, 60, 256, tol)
+    assert _tail_converges(5.6e-5, 48, 2.4e-6, 60, 256, tol)  # tenfold (seed 53879)
+    assert _tail_converges(1e-4, 185, 9e-6, 231, 256, tol)  # tenfold, though too slow by the power
+    assert not _tail_converges(1e-5, 48, 2e-5, 60, 256, tol)
+    assert not _tail_converges(1e-5, 231, 5e-6, 256, 256, tol)
+
+
 def test_a_slowly_converging_mode_beside_the_band_is_the_estimate():
     """θ = 16.648°, ν0(0) = 0.0192, φ = 0.0684, Φ = 0.388, (k_x, k_z) = (0.00615, 0.006292)
     (the same seed): the mode −0.000538047 − 0.014374555i (dense QZ at N = 350; at N = 250

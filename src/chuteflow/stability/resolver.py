@@ -381,8 +381,10 @@ class _Candidate:
         policy,
         cache,
         tail: float | None = None,
+        top: int | None = None,
     ):
         self.flow, self.kx, self.kz, self.policy, self.cache = flow, kx, kz, policy, cache
+        self.top = policy.n_max if top is None else top  # the ladder's top
         self.start = self.alpha = complex(alpha)
         self.v, self.n_from = v, n_from
         self.tail0 = tail  # the tail of ``v`` at N = n_from, where the screen measured it
@@ -422,6 +424,7 @@ class _Candidate:
             except ConvergenceError:
                 drift = math.inf
         tail_before = self.tails[-1] if self.tails else None
+        n_before = prev.n if prev is not None else self.n_from  # where tail_before was measured
         if tail_before is None and self.mode is None and nn != self.n_from:
             # the tail of the eigenvector followed, at N = n_from (the screen's, where it ran)
             if self.tail0 is None:
@@ -446,7 +449,7 @@ class _Candidate:
             # ... and its tail does not fall as a mode's from a coarser N; at the first rung, where
             # none was seen, only an eigenvalue pinned far below its tail (CONTINUUM_PINNED)
             and (
-                not mode.tail <= CONTINUUM_TAIL_FALL * tail_before
+                not _tail_converges(tail_before, n_before, mode.tail, nn, self.top, policy.tail_tol)
                 if tail_before is not None
                 else drift <= CONTINUUM_PINNED * mode.tail
             )
@@ -525,7 +528,7 @@ def follow_candidate(
     shift-invert until it is decided (module docstring; ``floor``: the growth rate of the
     answer, below which a candidate is decided ``"below"``). A rung's α(N') is the α just
     solved on the rung below when that is N' = round(0.8 N), else a solve at N'."""
-    c = _Candidate(flow, kx, kz, alpha, v, n_from, policy, cache)
+    c = _Candidate(flow, kx, kz, alpha, v, n_from, policy, cache, top=max(rungs, default=n_from))
     for i, nn in enumerate(rungs):
         if c.step(nn, floor, len(rungs) - 1 - i) is not None:
             break
@@ -588,6 +591,19 @@ CONTINUUM_DRIFT = 1e-4
 #: at N = 48, 60, 75 (×0.04 a rung): it was decided the continuum, and −0.0834 − 0.2131i
 #: was answered, flagged.
 CONTINUUM_TAIL_FALL = 0.1
+#: ... nor one whose tail, falling on at the power of N it fell by over the last rung, passes
+#: the tail test by the top of the ladder (:func:`_tail_converges`). The continuum's
+#: eigenfunctions are singular at the top, so their tails fall as a power of N: the member
+#: above, 1.2e-2, 4.8e-3, 1.7e-3 at N = 48, 60, 75 and 7e-6 at 256, as N^-4.1 … N^-4.5
+#: (from 4.8e-3 at N = 60 at that power: 1.3e-5 at 256, far above 1e-7); a mode's
+#: eigenfunction is analytic and its tail falls exponentially in N, ever faster in powers of
+#: N. Measured: θ = 22.393°, ν0(0) = 0.0947, φ = 0.094, Φ = 0.436 at (k_x, k_z) = (0.001278,
+#: 0.00738) (try_random_points seed 645549) the unstable mode +0.0015222 − 0.0627026i (dense
+#: QZ at N = 75 … 300: the same to 1e-10; tails 1.7e-5, 2.1e-6, 8.7e-8, 1.9e-9 at N = 48, 60,
+#: 75, 94: N^-9.3, then N^-14) lies 2.5e-3 from α_top = −0.0646412i (radius 3.8e-3); its tail
+#: fell ×0.125 from N = 48 to 60 (not tenfold): it was decided the continuum, and the stable
+#: −0.0068978 − 0.0722538i was reported as converged. At N^-9.3 from 2.1e-6 at N = 60 it
+#: passes 1e-7 by N = 60 × 1.39: a mode's fall.
 #: ... and at a candidate's first rung (the screen's N, or the repeated screen's), where no
 #: coarser tail of its eigenvector has been seen, it is the continuum only where its
 #: eigenvalue is pinned: drift ≤ CONTINUUM_PINNED × tail (the continuum's settle to
@@ -625,6 +641,19 @@ CONTINUUM_RESOLVED = 1e-6
 #: as converged); a member of the band at (16.5°, 0.13, φ 0.08, Φ 0.30), k = 0.005, drifts
 #: 4.1e-4, 2.9e-4, 1.7e-4, 1.4e-4 (× 0.34) with its eigenvalue swinging back and forth.
 CONVERGING_DRIFT_FALL = 0.2
+
+
+def _tail_converges(t0: float, n0: int, t1: float, n1: int, top: int, tol: float) -> bool:
+    """Whether an eigenvector's tail ``t0`` at N = ``n0`` → ``t1`` at N = ``n1`` falls as a
+    mode's does, not as the dilute top's continuum's: tenfold or more
+    (:data:`CONTINUUM_TAIL_FALL`), or fast enough that, falling on at the same power of N,
+    it reaches ``tol`` by N = ``top``."""
+    if t1 <= CONTINUUM_TAIL_FALL * t0:
+        return True
+    if not (0 < t1 < t0) or n1 <= n0 or top <= n1:
+        return False
+    power = math.log(t1 / t0) / math.log(n1 / n0)  # < 0
+    return t1 * (top / n1) ** power <= tol
 
 
 def _top_continuum(flow: SteadyFlow, kx: float, kz: float) -> tuple[complex, float]:
@@ -986,7 +1015,7 @@ def _search_once(
         undecided.append(Followed(answer.alpha, answer, "undecided", ""))
     notes: list[str] = []
     active = [
-        _Candidate(flow, kx, kz, a, v, search.n, policy, cache, tail=t)
+        _Candidate(flow, kx, kz, a, v, search.n, policy, cache, tail=t, top=rungs[-1])
         for a, v, t in cands[: search.max_candidates]
     ]
     for c in active:
