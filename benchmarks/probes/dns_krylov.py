@@ -70,6 +70,8 @@ VARIANTS = {
     # the columns with the exact (Chebyshev) y-derivatives instead of finite differences
     "columns_chebyshev": dict(preconditioner="columns", column_y="chebyshev"),
     "coupled_chebyshev": dict(preconditioner="coupled", coupled_krylov=0, column_y="chebyshev"),
+    # the columns with each row's own x-transport by central differences (before 2026-12-07)
+    "columns_central": dict(preconditioner="columns", column_y="chebyshev", column_x="central"),
 }
 
 
@@ -217,6 +219,13 @@ def main(argv=None):
     sim = simulation(args.nx, args.ny, args.time, **where)
     with np.load(args.state) as ck:
         C, prev, h_prev, t = ck["C"], tuple(ck["prev"]), float(ck["scalars"][3]), float(ck["scalars"][0])
+        key = str(ck["key"]) if "key" in ck.files else None
+    if key is not None:
+        from chuteflow.dns.simulation import DnsState
+
+        saved = DnsState.load(args.state, key)
+        if saved is not None:
+            sim._follow(saved)  # a run's checkpoint: its grid, x map included
     with np.load(args.state) as ck:
         dt_run = float(ck["scalars"][2])
     if prev[0].shape[-1] != sim.disc.nxp:  # a state of an earlier padded grid

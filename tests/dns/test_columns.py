@@ -57,8 +57,8 @@ def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
     hist = (st.physical(C), st.physical(C))
     dt = 3.0
     coefs = column_coefficients(d, C, hist, dt, BDF2)
-    J = column_matrix(d, coefs, y="chebyshev")
-    P = ColumnPreconditioner(d, column_blocks(d, coefs, y="chebyshev"), "cyclic")
+    J = column_matrix(d, coefs, y="chebyshev", x="central")
+    P = ColumnPreconditioner(d, column_blocks(d, coefs, y="chebyshev", x="central"), "cyclic")
     blocks = d.linear_blocks(C)
     m, nx = d.n + 1, 2 * d.modes + 1
     h = d.length / nx
@@ -85,6 +85,54 @@ def test_column_matrix_at_uniform_state_is_the_mode_jacobian(p1):
             # one-sided differences of step 1e-7 × max|jet| in the coefficients; the density
             # top row drops the O(ν(y_max)) term of the linear problem's condition (test_dns)
             assert np.abs(out[:, :, mode].ravel() - ref[:, j]).max() <= 1e-5 * scale + 1e-6, (mode, j)
+
+
+def test_upwind_transport_is_the_central_matrix_plus_its_dissipation(p1):
+    """``x="upwind"`` (the default) adds to the central matrix, in each row's transport of its
+    own field a ∂_x f, the dissipation that makes it (f_i − f_{i∓1})/h from upstream: on mode
+    m at an x-independent state, sign(τ) |a| (1 − cos kh)/h on the diagonal of that field's
+    rows, τ the row's coefficient of ∂_t f. The time coefficients are checked against the
+    per-mode linearisation's (linear_blocks' Bt, built from the compiled equations: an
+    independent derivation), nonzero in the bulk rows and zero in the wall rows; the
+    dissipation is nowhere else (the other fields, the top conditions of u, v, T)."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 20, 2, frame=7.8)
+    C = _steady(d, p1)
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    coefs = column_coefficients(d, C, hist, 3.0, BDF2)
+    m, nx = d.n + 1, 2 * d.modes + 1
+    h = d.length / nx
+    Bt = np.diag(d.linear_blocks(C)["Bt"]).reshape(4, m)
+    for r, f in enumerate(("s", "u", "v", "T")):
+        tau = coefs[f + "_t"][r]  # (m, nx), x-independent here
+        assert np.allclose(tau, tau[:, :1], rtol=0, atol=1e-9 * np.abs(tau).max())
+        bulk = slice(1, m - 1)
+        assert np.allclose(tau[bulk, 0], Bt[r, bulk], rtol=1e-5, atol=1e-9 * np.abs(Bt[r]).max()), f
+        assert abs(tau[0, 0]) <= 1e-8 * np.abs(tau).max()  # the wall rows: conditions
+    up = column_matrix(d, coefs, y="chebyshev", x="upwind")
+    central = column_matrix(d, coefs, y="chebyshev", x="central")
+    P = ColumnPreconditioner(d, column_blocks(d, coefs, x="central"), "cyclic")
+    for mode in (1, 2):
+        k = d.k[mode]
+        for r, f in enumerate(("s", "u", "v", "T")):
+            a, tau = coefs[f + "_x"][r][:, 0], coefs[f + "_t"][r][:, 0]
+            big = np.abs(tau).max()
+            side = np.where(np.abs(tau) > 1e-8 * big, np.sign(tau), 0.0)
+            expect = side * np.abs(a) * (1 - math.cos(k * h)) / h
+            if r > 0:
+                expect[-1] = 0.0  # the top rows of u, v, T
+            for j in (0, 1, m // 2, m - 2, m - 1):
+                V = np.zeros(d.shape, complex)
+                V[r, j, mode] = 1.0
+                diff = P.to_modes((up - central) @ P.to_points(V))
+                want = np.zeros(d.shape, complex)
+                want[r, j, mode] = expect[j]
+                scale = max(abs(expect).max(), 1e-300)
+                assert np.abs(diff - want).max() <= 1e-9 * scale, (mode, f, j)
+    with pytest.raises(ValueError, match="column_x = 'spectral'"):
+        NewtonSettings(column_x="spectral")
+    with pytest.raises(ValueError, match="needs the coefficients of s_t"):
+        column_blocks(d, {k: v for k, v in coefs.items() if not k.endswith("_t")})
 
 
 @pytest.mark.parametrize(("order", "y"), [(2, "fd"), (2, "chebyshev"), (4, "fd")])

@@ -12,7 +12,11 @@ Jacobian of the pointwise rows (:meth:`Discretisation.pointwise_rows`) with
   :func:`chuteflow.equations.governing_equations`) with respect to that jet — one-sided
   differences, so nothing of the physics is restated here — projected onto the modes m ≤ M
   and evaluated at the x_i;
-* x-derivatives by the second-order periodic central differences on the x_i, y-derivatives
+* x-derivatives by the second-order periodic central differences on the x_i — each row's
+  transport of its own field, a ∂_x f, by first-order upwind differences (``x="upwind"``, the
+  default: the central ones' symbol i sin(kh)/h vanishes at the grid's highest modes, where
+  the spectral residual's is ik, so the preconditioned transport spread with nx; the upwind
+  symbol (1 − e^{−ikh})/h stays within 2/π … 1 of ik in size), y-derivatives
   exact (``y="chebyshev"``, the dense Chebyshev matrices; the stepper's default) or by
   second-order finite differences on the Chebyshev nodes (``y="fd"``:
   :func:`~chuteflow.spectral.fd_matrices`; finite differences precondition collocation
@@ -49,6 +53,7 @@ __all__ = [
     "column_blocks",
     "column_coefficients",
     "check_column_order",
+    "check_column_x",
     "check_column_y",
     "column_matrix",
     "jet_coefficients",
@@ -72,6 +77,17 @@ _STENCIL4 = {
 }
 #: Orders of the x-differences of the column preconditioner.
 ORDERS = (2, 4)
+#: How the column preconditioner differences each row's transport of its own field in x
+#: (:func:`column_blocks`). Measured (GMRES iterations a step of the Chebyshev columns, three
+#: steps from a checkpoint; ``benchmarks/probes/dns_krylov.py --variants
+#: columns_chebyshev,columns_central``): P1 at L = 2000, ±41 … 77 %, 257 × 96, Δt 4:
+#: central 84/85/85, upwind 36/37/37 (8.3 → 3.9 s a step); mapped 145 × 96, −46 … +71 %:
+#: 72/82/82 → 35/36/37; P5's mapped bore (129 × 96, Δt 8): 41/59/71 → 26/33/41. Half the
+#: upwind dissipation served less (44, 40 a step), one and a half times it no better.
+X_TRANSPORTS = ("upwind", "central")
+#: The time-derivative jets whose coefficients :func:`column_coefficients` adds (the
+#: direction the upwind differences dissipate in: :func:`column_blocks`).
+TIME_JETS = tuple(f + "_t" for f in UNKNOWNS)
 #: How the column preconditioner differentiates in y (:func:`column_blocks`).
 Y_DERIVATIVES = ("chebyshev", "fd")
 #: How :class:`ColumnPreconditioner` factorises its matrix.
@@ -82,6 +98,16 @@ FACTORISATIONS = ("cyclic", "sparse")
 #: 5.3 s at nx = 129, 1.28 GB and 8.5 s at 257, peak 2.4 GB; finite differences, a ±20 % wave
 #: of P1: 0.78 GB and 12 s at 257, 1.76 GB and 35 s at 513; docs/dns.md, *Solver*).
 NX_LIMIT = 257
+
+
+def check_column_x(x: str) -> str:
+    """``x`` if it is one of :data:`X_TRANSPORTS`, else a one-line ParameterError."""
+    if x not in X_TRANSPORTS:
+        raise ParameterError(
+            f"column_x = {x!r}: choose 'upwind' (each row's transport of its own field by "
+            "first-order upwind differences; the default) or 'central' (as the other x-differences)"
+        )
+    return x
 
 
 def check_column_order(order: int) -> int:
@@ -110,14 +136,22 @@ def column_coefficients(
     exp(ŝ_0(y_j)) as :meth:`Discretisation.residual` divides their modes. Evaluated on the
     padded grid, then projected onto the modes m ≤ M and taken at the 2M + 1 points x_i.
     """
-    padded = jet_coefficients(disc, C, history, dt, bdf, rel_step)
+    padded = jet_coefficients(disc, C, history, dt, bdf, rel_step, time=True)
     return {name: _at_points(disc, A) for name, A in padded.items()}
 
 
 def jet_coefficients(
-    disc: Discretisation, C: np.ndarray, history: tuple, dt: float, bdf=BDF2, rel_step: float = 1e-7
+    disc: Discretisation,
+    C: np.ndarray,
+    history: tuple,
+    dt: float,
+    bdf=BDF2,
+    rel_step: float = 1e-7,
+    time: bool = False,
 ) -> dict[str, np.ndarray]:
-    """The coefficients of :func:`column_coefficients` on the padded grid (4, N+1, nxp)."""
+    """The coefficients of :func:`column_coefficients` on the padded grid (4, N+1, nxp); with
+    ``time``, also those of the time derivatives ∂_t s, ∂_t u, ∂_t v, ∂_t T (:data:`TIME_JETS`),
+    from the history they are formed of (the BDF weight of the last level, ``bdf[1]``/Δt)."""
     prim = disc.primitive_jets(C)
     inflow = ~(prim["v"][-1] > 0)  # the upwind choice at the top, kept while differentiating
     R0 = disc.pointwise_rows(disc.state_jets(prim), history, dt, bdf, inflow)
@@ -132,6 +166,18 @@ def jet_coefficients(
         A = (disc.pointwise_rows(disc.state_jets(pert), history, dt, bdf, inflow) - R0) / h
         A[0, 1 : last + 1] /= nubar[1 : last + 1, None]
         out[name] = A
+    if time:
+        h0 = np.array(history[0])  # (nu, u, v, T) at the last level
+        for i, f in enumerate(UNKNOWNS):
+            h = rel_step * max(1.0, float(np.max(np.abs(h0[i]))))
+            pert_h = h0.copy()
+            pert_h[i] = h0[i] + h
+            R1 = disc.pointwise_rows(disc.state_jets(prim), (pert_h, *history[1:]), dt, bdf, inflow)
+            A = (R1 - R0) * (dt / (bdf[1] * h))
+            if i == 0:
+                A = A * np.exp(prim["s"])  # ∂_t ν = ν ∂_t s
+            A[0, 1 : last + 1] /= nubar[1 : last + 1, None]
+            out[f + "_t"] = A
     if disc.x_map is not None:
         _to_s_jets(disc, out, last)
     return out
@@ -150,7 +196,7 @@ def _to_s_jets(disc: Discretisation, out: dict[str, np.ndarray], last: int) -> N
         out[f + "_x"] = a * ax + b * axx
         out[f + "_xx"] = a * a * axx
         out[f + "_xy"] = a * axy
-    for A in out.values():
+    for A in out.values():  # (the time jets too, where present)
         A[0, 1 : last + 1] *= gp
 
 
@@ -175,7 +221,11 @@ def y_matrices(disc: Discretisation, y: str = "chebyshev") -> tuple[np.ndarray, 
 
 
 def column_blocks(
-    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2, y: str = "chebyshev"
+    disc: Discretisation,
+    coefficients: dict[str, np.ndarray],
+    order: int = 2,
+    y: str = "chebyshev",
+    x: str = "upwind",
 ) -> dict[int, np.ndarray]:
     """The blocks of the preconditioner's matrix by x-offset: ``blocks[o][i]`` (4(N+1) square,
     unknowns (field, y_j)) couples the point x_i to x_{i+o} (indices modulo 2M + 1), o = −1, 0, 1
@@ -187,7 +237,16 @@ def column_blocks(
     restricted to the offsets the x-differences reach: at P5's mapped bore (129 × 96, Δt 8)
     the fd-y columns took 145, 156, 156 GMRES iterations with the whole circulant and with its
     nearest neighbours alone (docs/dns.md, *Solver*), so the matrix keeps the block structure.
+
+    With ``x="upwind"`` (:data:`X_TRANSPORTS`) each row's transport of its own field, a ∂_x f
+    (a the row's coefficient of its field's x-jet), is differenced upwind: the central
+    difference plus the dissipation |a| h/2 ∂_xx with the sign of the row's coefficient of
+    ∂_t f (``coefficients[f + "_t"]``, :data:`TIME_JETS`; none where the row has no time
+    derivative: the wall's and the top's conditions), i.e. (f_i − f_{i∓1})/h from the side
+    the transport comes from. Upwind differences are first-order: they enter the
+    preconditioner, never the residual.
     """
+    check_column_x(x)
     m, nx = disc.n + 1, 2 * disc.modes + 1
     hx = disc.length / nx
     dy = y_matrices(disc, y)
@@ -207,6 +266,8 @@ def column_blocks(
             # block[i][(r, j), (fc, j')] += W[r, j, i] · dy[c][j, j']
             blk = W.transpose(2, 0, 1)[..., None] * dy[c][None, None]  # (nx, 4, m, m)
             blocks[o][:, :, fc * m : (fc + 1) * m] += blk.reshape(nx, 4 * m, m)
+    if x == "upwind":
+        _upwind_transport(blocks, coefficients, m, hx)
     # top conditions of u, v, T: Σ coef |k|^p (D^c f)(y_max), |k|^p by its circulant h_{i − i'}
     kabs = np.abs(disc.k)
     a_pts = np.ones(nx) if disc.x_map is None else 1.0 / disc.x_map.dx_ds(np.arange(nx) * hx)
@@ -223,12 +284,38 @@ def column_blocks(
     return blocks
 
 
+def _upwind_transport(blocks: dict[int, np.ndarray], coefficients: dict[str, np.ndarray], m: int, hx: float):
+    """Add to the central blocks the dissipation that makes each row's transport of its own
+    field first-order upwind (:func:`column_blocks`, ``x="upwind"``)."""
+    missing = [f + "_t" for f in UNKNOWNS if f + "_t" not in coefficients]
+    if missing:
+        raise ParameterError(
+            f"column_blocks(x='upwind') needs the coefficients of {', '.join(missing)} "
+            "(column_coefficients gives them), or x='central'"
+        )
+    for r, f in enumerate(UNKNOWNS):
+        a = coefficients[f + "_x"][r].copy()  # (m, nx)
+        tau = coefficients[f + "_t"][r]
+        if r > 0:
+            a[-1] = 0.0  # the top rows of u, v, T are the per-mode conditions
+        big = float(np.max(np.abs(tau)))
+        side = np.where(np.abs(tau) > 1e-8 * big, np.sign(tau), 0.0)
+        diss = side * np.abs(a) / (2.0 * hx)  # (m, nx)
+        idx = np.arange(r * m, (r + 1) * m)
+        for o, w in ((-1, -1.0), (0, 2.0), (1, -1.0)):
+            blocks[o][:, idx, idx] += (w * diss).T
+
+
 def column_matrix(
-    disc: Discretisation, coefficients: dict[str, np.ndarray], order: int = 2, y: str = "chebyshev"
+    disc: Discretisation,
+    coefficients: dict[str, np.ndarray],
+    order: int = 2,
+    y: str = "chebyshev",
+    x: str = "upwind",
 ) -> sps.csc_matrix:
     """The sparse matrix of the preconditioner, unknowns ordered (x_i, field, y_j): the blocks
     of :func:`column_blocks` (the same arguments) assembled."""
-    return _assemble(column_blocks(disc, coefficients, order, y))
+    return _assemble(column_blocks(disc, coefficients, order, y, x))
 
 
 def _assemble(blocks: dict[int, np.ndarray]) -> sps.csc_matrix:
@@ -303,12 +390,13 @@ class ColumnPreconditioner:
         bdf=BDF2,
         order: int = 2,
         y: str = "chebyshev",
+        x: str = "upwind",
     ) -> ColumnPreconditioner:
         """Coefficients at the state ``C`` (:func:`column_coefficients`), blocks (x-differences
-        of ``order`` 2 or 4, y-derivatives by ``y``: :func:`column_blocks`), factorisation
-        (``"cyclic"`` for the dense blocks of ``y="chebyshev"`` at ``order`` 2, else
-        ``"sparse"``)."""
-        blocks = column_blocks(disc, column_coefficients(disc, C, history, dt, bdf), order, y)
+        of ``order`` 2 or 4, each row's own transport by ``x``, y-derivatives by ``y``:
+        :func:`column_blocks`), factorisation (``"cyclic"`` for the dense blocks of
+        ``y="chebyshev"`` at ``order`` 2, else ``"sparse"``)."""
+        blocks = column_blocks(disc, column_coefficients(disc, C, history, dt, bdf), order, y, x)
         return cls(disc, blocks, "cyclic" if order == 2 and y == "chebyshev" else "sparse")
 
     @property

@@ -26,7 +26,7 @@ import numpy as np
 from scipy.sparse.linalg import LinearOperator, gmres
 
 from ..errors import ConvergenceError, ParameterError
-from .columns import NX_LIMIT, ColumnPreconditioner, check_column_order, check_column_y
+from .columns import NX_LIMIT, ColumnPreconditioner, check_column_order, check_column_x, check_column_y
 from .coupled import CoupledPreconditioner
 from .discretisation import BDF1, BDF2, Discretisation
 
@@ -117,6 +117,11 @@ class NewtonSettings:
         96 time units in 31 s against 100 s (Δt 8 held against falling to 4); at P1's
         ±80 % wave (L = 2000, 97 × 64) 200 in 41 s against 37 (docs/dns.md, *The
         block-tridiagonal LU*).
+    column_x : {"upwind", "central"}
+        How the column preconditioner differences each row's transport of its own field in x:
+        first-order upwind (default) or, as its other x-derivatives, central
+        (:data:`~chuteflow.dns.columns.X_TRANSPORTS`: at P1's ±41 … 77 % wave on 257 × 96,
+        37 GMRES iterations a step against 85).
     columns_max_nx : int or None
         Largest x grid (2M + 1 points) on which the column preconditioner is built; on a
         finer one the coupled blocks serve instead (``"columns"`` and ``"auto"`` included).
@@ -162,6 +167,7 @@ class NewtonSettings:
     coupled_krylov: int = 20
     column_order: int = 2
     column_y: str = "chebyshev"
+    column_x: str = "upwind"
     columns_max_nx: int | None = None
     dt_tol: float = 0.0
     dt_max: float = 0.0
@@ -184,6 +190,7 @@ class NewtonSettings:
             )
         check_column_order(self.column_order)
         check_column_y(self.column_y)
+        check_column_x(self.column_x)
         if not (math.isfinite(self.dt_tol) and 0.0 <= self.dt_tol < 1.0):
             raise ParameterError(
                 f"dt_tol = {self.dt_tol!r} is outside [0, 1): the time-step control's tolerance "
@@ -397,7 +404,14 @@ class Stepper:
             self._lus = CoupledPreconditioner.build(self.disc, C, history, dt, bdf)
         elif self.kind == "columns":
             self._lus = ColumnPreconditioner.build(
-                self.disc, C, history, dt, bdf, self.settings.column_order, self.settings.column_y
+                self.disc,
+                C,
+                history,
+                dt,
+                bdf,
+                self.settings.column_order,
+                self.settings.column_y,
+                self.settings.column_x,
             )
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
