@@ -100,24 +100,28 @@ FACTORISATIONS = ("cyclic", "sparse")
 NX_LIMIT = 257
 
 
+def _choice(name: str, value, choices: tuple, why: str):
+    """``value`` if it is one of ``choices``, else a one-line ParameterError naming ``name``,
+    the choices and ``why`` (what the setting is)."""
+    if value not in choices:
+        raise ParameterError(f"{name} = {value!r}: choose {' or '.join(map(repr, choices))} ({why})")
+    return value
+
+
 def check_column_x(x: str) -> str:
     """``x`` if it is one of :data:`X_TRANSPORTS`, else a one-line ParameterError."""
-    if x not in X_TRANSPORTS:
-        raise ParameterError(
-            f"column_x = {x!r}: choose 'upwind' (each row's transport of its own field by "
-            "first-order upwind differences; the default) or 'central' (as the other x-differences)"
-        )
-    return x
+    return _choice(
+        "column_x",
+        x,
+        X_TRANSPORTS,
+        "how the column preconditioner differences each row's transport of its own field in x: "
+        "first-order upwind, the default, or central as its other x-differences",
+    )
 
 
 def check_column_order(order: int) -> int:
     """``order`` if it is one of :data:`ORDERS`, else a one-line ParameterError."""
-    if order not in ORDERS:
-        raise ParameterError(
-            f"column_order = {order!r}: choose {' or '.join(map(str, ORDERS))} "
-            "(the order of the x-differences of the column preconditioner)"
-        )
-    return order
+    return _choice("column_order", order, ORDERS, "the order of the column preconditioner's x-differences")
 
 
 def _at_points(disc: Discretisation, values: np.ndarray) -> np.ndarray:
@@ -202,12 +206,13 @@ def _to_s_jets(disc: Discretisation, out: dict[str, np.ndarray], last: int) -> N
 
 def check_column_y(y: str) -> str:
     """``y`` if it names a way of :func:`y_matrices`, else a one-line ParameterError."""
-    if y not in Y_DERIVATIVES:
-        raise ParameterError(
-            f"column_y = {y!r}: choose 'chebyshev' (the exact y-derivatives, a dense block per x point) "
-            "or 'fd' (finite differences in y, a sparse LU) for the column preconditioner"
-        )
-    return y
+    return _choice(
+        "column_y",
+        y,
+        Y_DERIVATIVES,
+        "the column preconditioner's y-derivatives: exact, a dense block per x point, or finite "
+        "differences, a sparse LU",
+    )
 
 
 def y_matrices(disc: Discretisation, y: str = "chebyshev") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -306,16 +311,10 @@ def _upwind_transport(blocks: dict[int, np.ndarray], coefficients: dict[str, np.
             blocks[o][:, idx, idx] += (w * diss).T
 
 
-def column_matrix(
-    disc: Discretisation,
-    coefficients: dict[str, np.ndarray],
-    order: int = 2,
-    y: str = "chebyshev",
-    x: str = "upwind",
-) -> sps.csc_matrix:
+def column_matrix(disc: Discretisation, coefficients: dict[str, np.ndarray], *args, **kw) -> sps.csc_matrix:
     """The sparse matrix of the preconditioner, unknowns ordered (x_i, field, y_j): the blocks
-    of :func:`column_blocks` (the same arguments) assembled."""
-    return _assemble(column_blocks(disc, coefficients, order, y, x))
+    of :func:`column_blocks` (the same arguments: ``order``, ``y``, ``x``) assembled."""
+    return _assemble(column_blocks(disc, coefficients, *args, **kw))
 
 
 def _assemble(blocks: dict[int, np.ndarray]) -> sps.csc_matrix:
@@ -364,10 +363,7 @@ class ColumnPreconditioner:
     _matrix_bytes: int = field(init=False, repr=False, default=0)
 
     def __post_init__(self, blocks: dict[int, np.ndarray]):
-        if self.factorisation not in FACTORISATIONS:
-            raise ParameterError(
-                f"factorisation = {self.factorisation!r}: choose 'cyclic' (block-tridiagonal) or 'sparse'"
-            )
+        _choice("factorisation", self.factorisation, FACTORISATIONS, "block-tridiagonal or general sparse LU")
         if self.factorisation == "cyclic":
             if set(blocks) != {-1, 0, 1}:
                 raise ParameterError(
