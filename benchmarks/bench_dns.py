@@ -22,10 +22,13 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
 - ``dns_columns_large_wave``: the column preconditioner at a large wave (P1, L = 2000,
   nx = 65, N = 64, ln ν perturbed by 0.25 in mode 1 and 0.08 in mode 2), four BDF2 steps
   of Δt = 4 with ``NewtonSettings(preconditioner="columns")`` from the same state, the build
-  included: the exact Chebyshev blocks by the block-tridiagonal LU (the default,
-  ``column_y="chebyshev"``) against the baseline of the finite differences in y by the
-  sparse LU (``column_y="fd"``) in the same run; the note has GMRES per step and the end
-  states' distance (docs/dns.md, *The block-tridiagonal LU*).
+  included: the default (the exact Chebyshev blocks by the block-tridiagonal LU,
+  ``column_y="chebyshev"``, each row's own x-transport upwind, ``column_x="upwind"``)
+  against the plain baseline of finite differences in y by the sparse LU and central
+  x-differences (``column_y="fd"``, ``column_x="central"``) in the same run; the note has
+  GMRES per step of both and of the Chebyshev blocks with central x, and the end states'
+  distance (docs/dns.md, *The block-tridiagonal LU*, *Upwind transport*). Measured
+  2026-12-07: 9.6 s against 13.8 s, GMRES 78.5 against 157.5 (central Chebyshev 89.2).
 - ``dns_coupled_apply``: one application of the mode-coupled preconditioner
   (:class:`~chuteflow.dns.CoupledPreconditioner`) at P1, L = 1000, nx = 41, N = 80 (the
   grid of the 3-minute target) at a ±20 % wave, averaged over 100: the couplings applied
@@ -264,8 +267,8 @@ def _columns_row(model) -> dict:
     d, C0 = _p1_wave(model, 2000.0, 64, 32, {1: 0.25 * (1 + 0.5j), 2: 0.08 * (0.2 - 1j)})
     rho = d.depth_integrals(C0)[0]
     out = {}
-    for y in ("fd", "chebyshev"):
-        st = Stepper(d, NewtonSettings(preconditioner="columns", column_y=y))
+    for y, x in (("fd", "central"), ("chebyshev", "central"), ("chebyshev", "upwind")):
+        st = Stepper(d, NewtonSettings(preconditioner="columns", column_y=y, column_x=x))
         C, first = C0.copy(), True
         hist = (st.physical(C), st.physical(C))
         krylov = 0
@@ -275,8 +278,8 @@ def _columns_row(model) -> dict:
             krylov += info.krylov
             hist = (st.physical(C_new), hist[0])
             C, first = C_new, False
-        out[y] = (time.perf_counter() - t0, krylov / 4, C)
-    (t_fd, k_fd, C_fd), (t_ch, k_ch, C_ch) = out["fd"], out["chebyshev"]
+        out[y, x] = (time.perf_counter() - t0, krylov / 4, C)
+    (t_fd, k_fd, C_fd), (t_cc, k_cc, _), (t_ch, k_ch, C_ch) = out.values()
     return {
         "name": "dns_columns_large_wave",
         "seconds": t_ch,
@@ -284,8 +287,9 @@ def _columns_row(model) -> dict:
         "ratio": t_fd / t_ch,
         "note": f"4 steps of Δt = 4 at ρ̄ {rho.min() / rho.mean() - 1:+.2f} … "
         f"{rho.max() / rho.mean() - 1:+.2f}, "
-        f"65 × 64, build included: GMRES {k_ch:.1f}/step (the Chebyshev blocks, block LU) against "
-        f"{k_fd:.1f} (baseline: finite differences in y, sparse LU); end states "
+        f"65 × 64, build included: GMRES {k_ch:.1f}/step (the default: Chebyshev blocks, block LU, "
+        f"upwind transport) against {k_fd:.1f} (baseline: finite differences in y, sparse LU, "
+        f"central x) and {k_cc:.1f} ({t_cc:.1f} s: Chebyshev blocks, central x); end states "
         f"{np.abs(C_fd - C_ch).max():.1e} apart",
     }
 
