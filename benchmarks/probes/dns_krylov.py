@@ -292,6 +292,7 @@ def span(args, where: dict, names: list[str]) -> None:
             "steps": end.step - step,
             "factorisations": sim.stepper.factorisations,
             "dt_end": end.dt,
+            "gmres_per_step": [int(k) for k in end.records["krylov"][-(end.step - step) :]],
             "wave": wave(sim, end.C),
             "max_dC_vs_first": float(np.abs(end.C - first).max()),
         }

@@ -211,3 +211,42 @@ def test_a_diverging_iterate_fails_the_step_without_warnings(p1):
         warnings.simplefilter("error")
         with pytest.raises(ConvergenceError):
             st.step(C, hist, 4.0, guess=bad)
+
+
+def test_a_dear_preconditioner_is_rebuilt_once_its_excess_iterations_cost_a_build(p1):
+    """``NewtonSettings.refresh_excess``: the columns or coupled blocks are dropped (rebuilt at
+    the next step) once the GMRES iterations of the steps since their build, above the first
+    step's count, add up (signed) to more than it: a drift from 40 to 80 a step (P1, L = 2000,
+    225 × 96: 44 → 110 over 25 steps) triggers it after the excess passes 100; counts that
+    wander about the first do not; the x-mean blocks are never dropped by this rule. The
+    counters survive a snapshot and restore (a resumed run rebuilds where the run would),
+    and a snapshot of before the rule (five counters) restores with none."""
+    d = Discretisation(16.0, MODEL, 1000.0, p1.y_max, 8, 2, frame=7.8)
+    st = Stepper(d, NewtonSettings(refresh_excess=100))
+    st.kind, st._lus = "columns", object()
+    for k in (40, 45, 50, 60, 70):  # excess 5 + 10 + 20 + 30 = 65
+        st._count_excess(k)
+    assert st._lus is not None
+    assert st._excess == 65
+    snap = st.snapshot()
+    back = Stepper(d, NewtonSettings(refresh_excess=100))
+    back.restore(snap)
+    assert (back._excess, back._base_step) == (65, 40)
+    st._count_excess(80)  # 65 + 40 > 100
+    assert st._lus is None
+    wander = Stepper(d, NewtonSettings(refresh_excess=100))
+    wander.kind, wander._lus = "columns", object()
+    for k in [40] + [30, 50] * 20:
+        wander._count_excess(k)
+    assert wander._lus is not None
+    mean = Stepper(d, NewtonSettings(refresh_excess=0))
+    mean._lus = object()
+    for k in (10, 500, 500):
+        mean._count_excess(k)
+    assert mean._lus is not None
+    old = dict(snap, counters=snap["counters"][:5])
+    again = Stepper(d, NewtonSettings(refresh_excess=100))
+    again.restore(old)
+    assert (again._excess, again._base_step) == (0, None)
+    with pytest.raises(ValueError, match="refresh_excess = -1"):
+        NewtonSettings(refresh_excess=-1)

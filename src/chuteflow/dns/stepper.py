@@ -75,7 +75,14 @@ class NewtonSettings:
     refresh_krylov : int
         … or when one GMRES solve needed more iterations than this,
     refresh_every : int
-        … but then at most once in this many steps.
+        … but then at most once in this many steps (the x-mean blocks).
+    refresh_excess : int
+        The dear preconditioners (columns, coupled blocks) instead: rebuilt once the GMRES
+        iterations of the steps since their build, above the count of the first step after
+        it, add up to more than this (signed) — about what a build costs (the column build 5.3 s against
+        ≈ 50 ms a GMRES iteration at P5's mapped 129 × 96, 8 s against 85 ms at P1's 225 × 96).
+        The frozen coefficients drift from the travelling wave (P1, L = 2000, 225 × 96: 38 → 105
+        GMRES a step over 25 steps before the rule of twice the first count rebuilt them).
     chord_ratio : float
         A chord step (preconditioner as Jacobian, no GMRES) is kept when it reduces the
         residual by at least this factor; otherwise GMRES is used.
@@ -161,6 +168,7 @@ class NewtonSettings:
     refresh_after: int = 3
     refresh_krylov: int = 30
     refresh_every: int = 20
+    refresh_excess: int = 100
     chord_ratio: float = 0.2
     preconditioner: str = "auto"
     switch_krylov: int = 60
@@ -200,6 +208,11 @@ class NewtonSettings:
             raise ParameterError(f"columns_max_nx = {self.columns_max_nx!r}: ≥ 1 x points")
         if self.coupled_krylov < 0:
             raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
+        if self.refresh_excess < 0:
+            raise ParameterError(
+                f"refresh_excess = {self.refresh_excess!r}: ≥ 0 GMRES iterations (above the first solve's "
+                "count since the build, after which a column or coupled preconditioner is rebuilt)"
+            )
         if self.dt_krylov < 1:
             raise ParameterError(f"dt_krylov = {self.dt_krylov!r}: ≥ 1 GMRES iterations per step")
         if not (math.isfinite(self.dt_max) and self.dt_max >= 0.0):
@@ -271,6 +284,8 @@ class Stepper:
         self.factorisations = 0
         self._age = 0
         self._base_krylov: int | None = None
+        self._base_step: int | None = None  # GMRES iterations of the first step after the build
+        self._excess = 0  # … and those of the later steps above it, summed (refresh_excess)
         #: The preconditioner in use: ``"mean"``, ``"coupled"`` or ``"columns"`` (from the
         #: start as ``preconditioner`` names it, ``"coupled"`` only with ``coupled_krylov=0``;
         #: then as :meth:`_escalation` decides).
@@ -364,6 +379,8 @@ class Stepper:
                     self.factorisations,
                     fresh.get("coupled", -1),
                     fresh.get("columns", -1),
+                    self._excess,
+                    -1 if self._base_step is None else self._base_step,
                 ],
                 dtype=float,
             ),
@@ -387,8 +404,11 @@ class Stepper:
         if "C" in snap:
             dt, *bdf = (float(v) for v in snap["step"])
             self._factor(snap["C"], dt, tuple(bdf), (snap["h0"], snap["h1"]))
-        age, base, fact, coupled, columns = (int(v) for v in snap["counters"])
+        age, base, fact, coupled, columns, *more = (int(v) for v in snap["counters"])
         self._age, self.factorisations = age, fact
+        # (checkpoints before refresh_excess have neither)
+        self._excess = more[0] if more else 0
+        self._base_step = more[1] if len(more) > 1 and more[1] >= 0 else None
         self._base_krylov = None if base < 0 else base
         self.fresh_krylov = {k: v for k, v in (("coupled", coupled), ("columns", columns)) if v >= 0}
 
@@ -416,7 +436,8 @@ class Stepper:
         else:
             self._lus = MeanBlocks(self.disc, self.disc.factorise(self.disc.linear_blocks(C), dt, bdf[0]))
         self._lu_key = (dt, bdf[0])
-        self._base_krylov = None
+        self._base_krylov = self._base_step = None
+        self._excess = 0
         self.factorisations += 1
         self._age = 0
 
@@ -460,7 +481,24 @@ class Stepper:
         repeats it with a shorter Δt).
         """
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            return self._newton(C_now, history, dt, first=first, guess=guess, ratio=ratio)
+            out = self._newton(C_now, history, dt, first=first, guess=guess, ratio=ratio)
+        self._count_excess(out[1].krylov)
+        return out
+
+    def _count_excess(self, krylov: int) -> None:
+        """After a step of ``krylov`` GMRES iterations: a dear preconditioner (columns,
+        coupled blocks) is dropped, to be rebuilt at the next step's state, once the steps
+        since its build have cost more than ``refresh_excess`` iterations above the first
+        of them."""
+        if self.kind == "mean" or self._lus is None:
+            return
+        if self._base_step is None:
+            self._base_step = krylov
+            return
+        # (signed: steps that wander about the first one cancel, a drift adds up)
+        self._excess += krylov - self._base_step
+        if self._excess > self.settings.refresh_excess:
+            self.reset()
 
     def _newton(
         self,
@@ -570,11 +608,11 @@ class Stepper:
                 continue
             if self._base_krylov is None:
                 self._base_krylov = count[0]
-            # the column preconditioner is dear to build: refreshed when GMRES needs twice
-            # what it needed right after the last build (and more than `refresh_krylov`)
-            dear = self.kind != "mean"
-            limit = max(s.refresh_krylov, 2 * self._base_krylov) if dear else s.refresh_krylov
-            if it > s.refresh_after or (count[0] > limit and self._age >= s.refresh_every):
+            # the x-mean blocks are cheap: rebuilt for GMRES's sake at most every refresh_every
+            # steps; the dear ones where the steps since their build have cost about a build
+            # more than the first (refresh_excess: _count_excess)
+            again = self.kind == "mean" and count[0] > s.refresh_krylov and self._age >= s.refresh_every
+            if it > s.refresh_after or again:
                 self._factor(d.unpack(z), dt, bdf, history)
         rn = float(np.max(np.abs(r)))
         if rn < floor:  # at tol, or at the round-off floor below floor_atol
