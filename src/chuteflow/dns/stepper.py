@@ -75,9 +75,10 @@ class NewtonSettings:
     refresh_krylov : int
         … or when one GMRES solve needed more iterations than this,
     refresh_every : int
-        … but then at most once in this many steps (the x-mean blocks).
+        … but then at most once in this many steps.
     refresh_excess : int
-        The dear preconditioners (columns, coupled blocks) instead: rebuilt once the GMRES
+        The dear preconditioners (columns, coupled blocks; rebuilt by the rules above where a
+        solve needs twice the first solve's count after their build) also: rebuilt once the GMRES
         iterations of the steps since their build, above the count of the first step after
         it, add up to more than this (signed) — about what a build costs (the column build 5.3 s against
         ≈ 50 ms a GMRES iteration at P5's mapped 129 × 96, 8 s against 85 ms at P1's 225 × 96).
@@ -608,11 +609,13 @@ class Stepper:
                 continue
             if self._base_krylov is None:
                 self._base_krylov = count[0]
-            # the x-mean blocks are cheap: rebuilt for GMRES's sake at most every refresh_every
-            # steps; the dear ones where the steps since their build have cost about a build
-            # more than the first (refresh_excess: _count_excess)
-            again = self.kind == "mean" and count[0] > s.refresh_krylov and self._age >= s.refresh_every
-            if it > s.refresh_after or again:
+            # rebuilt for GMRES's sake at most every refresh_every steps, the dear preconditioners
+            # where a solve needs twice what the first after their build needed (and, at the
+            # step's end, where the steps since the build have cost about a build more than
+            # the first: refresh_excess, _count_excess)
+            dear = self.kind != "mean"
+            limit = max(s.refresh_krylov, 2 * self._base_krylov) if dear else s.refresh_krylov
+            if it > s.refresh_after or (count[0] > limit and self._age >= s.refresh_every):
                 self._factor(d.unpack(z), dt, bdf, history)
         rn = float(np.max(np.abs(r)))
         if rn < floor:  # at tol, or at the round-off floor below floor_atol
