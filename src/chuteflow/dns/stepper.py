@@ -211,7 +211,7 @@ class NewtonSettings:
             raise ParameterError(f"coupled_krylov = {self.coupled_krylov!r}: ≥ 0 GMRES iterations")
         if self.refresh_excess < 0:
             raise ParameterError(
-                f"refresh_excess = {self.refresh_excess!r}: ≥ 0 GMRES iterations (above the first solve's "
+                f"refresh_excess = {self.refresh_excess!r}: ≥ 0 GMRES iterations (above the first step's "
                 "count since the build, after which a column or coupled preconditioner is rebuilt)"
             )
         if self.dt_krylov < 1:
