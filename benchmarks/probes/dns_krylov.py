@@ -31,7 +31,10 @@ residual of the extrapolated guess; 0: ``atol`` alone), the first the reference 
 units with the step control (``dt_tol`` = 1e-3, as the run that made it) once per variant
 (``coupled`` and ``coupled_chebyshev`` there go over to the columns as a run does), and print
 the wall time, steps, factorisations and the end state's distance to the first variant's —
-the end-to-end comparison of docs/dns.md, *Finite differences in y*.
+the end-to-end comparison of docs/dns.md, *Finite differences in y*; ``columns_follow`` (span
+only) lets the frame follow the wave (``DnsSimulation(follow_wave=True)``): its end state is
+in another frame, so the distance to compare is that of the last ρ̄ record, which stays in
+the first frame (``max_drho_rel_vs_first``; docs/dns.md, *A frame that follows the wave*).
 
 Run: ``python benchmarks/probes/dns_krylov.py --make-state /tmp/p1_41x64.npz --nx 41 --ny 64``
 then ``python benchmarks/probes/dns_krylov.py --state /tmp/p1_41x64.npz --nx 41 --ny 64
@@ -72,6 +75,9 @@ VARIANTS = {
     "coupled_chebyshev": dict(preconditioner="coupled", coupled_krylov=0, column_y="chebyshev"),
     # the columns with each row's own x-transport by central differences (before 2026-12-07)
     "columns_central": dict(preconditioner="columns", column_y="chebyshev", column_x="central"),
+    # the Chebyshev columns in a frame that follows the wave (DnsSimulation(follow_wave=True);
+    # --span only: the frame changes by the run's records)
+    "columns_follow": dict(preconditioner="columns", column_y="chebyshev", follow_wave=True),
 }
 
 
@@ -107,12 +113,14 @@ def simulation(
     length=1000.0,
     **solver,
 ) -> DnsSimulation:
-    """The run of ``--make-state`` (``solver``: further NewtonSettings, e.g. ``column_y``)."""
+    """The run of ``--make-state`` (``solver``: further NewtonSettings, e.g. ``column_y``, and
+    ``follow_wave``, the simulation's)."""
     flow = solve_steady(theta, nu0, ChuteModel(roughness=0.05))
+    follow = bool(solver.pop("follow_wave", False))
     settings = NewtonSettings(**{"dt_tol": 1e-3, "preconditioner": preconditioner, **solver})
     return DnsSimulation(
         flow, length, time=t_end, dt=4.0, n=ny, modes=(nx - 1) // 2,
-        init="noise", amplitude=1e-3, snapshots=2, settings=settings,
+        init="noise", amplitude=1e-3, snapshots=2, settings=settings, follow_wave=follow,
     )  # fmt: skip
 
 
@@ -244,6 +252,8 @@ def main(argv=None):
         first = None
         for name, rtol in ((n, r) for n in names for r in rtols):
             extra = {} if rtol is None else {"newton_rtol": rtol}
+            if VARIANTS[name].get("follow_wave"):
+                raise SystemExit(f"{name}: a frame that follows the wave is measured with --span")
             settings = NewtonSettings(**{**VARIANTS[name], **extra})
             r, cnt, fact, C_end = measure(sim, settings, C, prev, h_prev, dt, args.steps)
             first = C_end if first is None else first
@@ -271,19 +281,20 @@ def span(args, where: dict, names: list[str]) -> None:
     """``--span``: the saved state continued for ``args.span`` time units per variant."""
     from chuteflow.dns.simulation import DnsState
 
-    first = None
+    first = first_rho = None
     for name in names:
         with np.load(args.state) as ck:
             key = str(ck["key"])  # the state's own run: read by the simulation's loader
         state = DnsState.load(args.state, key)
         if state is None:
             raise SystemExit(f"{args.state}: not a saved DNS state")
-        step = state.step
-        sim = simulation(args.nx, args.ny, state.t + args.span, **where, **VARIANTS[name])
+        step, frames = state.step, len(state.records["frame_t"])
+        sim = simulation(args.nx, args.ny, state.t + args.span, **where, **dict(VARIANTS[name]))
         t0 = time.perf_counter()
         end = sim.run(state=state)
         wall = time.perf_counter() - t0
-        first = end.C if first is None else first
+        if first is None:
+            first, first_rho = end.C, np.asarray(end.records["rho"][-1])
         row = {
             "variant": name,
             "span": args.span,
@@ -295,6 +306,12 @@ def span(args, where: dict, names: list[str]) -> None:
             "gmres_per_step": [int(k) for k in end.records["krylov"][-(end.step - step) :]],
             "wave": wave(sim, end.C),
             "max_dC_vs_first": float(np.abs(end.C - first).max()),
+            # (the records are in the run's first frame, whichever frame the end state is in)
+            "max_drho_rel_vs_first": float(
+                np.abs(end.records["rho"][-1] - first_rho).max() / first_rho.mean()
+            ),
+            "reframes": len(end.records["frame_t"]) - frames,
+            "frame_end": sim.disc.frame,
         }
         print(json.dumps(row, ensure_ascii=False), flush=True)
 

@@ -548,3 +548,129 @@ def test_resample_is_trigonometric_interpolation():
     x8 = 2 * np.pi * np.arange(8) / 8
     x17 = 2 * np.pi * np.arange(17) / 17
     np.testing.assert_allclose(_resample(np.cos(4 * x8), 17), np.cos(4 * x17), rtol=0, atol=1e-14)
+
+
+def test_wave_speed_now_measures_a_travelling_wave(p1):
+    """DnsSimulation.wave_speed_now on records of ρ̄ = 1 + a cos(2π m (ξ − v t)/L) in the
+    run's first frame: the lab speed frame + v exactly (a pure mode's phase is linear in t);
+    None while the wave is below FOLLOW_AMPLITUDE, with fewer than FOLLOW_WINDOW records, or
+    with a change of frame inside the window."""
+    from chuteflow.dns.simulation import FOLLOW_AMPLITUDE, FOLLOW_WINDOW
+
+    sim = DnsSimulation(p1, 1000.0, frame_speed=7.5, **SMALL)
+    x = np.arange(16) * 1000.0 / 16
+    t = 100.0 + 4.0 * np.arange(FOLLOW_WINDOW)
+    st = sim.initial_state()
+
+    def records(amp, m=1, v=0.21):
+        st.records["t"] = list(t)
+        st.records["rho"] = list(_wave(t, x, 1000.0, v, np.full(len(t), amp), m))
+        st.records["frame_t"] = []
+
+    records(0.1)
+    assert sim.wave_speed_now(st) == pytest.approx(7.5 + 0.21, abs=1e-9)
+    records(0.1, m=2, v=-0.4)  # the dominant mode's
+    assert sim.wave_speed_now(st) == pytest.approx(7.5 - 0.4, abs=1e-9)
+    records(0.45 * FOLLOW_AMPLITUDE)  # max − min = 0.9 FOLLOW_AMPLITUDE: still linear
+    assert sim.wave_speed_now(st) is None
+    records(0.1)
+    st.records["frame_t"] = [t[3]]
+    assert sim.wave_speed_now(st) is None
+    st.records["frame_t"] = [t[0] - 1.0]
+    assert sim.wave_speed_now(st) is not None
+    st.records["t"], st.records["rho"] = st.records["t"][1:], st.records["rho"][1:]
+    assert sim.wave_speed_now(st) is None
+
+
+def _reframed_run(p1, speed, at, time, shift_history=True, **kw):
+    """A run in frame 0 to ``at``, then in the frame ``speed`` (DnsSimulation.reframe) to
+    ``time``; with ``shift_history`` False the BDF2 history is left unshifted (the mistake
+    the shift prevents)."""
+    from dataclasses import replace
+
+    sim = DnsSimulation(p1, 1000.0, time=at, **kw)
+    st = sim.run()
+    if shift_history:
+        sim.reframe(st, speed)
+    else:
+        prev = st.prev.copy()
+        sim.reframe(st, speed)
+        st.prev = prev
+    sim.setup = replace(sim.setup, time=time)
+    return sim, sim.run(state=st)
+
+
+def test_a_change_of_frame_continues_the_same_solution(p1):
+    """reframe() mid-run: the run goes on in the frame of the eigenmode's phase velocity, and
+    its records (in the first frame) converge to the frame-0 run's at second order in Δt — the
+    two frames' BDF2 errors (eigenmode at amplitude 0.01, nx 17, the frame changed at t = 20,
+    compared at t = 40: 1.56e-5 of ⟨ρ̄⟩ at Δt 0.5, 4.5e-6 at 0.25). Without shifting the
+    history level into the new frame the error is first order (8.4e-5, 4.2e-5): the shift is
+    what makes the change exact."""
+    errs = {}
+    for dt in (0.5, 0.25):
+        kw = dict(dt=dt, init="mode", amplitude=0.01, n=24, modes=8)
+        ref_sim = DnsSimulation(p1, 1000.0, time=40.0, **kw)
+        ref = np.asarray(ref_sim.run().records["rho"])
+        c = ref_sim.mode.wave_speed
+        mean = np.mean(ref[-1])
+        for shift in (True, False) if dt == 0.25 else (True,):
+            sim, st = _reframed_run(p1, c, 20.0, 40.0, shift_history=shift, **kw)
+            errs[dt, shift] = np.abs(np.asarray(st.records["rho"]) - ref).max() / mean
+    assert sim.disc.frame == c
+    assert st.frame == c
+    assert st.records["frame_t"] == [20.0]
+    assert st.records["frame_speed"] == [c]
+    assert st.frame_shift == pytest.approx(20.0 * c, rel=1e-12)
+    assert errs[0.25, True] < 1e-5
+    assert errs[0.5, True] / errs[0.25, True] > 3.0  # second order
+    assert errs[0.25, False] > 5 * errs[0.25, True]
+    ds = sim.dataset(st)
+    assert ds.attrs["frame_speed"] == 0.0
+    assert ds.attrs["frame_speed_end"] == c
+    assert ds.attrs["reframes"] == 1
+
+
+def test_the_frame_survives_a_checkpoint(tmp_path, p1):
+    sim = DnsSimulation(p1, 1000.0, **SMALL)
+    st = sim.initial_state()
+    st.save(tmp_path / "a.npz", sim.key())
+    assert DnsState.load(tmp_path / "a.npz", sim.key()).frame is None  # (the run's own)
+    st.frame, st.frame_shift = 7.25, -12.5
+    st.records["frame_t"], st.records["frame_speed"] = [8.0], [7.25]
+    st.save(tmp_path / "b.npz", sim.key())
+    back = DnsState.load(tmp_path / "b.npz", sim.key())
+    assert (back.frame, back.frame_shift) == (7.25, -12.5)
+    assert back.records["frame_speed"] == [7.25]
+    sim._follow(back)
+    assert sim.disc.frame == 7.25
+
+
+def test_a_run_that_follows_its_wave(p1):
+    """follow_wave (the default from noise): P1, L = 1000, from noise in a frame 2.6 % slower
+    than the wave (7.6): once ρ̄ varies by FOLLOW_AMPLITUDE (t ≈ 17400 here) the frame moves,
+    once, to the wave's speed (7.8075; the run's own wave_speed, over the last tenth, to 1e-5),
+    and the records are the run's that stayed in 7.6 to the time-step control's error (4.5e-6
+    of ⟨ρ̄⟩ measured; the tolerance ten times that). The whole run in its first frame: mass to
+    round-off."""
+    from chuteflow.dns import NewtonSettings
+
+    kw = dict(
+        time=18000.0, dt=4.0, n=32, modes=8, init="noise", amplitude=1e-3, frame_speed=7.6, snapshots=2,
+        settings=NewtonSettings(dt_tol=1e-3, preconditioner="coupled"),
+    )  # fmt: skip
+    plain = DnsSimulation(p1, 1000.0, follow_wave=False, **kw)
+    ref = plain.run()
+    sim = DnsSimulation(p1, 1000.0, **kw)  # (from noise the frame follows by default)
+    st = sim.run()
+    ds = sim.dataset(st)
+    assert len(st.records["frame_t"]) == 1
+    assert ds.attrs["reframes"] == 1
+    assert ds.attrs["frame_speed"] == 7.6
+    assert ds.attrs["follow_wave"] == 1
+    assert ds.attrs["frame_speed_end"] == pytest.approx(ds.attrs["wave_speed"], rel=1e-4)
+    a, b = np.asarray(st.records["rho"][-1]), np.asarray(ref.records["rho"][-1])
+    assert st.t == ref.t
+    assert np.abs(a - b).max() / b.mean() < 5e-5
+    assert ds.attrs["mass_drift"] < 1e-12
+    assert ds.attrs["rho_max_rel"] > 0.025  # (the wave was nonlinear: FOLLOW_AMPLITUDE = 0.05 max − min)

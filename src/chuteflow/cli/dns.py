@@ -45,6 +45,12 @@ def dns(
         "centred at the steepest point of ln ν (at the same nx where that suffices, else "
         "nx doubled up to --max-nx), re-centred as the front moves (docs/dns.md).",
     ),
+    follow_wave: bool | None = typer.Option(
+        None,
+        "--follow-wave/--no-follow-wave",
+        help="Let the frame follow the nonlinear wave's measured speed (the wave stands in it; "
+        "the records stay in the first frame; docs/dns.md). Default: on from noise, off from a mode.",
+    ),
     ny: int | None = typer.Option(None, "--ny", help="Chebyshev intervals N (default: the eigenvalue's N)."),
     max_ny: int | None = typer.Option(
         None,
@@ -152,6 +158,7 @@ def dns(
                 max_modes=None if max_nx is None else (max_nx - 1) // 2,
                 max_n=max_ny,
                 x_map=x_map,
+                follow_wave=follow_wave,
                 dt=dt,
                 init=init,
                 amplitude=amplitude,
@@ -242,6 +249,11 @@ def waves(
         False,
         "--x-map/--no-x-map",
         help="Let each run's x grid follow its front with a tan map (as chuteflow dns --x-map).",
+    ),
+    follow_wave: bool = typer.Option(
+        True,
+        "--follow-wave/--no-follow-wave",
+        help="Let each run's frame follow its wave's measured speed (as chuteflow dns --follow-wave).",
     ),
     ny: int = typer.Option(80, "--ny", help="Chebyshev intervals N."),
     max_ny: int | None = typer.Option(
@@ -349,6 +361,7 @@ def waves(
         max_modes=None if max_nx is None else (max_nx - 1) // 2,
         max_n=max_ny,
         x_map=x_map,
+        follow_wave=follow_wave,
     )
     con = Console(stderr=True)
 

@@ -68,6 +68,7 @@ def simulate(
     max_modes: int | None = None,
     max_n: int | None = None,
     x_map: bool = False,
+    follow_wave: bool | None = None,
 ) -> xr.Dataset:
     """Simulate the time-dependent equations on a slope periodic in x (docs/dns.md).
 
@@ -123,6 +124,10 @@ def simulate(
         tail rises the run goes to a map centred at the steepest point of ln ν, at the
         run's modes where that suffices, and re-centres it as the front moves; ``x_map_beta``,
         ``x_map_centre`` and ``refined_at`` in the result (the records stay on a uniform x).
+    follow_wave : bool, optional
+        Let the frame follow the nonlinear wave's measured speed (:class:`DnsSimulation`;
+        default on from noise, off from a mode); ``frame_speed_end`` and ``reframes`` in the
+        result (the records stay in the frame of ``frame_speed``).
     wall_limit : float, optional
         Seconds of wall time after which the run pauses
         (:class:`~chuteflow.trackers.WallTimeStop`): status ``"paused at t = …"``, the wave
@@ -164,6 +169,7 @@ def simulate(
         max_modes=max_modes,
         max_n=max_n,
         x_map=x_map,
+        follow_wave=follow_wave,
         wave_policy=WavePolicy(tol=saturation_tol) if saturation_tol is not None else None,
     )
     tracking: list[Tracker] = []
@@ -219,6 +225,8 @@ def summary(ds: xr.Dataset) -> dict:
         "init",
         "amplitude",
         "frame_speed",
+        "frame_speed_end",
+        "reframes",
         "growth_rate",
         "phase_velocity",
         "alpha_re",

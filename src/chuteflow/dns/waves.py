@@ -102,6 +102,12 @@ class WaveMapSettings:
         (:class:`~chuteflow.dns.DnsSimulation`, docs/dns.md *In the runs*). Not in the
         settings' repr (a run is read back where its ``x_map`` attribute agrees), so that the
         runs of a map made before it existed are read back.
+    follow_wave : bool
+        Let each run's frame follow its wave's measured speed (default True, as for every
+        run from noise: :class:`~chuteflow.dns.DnsSimulation`, docs/dns.md *A frame that
+        follows the wave*); like ``x_map`` not in the repr (read back where the run's
+        ``follow_wave`` attribute agrees; runs from before it existed, without the
+        attribute, did not follow).
     """
 
     length: float = 1000.0
@@ -119,6 +125,7 @@ class WaveMapSettings:
     max_modes: int | None = None
     max_n: int | None = None
     x_map: bool = field(default=False, repr=False)
+    follow_wave: bool = field(default=True, repr=False)
 
     def __post_init__(self):
         for name in ("length", "time", "dt"):
@@ -168,6 +175,7 @@ def _one(
             done = (
                 ds.attrs.get("map_settings") == repr(s)
                 and int(ds.attrs.get("x_map", 0)) == int(s.x_map)
+                and int(ds.attrs.get("follow_wave", 0)) == int(s.follow_wave)
                 and float(ds.attrs["length"]) == length
                 and not str(ds.attrs["status"]).startswith(("stopped", "paused"))
             )
@@ -198,6 +206,7 @@ def _one(
                 max_modes=s.max_modes,
                 max_n=s.max_n,
                 x_map=s.x_map,
+                follow_wave=s.follow_wave,
             )
             ds.attrs["map_settings"] = repr(s)
             if out is not None:
