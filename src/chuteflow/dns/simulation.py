@@ -688,8 +688,9 @@ class DnsSimulation:
         return out
 
     def wave_speed_now(self, state: DnsState) -> float | None:
-        """The wave's lab speed over the last :data:`FOLLOW_WINDOW` records in the current
-        frame: the phase of ρ̄'s dominant mode, least squares in t; None where the wave is
+        """The wave's lab speed over the last :data:`FOLLOW_WINDOW` records, all after the
+        last change of frame (the records themselves are in the run's first frame): the
+        phase of ρ̄'s dominant mode, least squares in t; None where the wave is
         still linear (below :data:`FOLLOW_AMPLITUDE`), the records are fewer, or the two
         halves of the window give speeds more than :data:`FOLLOW_TOL` apart (a transient:
         the start from a mode at finite amplitude measured 14.2 against the mode's 7.8)."""
