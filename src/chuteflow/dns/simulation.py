@@ -684,12 +684,9 @@ class DnsSimulation:
 
     def _shifted(self, fields: np.ndarray, delta: float) -> np.ndarray:
         """(ν, u, v, T) on the padded grid → the same functions at x − ``delta``."""
-        d = self.disc
         f = np.array(fields, dtype=float)
         f[0] = np.log(f[0])
-        c = scipy.fft.rfft(f, axis=-1, norm="forward")[..., : (d.nxp - 1) // 2 + 1]
-        pts = np.mod(d.x - delta, d.length)
-        out = fourier_evaluate(c, pts if d.x_map is None else d.x_map.s(pts), d.length)
+        out = self._at(f, self.disc.x - delta)
         out[0] = np.exp(out[0])
         return out
 
@@ -780,13 +777,20 @@ class DnsSimulation:
         d = self.disc
         if d.x_map is None and shift == 0.0:
             return f
-        c = scipy.fft.rfft(f, axis=-1, norm="forward")[..., : (d.nxp - 1) // 2 + 1]
-        return fourier_evaluate(c, self._record_points(shift), d.length)
+        return self._at(f, d.s - shift)
 
-    def _record_points(self, shift: float) -> np.ndarray:
-        """The computational coordinates s of the records' uniform points x − ``shift``."""
+    def _at(self, f: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """Values on the padded grid → the same function at the points ``x`` of the current
+        frame: its series in s (all the padded grid's modes below Nyquist) evaluated exactly
+        at s = g⁻¹(x)."""
         d = self.disc
-        pts = np.mod(d.s - shift, d.length)
+        c = scipy.fft.rfft(f, axis=-1, norm="forward")[..., : (d.nxp - 1) // 2 + 1]
+        return fourier_evaluate(c, self._s_at(x), d.length)
+
+    def _s_at(self, x: np.ndarray) -> np.ndarray:
+        """The computational coordinate s of the points ``x`` (modulo L) of the current frame."""
+        d = self.disc
+        pts = np.mod(x, d.length)
         return pts if d.x_map is None else d.x_map.s(pts)
 
     def _record(self, st: DnsState) -> None:
@@ -809,7 +813,7 @@ class DnsSimulation:
         if d.x_map is None and st.frame_shift == 0.0:
             s = np.stack([d.to_physical(st.C[i]) for i in range(4)])
         else:  # (on the records' uniform x grid: the series evaluated exactly there)
-            s = fourier_evaluate(st.C, self._record_points(st.frame_shift), d.length)
+            s = fourier_evaluate(st.C, self._s_at(d.s - st.frame_shift), d.length)
         s[0] = np.exp(s[0])
         st.records["snap_t"].append(st.t)
         st.records["snaps"].append(s)
