@@ -131,16 +131,23 @@ def _at_points(disc: Discretisation, values: np.ndarray) -> np.ndarray:
 
 
 def column_coefficients(
-    disc: Discretisation, C: np.ndarray, history: tuple, dt: float, bdf=BDF2, rel_step: float = 1e-7
+    disc: Discretisation,
+    C: np.ndarray,
+    history: tuple,
+    dt: float,
+    bdf=BDF2,
+    rel_step: float = 1e-7,
+    time: bool = True,
 ) -> dict[str, np.ndarray]:
-    """Coefficients ∂(row)/∂(jet) (4, N+1, 2M+1) of every jet of :data:`PRIMITIVE_JETS`.
+    """Coefficients ∂(row)/∂(jet) (4, N+1, 2M+1) of every jet of :data:`PRIMITIVE_JETS`
+    (with ``time``, those of :data:`TIME_JETS` too: what ``x="upwind"`` needs).
 
     One-sided differences of :meth:`Discretisation.pointwise_rows` at the state ``C`` with
     the step ``rel_step`` × max(1, max |jet|); the mass rows are divided by ν̄_j =
     exp(ŝ_0(y_j)) as :meth:`Discretisation.residual` divides their modes. Evaluated on the
     padded grid, then projected onto the modes m ≤ M and taken at the 2M + 1 points x_i.
     """
-    padded = jet_coefficients(disc, C, history, dt, bdf, rel_step, time=True)
+    padded = jet_coefficients(disc, C, history, dt, bdf, rel_step, time=time)
     return {name: _at_points(disc, A) for name, A in padded.items()}
 
 
@@ -392,7 +399,8 @@ class ColumnPreconditioner:
         of ``order`` 2 or 4, each row's own transport by ``x``, y-derivatives by ``y``:
         :func:`column_blocks`), factorisation (``"cyclic"`` for the dense blocks of
         ``y="chebyshev"`` at ``order`` 2, else ``"sparse"``)."""
-        blocks = column_blocks(disc, column_coefficients(disc, C, history, dt, bdf), order, y, x)
+        coefficients = column_coefficients(disc, C, history, dt, bdf, time=x == "upwind")
+        blocks = column_blocks(disc, coefficients, order, y, x)
         return cls(disc, blocks, "cyclic" if order == 2 and y == "chebyshev" else "sparse")
 
     @property
