@@ -11,9 +11,11 @@ Contract
     falling, or no eigenvalue at the next N continues it), or below the answer. Where the
     ladder ends with such a candidate undecided, the answer is that candidate, flagged
     ``converged = False`` with its drift and tail, and the note names the least-stable
-    resolved mode below it. A damped mode is never reported as converged while a less
-    damped one that passes the tests exists at the resolutions tried — or, where its
-    eigenvector resolves only beyond them, while it is found there (step 3).
+    resolved mode below it (such a candidate, left undecided before the ladder's top where
+    its drift cannot pass the threshold by then, is followed on to the top: the estimate is
+    the ladder's best). A damped mode is never reported as converged while a less damped
+    one that passes the tests exists at the resolutions tried — or, where its eigenvector
+    resolves only beyond them, while it is found there (step 3).
 
 Resolver (:func:`least_stable`)
     1. *Tracked or direct answer*: the α(0) = 0 branch (the kinematic-wave mode of
@@ -393,6 +395,8 @@ class _Candidate:
         self.drifts: list[float] = []  # the drift at each rung where the tail was recorded
         self.done: Followed | None = None
         self.answer: Mode | None = None  # the answer the search is above (search_above)
+        self.hopeless = False  # left undecided by the hopeless rule, before the ladder's top
+        self.finishing = False  # followed on past that verdict (finish): the rule is off
 
     def _decide(self, verdict: str, why: str) -> Followed:
         self.done = Followed(self.start, self.mode, verdict, why)
@@ -496,13 +500,37 @@ class _Candidate:
             # top at its own rate or the fastest plausible one, stays far above the
             # threshold: the ladder cannot decide it
             rate = max(drift / prev.drift, search.fastest_fall)
-            if drift * rate**rungs_left > search.hopeless * policy.drift_tol:
+            if not self.finishing and drift * rate**rungs_left > search.hopeless * policy.drift_tol:
+                self.hopeless = rungs_left > 0
                 return self._decide(
                     "undecided",
                     f"its drift {drift:.1e} at N = {nn}, falling ×{rate:.2g} a rung, stays above "
                     f"{search.hopeless:g} × the threshold by the top of the ladder",
                 )
         return None
+
+    def finish(self, rungs: list[int]) -> Followed:
+        """A candidate the hopeless rule left undecided, the search's flagged answer, followed
+        on over the ``rungs`` above its last to the ladder's top (the rule off): the answer's
+        estimate is the ladder's best. Its verdict there: a mode, not one, or undecided with
+        the drift and tail at the top. Measured (try_random_points
+        seed 389533): θ = 22.867°, ν0(0) = 0.0106, φ = 0.0947, Φ = 0.465 at (k_x, k_z) =
+        (0.001491, 0.020654), a candidate with drifts 3.2e-3, 3.5e-3, 6.6e-4, 2.4e-3 at N = 48
+        … 94 (tails 1.4e-4 … 1.2e-5) was left undecided at N = 94 and answered, flagged, as
+        −0.0374368 − 0.0223830i, 8.4e-4 from the dense QZ at N = 250 (−0.0373596 −
+        0.0232151i); followed on, −0.0373595 − 0.0232103i at N = 256 (drift 2.6e-5, tail
+        6.2e-9: 4.8e-6 from it), still flagged."""
+        assert self.done is not None
+        assert self.mode is not None
+        why, self.done, self.finishing = self.done.why, None, True
+        rest = [r for r in rungs if r > self.n_from]
+        for i, nn in enumerate(rest):
+            if self.step(nn, -math.inf, len(rest) - 1 - i) is not None:
+                return self.done  # type: ignore[return-value]
+        m = self.mode
+        return self._decide(
+            "undecided", f"{why}; followed on to the ladder's top (N = {m.n}) for the estimate"
+        )
 
     def result(self) -> Followed:
         """The verdict, ``"undecided"`` while none."""
@@ -833,7 +861,10 @@ def search_above(
     if rungs is None:
         rungs = search.ladder(policy.n_max, policy.n_growth)
     # the rate rule's screens on the next rungs of the search's ladder (SCREEN_RATE_RUNGS)
-    found = _search_once(flow, kx, kz, answer, policy, cache, rungs, rungs[1 : SCREEN_RATE_RUNGS + 1])
+    early: list[_Candidate] = []
+    found = _search_once(
+        flow, kx, kz, answer, policy, cache, rungs, rungs[1 : SCREEN_RATE_RUNGS + 1], early=early
+    )
     screened = search.n
     while found is not None and found.physical and found.n > SCREEN_REPEAT * screened:
         n2 = found.n
@@ -847,6 +878,7 @@ def search_above(
             cache,
             [r for r in rungs if r >= n2] or [n2],
             suspects=suspects,
+            early=early,
         )
         screened = n2
         if found is not None and found.physical and suspects:
@@ -860,11 +892,36 @@ def search_above(
         n2 = next((r for r in rungs if r >= SCREEN_REPEAT * found.n), rungs[-1])
         if n2 > found.n:
             again = _search_once(
-                flow, kx, kz, found, _repeated(policy, n2), cache, [r for r in rungs if r >= n2]
+                flow, kx, kz, found, _repeated(policy, n2), cache, [r for r in rungs if r >= n2], early=early
             )
             if again is not None and again.alpha.real > found.alpha.real + max(found.drift, again.drift):
-                return again
+                found = again
+        return _finished(found, early, rungs)
     return found
+
+
+def _finished(found: Mode, early: list[_Candidate], rungs: list[int]) -> Mode:
+    """The flagged answer ``found`` of the search, or, where it is a candidate the hopeless
+    rule left undecided before the ladder's top (one of ``early``), that candidate followed on
+    to the top (:meth:`_Candidate.finish`): its estimate there, flagged while undecided, the
+    answer where it passes both tests. Where it is decided no mode or below the resolved mode
+    on the way, the early estimate stays the answer, flagged, and its note says so: the
+    search's rules that set a candidate aside are not proof that no mode lies near it (a
+    candidate lost by a hop onto a neighbour, test_resolver's seed 663316), and a flagged
+    answer is the conservative one."""
+    c = next((c for c in early if c.mode is not None and c.mode.alpha == found.alpha), None)
+    if c is None or c.finishing:
+        return found
+    f = c.finish(rungs)
+    m = f.mode
+    if m is not None and f.verdict in ("undecided", "mode"):
+        how = "passes both tests" if f.verdict == "mode" else "is not decided"
+        note = (
+            f"followed on to N = {m.n}, it {how} (drift {m.drift:.1e}, tail {m.tail:.1e}): the estimate there"
+        )
+        return dataclasses.replace(m, method="global", note=join_notes(found.note, note))
+    note = f"followed on, it was decided {f.verdict!r} ({f.why}); the answer stays flagged"
+    return dataclasses.replace(found, note=join_notes(found.note, note))
 
 
 #: Beyond the ladder (:func:`beyond_the_ladder`). At the repeated screen (:data:`SCREEN_REPEAT`)
@@ -1000,10 +1057,12 @@ def _search_once(
     rungs: list[int],
     finer: list[int] | None = None,
     suspects: list | None = None,
+    early: list | None = None,
 ) -> Mode | None:
     """One screen at ``policy.search.n`` (with the rate rule's ``finer`` resolutions, see
     :func:`global_candidates`, which appends to ``suspects``) and its candidates followed
-    (:func:`search_above`)."""
+    (:func:`search_above`). Where the answer is a candidate the hopeless rule left undecided
+    before the ladder's top, its :class:`_Candidate` is appended to ``early``."""
     search = policy.search
     cands = global_candidates(flow, kx, kz, answer, policy, cache, finer, rungs[-1], suspects)
     if not cands:
@@ -1059,6 +1118,7 @@ def _search_once(
         assert top.mode is not None
         if top.mode is answer:
             return answer
+        _note_early(top, followed_all, early)
         return dataclasses.replace(
             top.mode,
             method="global",
@@ -1082,6 +1142,7 @@ def _search_once(
     if above:
         top = max(above, key=lambda f: f.mode.alpha.real)  # type: ignore[union-attr]
         assert top.mode is not None
+        _note_early(top, followed_all, early)
         note = join_notes(
             top.mode.note,
             f"a candidate above the least-stable resolved mode {best.alpha:.6g} (N = {best.n}) is not "
@@ -1105,6 +1166,14 @@ def _search_once(
     return dataclasses.replace(
         best, method=best.method if best is answer else "global", note=join_notes(best.note, *notes, rejected)
     )
+
+
+def _note_early(top: Followed, followed: list[_Candidate], early: list | None) -> None:
+    """Append to ``early`` the candidate whose verdict is ``top`` where the hopeless rule gave
+    it before the ladder's top (:meth:`_Candidate.finish`)."""
+    c = next((c for c in followed if c.done is top), None)
+    if early is not None and c is not None and c.hopeless:
+        early.append(c)
 
 
 def _rejected_above(followed: list[_Candidate], best: Mode) -> str:
