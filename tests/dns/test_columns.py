@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 import pytest
+import scipy.sparse as sps
 
 from chuteflow.closures import ChuteModel
 from chuteflow.dns import Discretisation, Stepper, cyclic
@@ -199,10 +200,17 @@ def test_the_two_factorisations_give_the_same_correction(p1):
         ColumnPreconditioner(d, column_blocks(d, column_coefficients(d, C, hist, 4.0, BDF2), 4), "cyclic")
 
 
-def _cyclic(rng, n, b, coupling):
-    """Random periodic block-tridiagonal blocks, diagonally dominant, and the dense matrix."""
+def _cyclic(rng, n, b, coupling, sparse=False):
+    """Random periodic block-tridiagonal blocks, diagonally dominant, and the dense matrix;
+    ``sparse``: couplings as the columns' (the diagonal, a dense sub-block and a dense row:
+    a quarter nonzero at b = 16)."""
     D = rng.normal(size=(n, b, b)) + 4 * b**0.5 * np.eye(b)
     lower, upper = coupling * rng.normal(size=(2, n, b, b))
+    if sparse:
+        keep = np.eye(b, dtype=bool)
+        keep[: b // 4, b // 2 :] = True
+        keep[b // 2, :] = True  # a dense row, as the top conditions
+        lower, upper = lower * keep, upper * keep
     A = np.zeros((n * b, n * b))
     for i in range(n):
         for o, blk in ((0, D), (-1, lower), (1, upper)):
@@ -211,14 +219,19 @@ def _cyclic(rng, n, b, coupling):
     return D, lower, upper, A
 
 
+@pytest.mark.parametrize("sparse", [False, True])
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 40])
-def test_cyclic_block_lu_solves_the_periodic_matrix(n):
+def test_cyclic_block_lu_solves_the_periodic_matrix(n, sparse):
     """CyclicBlockLU against a dense solve (LAPACK): every n from the degenerate ones (the
-    offsets coincide for n ≤ 2) to one long enough that the border's fill is dropped."""
+    offsets coincide for n ≤ 2) to one long enough that the border's fill is dropped; with
+    couplings dense and sparse (kept in CSR form below ``cyclic.SPARSE_BELOW``)."""
     rng = np.random.default_rng(n)
-    D, lower, upper, A = _cyclic(rng, n, 6, 1.0)
+    b = 16 if sparse else 6
+    D, lower, upper, A = _cyclic(rng, n, b, 1.0, sparse)
     lu = CyclicBlockLU(D, lower, upper)
-    rhs = rng.normal(size=n * 6)
+    if n > 2:
+        assert all(sps.issparse(blk) == sparse for blk in lu._lower)
+    rhs = rng.normal(size=n * b)
     x = lu.solve(rhs)
     assert np.abs(x - np.linalg.solve(A, rhs)).max() <= 1e-12 * np.abs(x).max()
     assert lu.nbytes > 0

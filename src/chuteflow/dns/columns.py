@@ -267,17 +267,29 @@ def column_blocks(
     if reach == 1:
         stencil = _STENCIL
     blocks = {o: np.zeros((nx, 4 * m, 4 * m)) for o in range(-reach, reach + 1)}
+    # the jets' coefficients summed by (offset, field, y-order): W[r, j, i] (4, m, nx)
+    summed: dict[tuple[int, int, int], np.ndarray] = {}
     for name, f, b, c in PRIMITIVE_JETS:
         A = coefficients[name].copy()  # (4, m, nx)
         A[1:, -1] = 0.0  # the top rows of u, v, T are the per-mode conditions below
         if not np.any(A):
             continue
-        fc = UNKNOWNS.index(f)
         for o, w in stencil[b]:
-            W = A * (w / hx**b)  # (4, m, nx)
-            # block[i][(r, j), (fc, j')] += W[r, j, i] · dy[c][j, j']
-            blk = W.transpose(2, 0, 1)[..., None] * dy[c][None, None]  # (nx, 4, m, m)
-            blocks[o][:, :, fc * m : (fc + 1) * m] += blk.reshape(nx, 4 * m, m)
+            key = (o, UNKNOWNS.index(f), c)
+            summed[key] = summed.get(key, 0.0) + A * (w / hx**b)
+    j = np.arange(m)
+    for (o, fc, c), W in summed.items():
+        cols = slice(fc * m, (fc + 1) * m)
+        for r in range(4):
+            if not np.any(W[r]):
+                continue
+            rows = slice(r * m, (r + 1) * m)
+            if c == 0:
+                # block[i][(r, j), (fc, j)] += W[r, j, i]: the identity in y
+                blocks[o][:, r * m + j, fc * m + j] += W[r].T
+            else:
+                # block[i][(r, j), (fc, j')] += W[r, j, i] · dy[c][j, j']
+                blocks[o][:, rows, cols] += W[r].T[:, :, None] * dy[c][None]
     if x == "upwind":
         _upwind_transport(blocks, coefficients, m, hx)
     # top conditions of u, v, T: Σ coef |k|^p (D^c f)(y_max), |k|^p by its circulant h_{i − i'}

@@ -17,16 +17,34 @@ The border fill decays geometrically away from the corner (at P5's mapped bore, 
 :data:`BORDER_DROP` times the largest are dropped, which changes the solve by less than that
 relative amount — far below GMRES's tolerance (1e-6) — and saves about a third of the
 memory traffic of a solve.
+
+A solve is bound by that memory traffic: per point it reads D_i⁻¹, D_i⁻¹ U_i and L_i. The
+couplings L_i, U_i are sparse (the x-differences: diagonal in y, dense only in the rows of the
+mixed ∂_x∂_y jets and the top conditions; 13 % of the entries at P1's mapped wave, 225 × 96),
+so a coupling with fewer than :data:`SPARSE_BELOW` of its entries nonzero is kept in CSR form:
+its product in the solve reads a seventh as much (a solve there 64.6 → 50.8 ms), and the
+elimination's products with it cost a fraction of the dense b³ ones (docs/dns.md, *The
+columns' couplings kept sparse*).
 """
 
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sps
 
-__all__ = ["BORDER_DROP", "CyclicBlockLU"]
+__all__ = ["BORDER_DROP", "SPARSE_BELOW", "CyclicBlockLU"]
 
 #: Border blocks (the periodic corner's fill) below this fraction of the largest are dropped.
 BORDER_DROP = 1e-12
+#: A coupling block with fewer nonzero entries than this fraction is kept sparse (CSR).
+SPARSE_BELOW = 0.3
+
+
+def _thin(block: np.ndarray):
+    """``block`` in CSR form where fewer than :data:`SPARSE_BELOW` of its entries are nonzero."""
+    if np.count_nonzero(block) < SPARSE_BELOW * block.size:
+        return sps.csr_array(block)
+    return block
 
 
 class CyclicBlockLU:
@@ -58,6 +76,8 @@ class CyclicBlockLU:
         scale_r, scale_b = np.abs(lower[0]).max(), np.abs(upper[last]).max()
         right: np.ndarray | None = lower[0].copy()  # A[0, last]
         bottom: np.ndarray | None = upper[last].copy()  # A[last, 0]
+        thin_lower = [_thin(blk) for blk in lower]
+        thin_upper = [_thin(blk) for blk in upper]
         d_last = diagonal[last].copy()
         d = diagonal[0].copy()
         for i in range(last):
@@ -74,12 +94,12 @@ class CyclicBlockLU:
                     d_last -= bottom @ XR[i]
             if i + 1 == last:
                 break
-            XU[i] = inv[i] @ upper[i]
-            d = diagonal[i + 1] - lower[i + 1] @ XU[i]
+            XU[i] = inv[i] @ thin_upper[i]
+            d = diagonal[i + 1] - thin_lower[i + 1] @ XU[i]
             # the fill of the border: row i + 1's block in the last column, the last row's in column i + 1
             new_right = upper[i + 1].copy() if i + 1 == last - 1 else None
             if right is not None:
-                fill = lower[i + 1] @ XR[i]
+                fill = thin_lower[i + 1] @ XR[i]
                 new_right = -fill if new_right is None else new_right - fill
             new_bottom = lower[last].copy() if i + 1 == last - 1 else None
             if bottom is not None:
@@ -87,7 +107,7 @@ class CyclicBlockLU:
                 new_bottom = -fill if new_bottom is None else new_bottom - fill
             right, bottom = new_right, new_bottom
         inv[last] = np.linalg.inv(d_last)
-        self._inv, self._xu, self._lower = inv, XU, lower
+        self._inv, self._xu, self._lower = inv, XU, thin_lower
         self._rows_r = np.array(sorted(XR), dtype=int)
         self._rows_b = np.array(sorted(BB), dtype=int)
         xr = [XR[i] for i in self._rows_r] or [np.zeros((0, b))]
@@ -100,7 +120,11 @@ class CyclicBlockLU:
         """Memory of the factors (bytes)."""
         if self.n <= 2:
             return int(self._dense.nbytes)
-        return int(sum(a.nbytes for a in (self._inv, self._xu, self._lower, self._xr, self._bb)))
+        thin = sum(
+            b.data.nbytes + b.indices.nbytes + b.indptr.nbytes if sps.issparse(b) else b.nbytes
+            for b in self._lower
+        )
+        return int(thin + sum(a.nbytes for a in (self._inv, self._xu, self._xr, self._bb)))
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
         """x with A x = ``rhs`` (a vector of n·b, ordered block by block)."""
