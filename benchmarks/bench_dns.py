@@ -29,6 +29,14 @@ interface of ``benchmarks/run.py``). Run alone: ``python benchmarks/bench_dns.py
   GMRES per step of both and of the Chebyshev blocks with central x, and the end states'
   distance (docs/dns.md, *The block-tridiagonal LU*, *Upwind transport*). Measured
   2026-12-07: 9.6 s against 13.8 s, GMRES 78.5 against 157.5 (central Chebyshev 89.2).
+- ``dns_columns_solve``: one solve of the column preconditioner's block LU
+  (:class:`~chuteflow.dns.cyclic.CyclicBlockLU`) at a large wave on the grid of P1's
+  saturated wave at L = 2000 (nx = 225, N = 96, ln ν perturbed by 0.5 in mode 1 and 0.15 in
+  mode 2), averaged over 20: the couplings L_i, U_i in CSR form (13 % nonzero,
+  ``cyclic.SPARSE_BELOW``) against the baseline of dense couplings (as before 2026-12-08) in
+  the same run; the note has the two factorisations' seconds and the solves' distance
+  (docs/dns.md, *The columns' couplings kept sparse*). Measured 2026-12-08 at a run's
+  checkpoint: 50.8 against 64.6 ms.
 - ``dns_coupled_apply``: one application of the mode-coupled preconditioner
   (:class:`~chuteflow.dns.CoupledPreconditioner`) at P1, L = 1000, nx = 41, N = 80 (the
   grid of the 3-minute target) at a ±20 % wave, averaged over 100: the couplings applied
@@ -152,6 +160,7 @@ def run(quick: bool = False) -> list[dict]:
         }
     )
     rows.append(_columns_row(model))
+    rows.append(_columns_solve_row(model))
     rows.extend(_coupled_rows(model))
     rows.append(_padding_row(model))
     rows.append(_newton_rtol_row(flow))
@@ -291,6 +300,42 @@ def _columns_row(model) -> dict:
         f"upwind transport) against {k_fd:.1f} (baseline: finite differences in y, sparse LU, "
         f"central x) and {k_cc:.1f} ({t_cc:.1f} s: Chebyshev blocks, central x); end states "
         f"{np.abs(C_fd - C_ch).max():.1e} apart",
+    }
+
+
+def _columns_solve_row(model) -> dict:
+    """``dns_columns_solve`` (module docstring)."""
+    import numpy as np
+
+    from chuteflow.dns import Stepper, cyclic
+    from chuteflow.dns.columns import column_blocks, column_coefficients
+    from chuteflow.dns.discretisation import BDF2
+
+    d, C = _p1_wave(model, 2000.0, 96, 112, {1: 0.5 * (1 + 0.5j), 2: 0.15 * (0.2 - 1j)})
+    st = Stepper(d)
+    hist = (st.physical(C), st.physical(C))
+    blocks = column_blocks(d, column_coefficients(d, C, hist, 8.0, BDF2))
+    rhs = np.random.default_rng(0).normal(size=blocks[0].shape[0] * blocks[0].shape[1])
+    out = {}
+    keep = cyclic.SPARSE_BELOW
+    try:
+        for name, below in (("sparse", keep), ("dense", 0.0)):
+            cyclic.SPARSE_BELOW = below
+            lu, t_build = _timed(lambda: cyclic.CyclicBlockLU(blocks[0], blocks[-1], blocks[1]))
+            t_solve, x = _per_call(lambda lu=lu: lu.solve(rhs), 20)
+            out[name] = (t_solve, t_build, x)
+    finally:
+        cyclic.SPARSE_BELOW = keep
+    (t_s, b_s, x_s), (t_d, b_d, x_d) = out["sparse"], out["dense"]
+    nnz = np.count_nonzero(blocks[-1]) / blocks[-1].size
+    return {
+        "name": "dns_columns_solve",
+        "seconds": t_s,
+        "baseline_seconds": t_d,
+        "ratio": t_d / t_s,
+        "note": f"225 × 96, couplings {100 * nnz:.0f} % nonzero: a solve {1e3 * t_s:.1f} ms (CSR couplings) "
+        f"against {1e3 * t_d:.1f} ms (dense, baseline); factorisation {b_s:.1f} s against {b_d:.1f} s; "
+        f"solves {np.abs(x_s - x_d).max() / np.abs(x_d).max():.1e} apart (relative)",
     }
 
 

@@ -22,9 +22,9 @@ A solve is bound by that memory traffic: per point it reads D_i⁻¹, D_i⁻¹ U
 couplings L_i, U_i are sparse (the x-differences: diagonal in y, dense only in the rows of the
 mixed ∂_x∂_y jets and the top conditions; 13 % of the entries at P1's mapped wave, 225 × 96),
 so a coupling with fewer than :data:`SPARSE_BELOW` of its entries nonzero is kept in CSR form:
-its product in the solve reads a seventh as much (a solve there 64.6 → 50.8 ms), and the
-elimination's products with it cost a fraction of the dense b³ ones (docs/dns.md, *The
-columns' couplings kept sparse*).
+its product in the solve reads a seventh as much (a solve there 64.6 → 50.8 ms; the
+factorisation, dominated by the inversions of the diagonal blocks, hardly changes: docs/dns.md,
+*The columns' couplings kept sparse*).
 """
 
 from __future__ import annotations
