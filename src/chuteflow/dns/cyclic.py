@@ -7,8 +7,9 @@ number of points. A general sparse LU (``scipy.sparse.linalg.splu``) of that mat
 the dense blocks of exact Chebyshev y-derivatives: 2.2 GB and 290 s at 129 × 96 (docs/dns.md,
 *Solver*). Block Gaussian elimination along x, with the periodic corner carried as a border
 (the last block column and the last block row), costs instead about 13 b³ flops a block
-(b = 4(N+1)) in dense BLAS-3 products and keeps five blocks per point (a bordered block LU;
-e.g. Golub & Van Loan, *Matrix Computations*, 4th ed., §4.5). Pivoting is within the diagonal
+(b = 4(N+1)) in dense BLAS-3 products and keeps five blocks per point, the coupling L_i
+sparse (below; a bordered block LU; e.g. Golub & Van Loan, *Matrix Computations*, 4th ed.,
+§4.5). Pivoting is within the diagonal
 blocks only (``numpy.linalg.inv``, LAPACK's partially pivoted LU): the blocks carry the
 implicit step's a0/Δt on the diagonal of the time-dependent rows.
 
